@@ -1,0 +1,28 @@
+// Initializers LiDAR-inertial systems use today, with the same output type as Free-Init, so they
+// can be compared on equal terms. All assume what their originals assume (a platform at rest).
+#pragma once
+
+#include <freeinit/initial_state.h>
+#include <freeinit/types.h>
+
+#include <vector>
+
+namespace freeinit::baselines {
+
+/// FAST-LIO2's static-mean initialization over the first `imu_samples` samples: b_g = mean gyro,
+/// gravity = -mean accel scaled to 9.81, zero velocity, zero accelerometer bias.
+/// The attitude is reported gravity-aligned (world z up) so it compares with Free-Init's.
+InitResult fastLio2(const std::vector<ImuSample>& imu, int imu_samples = 100);
+
+/// DLIO's initialization: means over `duration` seconds (3 s in DLIO), gravity-aligned attitude,
+/// b_g = mean gyro, b_a along the mean accel only (magnitude error), zero velocity.
+InitResult dlio(const std::vector<ImuSample>& imu, double duration = 3.0);
+
+/// Per-frame Doppler-only least squares: the LiDAR velocity of the last frame in the window from its
+/// static points (IRLS), turned into a body velocity with the mean gyro of the frame. Attitude and
+/// biases as FAST-LIO2 (it measures velocity only).
+InitResult dopplerLeastSquares(const std::vector<ImuSample>& imu,
+                               const std::vector<LidarFrame>& frames, const Extrinsics& extrinsics,
+                               int imu_samples = 100);
+
+}  // namespace freeinit::baselines

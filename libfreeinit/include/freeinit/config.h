@@ -1,0 +1,68 @@
+// All tunable parameters of Free-Init, grouped one struct per concern (one INI section each).
+// Defaults are the values the accuracy tests and benchmarks use; units in brackets.
+#pragma once
+
+#include <freeinit/gravity_estimator.h>
+#include <freeinit/types.h>
+
+#include <string>
+
+namespace freeinit {
+
+/// The Doppler-inertial velocimeter (paper Sec. III-B). INI section [velocimeter].
+struct VelocimeterParams {
+  double doppler_sigma = 0.03;        ///< [m/s] Doppler noise std
+  double gyro_sigma = 0.002;          ///< [rad/s] gyro white noise per sample
+  double vel_random_walk = 10.0;      ///< [m/s^2/sqrt(Hz)] v_l, v_b random walk density
+  double omega_random_walk = 100.0;   ///< [rad/s^2/sqrt(Hz)] omega_b random walk density
+  double gyro_bias_random_walk = 1e-4;  ///< [rad/s/sqrt(s)] Gauss-Markov driving noise
+  double gyro_bias_tau = 1000.0;      ///< [s] Gauss-Markov correlation time
+  double gyro_bias_sigma0 = 0.02;     ///< [rad/s] initial gyro bias std (typical MEMS)
+  Vec3 gyro_bias_prior = Vec3::Zero();  ///< [rad/s] initial gyro bias (e.g. from a calibration)
+  bool kinematic_propagation = true;  ///< add -omega x v and the gyro slope to the propagation
+  double min_range = 1.0;             ///< [m] closer points are skipped
+  double max_range = 150.0;           ///< [m]
+  int point_stride = 1;               ///< use one point in N (1: every point)
+  // Gating of dynamic points and gross outliers, on the Doppler residual.
+  double gate_sigma = 4.0;            ///< [-] reject |r| > gate_sigma * sqrt(S) ...
+  double gate_min = 0.15;             ///< [m/s] ... but never below this
+  double gate_rel = 0.01;             ///< [-] ... plus this fraction of the LiDAR speed
+  bool doppler_ego_compensated = false;  ///< input Doppler already has the ego motion removed
+};
+
+/// Robust start of the LiDAR velocity from the first points. INI section [bootstrap].
+struct BootstrapParams {
+  int points = 4000;                  ///< number of first points used
+  int iterations = 10;                ///< IRLS iterations
+  double cauchy_scale = 0.1;          ///< [m/s] IRLS Cauchy scale
+  double prior_sigma = 40.0;          ///< [m/s] weak prior on each velocity axis
+  double min_info_eigen = 100.0;      ///< [1/(m/s)^2] below: DegenerateGeometry
+};
+
+/// Static-start detection and zero-velocity mode. INI section [static_detector].
+struct StaticParams {
+  bool enabled = true;
+  double max_speed = 0.05;            ///< [m/s] LiDAR speed below which the platform is at rest
+  double max_gyro_dev = 0.03;         ///< [rad/s] gyro deviation from its mean at rest
+  double zupt_sigma = 0.002;          ///< [m/s], [rad/s] zero-velocity pseudo-measurement std
+  double check_period = 0.025;        ///< [s] how often motion is checked
+};
+
+/// The initialization window. INI section [window].
+struct WindowParams {
+  int imu_samples = 100;              ///< window length in IMU samples (paper: ~100)
+};
+
+/// Everything. The INI file has one section per member.
+struct FreeInitConfig {
+  VelocimeterParams velocimeter;
+  BootstrapParams bootstrap;
+  StaticParams static_detector;
+  WindowParams window;
+  GravityEstimator::Parameters gravity;
+  Extrinsics extrinsics;
+  /// Throws std::invalid_argument naming the offending key if a value is out of range.
+  void validate() const;
+};
+
+}  // namespace freeinit

@@ -1,0 +1,41 @@
+// Free-Init: the initializer facade. Feed IMU samples and LiDAR frames in any interleaving (each
+// stream in time order); it runs the velocimeter, integrates the pose, maps static points and, when
+// the window closes, solves for the accelerometer bias and gravity.
+#pragma once
+
+#include <freeinit/config.h>
+#include <freeinit/initial_state.h>
+
+#include <memory>
+
+namespace freeinit {
+
+class FreeInit {
+ public:
+  explicit FreeInit(const FreeInitConfig& config);
+  ~FreeInit();
+  FreeInit(FreeInit&&) noexcept;
+  FreeInit& operator=(FreeInit&&) noexcept;
+
+  /// Adds one IMU sample. Throws std::invalid_argument if time goes backwards or is duplicated.
+  void addImu(const ImuSample& s);
+  /// Adds one LiDAR frame. Throws std::invalid_argument if stamps go backwards.
+  void addFrame(const LidarFrame& f);
+  /// Declares the end of the input: a window still open is closed with what is there.
+  void finish();
+
+  /// True once the window is closed and result() is final.
+  bool ready() const;
+  /// The result (status NotEnoughData until ready()).
+  const InitResult& result() const;
+
+  /// Batch convenience: runs over whole recordings.
+  static InitResult run(const FreeInitConfig& config, const std::vector<ImuSample>& imu,
+                        const std::vector<LidarFrame>& frames);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace freeinit

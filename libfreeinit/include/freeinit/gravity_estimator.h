@@ -1,0 +1,68 @@
+// Accelerometer bias and gravity from the velocimeter's velocities and the integrated attitude
+// (paper Sec. III-C, Eq. (acc_bias_gravity_opt)), solved with Ceres on the sphere S^2(9.81).
+#pragma once
+
+#include <freeinit/types.h>
+
+#include <string>
+#include <vector>
+
+namespace freeinit {
+
+/// The velocimeter's and integrator's estimates at one IMU sample of the window.
+/// Frame w here is the first body frame of the window (not yet gravity-aligned).
+struct KinematicSample {
+  double t = 0;                       ///< [s] time since the window start
+  Mat3 R_wb = Mat3::Identity();       ///< integrated attitude
+  Vec3 v_b = Vec3::Zero();            ///< [m/s] body velocity in b
+  Mat3 cov_v_b = Mat3::Identity();    ///< [(m/s)^2]
+  Vec3 v_l = Vec3::Zero();            ///< [m/s] LiDAR velocity in l
+  Mat3 cov_v_l = Mat3::Identity();    ///< [(m/s)^2]
+  Vec3 omega_b = Vec3::Zero();        ///< [rad/s] bias-free angular velocity
+  Vec3 accel = Vec3::Zero();          ///< [m/s^2] measured specific force (with bias)
+};
+
+/// Result of the accelerometer bias / gravity estimation.
+struct GravityEstimate {
+  bool ok = false;
+  std::string message;                  ///< reason when !ok, else the solver summary line
+  Vec3 g_w = Vec3(0, 0, -kGravity);     ///< gravity in the first body frame, |g_w| = 9.81
+  Vec3 b_a = Vec3::Zero();              ///< [m/s^2]
+  /// Covariance of [g_w (3, rank 2: tangent to the sphere), b_a (3)], ambient coordinates.
+  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Identity();
+  double final_cost = 0;
+  int iterations = 0;
+};
+
+/// Solves for b_a and g_w given the window's kinematic samples.
+class GravityEstimator {
+ public:
+  enum class Formulation {
+    Integrated,      ///< velocity differences vs integrated specific force (default)
+    Differentiated,  ///< the paper's form: numerically differentiated, low-pass filtered velocities
+  };
+  struct Parameters {
+    Formulation formulation = Formulation::Integrated;
+    bool use_body_equation = true;     ///< residuals of the body kinematics
+    bool use_lidar_equation = true;    ///< residuals of the LiDAR kinematics (lever arm terms)
+    double accel_sigma = 0.02;         ///< [m/s^2] accelerometer white noise per sample
+    double accel_bias_bound = 0.5;     ///< [m/s^2] |b_a| per axis is kept below this
+    double accel_bias_prior_sigma = 0.2;  ///< [m/s^2] weak zero-mean prior (keeps b_a defined)
+    double lowpass_cutoff_hz = 10.0;   ///< [Hz] for the differentiated formulation
+    double loss_scale = 3.0;           ///< Cauchy loss scale on whitened residuals [sigma]
+    int max_iterations = 50;
+  };
+
+  GravityEstimator() = default;
+  explicit GravityEstimator(const Parameters& p) : params_(p) {}
+  const Parameters& params() const { return params_; }
+
+  /// Solves the problem. Requires >= 10 samples, sorted by time.
+  GravityEstimate estimate(const std::vector<KinematicSample>& samples,
+                           const Extrinsics& extrinsics) const;
+
+ private:
+  Parameters params_;
+};
+
+}  // namespace freeinit

@@ -1,0 +1,102 @@
+// The result of an initialization: the initial state of a LiDAR-inertial estimator, its covariance,
+// the static map and diagnostics.
+#pragma once
+
+#include <freeinit/types.h>
+
+#include <string>
+#include <vector>
+
+namespace freeinit {
+
+/// Expected outcomes. Anything but Ok means "not initialized": never a confident wrong answer.
+enum class InitStatus {
+  Ok,
+  NotEnoughData,       ///< the window is not covered by IMU and LiDAR data
+  NoDoppler,           ///< no usable Doppler returns (all gated, or zero everywhere)
+  DegenerateGeometry,  ///< the point directions do not constrain the velocity
+  SolverFailed,        ///< the accelerometer bias / gravity problem has no usable solution
+};
+
+/// Short machine-friendly name of a status ("ok", "not_enough_data", ...).
+const char* toString(InitStatus s);
+
+/// Index of each block in the 18x18 covariance, order [dtheta p v b_g b_a g].
+enum StateBlock : int { kTheta = 0, kPos = 3, kVel = 6, kBg = 9, kBa = 12, kGrav = 15 };
+using Cov18 = Eigen::Matrix<double, 18, 18>;
+
+/// The initial state x0 = [R_wb, p_w, v_w, b_g, b_a, g_w] (paper Sec. III-D).
+/// World frame w: origin at the body position at the window start, z axis opposite to gravity,
+/// yaw equal to the body yaw at the window start. Hence g_w = (0, 0, -9.81) and the roll/pitch
+/// uncertainty is carried by the attitude block. dtheta is the right (body-frame) perturbation:
+/// R_true = R_wb * Exp(dtheta).
+struct InitialState {
+  InitStatus status = InitStatus::NotEnoughData;
+  std::string message;           ///< human-readable reason when status != Ok
+  double timestamp = 0;          ///< [s] UNIX time the state refers to (window end)
+  Quat q_wb = Quat::Identity();
+  Vec3 p_w = Vec3::Zero();       ///< [m]
+  Vec3 v_w = Vec3::Zero();       ///< [m/s] body (IMU origin) velocity in w
+  Vec3 b_g = Vec3::Zero();       ///< [rad/s]
+  Vec3 b_a = Vec3::Zero();       ///< [m/s^2]
+  Vec3 g_w = Vec3(0, 0, -kGravity);  ///< [m/s^2]
+  Cov18 cov = Cov18::Identity();
+
+  bool ok() const { return status == InitStatus::Ok; }
+  /// Body velocity in the body frame.
+  Vec3 v_b() const { return q_wb.conjugate() * v_w; }
+  /// Gravity in the body frame.
+  Vec3 g_b() const { return q_wb.conjugate() * g_w; }
+};
+
+/// A pose of the initialization trajectory (world frame as in InitialState).
+struct PoseSample {
+  double t = 0;  ///< [s] UNIX time
+  Quat q_wb = Quat::Identity();
+  Vec3 p_w = Vec3::Zero();
+};
+
+/// The velocimeter's estimate at one instant (recorded at every IMU sample).
+struct VelocitySample {
+  double t = 0;                   ///< [s] UNIX time
+  Vec3 v_l = Vec3::Zero();        ///< [m/s] LiDAR velocity in l
+  Vec3 v_b = Vec3::Zero();        ///< [m/s] body velocity in b
+  Vec3 omega_b = Vec3::Zero();    ///< [rad/s] bias-free angular velocity in b
+  Vec3 b_g = Vec3::Zero();        ///< [rad/s]
+  Vec3 sigma_v_b = Vec3::Zero();  ///< [m/s] per-axis standard deviation of v_b
+  bool stationary = false;        ///< zero-velocity mode active
+};
+
+/// A point of the map, in the world frame.
+struct MapPoint {
+  Eigen::Vector3f p_w = Eigen::Vector3f::Zero();  ///< [m]
+  float intensity = 0;
+  float residual = 0;  ///< [m/s] Doppler residual when it was processed
+};
+
+/// Counters and timings, for users and for tests.
+struct Diagnostics {
+  std::size_t points_seen = 0;       ///< points inside the window
+  std::size_t points_used = 0;       ///< points that updated the velocimeter
+  std::size_t points_skipped = 0;    ///< by decimation or range limits
+  std::size_t points_rejected = 0;   ///< gated out as dynamic or outlier
+  std::size_t gyro_updates = 0;
+  double update_rate_hz = 0;         ///< velocimeter updates per second of data
+  bool static_start = false;         ///< the window started at rest
+  double static_duration = 0;        ///< [s] time spent in zero-velocity mode
+  double time_velocimeter = 0;       ///< [s] wall time
+  double time_solver = 0;            ///< [s] wall time
+  std::string solver_report;
+};
+
+/// Everything an initialization produces.
+struct InitResult {
+  InitialState state;
+  std::vector<MapPoint> static_map;    ///< static points mapped at their own time
+  std::vector<MapPoint> rejected;      ///< gated-out points (dynamic objects, outliers)
+  std::vector<PoseSample> trajectory;  ///< at every IMU sample of the window
+  std::vector<VelocitySample> velocities;
+  Diagnostics diag;
+};
+
+}  // namespace freeinit
