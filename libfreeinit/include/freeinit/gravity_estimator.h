@@ -48,7 +48,11 @@ class GravityEstimator {
     double accel_sigma = 0.02;         ///< [m/s^2] accelerometer white noise per sample
     double accel_bias_bound = 0.5;     ///< [m/s^2] |b_a| per axis is kept below this
     double accel_bias_prior_sigma = 0.2;  ///< [m/s^2] weak zero-mean prior (keeps b_a defined)
-    double lowpass_cutoff_hz = 10.0;   ///< [Hz] for the differentiated formulation
+    double lowpass_cutoff_hz = 10.0;   ///< [Hz] for the differentiated formulation (<= 0: off)
+    /// [s] correlation time of the velocimeter's velocity error, modelled as first-order
+    /// Gauss-Markov (AR(1)) with the samples' covariance as its stationary covariance; the
+    /// integrated residuals are then whitened in time (quasi-differenced). 0: white errors.
+    double velocity_error_correlation_time = 0.0;
     double loss_scale = 3.0;           ///< Cauchy loss scale on whitened residuals [sigma]
     int max_iterations = 50;
   };
