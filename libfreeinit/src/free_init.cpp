@@ -1,0 +1,445 @@
+#include <freeinit/free_init.h>
+#include <freeinit/gravity_estimator.h>
+#include <freeinit/pose_integrator.h>
+#include <freeinit/rotation.h>
+#include <freeinit/velocimeter.h>
+#include <freeinit/velocity_bootstrap.h>
+
+#include <Eigen/Eigenvalues>
+
+#include <chrono>
+#include <limits>
+#include <cmath>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+namespace freeinit {
+namespace {
+
+double wallSeconds() {
+  using Clock = std::chrono::steady_clock;
+  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+}
+
+bool finitePoint(const DopplerPoint& p) {
+  return p.p_l.allFinite() && std::isfinite(p.doppler) && std::isfinite(p.time_offset);
+}
+
+}  // namespace
+
+// Processing is incremental: every add*() call processes, in time order, all gyro samples and
+// points that the data received so far allows (a point needs the IMU sample after it; a gyro
+// sample needs the LiDAR stream to have passed it). When the last IMU sample of the window has
+// been processed the accelerometer bias and gravity are solved and the result is final.
+struct FreeInit::Impl {
+  enum class Phase { WaitStart, Running, Done };
+
+  FreeInitConfig cfg;
+  std::vector<ImuSample> imu;
+  std::vector<LidarFrame> frames;
+  bool finished = false;
+  Phase phase = Phase::WaitStart;
+  InitResult result;
+
+  // Window and cursors.
+  double t_ref = 0;          ///< UNIX time of the window start; internal times are relative
+  std::size_t k0 = 0;        ///< first IMU sample of the window
+  std::size_t k_end = 0;     ///< last IMU sample of the window
+  std::size_t k_next = 0;    ///< next IMU sample to process
+  std::size_t f_cur = 0, p_cur = 0;  ///< next point to process
+  std::size_t stride_counter = 0;
+
+  std::optional<Velocimeter> div;
+  PoseIntegrator integrator;
+  std::vector<KinematicSample> kinematics;
+
+  // Zero-velocity mode.
+  bool stationary = false;
+  double last_check = 0;
+  Mat3 static_A = Mat3::Zero();
+  Vec3 static_b = Vec3::Zero();
+
+  explicit Impl(const FreeInitConfig& c) : cfg(c) { cfg.validate(); }
+
+  double pointTime(std::size_t f, std::size_t p) const {
+    return (frames[f].stamp - t_ref) + frames[f].points[p].time_offset;
+  }
+  /// Moves (f, p) to the next existing point; false when the buffered frames are exhausted.
+  bool normalizeCursor(std::size_t& f, std::size_t& p) const {
+    while (f < frames.size() && p >= frames[f].points.size()) {
+      ++f;
+      p = 0;
+    }
+    return f < frames.size();
+  }
+  /// Time of the last buffered point (relative), or -inf.
+  double lidarCoveredUntil() const {
+    for (std::size_t f = frames.size(); f-- > 0;)
+      if (!frames[f].points.empty())
+        return (frames[f].stamp - t_ref) + frames[f].points.back().time_offset;
+    return -std::numeric_limits<double>::infinity();
+  }
+
+  void fail(InitStatus s, const std::string& msg) {
+    result.state.status = s;
+    result.state.message = msg;
+    phase = Phase::Done;
+  }
+
+  void pump() {
+    const double t0 = wallSeconds();
+    if (phase == Phase::WaitStart) tryStart();
+    if (phase == Phase::Running) run();
+    result.diag.time_velocimeter += wallSeconds() - t0;
+    if (phase == Phase::Running && finished) {
+      fail(InitStatus::NotEnoughData,
+           "the recording ends before the initialization window (" +
+               std::to_string(cfg.window.imu_samples) + " IMU samples) is covered");
+    }
+    if (phase == Phase::WaitStart && finished) {
+      if (result.state.message.empty())
+        fail(InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
+      else
+        phase = Phase::Done;
+    }
+  }
+
+  void tryStart() {
+    if (cfg.velocimeter.doppler_ego_compensated) {
+      fail(InitStatus::NoDoppler,
+           "the Doppler values are ego-compensated: they carry no ego velocity; Free-Init needs "
+           "the raw (range-rate) Doppler");
+      return;
+    }
+    // Window start: the first IMU sample at or after the first LiDAR point.
+    std::size_t f = 0, p = 0;
+    if (!normalizeCursor(f, p) || imu.empty()) return;
+    const double tp0 = frames[f].stamp + frames[f].points[p].time_offset;
+    std::size_t k = 0;
+    while (k < imu.size() && imu[k].t < tp0) ++k;
+    if (k + 1 >= imu.size()) return;  // need the sample and the next one (gyro slope)
+    t_ref = imu[k].t;
+    // Bootstrap points: the first ones at or after the window start.
+    std::vector<Vec3> dirs;
+    std::vector<double> dopplers;
+    const auto& vp = cfg.velocimeter;
+    dirs.reserve(cfg.bootstrap.points);
+    dopplers.reserve(cfg.bootstrap.points);
+    for (; normalizeCursor(f, p) && static_cast<int>(dirs.size()) < cfg.bootstrap.points; ++p) {
+      const DopplerPoint& pt = frames[f].points[p];
+      if (pointTime(f, p) < 0 || !finitePoint(pt)) continue;
+      const double r = pt.p_l.norm();
+      if (r < vp.min_range || r > vp.max_range) continue;
+      dirs.push_back(pt.p_l.cast<double>() / r);
+      dopplers.push_back(pt.doppler);
+    }
+    if (static_cast<int>(dirs.size()) < cfg.bootstrap.points && !finished) return;
+    if (dirs.size() < 10) {
+      fail(InitStatus::NoDoppler, "fewer than 10 usable LiDAR returns in the window");
+      return;
+    }
+    const VelocityFit fit = fitLidarVelocity(dirs, dopplers, cfg.bootstrap, vp.doppler_sigma);
+    if (!fit.ok) {
+      fail(InitStatus::DegenerateGeometry, "bootstrap: " + fit.message);
+      return;
+    }
+    k0 = k;
+    k_end = k0 + static_cast<std::size_t>(cfg.window.imu_samples) - 1;
+    k_next = k0 + 1;
+    f_cur = 0;
+    p_cur = 0;
+    div.emplace(vp, cfg.extrinsics);
+    // The bootstrap points are processed again by the filter: its covariance is widened so that
+    // it acts as a starting point and a gate, not as information counted twice.
+    div->start(0.0, fit.v_l, fit.cov * 100.0, imu[k0].gyro);
+    div->setOmegaSlope((imu[k0 + 1].gyro - imu[k0].gyro) / (imu[k0 + 1].t - imu[k0].t));
+    integrator.reset(0.0, div->omega_b(), div->v_b());
+    const auto& sp = cfg.static_detector;
+    stationary = sp.enabled && fit.v_l.norm() < sp.max_speed &&
+                 (imu[k0].gyro - vp.gyro_bias_prior).norm() <
+                     sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
+    result.diag.static_start = stationary;
+    last_check = 0;
+    recordSample(k0);
+    phase = Phase::Running;
+  }
+
+  void run() {
+    const double t_end = imu.size() > k_end ? imu[k_end].t - t_ref : 0.0;
+    while (true) {
+      const bool have_point = normalizeCursor(f_cur, p_cur);
+      const double tp = have_point ? pointTime(f_cur, p_cur) : 0.0;
+      if (k_next <= k_end) {
+        if (k_next >= imu.size()) return;  // wait for IMU
+        const double tg = imu[k_next].t - t_ref;
+        if (have_point && tp <= tg) {
+          processPoint(tp);
+          continue;
+        }
+        // All points before tg are processed if the LiDAR stream has passed tg.
+        if (!have_point && !finished && lidarCoveredUntil() < tg) return;
+        if (k_next < k_end && k_next + 1 >= imu.size() && !finished) return;  // need the slope
+        processGyro(k_next);
+        ++k_next;
+        continue;
+      }
+      if (have_point && tp <= t_end) {
+        processPoint(tp);
+        continue;
+      }
+      finalize();
+      return;
+    }
+  }
+
+  void processPoint(double t) {
+    const DopplerPoint& pt = frames[f_cur].points[p_cur];
+    ++p_cur;
+    auto& diag = result.diag;
+    if (t < 0) return;  // before the window
+    ++diag.points_seen;
+    const double r = pt.p_l.norm();
+    const auto& vp = cfg.velocimeter;
+    if (!finitePoint(pt) || r < vp.min_range || r > vp.max_range ||
+        (stride_counter++ % static_cast<std::size_t>(vp.point_stride)) != 0) {
+      ++diag.points_skipped;
+      return;
+    }
+    div->propagate(t);
+    bool accepted;
+    double residual;
+    if (stationary) {
+      // Zero-velocity mode: points only feed the motion check and the map.
+      const Vec3 d = pt.p_l.cast<double>() / r;
+      residual = pt.doppler + d.dot(div->v_l());
+      accepted = std::abs(residual) < vp.gate_min;
+      if (std::abs(pt.doppler) < 1.0) {
+        static_A.noalias() += d * d.transpose();
+        static_b -= pt.doppler * d;
+      }
+    } else {
+      const auto out = div->updateDoppler(pt.p_l, pt.doppler);
+      accepted = out.accepted;
+      residual = out.residual;
+    }
+    integrator.integrate(t, div->omega_b(), div->v_b());
+    MapPoint m;
+    const Vec3 p_b = cfg.extrinsics.R_bl * pt.p_l.cast<double>() + cfg.extrinsics.p_bl;
+    m.p_w = (integrator.q_wb() * p_b + integrator.p_w()).cast<float>();
+    m.intensity = pt.intensity;
+    m.residual = static_cast<float>(residual);
+    if (accepted) {
+      ++diag.points_used;
+      result.static_map.push_back(m);
+    } else {
+      ++diag.points_rejected;
+      result.rejected.push_back(m);
+    }
+  }
+
+  void processGyro(std::size_t k) {
+    const double t = imu[k].t - t_ref;
+    div->propagate(t);
+    const auto& sp = cfg.static_detector;
+    if (stationary) {
+      div->updateZeroVelocity(sp.zupt_sigma);
+      checkMotion(k, t);
+    }
+    const bool has_next = k + 1 < imu.size();
+    div->updateGyro(imu[k].gyro, has_next ? imu[k + 1].gyro : imu[k].gyro,
+                    has_next ? imu[k + 1].t - imu[k].t : 0.0);
+    ++result.diag.gyro_updates;
+    integrator.integrate(t, div->omega_b(), div->v_b());
+    recordSample(k);
+  }
+
+  /// Leaves zero-velocity mode as soon as the Doppler or the gyro shows motion.
+  void checkMotion(std::size_t k, double t) {
+    const auto& sp = cfg.static_detector;
+    bool moving = (imu[k].gyro - div->b_g()).norm() > sp.max_gyro_dev;
+    Vec3 v_ls = Vec3::Zero();
+    if (t - last_check >= sp.check_period) {
+      const Eigen::SelfAdjointEigenSolver<Mat3> es(static_A);
+      if (es.eigenvalues()(0) > 10.0) {
+        v_ls = static_A.ldlt().solve(static_b);
+        moving = moving || v_ls.norm() > sp.max_speed;
+      }
+      static_A.setZero();
+      static_b.setZero();
+      last_check = t;
+    }
+    if (!moving) return;
+    stationary = false;
+    result.diag.static_duration = t;
+    div->releaseZeroVelocity(std::max(0.2, 2.0 * v_ls.norm()), 0.5);
+  }
+
+  void recordSample(std::size_t k) {
+    KinematicSample s;
+    s.t = imu[k].t - t_ref;
+    s.R_wb = integrator.R_wb();
+    s.v_b = div->v_b();
+    s.cov_v_b = div->covVb();
+    s.v_l = div->v_l();
+    s.cov_v_l = div->covVl();
+    s.omega_b = div->omega_b();
+    s.accel = imu[k].accel;
+    kinematics.push_back(s);
+    VelocitySample v;
+    v.t = imu[k].t;
+    v.v_l = s.v_l;
+    v.v_b = s.v_b;
+    v.omega_b = s.omega_b;
+    v.b_g = div->b_g();
+    v.sigma_v_b = s.cov_v_b.diagonal().cwiseSqrt();
+    v.stationary = stationary;
+    result.velocities.push_back(v);
+    PoseSample p;
+    p.t = imu[k].t;
+    p.q_wb = integrator.q_wb().normalized();
+    p.p_w = integrator.p_w();
+    result.trajectory.push_back(p);
+  }
+
+  void finalize();
+};
+
+void FreeInit::Impl::finalize() {
+  phase = Phase::Done;
+  auto& diag = result.diag;
+  if (stationary) diag.static_duration = imu[k_end].t - t_ref;
+  const double T = imu[k_end].t - t_ref;
+  diag.update_rate_hz = T > 0 ? static_cast<double>(diag.points_used + diag.gyro_updates) / T : 0;
+  if (diag.points_used < 10 && !diag.static_start) {
+    fail(InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
+    return;
+  }
+  const double t0 = wallSeconds();
+  const GravityEstimator solver(cfg.gravity);
+  const GravityEstimate ge = solver.estimate(kinematics, cfg.extrinsics);
+  diag.time_solver = wallSeconds() - t0;
+  diag.solver_report = ge.message;
+  if (!ge.ok) {
+    fail(InitStatus::SolverFailed, "accelerometer bias / gravity: " + ge.message);
+    return;
+  }
+
+  // Gravity-aligned world: the smallest rotation taking the estimated gravity to -z.
+  const Mat3 R_align =
+      Quat::FromTwoVectors(ge.g_w.normalized(), Vec3(0, 0, -1)).toRotationMatrix();
+  const Mat3 R_w0b = integrator.R_wb();
+  const Mat3 R_wb = R_align * R_w0b;
+  InitialState& s = result.state;
+  s.status = InitStatus::Ok;
+  s.message.clear();
+  s.timestamp = imu[k_end].t;
+  s.q_wb = Quat(R_wb).normalized();
+  s.p_w = R_align * integrator.p_w();
+  const Vec3 v_b = div->v_b();
+  s.v_w = R_wb * v_b;
+  s.b_g = div->b_g();
+  s.b_a = ge.b_a;
+  s.g_w = Vec3(0, 0, -kGravity);
+
+  // Covariance, order [dtheta p v b_g b_a g], dtheta a right perturbation of R_wb.
+  // Tilt from the gravity estimate: g_b = R_w0b^T g_w0 and g_b,true = g_b + [g_b]x dtheta, so on
+  // the tangent plane dtheta = M dg_w0 with M = -[g_b]x R_w0b^T / |g|^2.
+  const Vec3 g_b = R_w0b.transpose() * ge.g_w;
+  const Vec3 up_b = -g_b.normalized();
+  const Mat3 M = -skew(g_b) * R_w0b.transpose() / (kGravity * kGravity);
+  const Mat3 cov_g = ge.cov.topLeftCorner<3, 3>();
+  const Mat3 cov_ba = ge.cov.bottomRightCorner<3, 3>();
+  const Mat3 cov_gba = ge.cov.topRightCorner<3, 3>();
+  const Mat3 P_bg = div->covBg();
+  const Mat3 tilt = Mat3::Identity() - up_b * up_b.transpose();
+  const double dt_imu = T / std::max(1, cfg.window.imu_samples - 1);
+  // Attitude integration: an unknown gyro bias tilts the end attitude relative to the mean
+  // attitude the gravity fit sees (~T/2), and turns the yaw (defined at the start) by ~T.
+  Mat3 cov_th = M * cov_g * M.transpose() + tilt * P_bg * tilt.transpose() * (T * T / 4.0) +
+                up_b * up_b.transpose() * (up_b.dot(P_bg * up_b) * T * T) +
+                Mat3::Identity() * (cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma *
+                                    dt_imu * T);
+  const Mat3 cov_vb = div->covVb();
+  const Mat3 J_v_th = -R_wb * skew(v_b);  // dv_w/dtheta
+  Cov18 P = Cov18::Zero();
+  P.block<3, 3>(kTheta, kTheta) = cov_th;
+  P.block<3, 3>(kPos, kPos) = R_wb * cov_vb * R_wb.transpose() * (T * T) +
+                              Mat3::Identity() * 1e-6;
+  P.block<3, 3>(kVel, kVel) =
+      R_wb * cov_vb * R_wb.transpose() + J_v_th * cov_th * J_v_th.transpose();
+  P.block<3, 3>(kTheta, kVel) = cov_th * J_v_th.transpose();
+  P.block<3, 3>(kVel, kBg) = R_wb * div->covBody().block<3, 3>(0, 6);
+  P.block<3, 3>(kBg, kBg) = P_bg;
+  P.block<3, 3>(kBa, kBa) = cov_ba;
+  P.block<3, 3>(kTheta, kBa) = M * cov_gba;
+  // Gravity is fixed by the choice of world frame; its uncertainty lives in the attitude block.
+  P.block<3, 3>(kGrav, kGrav) = Mat3::Identity() * 1e-6;
+  s.cov = P.selfadjointView<Eigen::Upper>();
+
+  // Express everything recorded in the first body frame in the aligned world.
+  const Quat q_align(R_align);
+  for (auto& m : result.static_map) m.p_w = (R_align * m.p_w.cast<double>()).cast<float>();
+  for (auto& m : result.rejected) m.p_w = (R_align * m.p_w.cast<double>()).cast<float>();
+  for (auto& p : result.trajectory) {
+    p.q_wb = (q_align * p.q_wb).normalized();
+    p.p_w = R_align * p.p_w;
+  }
+}
+
+FreeInit::FreeInit(const FreeInitConfig& config) : impl_(std::make_unique<Impl>(config)) {}
+FreeInit::~FreeInit() = default;
+FreeInit::FreeInit(FreeInit&&) noexcept = default;
+FreeInit& FreeInit::operator=(FreeInit&&) noexcept = default;
+
+void FreeInit::addImu(const ImuSample& s) {
+  if (!s.gyro.allFinite() || !s.accel.allFinite() || !std::isfinite(s.t))
+    throw std::invalid_argument("IMU sample at t=" + std::to_string(s.t) + " is not finite");
+  if (!impl_->imu.empty() && s.t <= impl_->imu.back().t)
+    throw std::invalid_argument("IMU time does not increase: " + std::to_string(s.t) +
+                                " after " + std::to_string(impl_->imu.back().t));
+  impl_->imu.push_back(s);
+  if (impl_->phase != Impl::Phase::Done) impl_->pump();
+}
+
+void FreeInit::addFrame(const LidarFrame& f) {
+  if (!std::isfinite(f.stamp))
+    throw std::invalid_argument("LiDAR frame stamp is not finite");
+  if (!impl_->frames.empty() && f.stamp <= impl_->frames.back().stamp)
+    throw std::invalid_argument("LiDAR frame stamp does not increase: " +
+                                std::to_string(f.stamp) + " after " +
+                                std::to_string(impl_->frames.back().stamp));
+  for (std::size_t i = 1; i < f.points.size(); ++i)
+    if (f.points[i].time_offset < f.points[i - 1].time_offset)
+      throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
+                                  ": points are not sorted by time (point " + std::to_string(i) +
+                                  ")");
+  impl_->frames.push_back(f);
+  if (impl_->phase != Impl::Phase::Done) impl_->pump();
+}
+
+void FreeInit::finish() {
+  impl_->finished = true;
+  if (impl_->phase != Impl::Phase::Done) impl_->pump();
+}
+
+bool FreeInit::ready() const { return impl_->phase == Impl::Phase::Done; }
+const InitResult& FreeInit::result() const { return impl_->result; }
+
+InitResult FreeInit::run(const FreeInitConfig& config, const std::vector<ImuSample>& imu,
+                         const std::vector<LidarFrame>& frames) {
+  FreeInit fi(config);
+  // Feed in time order, as a recording would interleave them.
+  std::size_t k = 0;
+  for (const auto& f : frames) {
+    const double t_last = f.points.empty() ? f.stamp : f.stamp + f.points.back().time_offset;
+    while (k < imu.size() && imu[k].t <= t_last) fi.addImu(imu[k++]);
+    fi.addFrame(f);
+    if (fi.ready()) return fi.result();
+  }
+  while (k < imu.size() && !fi.ready()) fi.addImu(imu[k++]);
+  fi.finish();
+  return fi.result();
+}
+
+}  // namespace freeinit
