@@ -11,6 +11,8 @@
 
 namespace freeinit::sim {
 
+class Scene;  // scene.h
+
 /// Exact kinematic state of the body (IMU) frame at time t.
 struct TruthState {
   double t = 0;                        ///< [s] UNIX time
@@ -70,6 +72,7 @@ struct Recording {
   Vec3 b_a = Vec3::Zero();                      ///< [m/s^2] true constant accel bias
   Vec3 g_w = Vec3(0, 0, -kGravity);             ///< gravity in the simulator world (z up)
   std::shared_ptr<const Trajectory> trajectory; ///< exact body trajectory
+  std::shared_ptr<const Scene> scene;           ///< the scene that was ray cast (scene.h)
   TruthState truth(double t) const { return trajectory->at(t); }
 };
 
