@@ -1,0 +1,32 @@
+// Checks a whole recording before it is used, so that bad input fails loudly with the file, the
+// record index and what is wrong, instead of producing a confident wrong answer.
+#pragma once
+
+#include <freeinit/mrpt/app_config.h>
+#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/types.h>
+
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace freeinit::mrpt_glue {
+
+/// The recording in core types, as the estimator will see it.
+struct ValidatedInput {
+  std::vector<ImuSample> imu;
+  std::vector<LidarFrame> frames;
+  std::optional<Extrinsics> sensor_pose_extrinsics;  ///< LiDAR sensorPose relative to the IMU's
+  std::size_t invalid_points_dropped = 0;
+  std::vector<std::string> warnings;
+};
+
+/// Throws InputError for: no IMU or no LiDAR observations with the configured labels, IMU without
+/// gyro/accel fields, clouds without Doppler (any class but CPointsMapDoppler), empty clouds,
+/// NaN/inf points (unless [input] drop_invalid_points), timestamps going backwards or duplicated,
+/// an IMU slower than [input] min_imu_rate, accelerations in g without [input] imu_accel_in_g
+/// (or the reverse), Doppler zero everywhere, a recording shorter than the window.
+ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const AppConfig& config,
+                             const std::string& file);
+
+}  // namespace freeinit::mrpt_glue

@@ -1,0 +1,130 @@
+#include <freeinit/mrpt/FreeInitApp.h>
+#include <freeinit/mrpt/FreeInitObservationHandler.h>
+#include <freeinit/mrpt/input_validator.h>
+#include <freeinit/mrpt/map_export.h>
+#include <freeinit/mrpt/output_writers.h>
+#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt/snapshots.h>
+
+#include <chrono>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+namespace freeinit::mrpt_glue {
+namespace {
+
+void progressBar(std::ostream& log, std::size_t done, std::size_t total) {
+  constexpr int kWidth = 40;
+  const double f = total == 0 ? 1.0 : static_cast<double>(done) / static_cast<double>(total);
+  const int n = static_cast<int>(f * kWidth);
+  log << "\r[" << std::string(static_cast<std::size_t>(n), '#')
+      << std::string(static_cast<std::size_t>(kWidth - n), ' ') << "] " << std::setw(3)
+      << static_cast<int>(100 * f) << "% (" << done << "/" << total << " observations)"
+      << std::flush;
+}
+
+std::string v3(const Vec3& v) {
+  std::ostringstream os;
+  os << std::fixed << std::setprecision(4) << v.x() << " " << v.y() << " " << v.z();
+  return os.str();
+}
+
+}  // namespace
+
+int FreeInitApp::run(std::ostream& log) {
+  using Clock = std::chrono::steady_clock;
+  const auto t_start = Clock::now();
+
+  // 1. Configuration, echoed.
+  config = loadAppConfig(params.config_file);
+  std::ostringstream effective;
+  dumpAppConfig(config, effective);
+  log << "Effective configuration (" << params.config_file << "):\n" << effective.str() << "\n";
+
+  // 2. Input: read everything, then validate. Any problem throws before an output exists.
+  log << "Reading " << params.rawlog << " ...\n";
+  const auto records = readRawlog(params.rawlog);
+  const ValidatedInput in = validateInput(records, config, params.rawlog);
+  for (const auto& w : in.warnings) log << "Warning: " << w << "\n";
+  if (in.invalid_points_dropped > 0)
+    log << "Warning: dropped " << in.invalid_points_dropped << " NaN/inf points\n";
+  log << "Input: " << records.size() << " observations, " << in.imu.size() << " IMU samples ("
+      << std::fixed << std::setprecision(3) << in.imu.front().t << " .. " << in.imu.back().t
+      << "), " << in.frames.size() << " point clouds\n"
+      << std::defaultfloat;
+  if (config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics)
+    log << "Extrinsics from sensorPose: p_bl = " << v3(in.sensor_pose_extrinsics->p_bl) << " m\n";
+
+  // 3. Run the estimator over the observations in file order.
+  FreeInitObservationHandler handler(config);
+  const std::size_t total = records.size();
+  const std::size_t step = std::max<std::size_t>(1, total / 40);
+  std::size_t done = 0;
+  for (const auto& r : records) {
+    try {
+      handler.process(r.obs);
+    } catch (const std::exception& e) {
+      throw InputError(params.rawlog + ": record " + std::to_string(r.index) + ": " + e.what());
+    }
+    ++done;
+    if (params.progress && (done % step == 0 || handler.ready())) progressBar(log, done, total);
+    if (handler.ready()) break;
+  }
+  if (!handler.ready()) handler.finish();
+  if (params.progress) log << "\n";
+  result = handler.result();
+  const InitialState& s = result.state;
+
+  log << "Initialization: " << toString(s.status) << (s.message.empty() ? "" : " (" + s.message + ")")
+      << "\n";
+  log << std::fixed << std::setprecision(6) << "  timestamp " << s.timestamp << "\n"
+      << std::setprecision(4) << "  v_b  " << v3(s.v_b()) << " m/s\n  g_b  " << v3(s.g_b())
+      << " m/s^2\n  b_g  " << v3(s.b_g) << " rad/s\n  b_a  " << v3(s.b_a) << " m/s^2\n"
+      << std::defaultfloat << "  points: " << result.diag.points_used << " used, "
+      << result.diag.points_rejected << " rejected, " << result.diag.points_skipped
+      << " skipped; static start: " << (result.diag.static_start ? "yes" : "no") << "\n";
+
+  // 4. Ground truth, when it sits beside the rawlog.
+  errors_wrt_gt.reset();
+  std::vector<TruthSample> truth;
+  const std::string truth_file = truthPathFor(params.rawlog);
+  if (std::filesystem::is_regular_file(truth_file)) {
+    truth = readTruthCsv(truth_file);
+    if (s.ok()) {
+      errors_wrt_gt = compareWithTruth(s, truth);
+      log << "Errors w.r.t. ground truth (" << truth_file << "):\n"
+          << "  velocity    " << errors_wrt_gt->velocity << " m/s\n"
+          << "  gravity     " << errors_wrt_gt->gravity_deg << " deg\n"
+          << "  gyro bias   " << errors_wrt_gt->gyro_bias << " rad/s\n"
+          << "  accel bias  " << errors_wrt_gt->accel_bias << " m/s^2\n";
+    }
+  }
+
+  // 5. Outputs, each written atomically.
+  const std::filesystem::path out(params.out_dir);
+  std::filesystem::create_directories(out);
+  auto file = [&](const char* name) { return (out / name).string(); };
+  writeFileAtomically(file("effective_config.ini"),
+                      [&](std::ostream& o) { o << effective.str(); });
+  writeInitialStateIni(file("initial_state.ini"), s);
+  if (errors_wrt_gt) writeTruthErrors(file("errors_wrt_gt.ini"), *errors_wrt_gt);
+  if (config.output.simplemap) writeStaticSimplemap(file("static_map.simplemap"), result);
+  if (config.output.ply) writePly(file("static_map.ply"), result.static_map);
+  if (config.output.trajectory) writeTum(file("trajectory_tum.txt"), result.trajectory);
+  if (config.output.velocities) writeVelocityCsv(file("velocimeter.csv"), result.velocities);
+  if (config.output.snapshots) {
+    if (!result.static_map.empty())
+      renderMapSnapshot(file("static_map.png"), result, config.output.snapshot_width,
+                        config.output.snapshot_height);
+    if (!result.velocities.empty())
+      renderVelocityPlot(file("velocity.png"), result, truth, config.output.snapshot_width,
+                         config.output.snapshot_height);
+  }
+  const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
+  log << "Outputs in " << out.string() << " (" << std::setprecision(3) << secs << " s total)\n";
+  return s.ok() ? 0 : 3;
+}
+
+}  // namespace freeinit::mrpt_glue

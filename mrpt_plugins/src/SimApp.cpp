@@ -1,0 +1,96 @@
+#include <freeinit/mrpt/SimApp.h>
+#include <freeinit/mrpt/conversions.h>
+#include <freeinit/mrpt/ground_truth.h>
+#include <freeinit/mrpt/output_writers.h>
+#include <freeinit/mrpt/register.h>
+#include <freeinit/sim/simulator.h>
+#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+#include <stdexcept>
+
+namespace freeinit::mrpt_glue {
+
+void SimApp::run(std::ostream& log) {
+  registerClasses();
+  sim::ScenarioConfig sc = sim::preset(params.preset, params.seed);
+  if (params.duration > 0) sc.duration = params.duration;
+  if (params.points_per_frame > 0) sc.points_per_frame = params.points_per_frame;
+  log << "Simulating preset " << sc.name << " (seed " << sc.seed << ", " << sc.duration << " s, "
+      << sc.points_per_frame << " points/frame, IMU " << sc.imu_rate << " Hz)...\n";
+  const sim::Recording rec = sim::simulate(sc);
+
+  const std::string out = params.output;
+  std::string stem = out;
+  if (stem.size() > 7 && stem.substr(stem.size() - 7) == ".rawlog") stem.resize(stem.size() - 7);
+  if (const auto dir = std::filesystem::path(out).parent_path(); !dir.empty())
+    std::filesystem::create_directories(dir);
+
+  // The rawlog: observations only, merged by timestamp (IMU first on ties).
+  const double g_scale = params.accel_in_g ? 1.0 / kGravity : 1.0;
+  const std::string tmp = out + ".tmp";
+  records_written = 0;
+  {
+    mrpt::io::CFileGZOutputStream f;
+    if (!f.open(tmp)) throw std::runtime_error(out + ": cannot create " + tmp);
+    auto arch = mrpt::serialization::archiveFrom(f);
+    std::size_t i = 0, k = 0;
+    while (i < rec.imu.size() || k < rec.frames.size()) {
+      const bool take_imu =
+          k >= rec.frames.size() || (i < rec.imu.size() && rec.imu[i].t <= rec.frames[k].stamp);
+      if (take_imu) {
+        ImuSample s = rec.imu[i++];
+        s.accel *= g_scale;
+        arch << *imuToObservation(s, params.imu_label);
+      } else {
+        arch << *frameToObservation(rec.frames[k++], rec.extrinsics, params.lidar_label);
+      }
+      ++records_written;
+    }
+  }
+  std::filesystem::rename(tmp, out);
+
+  // Ground truth at every IMU sample.
+  std::vector<TruthSample> truth;
+  truth.reserve(rec.imu.size());
+  for (const auto& s : rec.imu) {
+    const sim::TruthState x = rec.truth(s.t);
+    TruthSample t;
+    t.t = s.t;
+    t.q_wb = Quat(x.R_wb);
+    t.p_w = x.p_w;
+    t.v_w = x.v_w;
+    t.omega_b = x.omega_b;
+    t.b_g = rec.b_g;
+    t.b_a = rec.b_a;
+    t.g_w = rec.g_w;
+    truth.push_back(t);
+  }
+  writeTruthCsv(stem + ".truth.csv", truth);
+  writeFileAtomically(stem + ".truth_tum.txt", [&](std::ostream& o) {
+    o << "# ground truth: timestamp x y z qx qy qz qw (body = IMU frame, world z up)\n";
+    for (const auto& t : truth)
+      o << std::fixed << std::setprecision(9) << t.t << " " << t.p_w.x() << " " << t.p_w.y()
+        << " " << t.p_w.z() << " " << t.q_wb.x() << " " << t.q_wb.y() << " " << t.q_wb.z() << " "
+        << t.q_wb.w() << "\n";
+  });
+  writeFileAtomically(stem + ".extrinsics.ini", [&](std::ostream& o) {
+    o << std::setprecision(12) << "; true extrinsics of " << out
+      << " (also in each point cloud's sensorPose)\n[extrinsics]\nR_bl = ";
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) o << rec.extrinsics.R_bl(r, c) << (r * 3 + c < 8 ? " " : "\n");
+    o << "p_bl = " << rec.extrinsics.p_bl.x() << " " << rec.extrinsics.p_bl.y() << " "
+      << rec.extrinsics.p_bl.z() << "\n";
+  });
+  log << "Wrote " << out << " (" << records_written << " records: " << rec.imu.size()
+      << " IMU, " << rec.frames.size() << " point clouds), " << stem << ".truth.csv, " << stem
+      << ".truth_tum.txt, " << stem << ".extrinsics.ini\n";
+  log << std::setprecision(6) << "True biases: b_g = " << rec.b_g.transpose()
+      << " rad/s, b_a = " << rec.b_a.transpose() << " m/s^2\n";
+}
+
+}  // namespace freeinit::mrpt_glue

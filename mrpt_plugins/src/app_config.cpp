@@ -1,0 +1,339 @@
+// INI loading and echo of AppConfig. One table of keys (visitConfig) drives both loading and
+// dumping, so the documented INI and the loader cannot drift apart.
+#include <freeinit/mrpt/app_config.h>
+#include <mrpt/config/CConfigFile.h>
+#include <mrpt/config/CConfigFileMemory.h>
+
+#include <Eigen/Geometry>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <map>
+#include <set>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace freeinit::mrpt_glue {
+namespace {
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  return s;
+}
+
+// Calls v(section, key, value&, unit, doc) for every scalar key of the configuration.
+template <class Visitor>
+void visitConfig(Visitor& v, AppConfig& c) {
+  auto& vel = c.core.velocimeter;
+  v("velocimeter", "doppler_sigma", vel.doppler_sigma, "m/s", "Doppler noise std");
+  v("velocimeter", "gyro_sigma", vel.gyro_sigma, "rad/s", "gyro white noise per sample");
+  v("velocimeter", "vel_random_walk", vel.vel_random_walk, "m/s^2/sqrt(Hz)",
+    "random walk density of the LiDAR and body velocities");
+  v("velocimeter", "omega_random_walk", vel.omega_random_walk, "rad/s^2/sqrt(Hz)",
+    "random walk density of the angular velocity");
+  v("velocimeter", "gyro_bias_random_walk", vel.gyro_bias_random_walk, "rad/s/sqrt(s)",
+    "Gauss-Markov gyro bias driving noise");
+  v("velocimeter", "gyro_bias_tau", vel.gyro_bias_tau, "s", "Gauss-Markov correlation time");
+  v("velocimeter", "gyro_bias_sigma0", vel.gyro_bias_sigma0, "rad/s", "initial gyro bias std");
+  v("velocimeter", "gyro_bias_prior", vel.gyro_bias_prior, "rad/s",
+    "initial gyro bias x y z (e.g. from a static calibration)");
+  v("velocimeter", "kinematic_propagation", vel.kinematic_propagation, "bool",
+    "add -omega x v and the gyro slope to the propagation");
+  v("velocimeter", "min_range", vel.min_range, "m", "closer points are skipped");
+  v("velocimeter", "max_range", vel.max_range, "m", "farther points are skipped");
+  v("velocimeter", "point_stride", vel.point_stride, "-", "use one point in N (1: every point)");
+  v("velocimeter", "gate_sigma", vel.gate_sigma, "sigma",
+    "reject a point when |residual| > gate_sigma * sqrt(S) ...");
+  v("velocimeter", "gate_min", vel.gate_min, "m/s", "... but never below this ...");
+  v("velocimeter", "gate_rel", vel.gate_rel, "-", "... plus this fraction of the LiDAR speed");
+  v("velocimeter", "doppler_ego_compensated", vel.doppler_ego_compensated, "bool",
+    "the input Doppler already has the ego motion removed (some Aeva drivers)");
+
+  auto& bs = c.core.bootstrap;
+  v("bootstrap", "points", bs.points, "-", "first points used by the robust start");
+  v("bootstrap", "iterations", bs.iterations, "-", "IRLS iterations");
+  v("bootstrap", "cauchy_scale", bs.cauchy_scale, "m/s", "IRLS Cauchy scale");
+  v("bootstrap", "prior_sigma", bs.prior_sigma, "m/s", "weak prior on each velocity axis");
+  v("bootstrap", "min_info_eigen", bs.min_info_eigen, "1/(m/s)^2",
+    "smallest information eigenvalue accepted (else degenerate geometry)");
+
+  auto& st = c.core.static_detector;
+  v("static_detector", "enabled", st.enabled, "bool", "detect a static start (ZUPT mode)");
+  v("static_detector", "max_speed", st.max_speed, "m/s", "LiDAR speed below which at rest");
+  v("static_detector", "max_gyro_dev", st.max_gyro_dev, "rad/s",
+    "gyro deviation from its mean at rest");
+  v("static_detector", "zupt_sigma", st.zupt_sigma, "m/s",
+    "zero-velocity pseudo-measurement std");
+  v("static_detector", "check_period", st.check_period, "s", "how often motion is checked");
+
+  v("window", "imu_samples", c.core.window.imu_samples, "-",
+    "window length in IMU samples (paper: ~100)");
+
+  auto& g = c.core.gravity;
+  v("gravity", "formulation", g.formulation, "-", "integrated | differentiated");
+  v("gravity", "use_body_equation", g.use_body_equation, "bool", "body kinematics residuals");
+  v("gravity", "use_lidar_equation", g.use_lidar_equation, "bool",
+    "LiDAR kinematics residuals (lever-arm terms)");
+  v("gravity", "accel_sigma", g.accel_sigma, "m/s^2", "accelerometer white noise per sample");
+  v("gravity", "accel_bias_bound", g.accel_bias_bound, "m/s^2", "|b_a| bound per axis");
+  v("gravity", "accel_bias_prior_sigma", g.accel_bias_prior_sigma, "m/s^2",
+    "weak zero-mean prior on b_a");
+  v("gravity", "lowpass_cutoff_hz", g.lowpass_cutoff_hz, "Hz",
+    "low-pass cutoff of the differentiated formulation");
+  v("gravity", "loss_scale", g.loss_scale, "sigma", "Cauchy loss scale on whitened residuals");
+  v("gravity", "max_iterations", g.max_iterations, "-", "Ceres iterations");
+
+  v("input", "imu_label", c.input.imu_label, "-", "sensorLabel of the IMU observations (empty: any)");
+  v("input", "lidar_label", c.input.lidar_label, "-",
+    "sensorLabel of the point-cloud observations (empty: any)");
+  v("input", "imu_accel_in_g", c.input.imu_accel_in_g, "bool",
+    "accelerometer given in g (converted with 9.81); otherwise m/s^2");
+  v("input", "min_imu_rate", c.input.min_imu_rate, "Hz", "slower IMU streams are rejected");
+  v("input", "drop_invalid_points", c.input.drop_invalid_points, "bool",
+    "drop NaN/inf points (reported) instead of failing");
+
+
+  auto& o = c.output;
+  v("output", "simplemap", o.simplemap, "bool", "static_map.simplemap (stock MRPT classes)");
+  v("output", "ply", o.ply, "bool", "static_map.ply");
+  v("output", "trajectory", o.trajectory, "bool", "trajectory_tum.txt");
+  v("output", "velocities", o.velocities, "bool", "velocimeter.csv");
+  v("output", "snapshots", o.snapshots, "bool", "PNG snapshots rendered offscreen");
+  v("output", "snapshot_width", o.snapshot_width, "px", "snapshot width");
+  v("output", "snapshot_height", o.snapshot_height, "px", "snapshot height");
+
+  // Last, so that the dump can append R_bl and p_bl to this section.
+  v("extrinsics", "from_sensor_pose", c.extrinsics.from_sensor_pose, "bool",
+    "take the extrinsics from the observations' sensorPose (LiDAR pose w.r.t. the IMU pose)");
+}
+
+class Loader {
+ public:
+  Loader(const mrpt::config::CConfigFileBase& cfg, std::string source)
+      : cfg_(cfg), source_(std::move(source)) {}
+
+  [[noreturn]] void fail(const std::string& section, const std::string& key,
+                         const std::string& what) const {
+    throw std::invalid_argument(source_ + ": [" + section + "] " + key + ": " + what);
+  }
+
+  bool has(const std::string& s, const std::string& k) {
+    known_[s].insert(lower(k));
+    return cfg_.keyExists(s, k);
+  }
+  std::string raw(const std::string& s, const std::string& k) {
+    std::string v = cfg_.read_string(s, k, "", false);
+    // Strip trailing comments and blanks (CConfigFile keeps text after the value in some cases).
+    for (const char* c : {";", "#"}) {
+      if (auto p = v.find(c); p != std::string::npos) v.erase(p);
+    }
+    while (!v.empty() && std::isspace(static_cast<unsigned char>(v.back()))) v.pop_back();
+    while (!v.empty() && std::isspace(static_cast<unsigned char>(v.front()))) v.erase(0, 1);
+    return v;
+  }
+  std::vector<double> numbers(const std::string& s, const std::string& k, std::size_t n) {
+    std::istringstream is(raw(s, k));
+    std::vector<double> out;
+    std::string tok;
+    while (is >> tok) {
+      try {
+        std::size_t used = 0;
+        out.push_back(std::stod(tok, &used));
+        if (used != tok.size()) throw std::invalid_argument(tok);
+      } catch (const std::exception&) {
+        fail(s, k, "'" + tok + "' is not a number");
+      }
+      if (!std::isfinite(out.back())) fail(s, k, "'" + tok + "' is not finite");
+    }
+    if (out.size() != n)
+      fail(s, k, "expected " + std::to_string(n) + " number(s), got " + std::to_string(out.size()));
+    return out;
+  }
+
+  void operator()(const std::string& s, const std::string& k, double& x, const char*,
+                  const char*) {
+    if (has(s, k)) x = numbers(s, k, 1)[0];
+  }
+  void operator()(const std::string& s, const std::string& k, int& x, const char*, const char*) {
+    if (!has(s, k)) return;
+    const double d = numbers(s, k, 1)[0];
+    if (d != std::floor(d) || std::abs(d) > 1e9) fail(s, k, "expected an integer");
+    x = static_cast<int>(d);
+  }
+  void operator()(const std::string& s, const std::string& k, bool& x, const char*, const char*) {
+    if (!has(s, k)) return;
+    const std::string v = lower(raw(s, k));
+    if (v == "true" || v == "1" || v == "yes" || v == "on") {
+      x = true;
+    } else if (v == "false" || v == "0" || v == "no" || v == "off") {
+      x = false;
+    } else {
+      fail(s, k, "'" + v + "' is not a boolean (true/false)");
+    }
+  }
+  void operator()(const std::string& s, const std::string& k, std::string& x, const char*,
+                  const char*) {
+    if (has(s, k)) x = raw(s, k);
+  }
+  void operator()(const std::string& s, const std::string& k, Vec3& x, const char*, const char*) {
+    if (!has(s, k)) return;
+    const auto v = numbers(s, k, 3);
+    x = Vec3(v[0], v[1], v[2]);
+  }
+  void operator()(const std::string& s, const std::string& k, GravityEstimator::Formulation& x,
+                  const char*, const char*) {
+    if (!has(s, k)) return;
+    const std::string v = lower(raw(s, k));
+    if (v == "integrated") {
+      x = GravityEstimator::Formulation::Integrated;
+    } else if (v == "differentiated") {
+      x = GravityEstimator::Formulation::Differentiated;
+    } else {
+      fail(s, k, "'" + v + "' is neither 'integrated' nor 'differentiated'");
+    }
+  }
+
+  /// Unknown keys in our sections are errors (a typo must not silently keep a default).
+  void checkUnknownKeys() const {
+    for (const auto& [section, keys] : known_) {
+      std::vector<std::string> present;
+      cfg_.getAllKeys(section, present);
+      for (const auto& k : present) {
+        if (keys.count(lower(k)) == 0) fail(section, k, "unknown key");
+      }
+    }
+  }
+
+ private:
+  const mrpt::config::CConfigFileBase& cfg_;
+  std::string source_;
+  std::map<std::string, std::set<std::string>> known_;
+};
+
+void loadExtrinsics(Loader& L, AppConfig& c) {
+  const std::string s = "extrinsics";
+  const bool has_R = L.has(s, "R_bl");
+  const bool has_rpy = L.has(s, "roll_deg") || L.has(s, "pitch_deg") || L.has(s, "yaw_deg");
+  const bool has_p = L.has(s, "p_bl");
+  if (has_R && has_rpy) L.fail(s, "R_bl", "give either R_bl or roll_deg/pitch_deg/yaw_deg, not both");
+  Mat3 R = Mat3::Identity();
+  if (has_R) {
+    const auto v = L.numbers(s, "R_bl", 9);
+    R << v[0], v[1], v[2], v[3], v[4], v[5], v[6], v[7], v[8];
+    const double orth = (R.transpose() * R - Mat3::Identity()).norm();
+    const double det = R.determinant();
+    if (orth > 1e-4 || std::abs(det - 1.0) > 1e-4) {
+      std::ostringstream os;
+      os << "not a rotation matrix (|R^T R - I| = " << orth << ", det = " << det << ")";
+      L.fail(s, "R_bl", os.str());
+    }
+  } else if (has_rpy) {
+    auto angle = [&](const char* k) {
+      return L.has(s, k) ? L.numbers(s, k, 1)[0] * M_PI / 180.0 : 0.0;
+    };
+    // R_bl = Rz(yaw) Ry(pitch) Rx(roll), as mrpt::poses::CPose3D.
+    R = (Eigen::AngleAxisd(angle("yaw_deg"), Vec3::UnitZ()) *
+         Eigen::AngleAxisd(angle("pitch_deg"), Vec3::UnitY()) *
+         Eigen::AngleAxisd(angle("roll_deg"), Vec3::UnitX()))
+            .toRotationMatrix();
+  }
+  c.core.extrinsics.R_bl = R;
+  if (has_p) {
+    const auto v = L.numbers(s, "p_bl", 3);
+    c.core.extrinsics.p_bl = Vec3(v[0], v[1], v[2]);
+  }
+  c.extrinsics.given_in_ini = has_R || has_rpy || has_p;
+  if (c.extrinsics.given_in_ini && c.extrinsics.from_sensor_pose)
+    L.fail(s, "from_sensor_pose", "true, but R_bl/p_bl/roll_deg... are given too: choose one");
+  if (!c.extrinsics.given_in_ini && !c.extrinsics.from_sensor_pose)
+    L.fail(s, "R_bl",
+           "extrinsics missing: give R_bl (or roll_deg, pitch_deg, yaw_deg) and p_bl, or set "
+           "from_sensor_pose = true");
+}
+
+AppConfig load(const mrpt::config::CConfigFileBase& cfg, const std::string& source) {
+  AppConfig c;
+  Loader L(cfg, source);
+  visitConfig(L, c);
+  loadExtrinsics(L, c);
+  L.checkUnknownKeys();
+  try {
+    c.core.validate();
+  } catch (const std::exception& e) {
+    throw std::invalid_argument(source + ": " + e.what());
+  }
+  if (c.input.min_imu_rate <= 0) L.fail("input", "min_imu_rate", "must be > 0");
+  if (c.output.snapshot_width < 64 || c.output.snapshot_height < 64)
+    L.fail("output", "snapshot_width", "snapshots must be at least 64x64 px");
+  return c;
+}
+
+class Dumper {
+ public:
+  explicit Dumper(std::ostream& out) : out_(out) {}
+  template <class T>
+  void operator()(const std::string& s, const std::string& k, T& x, const char* unit,
+                  const char* doc) {
+    section(s);
+    std::ostringstream v;
+    v << std::setprecision(10);
+    write(v, x);
+    out_ << std::left << std::setw(26) << k << "= " << std::setw(14) << v.str() << " ; ["
+         << unit << "] " << doc << "\n";
+  }
+  void section(const std::string& s) {
+    if (s == current_) return;
+    out_ << (current_.empty() ? "" : "\n") << "[" << s << "]\n";
+    current_ = s;
+  }
+
+ private:
+  static void write(std::ostream& o, double x) { o << x; }
+  static void write(std::ostream& o, int x) { o << x; }
+  static void write(std::ostream& o, bool x) { o << (x ? "true" : "false"); }
+  static void write(std::ostream& o, const std::string& x) { o << x; }
+  static void write(std::ostream& o, const Vec3& x) { o << x.x() << " " << x.y() << " " << x.z(); }
+  static void write(std::ostream& o, GravityEstimator::Formulation f) {
+    o << (f == GravityEstimator::Formulation::Integrated ? "integrated" : "differentiated");
+  }
+  std::ostream& out_;
+  std::string current_;
+};
+
+}  // namespace
+
+AppConfig loadAppConfig(const std::string& ini_file) {
+  if (!std::filesystem::is_regular_file(ini_file))
+    throw std::invalid_argument(ini_file + ": configuration file not found");
+  mrpt::config::CConfigFile cfg(ini_file);
+  return load(cfg, ini_file);
+}
+
+AppConfig loadAppConfigFromText(const std::string& ini_text, const std::string& source) {
+  mrpt::config::CConfigFileMemory cfg(ini_text);
+  return load(cfg, source);
+}
+
+void dumpAppConfig(const AppConfig& config, std::ostream& out) {
+  AppConfig c = config;  // the visitor takes non-const references
+  Dumper d(out);
+  visitConfig(d, c);
+  if (!c.extrinsics.from_sensor_pose) {
+    const Mat3& R = c.core.extrinsics.R_bl;
+    const Vec3& p = c.core.extrinsics.p_bl;
+    std::ostringstream r, t;
+    r << std::setprecision(12);
+    t << std::setprecision(12);
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) r << R(i, j) << (i * 3 + j < 8 ? " " : "");
+    t << p.x() << " " << p.y() << " " << p.z();
+    out << "R_bl                      = " << r.str() << " ; [-] LiDAR-to-IMU rotation, row-major\n"
+        << "p_bl                      = " << t.str() << " ; [m] LiDAR origin in the IMU frame\n";
+  }
+}
+
+}  // namespace freeinit::mrpt_glue

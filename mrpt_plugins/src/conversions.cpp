@@ -1,0 +1,114 @@
+#include <freeinit/mrpt/CPointsMapDoppler.h>
+#include <freeinit/mrpt/conversions.h>
+#include <mrpt/math/CMatrixFixed.h>
+
+#include <algorithm>
+#include <numeric>
+#include <stdexcept>
+
+namespace freeinit::mrpt_glue {
+
+using mrpt::obs::CObservationIMU;
+using mrpt::obs::CObservationPointCloud;
+
+double toUnix(mrpt::Clock::time_point t) { return mrpt::Clock::toDouble(t); }
+mrpt::Clock::time_point fromUnix(double t) { return mrpt::Clock::fromDouble(t); }
+
+ImuSample imuFromObservation(const CObservationIMU& obs, double accel_scale) {
+  using namespace mrpt::obs;  // TIMUDataIndex enumerators
+  for (auto idx : {IMU_WX, IMU_WY, IMU_WZ, IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC}) {
+    if (!obs.has(idx))
+      throw std::invalid_argument("CObservationIMU '" + obs.sensorLabel +
+                                  "' lacks angular velocity or acceleration fields");
+  }
+  ImuSample s;
+  s.t = toUnix(obs.timestamp);
+  // MRPT 2.5.8 stores the angular rates as yaw (z), pitch (y), roll (x) rates: indices 3, 4, 5.
+  s.gyro = Vec3(obs.get(IMU_WX), obs.get(IMU_WY), obs.get(IMU_WZ));
+  s.accel = accel_scale * Vec3(obs.get(IMU_X_ACC), obs.get(IMU_Y_ACC), obs.get(IMU_Z_ACC));
+  return s;
+}
+
+CObservationIMU::Ptr imuToObservation(const ImuSample& s, const std::string& label) {
+  using namespace mrpt::obs;
+  auto obs = CObservationIMU::Create();
+  obs->timestamp = fromUnix(s.t);
+  obs->sensorLabel = label;
+  obs->set(IMU_WX, s.gyro.x());
+  obs->set(IMU_WY, s.gyro.y());
+  obs->set(IMU_WZ, s.gyro.z());
+  obs->set(IMU_X_ACC, s.accel.x());
+  obs->set(IMU_Y_ACC, s.accel.y());
+  obs->set(IMU_Z_ACC, s.accel.z());
+  return obs;
+}
+
+LidarFrame frameFromObservation(const CObservationPointCloud& obs) {
+  if (!obs.pointcloud)
+    throw std::invalid_argument("CObservationPointCloud '" + obs.sensorLabel +
+                                "' has no point cloud (externally stored clouds are not supported)");
+  const auto* map = dynamic_cast<const CPointsMapDoppler*>(obs.pointcloud.get());
+  if (map == nullptr)
+    throw std::invalid_argument("CObservationPointCloud '" + obs.sensorLabel + "' holds a " +
+                                obs.pointcloud->GetRuntimeClass()->className +
+                                ", which has no per-point Doppler: expected a "
+                                "freeinit::mrpt_glue::CPointsMapDoppler");
+  LidarFrame f;
+  f.stamp = toUnix(obs.timestamp);
+  const std::size_t n = map->size();
+  f.points.resize(n);
+  const auto& xs = map->getPointsBufferRef_x();
+  const auto& ys = map->getPointsBufferRef_y();
+  const auto& zs = map->getPointsBufferRef_z();
+  bool sorted = true;
+  for (std::size_t i = 0; i < n; ++i) {
+    DopplerPoint& p = f.points[i];
+    p.p_l = Eigen::Vector3f(xs[i], ys[i], zs[i]);
+    p.doppler = map->doppler(i);
+    p.time_offset = map->timeOffset(i);
+    p.intensity = map->intensity(i);
+    p.line = map->line(i);
+    if (i > 0 && p.time_offset < f.points[i - 1].time_offset) sorted = false;
+  }
+  if (!sorted) {
+    std::stable_sort(f.points.begin(), f.points.end(),
+                     [](const DopplerPoint& a, const DopplerPoint& b) {
+                       return a.time_offset < b.time_offset;
+                     });
+  }
+  return f;
+}
+
+CObservationPointCloud::Ptr frameToObservation(const LidarFrame& f, const Extrinsics& extrinsics,
+                                               const std::string& label) {
+  auto map = CPointsMapDoppler::Create();
+  map->reserve(f.points.size());
+  for (const auto& p : f.points)
+    map->insertPointDoppler(p.p_l.x(), p.p_l.y(), p.p_l.z(), p.doppler, p.time_offset,
+                            p.intensity, p.line);
+  auto obs = CObservationPointCloud::Create();
+  obs->timestamp = fromUnix(f.stamp);
+  obs->sensorLabel = label;
+  obs->sensorPose = poseFromExtrinsics(extrinsics);
+  obs->pointcloud = map;
+  return obs;
+}
+
+Extrinsics extrinsicsFromPose(const mrpt::poses::CPose3D& pose_bl) {
+  Extrinsics e;
+  const auto R = pose_bl.getRotationMatrix();
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) e.R_bl(i, j) = R(i, j);
+  e.p_bl = Vec3(pose_bl.x(), pose_bl.y(), pose_bl.z());
+  return e;
+}
+
+mrpt::poses::CPose3D poseFromExtrinsics(const Extrinsics& e) {
+  mrpt::math::CMatrixDouble33 R;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) R(i, j) = e.R_bl(i, j);
+  return mrpt::poses::CPose3D::FromRotationAndTranslation(
+      R, mrpt::math::TVector3D(e.p_bl.x(), e.p_bl.y(), e.p_bl.z()));
+}
+
+}  // namespace freeinit::mrpt_glue

@@ -1,0 +1,76 @@
+#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt/register.h>
+#include <mrpt/io/CFileGZInputStream.h>
+#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CSensoryFrame.h>
+#include <mrpt/serialization/CArchive.h>
+
+#include <filesystem>
+
+namespace freeinit::mrpt_glue {
+
+std::vector<RawlogRecord> readRawlog(const std::string& path) {
+  registerClasses();
+  if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": file not found");
+
+  // Decompress everything (gzip or plain) so that "end of data" is known exactly.
+  std::vector<unsigned char> data;
+  {
+    mrpt::io::CFileGZInputStream f;
+    std::string err;
+    if (!f.open(path, err)) throw InputError(path + ": cannot open: " + err);
+    std::vector<unsigned char> chunk(1 << 20);
+    for (;;) {
+      const std::size_t n = f.Read(chunk.data(), chunk.size());
+      if (n == 0) break;
+      data.insert(data.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n));
+    }
+  }
+  if (data.empty()) throw InputError(path + ": empty file (no rawlog records)");
+
+  mrpt::io::CMemoryStream mem;
+  mem.assignMemoryNotOwn(data.data(), data.size());
+  auto arch = mrpt::serialization::archiveFrom(mem);
+
+  std::vector<RawlogRecord> out;
+  for (std::size_t index = 0; mem.getPosition() < data.size(); ++index) {
+    const auto start = mem.getPosition();
+    mrpt::serialization::CSerializable::Ptr obj;
+    try {
+      obj = arch.ReadObject();
+    } catch (const std::exception& e) {
+      std::string what = e.what();
+      if (auto nl = what.find('\n'); nl != std::string::npos && nl > 0) {
+        // MRPT exceptions carry a multi-line trace: keep the line that names the cause.
+        const auto cls = what.find("not registered");
+        if (cls != std::string::npos) {
+          const auto b = what.rfind('\n', cls);
+          const auto e2 = what.find('\n', cls);
+          what = what.substr(b == std::string::npos ? 0 : b + 1, e2 - (b == std::string::npos ? 0 : b + 1));
+        }
+      }
+      throw InputError(path + ": record " + std::to_string(index) + " (byte " +
+                       std::to_string(start) + " of " + std::to_string(data.size()) +
+                       " decompressed): cannot be read: the file is truncated or corrupted, or "
+                       "holds a class that is not registered (load the freeinit_mrpt plugin). "
+                       "MRPT says: " + what);
+    }
+    if (!obj) {
+      throw InputError(path + ": record " + std::to_string(index) + ": null object");
+    }
+    if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj)) {
+      out.push_back({index, o});
+    } else if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj)) {
+      for (const auto& so : *sf) out.push_back({index, so});
+    } else if (std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(obj)) {
+      continue;  // odometry actions are not used
+    } else {
+      throw InputError(path + ": record " + std::to_string(index) + ": unexpected class " +
+                       obj->GetRuntimeClass()->className + " in a rawlog");
+    }
+  }
+  return out;
+}
+
+}  // namespace freeinit::mrpt_glue
