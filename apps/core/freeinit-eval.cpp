@@ -37,7 +37,8 @@ int main(int argc, char** argv) {
   try {
     int seeds = 3, stride = 1, points = 0;
     double duration = 1.2;
-    bool baselines = true, trace = false;
+    bool baselines = true, trace = false, zero_bg = false;
+    int passes = -1;
     std::vector<std::string> presets;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -47,6 +48,8 @@ int main(int argc, char** argv) {
       else if (a == "--duration" && i + 1 < argc) duration = std::atof(argv[++i]);
       else if (a == "--no-baselines") baselines = false;
       else if (a == "--trace") trace = true;
+      else if (a == "--zero-gyro-bias") zero_bg = true;
+      else if (a == "--passes" && i + 1 < argc) passes = std::atoi(argv[++i]);
       else presets.push_back(a);
     }
     if (presets.empty()) presets = freeinit::sim::presetNames();
@@ -55,10 +58,16 @@ int main(int argc, char** argv) {
         auto sc = freeinit::sim::preset(name, static_cast<std::uint64_t>(s));
         sc.duration = duration;
         if (points > 0) sc.points_per_frame = points;
+        if (zero_bg) {
+          sc.random_biases = false;
+          sc.b_g.setZero();
+          sc.b_a = freeinit::Vec3(0.1, -0.08, 0.05);
+        }
         const auto rec = freeinit::sim::simulate(sc);
         freeinit::FreeInitConfig cfg;
         cfg.extrinsics = rec.extrinsics;
         cfg.velocimeter.point_stride = stride;
+        if (passes >= 0) cfg.window.refinement_passes = passes;
         const auto t0 = std::chrono::steady_clock::now();
         const auto r = freeinit::FreeInit::run(cfg, rec.imu, rec.frames);
         const double ms =

@@ -54,6 +54,12 @@ struct FreeInit::Impl {
   PoseIntegrator integrator;
   std::vector<KinematicSample> kinematics;
 
+  // Passes: the paper's, then accelerometer-aided refinements (see WindowParams).
+  int pass = 0;
+  VelocityFit boot_fit;
+  bool boot_static = false;
+  GravityEstimate gravity;  ///< of the last finished pass
+
   // Zero-velocity mode.
   bool stationary = false;
   double last_check = 0;
@@ -146,23 +152,56 @@ struct FreeInit::Impl {
     }
     k0 = k;
     k_end = k0 + static_cast<std::size_t>(cfg.window.imu_samples) - 1;
+    boot_fit = fit;
+    const auto& sp = cfg.static_detector;
+    boot_static = sp.enabled && fit.v_l.norm() < sp.max_speed &&
+                  (imu[k0].gyro - vp.gyro_bias_prior).norm() <
+                      sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
+    startPass();
+    phase = Phase::Running;
+  }
+
+  /// (Re)starts the velocimeter at the window start; all window data are buffered for pass > 0.
+  void startPass() {
     k_next = k0 + 1;
     f_cur = 0;
     p_cur = 0;
-    div.emplace(vp, cfg.extrinsics);
+    stride_counter = 0;
+    kinematics.clear();
+    result.static_map.clear();
+    result.rejected.clear();
+    result.velocities.clear();
+    result.trajectory.clear();
+    auto& d = result.diag;
+    d.points_seen = d.points_used = d.points_skipped = d.points_rejected = d.gyro_updates = 0;
+    div.emplace(cfg.velocimeter, cfg.extrinsics);
     // The bootstrap points are processed again by the filter: its covariance is widened so that
     // it acts as a starting point and a gate, not as information counted twice.
-    div->start(0.0, fit.v_l, fit.cov * 100.0, imu[k0].gyro);
+    div->start(0.0, boot_fit.v_l, boot_fit.cov * 100.0, imu[k0].gyro);
     div->setOmegaSlope((imu[k0 + 1].gyro - imu[k0].gyro) / (imu[k0 + 1].t - imu[k0].t));
     integrator.reset(0.0, div->omega_b(), div->v_b());
-    const auto& sp = cfg.static_detector;
-    stationary = sp.enabled && fit.v_l.norm() < sp.max_speed &&
-                 (imu[k0].gyro - vp.gyro_bias_prior).norm() <
-                     sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
-    result.diag.static_start = stationary;
+    stationary = boot_static;
+    d.static_start = boot_static;
+    d.static_duration = 0;
     last_check = 0;
+    static_A.setZero();
+    static_b.setZero();
+    if (pass > 0) setAcceleration(k0);
     recordSample(k0);
-    phase = Phase::Running;
+  }
+
+  /// Aided passes: the body acceleration a_b = f - b_a + R_w0b^T g_w0 at sample k and its slope to
+  /// sample k + 1 (gravity in b turns as dg_b/dt = -omega x g_b).
+  void setAcceleration(std::size_t k) {
+    const Vec3 g_b = integrator.R_wb().transpose() * gravity.g_w;
+    const Vec3 a_k = imu[k].accel - gravity.b_a + g_b;
+    Vec3 slope = Vec3::Zero();
+    if (k + 1 < imu.size()) {
+      const double dt = imu[k + 1].t - imu[k].t;
+      const Vec3 g_b_next = g_b - div->omega_b().cross(g_b) * dt;
+      slope = (imu[k + 1].accel - gravity.b_a + g_b_next - a_k) / dt;
+    }
+    div->setAcceleration(a_k, slope);
   }
 
   void run() {
@@ -188,9 +227,22 @@ struct FreeInit::Impl {
         processPoint(tp);
         continue;
       }
-      finalize();
-      return;
+      if (!endOfPass()) return;
     }
+  }
+
+  /// Solves b_a and gravity; starts the next pass and returns true if there is one.
+  bool endOfPass() {
+    const double t0 = wallSeconds();
+    gravity = GravityEstimator(cfg.gravity).estimate(kinematics, cfg.extrinsics);
+    result.diag.time_solver += wallSeconds() - t0;
+    if (gravity.ok && pass < cfg.window.refinement_passes) {
+      ++pass;
+      startPass();
+      return true;
+    }
+    finalize();
+    return false;
   }
 
   void processPoint(double t) {
@@ -251,6 +303,7 @@ struct FreeInit::Impl {
                     has_next ? imu[k + 1].t - imu[k].t : 0.0);
     ++result.diag.gyro_updates;
     integrator.integrate(t, div->omega_b(), div->v_b());
+    if (pass > 0) setAcceleration(k);
     recordSample(k);
   }
 
@@ -315,10 +368,7 @@ void FreeInit::Impl::finalize() {
     fail(InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
     return;
   }
-  const double t0 = wallSeconds();
-  const GravityEstimator solver(cfg.gravity);
-  const GravityEstimate ge = solver.estimate(kinematics, cfg.extrinsics);
-  diag.time_solver = wallSeconds() - t0;
+  const GravityEstimate& ge = gravity;
   diag.solver_report = ge.message;
   if (!ge.ok) {
     fail(InitStatus::SolverFailed, "accelerometer bias / gravity: " + ge.message);

@@ -56,8 +56,17 @@ void Velocimeter::propagate(double t) {
   if (params_.kinematic_propagation) {
     // dv/dt = a - omega x v in the moving frame; a is the random walk's business.
     const Vec3 omega_l = R_bl_.transpose() * omega_b_;
-    v_l_ += v_l_.cross(omega_l) * dt;
-    v_b_ += v_b_.cross(omega_b_) * dt;
+    Vec3 dv_l = v_l_.cross(omega_l);
+    Vec3 dv_b = v_b_.cross(omega_b_);
+    if (aided_) {
+      // LiDAR acceleration from the body's: a_l = R_lb (a_b + alpha x p + omega x (omega x p)).
+      const Vec3 a_b = a_b_ + a_b_slope_ * (t - t_acc_);
+      dv_b += a_b;
+      dv_l += R_bl_.transpose() *
+              (a_b + omega_slope_.cross(p_bl_) + omega_b_.cross(omega_b_.cross(p_bl_)));
+    }
+    v_l_ += dv_l * dt;
+    v_b_ += dv_b * dt;
     omega_b_ += omega_slope_ * dt;
   }
   b_g_ *= 1.0 - dt / params_.gyro_bias_tau;  // first-order Gauss-Markov
@@ -140,6 +149,14 @@ void Velocimeter::updateGyro(const Vec3& gyro, const Vec3& next_gyro, double dt_
   P_b_ -= K * PH.transpose();
   P_b_ = 0.5 * (P_b_ + P_b_.transpose()).eval();
   omega_slope_ = dt_next > 0 ? Vec3((next_gyro - gyro) / dt_next) : Vec3::Zero();
+}
+
+void Velocimeter::setAcceleration(const Vec3& a_b, const Vec3& a_b_slope) {
+  aided_ = true;
+  a_b_ = a_b;
+  a_b_slope_ = a_b_slope;
+  t_acc_ = t_;
+  q_v_ = params_.aided_vel_random_walk * params_.aided_vel_random_walk;
 }
 
 void Velocimeter::updateZeroVelocity(double sigma) {

@@ -14,7 +14,9 @@ struct VelocimeterParams {
   double doppler_sigma = 0.03;        ///< [m/s] Doppler noise std
   double gyro_sigma = 0.002;          ///< [rad/s] gyro white noise per sample
   double vel_random_walk = 10.0;      ///< [m/s^2/sqrt(Hz)] v_l, v_b random walk density
-  double omega_random_walk = 100.0;   ///< [rad/s^2/sqrt(Hz)] omega_b random walk density
+  double omega_random_walk = 1.0;     ///< [rad/s^2/sqrt(Hz)] omega_b random walk density
+  /// [m/s^2/sqrt(Hz)] v_l, v_b random walk density in the accelerometer-aided refinement passes
+  double aided_vel_random_walk = 0.3;
   double gyro_bias_random_walk = 1e-4;  ///< [rad/s/sqrt(s)] Gauss-Markov driving noise
   double gyro_bias_tau = 1000.0;      ///< [s] Gauss-Markov correlation time
   double gyro_bias_sigma0 = 0.02;     ///< [rad/s] initial gyro bias std (typical MEMS)
@@ -51,6 +53,10 @@ struct StaticParams {
 /// The initialization window. INI section [window].
 struct WindowParams {
   int imu_samples = 100;              ///< window length in IMU samples (paper: ~100)
+  /// Accelerometer-aided refinement passes over the window after the paper's pass: each reruns
+  /// the velocimeter with the body acceleration from the accelerometer, the last b_a and
+  /// gravity, then solves b_a and gravity again (0: the paper's single pass).
+  int refinement_passes = 1;
 };
 
 /// Everything. The INI file has one section per member.
