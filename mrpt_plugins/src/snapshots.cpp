@@ -87,7 +87,7 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   scene.insert(rejected);
 
   auto traj = mrpt::opengl::CSetOfLines::Create();
-  traj->setLineWidth(4.0f);
+  traj->setLineWidth(6.0f);
   traj->setColor(0.1f, 1.0f, 0.2f);
   for (std::size_t i = 1; i < result.trajectory.size(); ++i) {
     const auto& a = result.trajectory[i - 1].p_w;
@@ -112,16 +112,22 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   auto arrow = mrpt::opengl::CArrow::Create(
       static_cast<float>(p_end.x()), static_cast<float>(p_end.y()), static_cast<float>(p_end.z()),
       static_cast<float>(tip.x()), static_cast<float>(tip.y()), static_cast<float>(tip.z()), 0.25f,
-      0.06f, 0.2f);
-  arrow->setColor(0.2f, 0.4f, 1.0f);
+      0.08f, 0.25f);
+  arrow->setColor(0.3f, 0.6f, 1.0f);
   scene.insert(arrow);
 
   mrpt::opengl::CFBORender render(static_cast<unsigned>(width), static_cast<unsigned>(height));
+  // Look from behind and above the start pose, at a point between it and the map's center, so
+  // that the trajectory, the axes and the gravity arrow stay in view.
   auto& cam = render.getCamera(scene);
-  cam.setPointingAt(0.5f * (x0 + x1), 0.5f * (y0 + y1), 0.5f * (z0 + z1));
-  cam.setZoomDistance(1.3f * extent);
-  cam.setAzimuthDegrees(-125.0f);
-  cam.setElevationDegrees(35.0f);
+  const float cx = 0.5f * (x0 + x1), cy = 0.5f * (y0 + y1);
+  const float px = static_cast<float>(p_end.x()), py = static_cast<float>(p_end.y());
+  cam.setPointingAt(px + 0.35f * (cx - px), py + 0.35f * (cy - py),
+                    static_cast<float>(p_end.z()));
+  cam.setZoomDistance(std::clamp(0.7f * extent, 8.0f, 60.0f));
+  cam.setAzimuthDegrees(
+      static_cast<float>(std::atan2(py - cy, px - cx) * 180.0 / M_PI) + 25.0f);
+  cam.setElevationDegrees(30.0f);
   scene.getViewport()->setCustomBackgroundColor(mrpt::img::TColorf(0.08f, 0.08f, 0.12f));
 
   mrpt::img::CImage img;
@@ -129,6 +135,7 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
 
   const auto& s = result.state;
   const TColor white(255, 255, 255);
+  img.filledRectangle(0, 0, width - 1, 60, TColor(20, 20, 30));
   img.selectTextFont("10x20");
   img.textOut(12, 10, "Free-Init static map: " + std::to_string(result.static_map.size()) +
                           " static points, " + std::to_string(result.rejected.size()) +
