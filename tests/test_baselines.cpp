@@ -1,15 +1,14 @@
 // Baseline initializers: comparable to Free-Init at rest, wrong in motion (the paper's point).
-#include "analytic_motion.h"
-
 #include <freeinit/baselines.h>
 #include <freeinit/rotation.h>
-
-#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <random>
 #include <vector>
+
+#include "analytic_motion.h"
 
 namespace freeinit {
 namespace {
@@ -42,7 +41,8 @@ Data makeData(double motion_scale, double duration, unsigned seed = 7) {
     ImuSample s;
     s.t = d.t0 + t;
     s.gyro = m.omega_b + d.b_g + 0.002 * Vec3(n01(rng), n01(rng), n01(rng));
-    s.accel = m.R_wb.transpose() * (m.a_w - g_w) + d.b_a + 0.02 * Vec3(n01(rng), n01(rng), n01(rng));
+    s.accel =
+        m.R_wb.transpose() * (m.a_w - g_w) + d.b_a + 0.02 * Vec3(n01(rng), n01(rng), n01(rng));
     d.imu.push_back(s);
   }
   for (double t = 0.0; t < duration; t += 0.1) {

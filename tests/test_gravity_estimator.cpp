@@ -1,10 +1,8 @@
-// GravityEstimator against an exact analytic rotational motion: noiseless recovery, accuracy of both
-// formulations under velocimeter + accelerometer noise, covariance consistency (NEES), failures.
-#include "analytic_motion.h"
-
+// GravityEstimator against an exact analytic rotational motion: noiseless recovery, accuracy of
+// both formulations under velocimeter + accelerometer noise, covariance consistency (NEES),
+// failures.
 #include <freeinit/gravity_estimator.h>
 #include <freeinit/rotation.h>
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -14,19 +12,21 @@
 #include <random>
 #include <vector>
 
+#include "analytic_motion.h"
+
 namespace freeinit {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / 3.14159265358979323846;
 
 struct WindowConfig {
-  double rate_hz = 200.0;      ///< IMU rate
-  int samples = 100;           ///< window length
-  double sigma_v = 0.0;        ///< [m/s] white velocity noise per axis (v_b and v_l independent)
-  double sigma_v_corr = 0.0;   ///< [m/s] stationary std of a correlated (AR(1)) velocity error
-  double tau_corr = 0.05;      ///< [s] its correlation time
-  double sigma_a = 0.0;        ///< [m/s^2] accelerometer white noise
-  double motion_scale = 1.0;   ///< 0: at rest
+  double rate_hz = 200.0;     ///< IMU rate
+  int samples = 100;          ///< window length
+  double sigma_v = 0.0;       ///< [m/s] white velocity noise per axis (v_b and v_l independent)
+  double sigma_v_corr = 0.0;  ///< [m/s] stationary std of a correlated (AR(1)) velocity error
+  double tau_corr = 0.05;     ///< [s] its correlation time
+  double sigma_a = 0.0;       ///< [m/s^2] accelerometer white noise
+  double motion_scale = 1.0;  ///< 0: at rest
   Vec3 b_a = Vec3(0.1, -0.15, 0.08);
   unsigned seed = 1;
 };
@@ -191,10 +191,11 @@ Stats runSeeds(GravityEstimator::Formulation f, WindowConfig c, int seeds, doubl
 }
 
 void print(const char* name, const Stats& s) {
-  std::printf("%-34s gravity err mean %.3f max %.3f deg | b_a err mean %.4f max %.4f m/s^2 | "
-              "NEES(5) %.2f | predicted sigma %.3f deg %.4f m/s^2 | solve %.2f ms\n",
-              name, s.mean_g_deg, s.max_g_deg, s.mean_ba, s.max_ba, s.mean_nees, s.sigma_g_deg,
-              s.sigma_ba, s.mean_ms);
+  std::printf(
+      "%-34s gravity err mean %.3f max %.3f deg | b_a err mean %.4f max %.4f m/s^2 | "
+      "NEES(5) %.2f | predicted sigma %.3f deg %.4f m/s^2 | solve %.2f ms\n",
+      name, s.mean_g_deg, s.max_g_deg, s.mean_ba, s.max_ba, s.mean_nees, s.sigma_g_deg, s.sigma_ba,
+      s.mean_ms);
 }
 
 // 100 samples at 200 Hz (0.5 s), 0.02 m/s white velocity noise, 0.02 m/s^2 accelerometer noise.
@@ -247,8 +248,8 @@ TEST(GravityEstimator, SolveTime100Samples) {
   c.sigma_v = 0.02;
   c.sigma_a = 0.02;
   const Window w = makeWindow(c);
-  for (auto f : {GravityEstimator::Formulation::Integrated,
-                 GravityEstimator::Formulation::Differentiated}) {
+  for (auto f :
+       {GravityEstimator::Formulation::Integrated, GravityEstimator::Formulation::Differentiated}) {
     const GravityEstimator est(paramsFor(f, c));
     std::vector<double> ms;
     for (int i = 0; i < 50; ++i) {
@@ -261,8 +262,7 @@ TEST(GravityEstimator, SolveTime100Samples) {
     std::sort(ms.begin(), ms.end());
     std::printf("%s: median solve %.3f ms, min %.3f ms (100 samples, iterations %d)\n",
                 f == GravityEstimator::Formulation::Integrated ? "integrated" : "differentiated",
-                ms[ms.size() / 2], ms.front(),
-                est.estimate(w.samples, w.extrinsics).iterations);
+                ms[ms.size() / 2], ms.front(), est.estimate(w.samples, w.extrinsics).iterations);
     EXPECT_LT(ms.front(), 20.0);
   }
 }

@@ -1,7 +1,6 @@
 // SO(3) helpers: closed-form cases, round trips, gravity alignment, autodiff through Exp.
-#include <freeinit/rotation.h>
-
 #include <ceres/jet.h>
+#include <freeinit/rotation.h>
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -3,7 +3,6 @@
 #include <freeinit/rotation.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -13,8 +12,8 @@ namespace freeinit::baselines {
 namespace {
 
 // Variances reported for what a baseline assumes instead of estimating.
-constexpr double kAssumedVelocityVar = 1.0;     ///< [(m/s)^2] "v = 0" is an assumption
-constexpr double kAssumedAccelBiasVar = 0.04;   ///< [(m/s^2)^2] "b_a = 0": a 0.2 m/s^2 prior
+constexpr double kAssumedVelocityVar = 1.0;       ///< [(m/s)^2] "v = 0" is an assumption
+constexpr double kAssumedAccelBiasVar = 0.04;     ///< [(m/s^2)^2] "b_a = 0": a 0.2 m/s^2 prior
 constexpr double kDefinedByConventionVar = 1e-9;  ///< p_w = 0, yaw = 0, g_w fixed by definition
 
 /// Means and sample covariances of gyro and accel over imu[first, last).
@@ -109,8 +108,7 @@ void fillTrajectory(const std::vector<ImuSample>& imu, std::size_t count, InitRe
 }  // namespace
 
 InitResult fastLio2(const std::vector<ImuSample>& imu, int imu_samples) {
-  if (imu_samples < 2)
-    throw std::invalid_argument("baselines::fastLio2: imu_samples must be >= 2");
+  if (imu_samples < 2) throw std::invalid_argument("baselines::fastLio2: imu_samples must be >= 2");
   const auto count = static_cast<std::size_t>(imu_samples);
   if (imu.size() < count)
     return notEnoughData("FAST-LIO2 init needs " + std::to_string(imu_samples) +
@@ -197,7 +195,7 @@ InitResult dopplerLeastSquares(const std::vector<ImuSample>& imu,
     std::vector<double> sorted = abs_res;
     std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
     sigma = std::max(1.4826 * sorted[sorted.size() / 2], 0.01);  // [m/s]
-    const double c = iter == 0 ? 1e9 : 2.3849 * sigma;            // plain LS first
+    const double c = iter == 0 ? 1e9 : 2.3849 * sigma;           // plain LS first
     Mat3 A = Mat3::Zero();
     Vec3 b = Vec3::Zero();
     for (std::size_t i = 0; i < d_l.size(); ++i) {
@@ -213,8 +211,7 @@ InitResult dopplerLeastSquares(const std::vector<ImuSample>& imu,
     if (converged && iter > 0) break;
   }
   const Eigen::SelfAdjointEigenSolver<Mat3> eig(info);
-  if (!(eig.eigenvalues()(0) > 1e-6 * std::max(1.0, eig.eigenvalues()(2))) ||
-      !v_l.allFinite()) {
+  if (!(eig.eigenvalues()(0) > 1e-6 * std::max(1.0, eig.eigenvalues()(2))) || !v_l.allFinite()) {
     r.state.status = InitStatus::DegenerateGeometry;
     r.state.message = "the point directions of the last frame do not constrain the velocity";
     return r;
@@ -235,9 +232,10 @@ InitResult dopplerLeastSquares(const std::vector<ImuSample>& imu,
   if (n_gyro > 0) {
     omega_b /= n_gyro;
   } else {
-    const auto nearest = std::min_element(imu.begin(), imu.end(), [&](const auto& a, const auto& b) {
-      return std::abs(a.t - frame->stamp) < std::abs(b.t - frame->stamp);
-    });
+    const auto nearest =
+        std::min_element(imu.begin(), imu.end(), [&](const auto& a, const auto& b) {
+          return std::abs(a.t - frame->stamp) < std::abs(b.t - frame->stamp);
+        });
     omega_b = nearest->gyro;
   }
 

@@ -1,10 +1,9 @@
 // Accelerometer bias and gravity (paper Sec. III-C), two formulations of the same kinematics:
 // the paper's differentiated form, Eq. (acc_bias_gravity_opt), and its integrated form.
-#include <freeinit/gravity_estimator.h>
-#include <freeinit/rotation.h>
-
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
+#include <freeinit/gravity_estimator.h>
+#include <freeinit/rotation.h>
 
 #include <algorithm>
 #include <cmath>
@@ -301,8 +300,8 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
   Vec3 mean_f_w = Vec3::Zero();
   for (const KinematicSample& s : samples) mean_f_w += s.R_wb * s.accel;
   mean_f_w /= static_cast<double>(n);
-  Vec3 g_init = mean_f_w.norm() > 1e-6 ? Vec3(-mean_f_w.normalized() * kGravity)
-                                       : Vec3(0, 0, -kGravity);
+  Vec3 g_init =
+      mean_f_w.norm() > 1e-6 ? Vec3(-mean_f_w.normalized() * kGravity) : Vec3(0, 0, -kGravity);
   double g_w[3] = {g_init.x(), g_init.y(), g_init.z()};
   double b_a[3] = {0, 0, 0};
   double v0_w[3] = {0, 0, 0};
@@ -365,8 +364,8 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
           const double var_acc = var_acc_rate * ((1 - phi) * (1 - phi) * p.t + (tk - p.t));
           const Mat3 cov = (1 - phi * phi) * cur.cov + var_acc * Mat3::Identity();
           cost = IntegratedVelocityResidual::Create(cur.y_minus_S - phi * p.y_minus_S,
-                                                    cur.M - phi * p.M, cur.t - phi * p.t,
-                                                    1.0 - phi, sqrtInformation(cov));
+                                                    cur.M - phi * p.M, cur.t - phi * p.t, 1.0 - phi,
+                                                    sqrtInformation(cov));
         }
         problem.AddResidualBlock(cost, loss, g_w, b_a, v0_w);
         prev[eq] = cur;
@@ -410,12 +409,12 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
       }
       if (P.use_lidar_equation) {
         const Vec3& w = omega_b[k];
-        const Vec3 c_b = s.R_wb.transpose() * a_lw[k] - w.cross(w.cross(p_bl)) -
-                         alpha_b[k].cross(p_bl);
+        const Vec3 c_b =
+            s.R_wb.transpose() * a_lw[k] - w.cross(w.cross(p_bl)) - alpha_b[k].cross(p_bl);
         const Mat3 cov = gains.first * R_bl * s.cov_v_l * R_bl.transpose() + cov_acc;
         problem.AddResidualBlock(
-            LidarAccelerationResidual::Create(c_b, s.R_wb, accel_b[k], sqrtInformation(cov)),
-            loss, g_w, b_a);
+            LidarAccelerationResidual::Create(c_b, s.R_wb, accel_b[k], sqrtInformation(cov)), loss,
+            g_w, b_a);
       }
     }
   }
