@@ -7,6 +7,7 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <filesystem>
+#include <sstream>
 
 namespace freeinit::mrpt_glue {
 
@@ -40,21 +41,23 @@ std::vector<RawlogRecord> readRawlog(const std::string& path) {
     try {
       obj = arch.ReadObject();
     } catch (const std::exception& e) {
-      std::string what = e.what();
-      if (auto nl = what.find('\n'); nl != std::string::npos && nl > 0) {
-        // MRPT exceptions carry a multi-line trace: keep the line that names the cause.
-        const auto cls = what.find("not registered");
-        if (cls != std::string::npos) {
-          const auto b = what.rfind('\n', cls);
-          const auto e2 = what.find('\n', cls);
-          what = what.substr(b == std::string::npos ? 0 : b + 1, e2 - (b == std::string::npos ? 0 : b + 1));
-        }
+      // MRPT exceptions carry nested messages and a backtrace: keep the "Message:" lines.
+      std::string cause;
+      std::istringstream lines(e.what());
+      for (std::string l; std::getline(lines, l);) {
+        if (l.rfind("Message:", 0) != 0) continue;
+        l.erase(0, l.find_first_not_of(' ', 8));
+        cause += (cause.empty() ? "" : " <- ") + l;
       }
-      throw InputError(path + ": record " + std::to_string(index) + " (byte " +
-                       std::to_string(start) + " of " + std::to_string(data.size()) +
-                       " decompressed): cannot be read: the file is truncated or corrupted, or "
-                       "holds a class that is not registered (load the freeinit_mrpt plugin). "
-                       "MRPT says: " + what);
+      if (cause.empty()) cause = e.what();
+      const bool at_end = mem.getPosition() >= data.size();
+      throw InputError(
+          path + ": record " + std::to_string(index) + " (byte " + std::to_string(start) + " of " +
+          std::to_string(data.size()) + " decompressed) cannot be read: " +
+          (at_end ? "the file ends inside this record (truncated file)"
+                  : "corrupted data or a class that is not registered (rawlogs with Doppler "
+                    "clouds need the freeinit_mrpt plugin)") +
+          ". MRPT: " + cause);
     }
     if (!obj) {
       throw InputError(path + ": record " + std::to_string(index) + ": null object");

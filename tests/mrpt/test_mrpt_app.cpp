@@ -32,16 +32,17 @@ FreeInitApp makeApp(const std::string& rawlog, const std::string& out) {
 }
 }  // namespace
 
-// Tolerances: the issue's targets where the estimator meets them on these samples; the gravity
-// tolerance of the dynamic sample follows what the estimator reaches on it today (see README).
+// Tolerances: issue 3's targets (body velocity <= 0.05 m/s; gravity <= 0.5 deg on a rotational
+// start, where the accelerometer bias is observable). The gyro bias is not checked on dyna_01: in
+// a short moving window it is not observable from Doppler + gyro (DESIGN.md).
 TEST(FreeInitAppEndToEnd, DynamicSampleDyna01) {
   const std::string out = outDir("dyna_01");
   auto app = makeApp(kSrc + "/rawlogs/dyna_01.rawlog", out);
   std::ostringstream log;
   ASSERT_EQ(app.run(log), 0) << log.str();
   ASSERT_TRUE(app.errors_wrt_gt) << log.str();
-  EXPECT_LE(app.errors_wrt_gt->velocity, 0.06) << log.str();
-  EXPECT_LE(app.errors_wrt_gt->gravity_deg, 3.5) << log.str();
+  EXPECT_LE(app.errors_wrt_gt->velocity, 0.05) << log.str();
+  EXPECT_LE(app.errors_wrt_gt->gravity_deg, 0.5) << log.str();
   for (const char* f : {"initial_state.ini", "effective_config.ini", "errors_wrt_gt.ini",
                         "static_map.simplemap", "static_map.ply", "trajectory_tum.txt",
                         "velocimeter.csv", "static_map.png", "velocity.png"})
