@@ -4,6 +4,9 @@
 #include <freeinit/mrpt/SimApp.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <gtest/gtest.h>
+#include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/obs/CObservationPointCloud.h>
+#include <mrpt/obs/CSensoryFrame.h>
 
 #include <cmath>
 #include <filesystem>
@@ -49,6 +52,21 @@ TEST(FreeInitAppEndToEnd, DynamicSampleDyna01) {
     EXPECT_TRUE(fs::is_regular_file(fs::path(out) / f)) << f;
   for (const auto& e : fs::directory_iterator(out))
     EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
+
+  // The simple map holds stock MRPT classes only, so loaders without our plugin can use it.
+  mrpt::maps::CSimpleMap map;
+  ASSERT_TRUE(map.loadFromFile((fs::path(out) / "static_map.simplemap").string()));
+  ASSERT_EQ(map.size(), 1u);
+  const auto sf = map.getAsPair(0).sf;
+  ASSERT_TRUE(sf);
+  for (const auto& o : *sf) {
+    EXPECT_EQ(std::string(o->GetRuntimeClass()->className).rfind("mrpt::", 0), 0u);
+    auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(o);
+    ASSERT_TRUE(pc && pc->pointcloud);
+    EXPECT_EQ(std::string(pc->pointcloud->GetRuntimeClass()->className),
+              "mrpt::maps::CSimplePointsMap");
+    EXPECT_EQ(pc->pointcloud->size(), app.result.static_map.size());
+  }
 }
 
 TEST(FreeInitAppEndToEnd, StaticSampleStat01) {
