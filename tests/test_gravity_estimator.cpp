@@ -101,6 +101,9 @@ GravityEstimator::Parameters paramsFor(GravityEstimator::Formulation f, const Wi
   GravityEstimator::Parameters p;
   p.formulation = f;
   p.accel_sigma = std::max(c.sigma_a, 1e-4);
+  // The white velocity noise of this test is drawn independently for v_b and v_l; only the
+  // correlated part is shared, as in the velocimeter.
+  p.equations_share_errors = c.sigma_v_corr > 0;
   return p;
 }
 

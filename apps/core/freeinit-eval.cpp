@@ -39,6 +39,7 @@ int main(int argc, char** argv) {
     double duration = 1.2;
     bool baselines = true, trace = false, zero_bg = false;
     int passes = -1;
+    double tau = -1;
     std::vector<std::string> presets;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -50,6 +51,7 @@ int main(int argc, char** argv) {
       else if (a == "--trace") trace = true;
       else if (a == "--zero-gyro-bias") zero_bg = true;
       else if (a == "--passes" && i + 1 < argc) passes = std::atoi(argv[++i]);
+      else if (a == "--tau" && i + 1 < argc) tau = std::atof(argv[++i]);
       else presets.push_back(a);
     }
     if (presets.empty()) presets = freeinit::sim::presetNames();
@@ -68,6 +70,7 @@ int main(int argc, char** argv) {
         cfg.extrinsics = rec.extrinsics;
         cfg.velocimeter.point_stride = stride;
         if (passes >= 0) cfg.window.refinement_passes = passes;
+        if (tau >= 0) cfg.gravity.velocity_error_correlation_time = tau;
         const auto t0 = std::chrono::steady_clock::now();
         const auto r = freeinit::FreeInit::run(cfg, rec.imu, rec.frames);
         const double ms =

@@ -56,6 +56,7 @@ struct FreeInit::Impl {
 
   // Passes: the paper's, then accelerometer-aided refinements (see WindowParams).
   int pass = 0;
+  Vec3 b_g_start = Vec3::Zero();  ///< gyro bias the velocimeter starts from in this pass
   VelocityFit boot_fit;
   bool boot_static = false;
   GravityEstimate gravity;  ///< of the last finished pass
@@ -153,6 +154,7 @@ struct FreeInit::Impl {
     k0 = k;
     k_end = k0 + static_cast<std::size_t>(cfg.window.imu_samples) - 1;
     boot_fit = fit;
+    b_g_start = vp.gyro_bias_prior;
     const auto& sp = cfg.static_detector;
     boot_static = sp.enabled && fit.v_l.norm() < sp.max_speed &&
                   (imu[k0].gyro - vp.gyro_bias_prior).norm() <
@@ -174,7 +176,9 @@ struct FreeInit::Impl {
     result.trajectory.clear();
     auto& d = result.diag;
     d.points_seen = d.points_used = d.points_skipped = d.points_rejected = d.gyro_updates = 0;
-    div.emplace(cfg.velocimeter, cfg.extrinsics);
+    VelocimeterParams vp = cfg.velocimeter;
+    vp.gyro_bias_prior = b_g_start;
+    div.emplace(vp, cfg.extrinsics);
     // The bootstrap points are processed again by the filter: its covariance is widened so that
     // it acts as a starting point and a gate, not as information counted twice.
     div->start(0.0, boot_fit.v_l, boot_fit.cov * 100.0, imu[k0].gyro);
@@ -234,10 +238,13 @@ struct FreeInit::Impl {
   /// Solves b_a and gravity; starts the next pass and returns true if there is one.
   bool endOfPass() {
     const double t0 = wallSeconds();
-    gravity = GravityEstimator(cfg.gravity).estimate(kinematics, cfg.extrinsics);
+    gravity = GravityEstimator(cfg.gravity).estimate(kinematics, cfg.extrinsics, div->covBg());
     result.diag.time_solver += wallSeconds() - t0;
     if (gravity.ok && pass < cfg.window.refinement_passes) {
       ++pass;
+      // The next pass integrates with the corrected gyro bias (same prior width: the window's
+      // data must not be counted twice).
+      b_g_start = div->b_g() + gravity.delta_b_g;
       startPass();
       return true;
     }
@@ -375,10 +382,22 @@ void FreeInit::Impl::finalize() {
     return;
   }
 
-  // Gravity-aligned world: the smallest rotation taking the estimated gravity to -z.
-  const Mat3 R_align =
-      Quat::FromTwoVectors(ge.g_w.normalized(), Vec3(0, 0, -1)).toRotationMatrix();
-  const Mat3 R_w0b = integrator.R_wb();
+  // Gyro-bias correction of the attitude (left, world-frame perturbation, see GravityEstimate):
+  // R_w0b,true(t) = Exp(-M(t) db) R_w0b(t), M(t) = int_0^t R_w0b dt.
+  std::vector<Mat3> M(kinematics.size(), Mat3::Zero());
+  for (std::size_t k = 1; k < kinematics.size(); ++k)
+    M[k] = M[k - 1] + 0.5 * (kinematics[k].t - kinematics[k - 1].t) *
+                          (kinematics[k - 1].R_wb + kinematics[k].R_wb);
+  const Vec3& db = ge.delta_b_g;
+  for (std::size_t k = 0; k < result.trajectory.size() && k < M.size(); ++k) {
+    auto& q = result.trajectory[k].q_wb;
+    q = (Quat(Exp(Vec3(-M[k] * db))) * q).normalized();
+  }
+  const Mat3 M_end = M.back();
+  const Mat3 R_w0b = Exp(Vec3(-M_end * db)) * integrator.R_wb();
+
+  // Gravity-aligned world with the yaw of the first body frame (w0).
+  const Mat3 R_align = alignToGravity(ge.g_w);
   const Mat3 R_wb = R_align * R_w0b;
   InitialState& s = result.state;
   s.status = InitStatus::Ok;
@@ -388,41 +407,48 @@ void FreeInit::Impl::finalize() {
   s.p_w = R_align * integrator.p_w();
   const Vec3 v_b = div->v_b();
   s.v_w = R_wb * v_b;
-  s.b_g = div->b_g();
+  s.b_g = div->b_g() + db;
   s.b_a = ge.b_a;
   s.g_w = Vec3(0, 0, -kGravity);
 
   // Covariance, order [dtheta p v b_g b_a g], dtheta a right perturbation of R_wb.
-  // Tilt from the gravity estimate: g_b = R_w0b^T g_w0 and g_b,true = g_b + [g_b]x dtheta, so on
-  // the tangent plane dtheta = M dg_w0 with M = -[g_b]x R_w0b^T / |g|^2.
+  // x = [dg_w0, db_a, db_g] has the solver's covariance; where the solver did not estimate the
+  // gyro bias its block is the velocimeter's (uncorrelated).
+  Eigen::Matrix<double, 9, 9> C = ge.cov_full;
+  if (C.block<3, 3>(6, 6).isZero()) {
+    C.block<3, 3>(6, 6) = div->covBg();
+  }
+  // Tilt: g_b = R_w0b^T g_w0 with R_w0b,true = Exp(-M_end db) R_w0b, so
+  //   dg_b = R_w0b^T (dg_w0 - [g_w0]x M_end db),  and g_b,true = g_b + [g_b]x dtheta gives the
+  // tangent part dtheta = -[g_b]x dg_b / |g|^2. Yaw (about gravity) from the gyro bias only:
+  //   the right perturbation of Exp(-M_end db) R_w0b is -R_w0b^T M_end db.
   const Vec3 g_b = R_w0b.transpose() * ge.g_w;
   const Vec3 up_b = -g_b.normalized();
-  const Mat3 M = -skew(g_b) * R_w0b.transpose() / (kGravity * kGravity);
-  const Mat3 cov_g = ge.cov.topLeftCorner<3, 3>();
-  const Mat3 cov_ba = ge.cov.bottomRightCorner<3, 3>();
-  const Mat3 cov_gba = ge.cov.topRightCorner<3, 3>();
-  const Mat3 P_bg = div->covBg();
-  const Mat3 tilt = Mat3::Identity() - up_b * up_b.transpose();
+  const double g2 = kGravity * kGravity;
+  Eigen::Matrix<double, 3, 9> A_th = Eigen::Matrix<double, 3, 9>::Zero();
+  A_th.block<3, 3>(0, 0) = -skew(g_b) * R_w0b.transpose() / g2;
+  A_th.block<3, 3>(0, 6) = skew(g_b) * R_w0b.transpose() * skew(ge.g_w) * M_end / g2 -
+                           up_b * up_b.transpose() * R_w0b.transpose() * M_end;
   const double dt_imu = T / std::max(1, cfg.window.imu_samples - 1);
-  // Attitude integration: an unknown gyro bias tilts the end attitude relative to the mean
-  // attitude the gravity fit sees (~T/2), and turns the yaw (defined at the start) by ~T.
-  Mat3 cov_th = M * cov_g * M.transpose() + tilt * P_bg * tilt.transpose() * (T * T / 4.0) +
-                up_b * up_b.transpose() * (up_b.dot(P_bg * up_b) * T * T) +
-                Mat3::Identity() * (cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma *
-                                    dt_imu * T);
+  const double var_gyro_walk =
+      cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma * dt_imu * T;
+  const Mat3 cov_th = A_th * C * A_th.transpose() + Mat3::Identity() * var_gyro_walk;
   const Mat3 cov_vb = div->covVb();
   const Mat3 J_v_th = -R_wb * skew(v_b);  // dv_w/dtheta
   Cov18 P = Cov18::Zero();
   P.block<3, 3>(kTheta, kTheta) = cov_th;
+  // Position: velocity errors integrated over the window, taken as fully correlated (an upper
+  // bound for a window this short).
   P.block<3, 3>(kPos, kPos) = R_wb * cov_vb * R_wb.transpose() * (T * T) +
                               Mat3::Identity() * 1e-6;
   P.block<3, 3>(kVel, kVel) =
       R_wb * cov_vb * R_wb.transpose() + J_v_th * cov_th * J_v_th.transpose();
   P.block<3, 3>(kTheta, kVel) = cov_th * J_v_th.transpose();
-  P.block<3, 3>(kVel, kBg) = R_wb * div->covBody().block<3, 3>(0, 6);
-  P.block<3, 3>(kBg, kBg) = P_bg;
-  P.block<3, 3>(kBa, kBa) = cov_ba;
-  P.block<3, 3>(kTheta, kBa) = M * cov_gba;
+  P.block<3, 3>(kBg, kBg) = C.block<3, 3>(6, 6);
+  P.block<3, 3>(kBa, kBa) = C.block<3, 3>(3, 3);
+  P.block<3, 3>(kTheta, kBa) = A_th * C.block<9, 3>(0, 3);
+  P.block<3, 3>(kTheta, kBg) = A_th * C.block<9, 3>(0, 6);
+  P.block<3, 3>(kBg, kBa) = C.block<3, 3>(6, 3);
   // Gravity is fixed by the choice of world frame; its uncertainty lives in the attitude block.
   P.block<3, 3>(kGrav, kGrav) = Mat3::Identity() * 1e-6;
   s.cov = P.selfadjointView<Eigen::Upper>();

@@ -46,42 +46,46 @@ Mat3 sqrtInformation(const Mat3& cov) {
 //   LiDAR: y_k = R_wb,k R_bl v_l,k - R_wb,k (omega_k x p_bl),
 // the latter because v_lw = R_wb (v_b + omega x p_bl) and d/dt(R_wb (omega x p_bl)) =
 // R_wb (omega x (omega x p_bl) + alpha x p_bl): the lever-arm terms of the paper's LiDAR equation
-// integrate in closed form, and both equations share the same start velocity v0_w.
-// Residual (whitened by the velocimeter covariance plus the integrated accelerometer noise):
-//   r_k = L_k [ y_k - S_k + M_k b_a - g_w t_k - v0_w ].
-// With a first-order Gauss-Markov velocimeter error e_k = phi e_{k-1} + u_k (phi = exp(-dt/tau))
-// the residuals are quasi-differenced, r'_k = r_k - phi r_{k-1}, whose error u_k is white with
-// covariance (1 - phi^2) C_k; r'_k keeps the same linear form with y - S, M and t replaced by
-// their differences and v0_w scaled by (1 - phi). The functor takes these combined constants.
+// integrate in closed form, and both equations share the same start velocity v0_w. Residual:
+//   e_k = y_k - S_k + M_k b_a - g_w (t_k - t_0) - v0_w + D_k db_g.
+//
+// Gyro bias. R_wb was integrated with a gyro bias that is off by db (unknown); to first order
+// R_wb,true(t) = Exp(-M(t) db) R_wb(t), since the attitude error grows as d(phi)/dt = R_wb db in w
+// and M(t) = int R_wb dt is the same integral as above. Then y_k and S_k change linearly:
+//   y_k -> y_k + [y_k]x M_k db,   S_k -> S_k + int [R_wb accel]x M db dt,
+// so D_k = [y_k]x M_k - int [R_wb accel]x M dt (the b_a M term is second order). db has a prior
+// from the velocimeter; rotation about different axes makes it observable.
+//
+// e_k is affine in the unknowns; after whitening in time (addWhitenedResiduals) each residual is
+//   r_k = L_k (c_k + G_g g_w + G_ba b_a + G_v0 v0_w + G_db db_g).
 // ---------------------------------------------------------------------------------------------
 struct IntegratedVelocityResidual {
-  IntegratedVelocityResidual(const Vec3& y_minus_S_w, const Mat3& M_w, double t, double c_v0,
-                             const Mat3& sqrt_info)
-      : y_minus_S_w_(y_minus_S_w), M_w_(M_w), t_(t), c_v0_(c_v0), sqrt_info_(sqrt_info) {}
+  IntegratedVelocityResidual(const Vec3& c, const Mat3& G_g, const Mat3& G_ba, const Mat3& G_v0,
+                             const Mat3& G_db, const Mat3& sqrt_info)
+      : c_(c), G_g_(G_g), G_ba_(G_ba), G_v0_(G_v0), G_db_(G_db), sqrt_info_(sqrt_info) {}
 
   template <typename T>
   bool operator()(const T* const g_w_ptr, const T* const b_a_ptr, const T* const v0_w_ptr,
-                  T* residual_ptr) const {
+                  const T* const db_g_ptr, T* residual_ptr) const {
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> g_w(g_w_ptr);
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> b_a(b_a_ptr);
     const Eigen::Map<const Eigen::Matrix<T, 3, 1>> v0_w(v0_w_ptr);
-    const Eigen::Matrix<T, 3, 1> e =
-        y_minus_S_w_.cast<T>() + M_w_.cast<T>() * b_a - g_w * T(t_) - v0_w * T(c_v0_);
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> db_g(db_g_ptr);
+    const Eigen::Matrix<T, 3, 1> e = c_.cast<T>() + G_g_.cast<T>() * g_w + G_ba_.cast<T>() * b_a +
+                                     G_v0_.cast<T>() * v0_w + G_db_.cast<T>() * db_g;
     Eigen::Map<Eigen::Matrix<T, 3, 1>> residual(residual_ptr);
     residual = sqrt_info_.cast<T>() * e;
     return true;
   }
 
-  static ceres::CostFunction* Create(const Vec3& y_minus_S_w, const Mat3& M_w, double t,
-                                     double c_v0, const Mat3& sqrt_info) {
-    return new ceres::AutoDiffCostFunction<IntegratedVelocityResidual, 3, 3, 3, 3>(
-        new IntegratedVelocityResidual(y_minus_S_w, M_w, t, c_v0, sqrt_info));
+  static ceres::CostFunction* Create(const Vec3& c, const Mat3& G_g, const Mat3& G_ba,
+                                     const Mat3& G_v0, const Mat3& G_db, const Mat3& sqrt_info) {
+    return new ceres::AutoDiffCostFunction<IntegratedVelocityResidual, 3, 3, 3, 3, 3>(
+        new IntegratedVelocityResidual(c, G_g, G_ba, G_v0, G_db, sqrt_info));
   }
 
-  Vec3 y_minus_S_w_;
-  Mat3 M_w_;
-  double t_;
-  double c_v0_;
+  Vec3 c_;
+  Mat3 G_g_, G_ba_, G_v0_, G_db_;
   Mat3 sqrt_info_;
 };
 
@@ -177,6 +181,27 @@ struct AccelBiasPrior {
   double inv_sigma_;
 };
 
+// ---------------------------------------------------------------------------------------------
+// Prior on the gyro-bias correction, db ~ N(0, C): r = L db with L^T L = C^-1.
+// ---------------------------------------------------------------------------------------------
+struct GyroBiasPrior {
+  explicit GyroBiasPrior(const Mat3& sqrt_info) : sqrt_info_(sqrt_info) {}
+
+  template <typename T>
+  bool operator()(const T* const db_ptr, T* residual_ptr) const {
+    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> db(db_ptr);
+    Eigen::Map<Eigen::Matrix<T, 3, 1>> residual(residual_ptr);
+    residual = sqrt_info_.cast<T>() * db;
+    return true;
+  }
+
+  static ceres::CostFunction* Create(const Mat3& sqrt_info) {
+    return new ceres::AutoDiffCostFunction<GyroBiasPrior, 3, 3>(new GyroBiasPrior(sqrt_info));
+  }
+
+  Mat3 sqrt_info_;
+};
+
 /// Second-order Butterworth low-pass (bilinear transform, prewarped), applied forward and backward
 /// (zero phase) with an odd extension at both ends so that linear trends pass without transients.
 class ZeroPhaseLowPass {
@@ -263,10 +288,61 @@ std::pair<double, double> filteredNoiseGains(double dt, double cutoff_hz) {
   return {deriv * 2.0 / fs, value * 2.0 / fs};
 }
 
+/// Adds the integrated residuals e_k = a_k + B_k x (x = [g_w; b_a; v0_w; db_g]), whitened in time.
+///
+/// Noise model: e_k's error is u_k + s_k with u_k the velocimeter's velocity error (covariance C_k,
+/// first-order Gauss-Markov with coefficient phi between samples; phi = 0: white) and s_k the
+/// accelerometer noise integrated since the window start (a random walk, var_acc_rate per second).
+/// Residuals relative to the window start are therefore correlated; a Kalman filter over the noise
+/// state [u; s] turns them into innovations, which are white, so least squares on the whitened
+/// innovations is the exact generalized least squares of this model. The filter gains depend on
+/// the covariances only, so the innovations are affine in x: the filter is run on a_k and on each
+/// column of B_k.
+void addWhitenedResiduals(const std::vector<Vec3>& a, const std::vector<Eigen::Matrix<double, 3, 12>>& B,
+                          const std::vector<Mat3>& C, const std::vector<KinematicSample>& samples,
+                          double phi, double var_acc_rate, double weight,
+                          ceres::LossFunction* loss, double* g_w, double* b_a, double* v0_w,
+                          double* db_g, ceres::Problem& problem) {
+  using Mat36 = Eigen::Matrix<double, 3, 6>;
+  using Cols = Eigen::Matrix<double, 6, 13>;  // state estimate of the noise for a and B's columns
+  const std::size_t n = a.size();
+  Mat36 H;
+  H << Mat3::Identity(), Mat3::Identity();
+  Mat6 P = Mat6::Zero();
+  P.topLeftCorner<3, 3>() = C[0];
+  Cols x = Cols::Zero();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (k > 0) {
+      const double dt = samples[k].t - samples[k - 1].t;
+      Mat6 F = Mat6::Identity();
+      F.topLeftCorner<3, 3>() *= phi;
+      Mat6 Q = Mat6::Zero();
+      Q.topLeftCorner<3, 3>() = (1.0 - phi * phi) * C[k];
+      Q.bottomRightCorner<3, 3>() = var_acc_rate * dt * Mat3::Identity();
+      P = F * P * F.transpose() + Q;
+      x = F * x;
+    }
+    Eigen::Matrix<double, 3, 13> z;
+    z << a[k], B[k];
+    const Eigen::Matrix<double, 3, 13> nu = z - H * x;
+    const Mat3 S = H * P * H.transpose();
+    const Eigen::Matrix<double, 6, 3> K = P * H.transpose() * S.inverse();
+    x += K * nu;
+    P = ((Mat6::Identity() - K * H) * P).eval();
+    P = 0.5 * (P + P.transpose()).eval();
+    problem.AddResidualBlock(
+        IntegratedVelocityResidual::Create(nu.col(0), nu.middleCols<3>(1), nu.middleCols<3>(4),
+                                           nu.middleCols<3>(7), nu.middleCols<3>(10),
+                                           weight * sqrtInformation(S)),
+        loss, g_w, b_a, v0_w, db_g);
+  }
+}
+
 }  // namespace
 
 GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& samples,
-                                           const Extrinsics& extrinsics) const {
+                                           const Extrinsics& extrinsics,
+                                           const Mat3& gyro_bias_cov) const {
   const Parameters& P = params_;
   if (!P.use_body_equation && !P.use_lidar_equation)
     throw std::invalid_argument(
@@ -305,6 +381,11 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
   double g_w[3] = {g_init.x(), g_init.y(), g_init.z()};
   double b_a[3] = {0, 0, 0};
   double v0_w[3] = {0, 0, 0};
+  double db_g[3] = {0, 0, 0};
+  const bool estimate_db = P.formulation == Formulation::Integrated && P.estimate_gyro_bias &&
+                           gyro_bias_cov.allFinite() &&
+                           Eigen::LLT<Mat3>(gyro_bias_cov).info() == Eigen::Success &&
+                           gyro_bias_cov.trace() > 0;
 
   ceres::Problem problem;  // owns the cost functions, the loss and the manifold
   // One loss object shared by the residual blocks of this problem only (Ceres deletes it once).
@@ -319,57 +400,45 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
     const double tau = P.velocity_error_correlation_time;
     const double phi = tau > 0 ? std::exp(-dt_mean / tau) : 0.0;
     const double var_acc_rate = P.accel_sigma * P.accel_sigma * dt_mean;  // [(m/s)^2 / s]
-    // Per sample and equation: y - S (the measured velocity minus the integrated specific
-    // force), M, t and the measurement covariance C; combined with the previous sample's values
-    // when the errors are correlated.
-    struct Term {
-      Vec3 y_minus_S;
-      Mat3 M;
-      double t;
-      Mat3 cov;
-    };
-    Vec3 S_w = Vec3::Zero();  // trapezoidal integral of R_wb accel
-    Mat3 M_w = Mat3::Zero();  // trapezoidal integral of R_wb
-    Term prev[2];
-    for (std::size_t k = 0; k < n; ++k) {
-      const KinematicSample& s = samples[k];
-      if (k > 0) {
-        const KinematicSample& sp = samples[k - 1];
-        const double dt = s.t - sp.t;
-        S_w += 0.5 * dt * (sp.R_wb * sp.accel + s.R_wb * s.accel);
-        M_w += 0.5 * dt * (sp.R_wb + s.R_wb);
-      }
-      const double tk = s.t - t0;
-      for (int eq = 0; eq < 2; ++eq) {
-        if ((eq == 0 && !P.use_body_equation) || (eq == 1 && !P.use_lidar_equation)) continue;
-        Term cur;
+    // Both equations see the same accelerometer noise and velocity errors from the same points:
+    // each gets half the information so that together they count it once.
+    const int n_eq = (P.use_body_equation ? 1 : 0) + (P.use_lidar_equation ? 1 : 0);
+    const double eq_weight =
+        P.equations_share_errors ? 1.0 / std::sqrt(static_cast<double>(n_eq)) : 1.0;
+    std::vector<Vec3> a(n);
+    std::vector<Eigen::Matrix<double, 3, 12>> B(n);
+    std::vector<Mat3> C(n);
+    for (int eq = 0; eq < 2; ++eq) {
+      if ((eq == 0 && !P.use_body_equation) || (eq == 1 && !P.use_lidar_equation)) continue;
+      Vec3 S_w = Vec3::Zero();  // trapezoidal integral of R_wb accel
+      Mat3 M_w = Mat3::Zero();  // trapezoidal integral of R_wb
+      Mat3 N_w = Mat3::Zero();  // trapezoidal integral of [R_wb accel]x M
+      for (std::size_t k = 0; k < n; ++k) {
+        const KinematicSample& s = samples[k];
+        if (k > 0) {
+          const KinematicSample& sp = samples[k - 1];
+          const double dt = s.t - sp.t;
+          const Mat3 M_prev = M_w;
+          S_w += 0.5 * dt * (sp.R_wb * sp.accel + s.R_wb * s.accel);
+          M_w += 0.5 * dt * (sp.R_wb + s.R_wb);
+          N_w += 0.5 * dt *
+                 (skew(Vec3(sp.R_wb * sp.accel)) * M_prev + skew(Vec3(s.R_wb * s.accel)) * M_w);
+        }
+        Vec3 y;
         if (eq == 0) {
-          cur.y_minus_S = s.R_wb * s.v_b - S_w;
-          cur.cov = s.R_wb * s.cov_v_b * s.R_wb.transpose();
+          y = s.R_wb * s.v_b;
+          C[k] = s.R_wb * s.cov_v_b * s.R_wb.transpose();
         } else {
           const Mat3 R_wl = s.R_wb * R_bl;
-          cur.y_minus_S = R_wl * s.v_l - s.R_wb * s.omega_b.cross(p_bl) - S_w;
-          cur.cov = R_wl * s.cov_v_l * R_wl.transpose();
+          y = R_wl * s.v_l - s.R_wb * s.omega_b.cross(p_bl);
+          C[k] = R_wl * s.cov_v_l * R_wl.transpose();
         }
-        cur.M = M_w;
-        cur.t = tk;
-        ceres::CostFunction* cost = nullptr;
-        if (k == 0 || phi == 0.0) {
-          const Mat3 cov = cur.cov + var_acc_rate * tk * Mat3::Identity();
-          cost = IntegratedVelocityResidual::Create(cur.y_minus_S, cur.M, cur.t, 1.0,
-                                                    sqrtInformation(cov));
-        } else {
-          const Term& p = prev[eq];
-          // Accelerometer noise of S_k - phi S_{k-1} = (1 - phi) S_{k-1} + (S_k - S_{k-1}).
-          const double var_acc = var_acc_rate * ((1 - phi) * (1 - phi) * p.t + (tk - p.t));
-          const Mat3 cov = (1 - phi * phi) * cur.cov + var_acc * Mat3::Identity();
-          cost = IntegratedVelocityResidual::Create(cur.y_minus_S - phi * p.y_minus_S,
-                                                    cur.M - phi * p.M, cur.t - phi * p.t, 1.0 - phi,
-                                                    sqrtInformation(cov));
-        }
-        problem.AddResidualBlock(cost, loss, g_w, b_a, v0_w);
-        prev[eq] = cur;
+        // e_k = a_k + B_k [g_w; b_a; v0_w; db_g]
+        a[k] = y - S_w;
+        B[k] << -(s.t - t0) * Mat3::Identity(), M_w, -Mat3::Identity(), skew(y) * M_w - N_w;
       }
+      addWhitenedResiduals(a, B, C, samples, phi, var_acc_rate, eq_weight, loss, g_w, b_a, v0_w,
+                           db_g, problem);
     }
   } else {
     // Differentiated (paper) form: filter, then central differences.
@@ -420,6 +489,13 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
   }
 
   problem.AddResidualBlock(AccelBiasPrior::Create(P.accel_bias_prior_sigma), nullptr, b_a);
+  if (P.formulation == Formulation::Integrated) {
+    if (estimate_db)
+      problem.AddResidualBlock(GyroBiasPrior::Create(sqrtInformation(gyro_bias_cov)), nullptr,
+                               db_g);
+    else
+      problem.SetParameterBlockConstant(db_g);
+  }
   problem.SetManifold(g_w, new ceres::SphereManifold<3>());
   for (int i = 0; i < 3; ++i) {
     problem.SetParameterLowerBound(b_a, i, -P.accel_bias_bound);
@@ -450,19 +526,26 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
   cov_options.algorithm_type = ceres::DENSE_SVD;
   cov_options.num_threads = 1;
   ceres::Covariance covariance(cov_options);
-  const std::vector<std::pair<const double*, const double*>> blocks = {
-      {g_w, g_w}, {g_w, b_a}, {b_a, b_a}};
+  std::vector<const double*> cov_blocks = {g_w, b_a};
+  if (estimate_db) cov_blocks.push_back(db_g);
+  std::vector<std::pair<const double*, const double*>> blocks;
+  for (std::size_t i = 0; i < cov_blocks.size(); ++i)
+    for (std::size_t j = i; j < cov_blocks.size(); ++j)
+      blocks.emplace_back(cov_blocks[i], cov_blocks[j]);
   if (!covariance.Compute(blocks, &problem)) {
     out.message = "gravity/accelerometer-bias covariance is rank deficient";
     return out;
   }
-  Eigen::Matrix<double, 6, 6, Eigen::RowMajor> cov;
-  if (!covariance.GetCovarianceMatrix({g_w, b_a}, cov.data())) {
+  const int dim = 3 * static_cast<int>(cov_blocks.size());
+  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, Eigen::RowMajor> cov(dim, dim);
+  if (!covariance.GetCovarianceMatrix(cov_blocks, cov.data())) {
     out.message = "gravity/accelerometer-bias covariance could not be extracted";
     return out;
   }
-  out.cov = Mat6(cov);
-  out.cov = 0.5 * (out.cov + out.cov.transpose()).eval();
+  out.cov_full.setZero();
+  out.cov_full.topLeftCorner(dim, dim) = 0.5 * (cov + cov.transpose());
+  out.cov = out.cov_full.topLeftCorner<6, 6>();
+  out.delta_b_g = Vec3(db_g[0], db_g[1], db_g[2]);
   out.ok = true;
   out.message = summary.BriefReport();
   return out;

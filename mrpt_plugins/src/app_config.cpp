@@ -35,6 +35,8 @@ void visitConfig(Visitor& v, AppConfig& c) {
     "random walk density of the LiDAR and body velocities");
   v("velocimeter", "omega_random_walk", vel.omega_random_walk, "rad/s^2/sqrt(Hz)",
     "random walk density of the angular velocity");
+  v("velocimeter", "aided_vel_random_walk", vel.aided_vel_random_walk, "m/s^2/sqrt(Hz)",
+    "velocity random walk density in the accelerometer-aided refinement passes");
   v("velocimeter", "gyro_bias_random_walk", vel.gyro_bias_random_walk, "rad/s/sqrt(s)",
     "Gauss-Markov gyro bias driving noise");
   v("velocimeter", "gyro_bias_tau", vel.gyro_bias_tau, "s", "Gauss-Markov correlation time");
@@ -72,6 +74,8 @@ void visitConfig(Visitor& v, AppConfig& c) {
 
   v("window", "imu_samples", c.core.window.imu_samples, "-",
     "window length in IMU samples (paper: ~100)");
+  v("window", "refinement_passes", c.core.window.refinement_passes, "-",
+    "accelerometer-aided passes after the paper's (0: the paper's single pass)");
 
   auto& g = c.core.gravity;
   v("gravity", "formulation", g.formulation, "-", "integrated | differentiated");
@@ -84,6 +88,12 @@ void visitConfig(Visitor& v, AppConfig& c) {
     "weak zero-mean prior on b_a");
   v("gravity", "lowpass_cutoff_hz", g.lowpass_cutoff_hz, "Hz",
     "low-pass cutoff of the differentiated formulation");
+  v("gravity", "velocity_error_correlation_time", g.velocity_error_correlation_time, "s",
+    "correlation time of the velocimeter's velocity error (0: white)");
+  v("gravity", "equations_share_errors", g.equations_share_errors, "bool",
+    "body and LiDAR velocities come from the same points: halve each equation's weight");
+  v("gravity", "estimate_gyro_bias", g.estimate_gyro_bias, "bool",
+    "estimate a gyro-bias correction with the integrated formulation");
   v("gravity", "loss_scale", g.loss_scale, "sigma", "Cauchy loss scale on whitened residuals");
   v("gravity", "max_iterations", g.max_iterations, "-", "Ceres iterations");
 

@@ -30,6 +30,12 @@ struct GravityEstimate {
   Vec3 b_a = Vec3::Zero();              ///< [m/s^2]
   /// Covariance of [g_w (3, rank 2: tangent to the sphere), b_a (3)], ambient coordinates.
   Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Identity();
+  /// Correction of the gyro bias used to integrate R_wb (integrated formulation with a gyro-bias
+  /// prior): b_g = b_g,used + delta_b_g, and the attitude becomes R_wb(t) = Exp(-M(t) delta_b_g)
+  /// R_wb,used(t) with M(t) = int_0^t R_wb,used dt (left, world-frame perturbation).
+  Vec3 delta_b_g = Vec3::Zero();
+  /// Covariance of [g_w, b_a, delta_b_g] (9x9, ambient coordinates); its top-left 6x6 is `cov`.
+  Eigen::Matrix<double, 9, 9> cov_full = Eigen::Matrix<double, 9, 9>::Identity();
   double final_cost = 0;
   int iterations = 0;
 };
@@ -53,8 +59,14 @@ class GravityEstimator {
     /// Gauss-Markov (AR(1)) with the samples' covariance as its stationary covariance; the
     /// integrated residuals are then whitened in time (quasi-differenced). 0: white errors.
     double velocity_error_correlation_time = 0.0;
+    /// The body and LiDAR velocities come from the same points (as in the velocimeter): when both
+    /// equations are used each gets half the information, so that together they count it once.
+    bool equations_share_errors = true;
     double loss_scale = 3.0;           ///< Cauchy loss scale on whitened residuals [sigma]
     int max_iterations = 50;
+    /// Estimate a correction of the gyro bias with the integrated formulation (needs the gyro
+    /// bias covariance, see estimate()).
+    bool estimate_gyro_bias = true;
   };
 
   GravityEstimator() = default;
@@ -62,8 +74,12 @@ class GravityEstimator {
   const Parameters& params() const { return params_; }
 
   /// Solves the problem. Requires >= 10 samples, sorted by time.
+  /// `gyro_bias_cov`, when positive definite, is the covariance [(rad/s)^2] of the gyro bias used
+  /// to integrate R_wb; the integrated formulation then also estimates its correction, which a
+  /// rotating platform makes observable (a zero matrix: the attitude is taken as exact).
   GravityEstimate estimate(const std::vector<KinematicSample>& samples,
-                           const Extrinsics& extrinsics) const;
+                           const Extrinsics& extrinsics,
+                           const Mat3& gyro_bias_cov = Mat3::Zero()) const;
 
  private:
   Parameters params_;
