@@ -9,6 +9,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -39,7 +40,8 @@ int main(int argc, char** argv) {
     double duration = 1.2;
     bool baselines = true, trace = false, zero_bg = false;
     int passes = -1;
-    double tau = -1;
+    double tau = -1, gyro_prior = 0;
+    bool no_db = false;
     std::vector<std::string> presets;
     for (int i = 1; i < argc; ++i) {
       const std::string a = argv[i];
@@ -52,6 +54,8 @@ int main(int argc, char** argv) {
       else if (a == "--zero-gyro-bias") zero_bg = true;
       else if (a == "--passes" && i + 1 < argc) passes = std::atoi(argv[++i]);
       else if (a == "--tau" && i + 1 < argc) tau = std::atof(argv[++i]);
+      else if (a == "--no-gyro-bias-estimate") no_db = true;
+      else if (a == "--gyro-prior" && i + 1 < argc) gyro_prior = std::atof(argv[++i]);
       else presets.push_back(a);
     }
     if (presets.empty()) presets = freeinit::sim::presetNames();
@@ -71,6 +75,15 @@ int main(int argc, char** argv) {
         cfg.velocimeter.point_stride = stride;
         if (passes >= 0) cfg.window.refinement_passes = passes;
         if (tau >= 0) cfg.gravity.velocity_error_correlation_time = tau;
+        if (no_db) cfg.gravity.estimate_gyro_bias = false;
+        if (gyro_prior > 0) {
+          // A gyro-bias prior as from a static calibration: the truth plus noise of that std.
+          std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(s));
+          std::normal_distribution<double> n01;
+          cfg.velocimeter.gyro_bias_prior =
+              rec.b_g + gyro_prior * freeinit::Vec3(n01(rng), n01(rng), n01(rng));
+          cfg.velocimeter.gyro_bias_sigma0 = gyro_prior;
+        }
         const auto t0 = std::chrono::steady_clock::now();
         const auto r = freeinit::FreeInit::run(cfg, rec.imu, rec.frames);
         const double ms =

@@ -120,9 +120,17 @@ Velocimeter::DopplerOutcome Velocimeter::updateDoppler(const Eigen::Vector3f& p_
   const double inv_S = 1.0 / S_b;
   const Eigen::Matrix<double, 9, 1> K = PH * inv_S;
   v_b_ += K.segment<3>(0) * r_b;
-  omega_b_ += K.segment<3>(3) * r_b;
-  b_g_ += K.segment<3>(6) * r_b;
-  P_b_.noalias() -= K * PH.transpose();
+  if (params_.doppler_updates_omega) {
+    omega_b_ += K.segment<3>(3) * r_b;
+    b_g_ += K.segment<3>(6) * r_b;
+    P_b_.noalias() -= K * PH.transpose();
+  } else {
+    // Schmidt ("consider") update: omega_b and b_g shape the gain through S but keep their
+    // estimates and covariance; only the v_b rows and columns change.
+    const Eigen::Matrix<double, 3, 9> dP = K.segment<3>(0) * PH.transpose();
+    P_b_.topRows<3>() -= dP;
+    P_b_.block<6, 3>(3, 0) -= dP.rightCols<6>().transpose();
+  }
   // LiDAR model: z = -d^T v_l.
   const double r_l = doppler + d.dot(v_l_);
   const Vec3 PHl = -(P_l_ * d);

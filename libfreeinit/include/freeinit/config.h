@@ -22,6 +22,11 @@ struct VelocimeterParams {
   double gyro_bias_sigma0 = 0.02;     ///< [rad/s] initial gyro bias std (typical MEMS)
   Vec3 gyro_bias_prior = Vec3::Zero();  ///< [rad/s] initial gyro bias (e.g. from a calibration)
   bool kinematic_propagation = true;  ///< add -omega x v and the gyro slope to the propagation
+  /// Let the Doppler update omega_b and b_g through the lever arm (the paper's full update).
+  /// Off: they are Schmidt "consider" states of the Doppler update (their uncertainty enters the
+  /// gain, their estimates come from the gyro and the gravity solve), so velocity-model errors at
+  /// speed cannot bend the attitude or the gyro bias through a few cm of lever arm.
+  bool doppler_updates_omega = false;
   double min_range = 1.0;             ///< [m] closer points are skipped
   double max_range = 150.0;           ///< [m]
   int point_stride = 1;               ///< use one point in N (1: every point)
