@@ -1,0 +1,230 @@
+// Speed and memory of the estimator core (issue 3, "Speed"), on one core:
+//   BM_VelocimeterDoppler  Doppler point updates per second through the velocimeter alone
+//                          (propagate + updateDoppler, gyro updates interleaved at 200 Hz as in the
+//                          real stream). items_per_second = points/s; target >= 3,000,000.
+//   BM_FreeInitRun         one whole initialization, FreeInit::run (velocimeter, integration,
+//                          mapping, solve, all passes) over 0.8 s of a preset at the default
+//                          60,000 points per frame; the window is the default 0.5 s (100 IMU
+//                          samples). Time per initialization in ms; targets: default
+//                          configuration < 20 ms, every point (point_stride = 1) < 150 ms.
+//                          Counters: peak_heap_bytes = peak extra heap during one run (including
+//                          the returned result), result_bytes = heap the result still holds,
+//                          allocs = allocations per run.
+// The recordings are simulated once, outside the timed loops.
+#include <freeinit/free_init.h>
+#include <freeinit/sim/simulator.h>
+#include <freeinit/velocimeter.h>
+
+#include <benchmark/benchmark.h>
+#include <malloc.h>
+
+#include <algorithm>
+#include <cstdint>
+#include <cstdlib>
+#include <map>
+#include <new>
+#include <string>
+#include <vector>
+
+// ---------------------------------------------------------------------------------------------
+// Heap accounting: the global allocation functions of this executable count live and peak bytes
+// (usable sizes as reported by glibc). Single-threaded benchmarks; the counters are plain.
+namespace {
+
+struct HeapStats {
+  std::int64_t live = 0;
+  std::int64_t peak = 0;
+  std::int64_t allocs = 0;
+};
+HeapStats g_heap;
+
+void* countedAlloc(std::size_t n) {
+  void* p = std::malloc(n == 0 ? 1 : n);
+  if (p == nullptr) throw std::bad_alloc();
+  g_heap.live += static_cast<std::int64_t>(malloc_usable_size(p));
+  g_heap.peak = std::max(g_heap.peak, g_heap.live);
+  ++g_heap.allocs;
+  return p;
+}
+
+void* countedAlignedAlloc(std::size_t n, std::align_val_t al) {
+  const std::size_t a = static_cast<std::size_t>(al);
+  void* p = std::aligned_alloc(a, (std::max<std::size_t>(n, 1) + a - 1) / a * a);
+  if (p == nullptr) throw std::bad_alloc();
+  g_heap.live += static_cast<std::int64_t>(malloc_usable_size(p));
+  g_heap.peak = std::max(g_heap.peak, g_heap.live);
+  ++g_heap.allocs;
+  return p;
+}
+
+void countedFree(void* p) noexcept {
+  if (p == nullptr) return;
+  g_heap.live -= static_cast<std::int64_t>(malloc_usable_size(p));
+  std::free(p);
+}
+
+}  // namespace
+
+void* operator new(std::size_t n) { return countedAlloc(n); }
+void* operator new[](std::size_t n) { return countedAlloc(n); }
+void* operator new(std::size_t n, std::align_val_t al) { return countedAlignedAlloc(n, al); }
+void* operator new[](std::size_t n, std::align_val_t al) { return countedAlignedAlloc(n, al); }
+void operator delete(void* p) noexcept { countedFree(p); }
+void operator delete[](void* p) noexcept { countedFree(p); }
+void operator delete(void* p, std::size_t) noexcept { countedFree(p); }
+void operator delete[](void* p, std::size_t) noexcept { countedFree(p); }
+void operator delete(void* p, std::align_val_t) noexcept { countedFree(p); }
+void operator delete[](void* p, std::align_val_t) noexcept { countedFree(p); }
+void operator delete(void* p, std::size_t, std::align_val_t) noexcept { countedFree(p); }
+void operator delete[](void* p, std::size_t, std::align_val_t) noexcept { countedFree(p); }
+
+namespace {
+
+constexpr double kSimDuration = 0.8;  ///< [s] covers the 0.5 s window and the bootstrap
+
+/// One simulated recording per preset (seed 1), made on first use.
+const freeinit::sim::Recording& recording(const std::string& name) {
+  static std::map<std::string, freeinit::sim::Recording> cache;
+  auto it = cache.find(name);
+  if (it == cache.end()) {
+    freeinit::sim::ScenarioConfig sc = freeinit::sim::preset(name, 1);
+    sc.duration = kSimDuration;
+    it = cache.emplace(name, freeinit::sim::simulate(sc)).first;
+  }
+  return it->second;
+}
+
+/// The velocimeter's input as one time-ordered stream: points in range and gyro samples.
+struct Stream {
+  struct Event {
+    double t = 0;        ///< [s] relative to the first IMU sample
+    std::int32_t imu = -1;  ///< IMU index for a gyro event, -1 for a point
+    Eigen::Vector3f p_l = Eigen::Vector3f::Zero();
+    double doppler = 0;
+  };
+  std::vector<Event> events;
+  std::int64_t points = 0;
+};
+
+Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::VelocimeterParams& vp) {
+  Stream s;
+  const double t0 = rec.imu.front().t;
+  std::vector<Stream::Event> pts;
+  for (const auto& f : rec.frames)
+    for (const auto& p : f.points) {
+      const double r = p.p_l.norm();
+      const double t = f.stamp + p.time_offset - t0;
+      if (t < 0 || r < vp.min_range || r > vp.max_range) continue;
+      pts.push_back({t, -1, p.p_l, p.doppler});
+    }
+  // Keep the points within the IMU span, merge in the gyro samples.
+  const double t_last = rec.imu.back().t - t0;
+  std::size_t k = 0;
+  for (const auto& e : pts) {
+    if (e.t > t_last) break;
+    while (k < rec.imu.size() && rec.imu[k].t - t0 < e.t) {
+      s.events.push_back({rec.imu[k].t - t0, static_cast<std::int32_t>(k), {}, 0});
+      ++k;
+    }
+    s.events.push_back(e);
+    ++s.points;
+  }
+  return s;
+}
+
+void BM_VelocimeterDoppler(benchmark::State& state, const std::string& name) {
+  const freeinit::sim::Recording& rec = recording(name);
+  const freeinit::FreeInitConfig cfg;
+  const Stream stream = makeStream(rec, cfg.velocimeter);
+  const auto& imu = rec.imu;
+  std::int64_t accepted = 0;
+  for (auto _ : state) {
+    freeinit::Velocimeter div(cfg.velocimeter, rec.extrinsics);
+    // Started from the true LiDAR velocity with a loose covariance (the bootstrap's job).
+    const freeinit::sim::TruthState x0 = rec.truth(imu.front().t);
+    const freeinit::Vec3 v_b0 = x0.R_wb.transpose() * x0.v_w;
+    const freeinit::Vec3 v_l0 =
+        rec.extrinsics.R_bl.transpose() * (v_b0 + x0.omega_b.cross(rec.extrinsics.p_bl));
+    div.start(0.0, v_l0, freeinit::Mat3::Identity() * 0.01, imu.front().gyro);
+    for (const Stream::Event& e : stream.events) {
+      div.propagate(e.t);
+      if (e.imu < 0) {
+        accepted += div.updateDoppler(e.p_l, e.doppler).accepted ? 1 : 0;
+      } else {
+        const std::size_t k = static_cast<std::size_t>(e.imu);
+        const bool has_next = k + 1 < imu.size();
+        div.updateGyro(imu[k].gyro, has_next ? imu[k + 1].gyro : imu[k].gyro,
+                       has_next ? imu[k + 1].t - imu[k].t : 0.0);
+      }
+    }
+    benchmark::DoNotOptimize(div.v_b().data());
+  }
+  state.SetItemsProcessed(state.iterations() * stream.points);
+  state.counters["points"] = static_cast<double>(stream.points);
+  state.counters["accepted_frac"] =
+      static_cast<double>(accepted) / static_cast<double>(state.iterations() * stream.points);
+}
+
+/// stride 0: the default configuration as it is.
+void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride) {
+  const freeinit::sim::Recording& rec = recording(name);
+  freeinit::FreeInitConfig cfg;
+  cfg.extrinsics = rec.extrinsics;
+  if (stride > 0) cfg.velocimeter.point_stride = stride;
+  HeapStats before{}, after{};
+  std::size_t used = 0;
+  double t_div = 0, t_solve = 0;
+  bool ok = true;
+  for (auto _ : state) {
+    before = g_heap;
+    g_heap.peak = g_heap.live;
+    {
+      const freeinit::InitResult r = freeinit::FreeInit::run(cfg, rec.imu, rec.frames);
+      after = g_heap;
+      used = r.diag.points_used;
+      t_div += r.diag.time_velocimeter;
+      t_solve += r.diag.time_solver;
+      ok = ok && r.state.status == freeinit::InitStatus::Ok;
+      benchmark::DoNotOptimize(r.state.v_w.data());
+    }
+  }
+  if (!ok) state.SkipWithError("initialization did not succeed");
+  const double n = static_cast<double>(state.iterations());
+  state.counters["stride"] = cfg.velocimeter.point_stride;
+  // Diagnostics: time_velocimeter includes the solves.
+  state.counters["ms_filter"] = 1e3 * (t_div - t_solve) / n;
+  state.counters["ms_solver"] = 1e3 * t_solve / n;
+  state.counters["points_used"] = static_cast<double>(used);
+  state.counters["peak_heap_bytes"] = static_cast<double>(after.peak - before.live);
+  state.counters["result_bytes"] = static_cast<double>(after.live - before.live);
+  state.counters["allocs"] = static_cast<double>(after.allocs - before.allocs);
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(BM_VelocimeterDoppler, dyna_05, std::string("dyna_05"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_VelocimeterDoppler, dyna_04, std::string("dyna_04"))
+    ->Unit(benchmark::kMillisecond);
+
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_default, std::string("dyna_05"), 0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_every_point, std::string("dyna_05"), 1)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_01_default, std::string("dyna_01"), 0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_01_every_point, std::string("dyna_01"), 1)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, stat_01_default, std::string("stat_01"), 0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, stat_01_every_point, std::string("stat_01"), 1)
+    ->Unit(benchmark::kMillisecond);
+// Decimation sweep on dyna_05 (the default's candidates).
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride2, std::string("dyna_05"), 2)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride4, std::string("dyna_05"), 4)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride8, std::string("dyna_05"), 8)
+    ->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
