@@ -64,8 +64,8 @@ struct FreeInit::Impl {
   // Zero-velocity mode.
   bool stationary = false;
   double last_check = 0;
-  Mat3 static_A = Mat3::Zero();
-  Vec3 static_b = Vec3::Zero();
+  std::vector<Vec3> static_dirs;  ///< points since the last motion check
+  std::vector<double> static_dopplers;
 
   explicit Impl(const FreeInitConfig& c) : cfg(c) { cfg.validate(); }
 
@@ -188,8 +188,8 @@ struct FreeInit::Impl {
     d.static_start = boot_static;
     d.static_duration = 0;
     last_check = 0;
-    static_A.setZero();
-    static_b.setZero();
+    static_dirs.clear();
+    static_dopplers.clear();
     if (pass > 0) setAcceleration(k0);
     recordSample(k0);
   }
@@ -273,10 +273,8 @@ struct FreeInit::Impl {
       const Vec3 d = pt.p_l.cast<double>() / r;
       residual = pt.doppler + d.dot(div->v_l());
       accepted = std::abs(residual) < vp.gate_min;
-      if (std::abs(pt.doppler) < 1.0) {
-        static_A.noalias() += d * d.transpose();
-        static_b -= pt.doppler * d;
-      }
+      static_dirs.push_back(d);
+      static_dopplers.push_back(pt.doppler);
     } else {
       const auto out = div->updateDoppler(pt.p_l, pt.doppler);
       accepted = out.accepted;
@@ -320,13 +318,16 @@ struct FreeInit::Impl {
     bool moving = (imu[k].gyro - div->b_g()).norm() > sp.max_gyro_dev;
     Vec3 v_ls = Vec3::Zero();
     if (t - last_check >= sp.check_period) {
-      const Eigen::SelfAdjointEigenSolver<Mat3> es(static_A);
-      if (es.eigenvalues()(0) > 10.0) {
-        v_ls = static_A.ldlt().solve(static_b);
+      // Robust (IRLS) velocity of the points since the last check: moving objects in view must
+      // not look like ego motion.
+      const VelocityFit fit = fitLidarVelocity(static_dirs, static_dopplers, cfg.bootstrap,
+                                               cfg.velocimeter.doppler_sigma);
+      if (fit.ok) {
+        v_ls = fit.v_l;
         moving = moving || v_ls.norm() > sp.max_speed;
       }
-      static_A.setZero();
-      static_b.setZero();
+      static_dirs.clear();
+      static_dopplers.clear();
       last_check = t;
     }
     if (!moving) return;

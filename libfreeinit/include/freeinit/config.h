@@ -16,10 +16,10 @@ struct VelocimeterParams {
   double vel_random_walk = 10.0;      ///< [m/s^2/sqrt(Hz)] v_l, v_b random walk density
   double omega_random_walk = 1.0;     ///< [rad/s^2/sqrt(Hz)] omega_b random walk density
   /// [m/s^2/sqrt(Hz)] v_l, v_b random walk density in the accelerometer-aided refinement passes
-  double aided_vel_random_walk = 0.3;
+  double aided_vel_random_walk = 0.1;
   double gyro_bias_random_walk = 1e-4;  ///< [rad/s/sqrt(s)] Gauss-Markov driving noise
   double gyro_bias_tau = 1000.0;      ///< [s] Gauss-Markov correlation time
-  double gyro_bias_sigma0 = 0.02;     ///< [rad/s] initial gyro bias std (typical MEMS)
+  double gyro_bias_sigma0 = 0.015;    ///< [rad/s] initial gyro bias std (typical MEMS)
   Vec3 gyro_bias_prior = Vec3::Zero();  ///< [rad/s] initial gyro bias (e.g. from a calibration)
   bool kinematic_propagation = true;  ///< add -omega x v and the gyro slope to the propagation
   /// Let the Doppler update omega_b and b_g through the lever arm (the paper's full update).

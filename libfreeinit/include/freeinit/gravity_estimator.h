@@ -53,7 +53,7 @@ class GravityEstimator {
     bool use_lidar_equation = true;    ///< residuals of the LiDAR kinematics (lever arm terms)
     double accel_sigma = 0.02;         ///< [m/s^2] accelerometer white noise per sample
     double accel_bias_bound = 0.5;     ///< [m/s^2] |b_a| per axis is kept below this
-    double accel_bias_prior_sigma = 0.2;  ///< [m/s^2] weak zero-mean prior (keeps b_a defined)
+    double accel_bias_prior_sigma = 0.1;  ///< [m/s^2] zero-mean prior (typical MEMS, ~10 mg)
     double lowpass_cutoff_hz = 10.0;   ///< [Hz] for the differentiated formulation (<= 0: off)
     /// [s] correlation time of the velocimeter's velocity error, modelled as first-order
     /// Gauss-Markov (AR(1)) with the samples' covariance as its stationary covariance; the
