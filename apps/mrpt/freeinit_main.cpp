@@ -4,6 +4,8 @@
 
 #include <iostream>
 
+#include <unistd.h>
+
 int main(int argc, char** argv) {
   try {
     TCLAP::CmdLine cmd("freeinit: initial state (attitude, velocity, biases, gravity, static map) "
@@ -18,6 +20,7 @@ int main(int argc, char** argv) {
     app.params.rawlog = rawlog.getValue();
     app.params.out_dir = out.getValue();
     app.params.progress = !quiet.getValue();
+    app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
     return app.run(std::cout);
   } catch (const std::exception& e) {
     std::cerr << "freeinit: error: " << e.what() << "\n";

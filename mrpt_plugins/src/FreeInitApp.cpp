@@ -1,5 +1,6 @@
 #include <freeinit/mrpt/FreeInitApp.h>
 #include <freeinit/mrpt/FreeInitObservationHandler.h>
+#include <freeinit/mrpt/ProgressBar.h>
 #include <freeinit/mrpt/input_validator.h>
 #include <freeinit/mrpt/map_export.h>
 #include <freeinit/mrpt/output_writers.h>
@@ -14,16 +15,6 @@
 
 namespace freeinit::mrpt_glue {
 namespace {
-
-void progressBar(std::ostream& log, std::size_t done, std::size_t total) {
-  constexpr int kWidth = 40;
-  const double f = total == 0 ? 1.0 : static_cast<double>(done) / static_cast<double>(total);
-  const int n = static_cast<int>(f * kWidth);
-  log << "\r[" << std::string(static_cast<std::size_t>(n), '#')
-      << std::string(static_cast<std::size_t>(kWidth - n), ' ') << "] " << std::setw(3)
-      << static_cast<int>(100 * f) << "% (" << done << "/" << total << " observations)"
-      << std::flush;
-}
 
 std::string v3(const Vec3& v) {
   std::ostringstream os;
@@ -44,8 +35,22 @@ int FreeInitApp::run(std::ostream& log) {
   log << "Effective configuration (" << params.config_file << "):\n" << effective.str() << "\n";
 
   // 2. Input: read everything, then validate. Any problem throws before an output exists.
-  log << "Reading " << params.rawlog << " ...\n";
-  const auto records = readRawlog(params.rawlog);
+  log << "Reading " << params.rawlog << "\n";
+  std::vector<RawlogRecord> records;
+  if (params.progress) {
+    ProgressBar inflate(log, "  inflating", "MB", params.progress_terminal, 1e6);
+    ProgressBar parse(log, "  parsing", "MB", params.progress_terminal, 1e6);
+    RawlogReadProgress cb;
+    cb.inflate = [&](std::size_t d, std::size_t t) { inflate.update(d, t); };
+    cb.parse = [&](std::size_t d, std::size_t t) {
+      inflate.finish();
+      parse.update(d, t);
+    };
+    records = readRawlog(params.rawlog, cb);
+    parse.finish(std::to_string(records.size()) + " observations");
+  } else {
+    records = readRawlog(params.rawlog);
+  }
   const ValidatedInput in = validateInput(records, config, params.rawlog);
   for (const auto& w : in.warnings) log << "Warning: " << w << "\n";
   if (in.invalid_points_dropped > 0)
@@ -60,8 +65,9 @@ int FreeInitApp::run(std::ostream& log) {
   // 3. Run the estimator over the observations in file order.
   FreeInitObservationHandler handler(config);
   const std::size_t total = records.size();
-  const std::size_t step = std::max<std::size_t>(1, total / 40);
   std::size_t done = 0;
+  log << "Estimating\n";
+  ProgressBar bar(log, "  running", "observations", params.progress_terminal);
   for (const auto& r : records) {
     try {
       handler.process(r.obs);
@@ -69,11 +75,13 @@ int FreeInitApp::run(std::ostream& log) {
       throw InputError(params.rawlog + ": record " + std::to_string(r.index) + ": " + e.what());
     }
     ++done;
-    if (params.progress && (done % step == 0 || handler.ready())) progressBar(log, done, total);
+    if (params.progress) bar.update(done, total);
     if (handler.ready()) break;
   }
+  const bool early = handler.ready() && done < total;
   if (!handler.ready()) handler.finish();
-  if (params.progress) log << "\n";
+  if (params.progress)
+    bar.finish(early ? "(state ready: the rest of the input is not needed)" : "");
   result = handler.result();
   const InitialState& s = result.state;
 

@@ -282,6 +282,9 @@ AppConfig load(const mrpt::config::CConfigFileBase& cfg, const std::string& sour
   return c;
 }
 
+// Wide enough for the longest key (velocity_error_correlation_time).
+constexpr int kKeyWidth = 32;
+
 class Dumper {
  public:
   explicit Dumper(std::ostream& out) : out_(out) {}
@@ -292,7 +295,7 @@ class Dumper {
     std::ostringstream v;
     v << std::setprecision(10);
     write(v, x);
-    out_ << std::left << std::setw(26) << k << "= " << std::setw(14) << v.str() << " ; ["
+    out_ << std::left << std::setw(kKeyWidth) << k << "= " << std::setw(14) << v.str() << " ; ["
          << unit << "] " << doc << "\n";
   }
   void section(const std::string& s) {
@@ -341,8 +344,10 @@ void dumpAppConfig(const AppConfig& config, std::ostream& out) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) r << R(i, j) << (i * 3 + j < 8 ? " " : "");
     t << p.x() << " " << p.y() << " " << p.z();
-    out << "R_bl                      = " << r.str() << " ; [-] LiDAR-to-IMU rotation, row-major\n"
-        << "p_bl                      = " << t.str() << " ; [m] LiDAR origin in the IMU frame\n";
+    out << std::left << std::setw(kKeyWidth) << "R_bl" << "= " << r.str()
+        << " ; [-] LiDAR-to-IMU rotation, row-major\n"
+        << std::setw(kKeyWidth) << "p_bl" << "= " << t.str()
+        << " ; [m] LiDAR origin in the IMU frame\n";
   }
 }
 

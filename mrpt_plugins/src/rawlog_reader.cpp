@@ -6,12 +6,14 @@
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <algorithm>
 #include <filesystem>
 #include <sstream>
 
 namespace freeinit::mrpt_glue {
 
-std::vector<RawlogRecord> readRawlog(const std::string& path) {
+std::vector<RawlogRecord> readRawlog(const std::string& path,
+                                     const RawlogReadProgress& progress) {
   registerClasses();
   if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": file not found");
 
@@ -21,12 +23,17 @@ std::vector<RawlogRecord> readRawlog(const std::string& path) {
     mrpt::io::CFileGZInputStream f;
     std::string err;
     if (!f.open(path, err)) throw InputError(path + ": cannot open: " + err);
+    const auto file_bytes = static_cast<std::size_t>(f.getTotalBytesCount());
     std::vector<unsigned char> chunk(1 << 20);
     for (;;) {
       const std::size_t n = f.Read(chunk.data(), chunk.size());
       if (n == 0) break;
       data.insert(data.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n));
+      if (progress.inflate)
+        progress.inflate(std::min(static_cast<std::size_t>(f.getPosition()), file_bytes),
+                         file_bytes);
     }
+    if (progress.inflate) progress.inflate(file_bytes, file_bytes);
   }
   if (data.empty()) throw InputError(path + ": empty file (no rawlog records)");
 
@@ -59,6 +66,7 @@ std::vector<RawlogRecord> readRawlog(const std::string& path) {
                     "clouds need the freeinit_mrpt plugin)") +
           ". MRPT: " + cause);
     }
+    if (progress.parse) progress.parse(static_cast<std::size_t>(mem.getPosition()), data.size());
     if (!obj) {
       throw InputError(path + ": record " + std::to_string(index) + ": null object");
     }

@@ -17,7 +17,8 @@ struct FreeInitAppParams {
   std::string config_file;
   std::string rawlog;
   std::string out_dir = "freeinit_out";
-  bool progress = true;  ///< progress bar on the log stream
+  bool progress = true;            ///< progress bars on the log stream
+  bool progress_terminal = false;  ///< the log is a terminal: redraw the bars in place
 };
 
 class FreeInitApp {

@@ -7,6 +7,7 @@
 #include <mrpt/obs/CObservation.h>
 
 #include <cstddef>
+#include <functional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -25,9 +26,16 @@ struct RawlogRecord {
   mrpt::obs::CObservation::Ptr obs;
 };
 
+/// Progress callbacks of readRawlog, each called with (done, total) bytes; either may be empty.
+struct RawlogReadProgress {
+  std::function<void(std::size_t, std::size_t)> inflate;  ///< file bytes read and decompressed
+  std::function<void(std::size_t, std::size_t)> parse;    ///< decompressed bytes deserialized
+};
+
 /// Reads a rawlog in either format (observations only, or CSensoryFrame / CActionCollection:
 /// sensory frames are flattened, actions skipped). Registers the classes first.
 /// Throws InputError on a missing, empty, truncated or corrupted file, or an unregistered class.
-std::vector<RawlogRecord> readRawlog(const std::string& path);
+std::vector<RawlogRecord> readRawlog(const std::string& path,
+                                     const RawlogReadProgress& progress = {});
 
 }  // namespace freeinit::mrpt_glue
