@@ -16,7 +16,7 @@ struct VelocimeterParams {
   double vel_random_walk = 10.0;      ///< [m/s^2/sqrt(Hz)] v_l, v_b random walk density
   double omega_random_walk = 1.0;     ///< [rad/s^2/sqrt(Hz)] omega_b random walk density
   /// [m/s^2/sqrt(Hz)] v_l, v_b random walk density in the accelerometer-aided refinement passes
-  double aided_vel_random_walk = 0.1;
+  double aided_vel_random_walk = 0.03;
   double gyro_bias_random_walk = 1e-4;  ///< [rad/s/sqrt(s)] Gauss-Markov driving noise
   double gyro_bias_tau = 1000.0;      ///< [s] Gauss-Markov correlation time
   double gyro_bias_sigma0 = 0.015;    ///< [rad/s] initial gyro bias std (typical MEMS)
