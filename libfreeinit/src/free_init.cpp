@@ -8,6 +8,7 @@
 #include <Eigen/Eigenvalues>
 
 #include <chrono>
+#include <deque>
 #include <limits>
 #include <cmath>
 #include <optional>
@@ -37,7 +38,13 @@ struct FreeInit::Impl {
 
   FreeInitConfig cfg;
   std::vector<ImuSample> imu;
-  std::vector<LidarFrame> frames;
+  /// A buffered frame: its points stay where the caller or owned_frames keeps them.
+  struct FrameRef {
+    double stamp;
+    const std::vector<DopplerPoint>& points;
+  };
+  std::deque<LidarFrame> owned_frames;  ///< frames handed to addFrame (stable addresses)
+  std::vector<FrameRef> frames;         ///< all frames in time order
   bool finished = false;
   Phase phase = Phase::WaitStart;
   InitResult result;
@@ -48,7 +55,7 @@ struct FreeInit::Impl {
   std::size_t k_end = 0;     ///< last IMU sample of the window
   std::size_t k_next = 0;    ///< next IMU sample to process
   std::size_t f_cur = 0, p_cur = 0;  ///< next point to process
-  std::size_t stride_counter = 0;
+  std::size_t stride_counter = 0;  ///< usable points since the last used one (mod the stride)
 
   std::optional<Velocimeter> div;
   PoseIntegrator integrator;
@@ -86,6 +93,26 @@ struct FreeInit::Impl {
       if (!frames[f].points.empty())
         return (frames[f].stamp - t_ref) + frames[f].points.back().time_offset;
     return -std::numeric_limits<double>::infinity();
+  }
+
+  /// Throws std::invalid_argument unless f can follow the buffered frames.
+  void checkFrame(const LidarFrame& f) const {
+    if (!std::isfinite(f.stamp)) throw std::invalid_argument("LiDAR frame stamp is not finite");
+    if (!frames.empty() && f.stamp <= frames.back().stamp)
+      throw std::invalid_argument("LiDAR frame stamp does not increase: " +
+                                  std::to_string(f.stamp) + " after " +
+                                  std::to_string(frames.back().stamp));
+    for (std::size_t i = 1; i < f.points.size(); ++i)
+      if (f.points[i].time_offset < f.points[i - 1].time_offset)
+        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
+                                    ": points are not sorted by time (point " +
+                                    std::to_string(i) + ")");
+  }
+  /// Buffers a checked frame that outlives this object (FreeInit::run), without copying it.
+  void addBorrowedFrame(const LidarFrame& f) {
+    checkFrame(f);
+    frames.push_back({f.stamp, f.points});
+    if (phase != Phase::Done) pump();
   }
 
   void fail(InitStatus s, const std::string& msg) {
@@ -260,8 +287,14 @@ struct FreeInit::Impl {
     ++diag.points_seen;
     const double r = pt.p_l.norm();
     const auto& vp = cfg.velocimeter;
-    if (!finitePoint(pt) || r < vp.min_range || r > vp.max_range ||
-        (stride_counter++ % static_cast<std::size_t>(vp.point_stride)) != 0) {
+    if (!finitePoint(pt) || r < vp.min_range || r > vp.max_range) {
+      ++diag.points_skipped;
+      return;
+    }
+    // One usable point in point_stride (a counter, not a modulo: this runs for every point).
+    const bool use = stride_counter == 0;
+    if (++stride_counter == static_cast<std::size_t>(vp.point_stride)) stride_counter = 0;
+    if (!use) {
       ++diag.points_skipped;
       return;
     }
@@ -315,16 +348,21 @@ struct FreeInit::Impl {
   /// Leaves zero-velocity mode as soon as the Doppler or the gyro shows motion.
   void checkMotion(std::size_t k, double t) {
     const auto& sp = cfg.static_detector;
-    bool moving = (imu[k].gyro - div->b_g()).norm() > sp.max_gyro_dev;
+    // The gyro deviates from the bias estimate by more than its own uncertainty allows.
+    const double sigma_bg = std::sqrt(div->covBg().diagonal().maxCoeff());
+    bool moving = (imu[k].gyro - div->b_g()).norm() > sp.max_gyro_dev + 3.0 * sigma_bg;
     Vec3 v_ls = Vec3::Zero();
     if (t - last_check >= sp.check_period) {
       // Robust (IRLS) velocity of the points since the last check: moving objects in view must
       // not look like ego motion.
       const VelocityFit fit = fitLidarVelocity(static_dirs, static_dopplers, cfg.bootstrap,
                                                cfg.velocimeter.doppler_sigma);
-      if (fit.ok) {
+      // Moving: faster than max_speed, and significantly non-zero (5 sigma) given how well the
+      // few points of a sparse scene constrain the velocity.
+      if (fit.ok && fit.v_l.norm() > sp.max_speed &&
+          fit.v_l.dot(fit.cov.ldlt().solve(fit.v_l)) > 25.0) {
         v_ls = fit.v_l;
-        moving = moving || v_ls.norm() > sp.max_speed;
+        moving = true;
       }
       static_dirs.clear();
       static_dopplers.clear();
@@ -479,19 +517,12 @@ void FreeInit::addImu(const ImuSample& s) {
   if (impl_->phase != Impl::Phase::Done) impl_->pump();
 }
 
-void FreeInit::addFrame(const LidarFrame& f) {
-  if (!std::isfinite(f.stamp))
-    throw std::invalid_argument("LiDAR frame stamp is not finite");
-  if (!impl_->frames.empty() && f.stamp <= impl_->frames.back().stamp)
-    throw std::invalid_argument("LiDAR frame stamp does not increase: " +
-                                std::to_string(f.stamp) + " after " +
-                                std::to_string(impl_->frames.back().stamp));
-  for (std::size_t i = 1; i < f.points.size(); ++i)
-    if (f.points[i].time_offset < f.points[i - 1].time_offset)
-      throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
-                                  ": points are not sorted by time (point " + std::to_string(i) +
-                                  ")");
-  impl_->frames.push_back(f);
+void FreeInit::addFrame(const LidarFrame& f) { addFrame(LidarFrame(f)); }
+
+void FreeInit::addFrame(LidarFrame&& f) {
+  impl_->checkFrame(f);
+  const LidarFrame& kept = impl_->owned_frames.emplace_back(std::move(f));
+  impl_->frames.push_back({kept.stamp, kept.points});
   if (impl_->phase != Impl::Phase::Done) impl_->pump();
 }
 
@@ -511,12 +542,12 @@ InitResult FreeInit::run(const FreeInitConfig& config, const std::vector<ImuSamp
   for (const auto& f : frames) {
     const double t_last = f.points.empty() ? f.stamp : f.stamp + f.points.back().time_offset;
     while (k < imu.size() && imu[k].t <= t_last) fi.addImu(imu[k++]);
-    fi.addFrame(f);
-    if (fi.ready()) return fi.result();
+    fi.impl_->addBorrowedFrame(f);  // `frames` outlives fi: no copy
+    if (fi.ready()) return std::move(fi.impl_->result);
   }
   while (k < imu.size() && !fi.ready()) fi.addImu(imu[k++]);
   fi.finish();
-  return fi.result();
+  return std::move(fi.impl_->result);
 }
 
 }  // namespace freeinit

@@ -21,6 +21,8 @@ class FreeInit {
   void addImu(const ImuSample& s);
   /// Adds one LiDAR frame. Throws std::invalid_argument if stamps go backwards.
   void addFrame(const LidarFrame& f);
+  /// As above, taking the frame's points without copying them.
+  void addFrame(LidarFrame&& f);
   /// Declares the end of the input: a window still open is closed with what is there.
   void finish();
 

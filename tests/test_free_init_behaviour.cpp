@@ -1,0 +1,185 @@
+// Free-Init's behaviour beyond accuracy: a start that begins moving inside the window, expected
+// failures with a clear status, outlier and dynamic-point gating, the streaming interface, and the
+// baselines' failure on dynamic starts (the paper's point).
+#include <freeinit/baselines.h>
+#include <freeinit/free_init.h>
+#include <freeinit/sim/evaluation.h>
+#include <freeinit/sim/simulator.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <stdexcept>
+
+namespace freeinit {
+namespace {
+
+sim::Recording simulatePreset(const std::string& name, double duration, int points = 30000,
+                              std::uint64_t seed = 1) {
+  auto sc = sim::preset(name, seed);
+  sc.duration = duration;
+  sc.points_per_frame = points;
+  return sim::simulate(sc);
+}
+
+FreeInitConfig configFor(const sim::Recording& rec) {
+  FreeInitConfig cfg;
+  cfg.extrinsics = rec.extrinsics;
+  return cfg;
+}
+
+/// Drops everything before `t_start` (UNIX s): the recording then starts at that instant.
+void cropBefore(sim::Recording& rec, double t_start) {
+  rec.imu.erase(std::remove_if(rec.imu.begin(), rec.imu.end(),
+                               [&](const ImuSample& s) { return s.t < t_start; }),
+                rec.imu.end());
+  std::vector<LidarFrame> frames;
+  for (const auto& f : rec.frames)
+    if (f.stamp >= t_start) frames.push_back(f);
+  rec.frames = frames;
+}
+
+// stat_03 stands still for 1.0 s then starts moving smoothly. Starting the recording at 0.8 s puts
+// the start of motion 0.2 s into the 0.5 s window: the zero-velocity mode must end there and the
+// velocity at the window end must still be right.
+TEST(FreeInitBehaviour, MotionStartingInsideTheWindow) {
+  sim::Recording rec = simulatePreset("stat_03", 1.6, 30000);
+  cropBefore(rec, rec.config.t0 + 0.8);
+  const InitResult r = FreeInit::run(configFor(rec), rec.imu, rec.frames);
+  ASSERT_TRUE(r.state.ok()) << r.state.message;
+  EXPECT_TRUE(r.diag.static_start);
+  // Left the zero-velocity mode after the motion started (0.2 s) but well before the end.
+  EXPECT_GT(r.diag.static_duration, 0.15);
+  EXPECT_LT(r.diag.static_duration, 0.45);
+  const auto e = sim::evaluate(r.state, rec);
+  EXPECT_GT(e.vel_b_true_norm, 0.05);
+  EXPECT_LE(e.vel_b, 0.05);
+  EXPECT_LE(e.gravity_deg, e.gravity_deg_from_bias + 0.1);
+  EXPECT_LE(e.gyro_bias, 0.002);
+}
+
+TEST(FreeInitBehaviour, RecordingShorterThanTheWindowIsNotEnoughData) {
+  const sim::Recording rec = simulatePreset("dyna_01", 0.3, 5000);
+  const InitResult r = FreeInit::run(configFor(rec), rec.imu, rec.frames);
+  EXPECT_EQ(r.state.status, InitStatus::NotEnoughData);
+  EXPECT_FALSE(r.state.message.empty());
+}
+
+TEST(FreeInitBehaviour, NoLidarIsNotEnoughData) {
+  const sim::Recording rec = simulatePreset("dyna_01", 0.7, 5000);
+  const InitResult r = FreeInit::run(configFor(rec), rec.imu, {});
+  EXPECT_EQ(r.state.status, InitStatus::NotEnoughData);
+}
+
+TEST(FreeInitBehaviour, EgoCompensatedDopplerIsRefused) {
+  const sim::Recording rec = simulatePreset("dyna_01", 0.7, 5000);
+  FreeInitConfig cfg = configFor(rec);
+  cfg.velocimeter.doppler_ego_compensated = true;
+  const InitResult r = FreeInit::run(cfg, rec.imu, rec.frames);
+  EXPECT_EQ(r.state.status, InitStatus::NoDoppler);
+}
+
+// All returns from one direction cannot give a 3-D velocity: not a confident wrong answer.
+TEST(FreeInitBehaviour, DegenerateDirectionsAreReported) {
+  sim::Recording rec = simulatePreset("dyna_01", 0.7, 5000);
+  for (auto& f : rec.frames)
+    for (auto& p : f.points) p.p_l = Eigen::Vector3f(10, 0, 0);
+  const InitResult r = FreeInit::run(configFor(rec), rec.imu, rec.frames);
+  EXPECT_EQ(r.state.status, InitStatus::DegenerateGeometry);
+}
+
+// About 1 % of the points are gross Doppler outliers and 5-20 % belong to moving objects in the
+// street presets: the gate must reject at least the outliers and keep nearly all static points.
+TEST(FreeInitBehaviour, GatingRejectsOutliersAndMovingObjects) {
+  const sim::Recording rec = simulatePreset("dyna_05", 0.7, 30000);
+  const InitResult r = FreeInit::run(configFor(rec), rec.imu, rec.frames);
+  ASSERT_TRUE(r.state.ok());
+  std::size_t in_window = 0, non_static = 0;
+  const double t_end = r.state.timestamp, t_begin = r.trajectory.front().t;
+  for (std::size_t f = 0; f < rec.frames.size(); ++f)
+    for (std::size_t i = 0; i < rec.frames[f].points.size(); ++i) {
+      const double t = rec.frames[f].stamp + rec.frames[f].points[i].time_offset;
+      if (t < t_begin || t > t_end) continue;
+      ++in_window;
+      if (rec.labels[f][i] != sim::PointLabel::Static) ++non_static;
+    }
+  const double rejected = static_cast<double>(r.diag.points_rejected);
+  EXPECT_GE(rejected, 0.8 * static_cast<double>(non_static));
+  EXPECT_LE(rejected, static_cast<double>(non_static) + 0.02 * static_cast<double>(in_window));
+  EXPECT_EQ(r.diag.points_used + r.diag.points_rejected + r.diag.points_skipped,
+            r.diag.points_seen);
+}
+
+// Data may arrive in any interleaving: IMU far ahead of the LiDAR, or the LiDAR ahead.
+TEST(FreeInitBehaviour, StreamingOrderDoesNotChangeTheResult) {
+  const sim::Recording rec = simulatePreset("dyna_04", 0.7, 10000);
+  const FreeInitConfig cfg = configFor(rec);
+  const InitResult batch = FreeInit::run(cfg, rec.imu, rec.frames);
+  FreeInit imu_first(cfg);
+  for (const auto& s : rec.imu) imu_first.addImu(s);
+  for (const auto& f : rec.frames) imu_first.addFrame(f);
+  imu_first.finish();
+  FreeInit lidar_first(cfg);
+  for (const auto& f : rec.frames) lidar_first.addFrame(f);
+  EXPECT_FALSE(lidar_first.ready());
+  for (const auto& s : rec.imu) lidar_first.addImu(s);
+  lidar_first.finish();
+  ASSERT_TRUE(batch.state.ok());
+  for (const FreeInit* fi : {&imu_first, &lidar_first}) {
+    ASSERT_TRUE(fi->ready());
+    EXPECT_NEAR((fi->result().state.v_w - batch.state.v_w).norm(), 0.0, 1e-9);
+    EXPECT_NEAR((fi->result().state.b_a - batch.state.b_a).norm(), 0.0, 1e-9);
+    EXPECT_EQ(fi->result().diag.points_used, batch.diag.points_used);
+  }
+}
+
+TEST(FreeInitBehaviour, TimeGoingBackwardsIsAnError) {
+  const sim::Recording rec = simulatePreset("dyna_01", 0.7, 2000);
+  FreeInit fi(configFor(rec));
+  fi.addImu(rec.imu[1]);
+  EXPECT_THROW(fi.addImu(rec.imu[0]), std::invalid_argument);
+  EXPECT_THROW(fi.addImu(rec.imu[1]), std::invalid_argument);  // duplicated
+  fi.addFrame(rec.frames[1]);
+  EXPECT_THROW(fi.addFrame(rec.frames[0]), std::invalid_argument);
+}
+
+TEST(FreeInitBehaviour, InvalidConfigurationNamesTheKey) {
+  FreeInitConfig cfg;
+  cfg.velocimeter.doppler_sigma = -1;
+  try {
+    FreeInit fi(cfg);
+    FAIL() << "expected an exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("velocimeter.doppler_sigma"), std::string::npos);
+  }
+  cfg = FreeInitConfig();
+  cfg.extrinsics.R_bl(0, 0) = 2;
+  EXPECT_THROW(FreeInit{cfg}, std::invalid_argument);
+}
+
+// The paper's point: initializers that assume a platform at rest fail dynamic starts, and are
+// comparable on static ones.
+TEST(FreeInitBehaviour, StaticMeanBaselinesFailDynamicStartsAndMatchOnStaticOnes) {
+  for (const char* name : {"dyna_01", "dyna_05"}) {
+    const sim::Recording rec = simulatePreset(name, 0.7, 20000);
+    const auto fi = sim::evaluate(FreeInit::run(configFor(rec), rec.imu, rec.frames).state, rec);
+    const auto fl = sim::evaluate(baselines::fastLio2(rec.imu).state, rec);
+    ASSERT_TRUE(fi.valid && fl.valid);
+    EXPECT_GT(fl.vel_b, 20 * fi.vel_b) << name;  // it assumes zero velocity
+    EXPECT_GT(fl.vel_b, 1.0) << name;
+  }
+  {
+    const sim::Recording rec = simulatePreset("dyna_01", 0.7, 20000);
+    const auto fl = sim::evaluate(baselines::fastLio2(rec.imu).state, rec);
+    EXPECT_GT(fl.gravity_deg, 2.0);  // the mean accelerometer is not gravity while shaking
+  }
+  const sim::Recording rec = simulatePreset("stat_01", 0.7, 20000);
+  const auto fi = sim::evaluate(FreeInit::run(configFor(rec), rec.imu, rec.frames).state, rec);
+  const auto fl = sim::evaluate(baselines::fastLio2(rec.imu).state, rec);
+  ASSERT_TRUE(fi.valid && fl.valid);
+  EXPECT_NEAR(fl.gravity_deg, fi.gravity_deg, 0.1);
+  EXPECT_NEAR(fl.gyro_bias, fi.gyro_bias, 0.001);
+}
+
+}  // namespace
+}  // namespace freeinit
