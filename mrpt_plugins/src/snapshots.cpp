@@ -7,12 +7,16 @@
 #include <mrpt/opengl/CPointCloud.h>
 #include <mrpt/opengl/CPointCloudColoured.h>
 #include <mrpt/opengl/CSetOfLines.h>
+#include <mrpt/opengl/CSphere.h>
 #include <mrpt/opengl/stock_objects.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <filesystem>
+#include <functional>
+#include <optional>
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
@@ -36,113 +40,257 @@ std::string num(double x, int prec = 3) {
   return os.str();
 }
 
-// Height colormap: blue (low) -> cyan -> yellow (high).
-void heightColor(float u, float& r, float& g, float& b) {
-  u = std::clamp(u, 0.0f, 1.0f);
-  r = u;
-  g = 0.4f + 0.6f * u;
-  b = 1.0f - 0.8f * u;
+// Height colormap (viridis-like, our own control points): dark purple (low) -> teal -> yellow
+// (high). It holds no red, so the rejected points (red) stay apart from the map.
+TColor heightColor(float u) {
+  static const float kStops[5][3] = {
+      {0.27f, 0.00f, 0.33f}, {0.23f, 0.32f, 0.55f}, {0.13f, 0.57f, 0.55f},
+      {0.37f, 0.79f, 0.38f}, {0.99f, 0.91f, 0.15f}};
+  u = std::clamp(u, 0.0f, 1.0f) * 4.0f;
+  const int i = std::min(static_cast<int>(u), 3);
+  const float f = u - static_cast<float>(i);
+  auto ch = [&](int c) {
+    return static_cast<std::uint8_t>(255.0f * ((1 - f) * kStops[i][c] + f * kStops[i + 1][c]));
+  };
+  return TColor(ch(0), ch(1), ch(2));
+}
+
+mrpt::poses::CPose3D toPose(const Quat& q, const Vec3& p) {
+  const Mat3 R = q.toRotationMatrix();
+  mrpt::math::CMatrixDouble33 Rm;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 3; ++j) Rm(i, j) = R(i, j);
+  return mrpt::poses::CPose3D::FromRotationAndTranslation(
+      Rm, mrpt::math::TVector3D(p.x(), p.y(), p.z()));
+}
+
+struct Range {
+  float lo = 0, hi = 1;
+};
+
+// Robust range of the values (quantiles q and 1 - q).
+Range quantileRange(std::vector<float> v, double q) {
+  if (v.empty()) return {};
+  auto at = [&](double f) {
+    const auto k = static_cast<std::size_t>(f * static_cast<double>(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+    return v[k];
+  };
+  return {at(q), at(1 - q)};
+}
+
+const TColor kRejected(235, 40, 40);
+const TColor kTrajectory(255, 150, 20);
+const TColor kStart(255, 255, 255);
+const TColor kGravity(120, 235, 255);
+
+mrpt::img::TColorf colorf(const TColor& c) {
+  return mrpt::img::TColorf(static_cast<float>(c.R) / 255.f, static_cast<float>(c.G) / 255.f,
+                            static_cast<float>(c.B) / 255.f);
+}
+
+// What differs between the views.
+struct ViewStyle {
+  Range x, y;             ///< [m] grid extent
+  float grid_z = 0;       ///< [m] grid height
+  float grid_step = 1;    ///< [m] grid spacing
+  float marker = 1;       ///< [m] sizes the start sphere, the axes and the gravity arrow
+  float point_size = 2;   ///< [px] map points
+};
+
+// One scene per view: the map colored by height over the range `z`, the rejected points, the
+// trajectory with body axes, the start, and the state's axes with gravity.
+void buildScene(mrpt::opengl::COpenGLScene& scene, const InitResult& result, const Range& z,
+                const ViewStyle& v) {
+  using namespace mrpt::opengl;
+  const float marker = v.marker, point_size = v.point_size;
+  auto grid = CGridPlaneXY::Create(v.x.lo, v.x.hi, v.y.lo, v.y.hi, v.grid_z, v.grid_step);
+  grid->setColor(0.45f, 0.45f, 0.5f, 0.5f);
+  scene.insert(grid);
+
+  auto cloud = CPointCloudColoured::Create();
+  cloud->setPointSize(point_size);
+  for (const auto& p : result.static_map) {
+    const TColor c = heightColor((p.p_w.z() - z.lo) / std::max(z.hi - z.lo, 0.1f));
+    cloud->push_back(p.p_w.x(), p.p_w.y(), p.p_w.z(), c.R / 255.f, c.G / 255.f, c.B / 255.f);
+  }
+  scene.insert(cloud);
+
+  auto rejected = CPointCloud::Create();
+  rejected->setPointSize(point_size + 1.0f);
+  rejected->setColor(colorf(kRejected));
+  for (const auto& p : result.rejected) rejected->insertPoint(p.p_w.x(), p.p_w.y(), p.p_w.z());
+  scene.insert(rejected);
+
+  // The trajectory as a dense chain of large points (GL line widths above 1 px are not portable
+  // to core profiles), body axes every few poses, a sphere at the start.
+  const auto& traj = result.trajectory;
+  auto path = CPointCloud::Create();
+  path->setPointSize(7.0f);
+  path->setColor(colorf(kTrajectory));
+  const float step = 0.05f * marker;
+  for (std::size_t i = 1; i < traj.size(); ++i) {
+    const Vec3 a = traj[i - 1].p_w, b = traj[i].p_w;
+    const int n = std::max(1, static_cast<int>((b - a).norm() / step));
+    for (int k = 0; k < n; ++k) {
+      const Vec3 p = a + (b - a) * (static_cast<double>(k) / n);
+      path->insertPoint(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                        static_cast<float>(p.z()));
+    }
+  }
+  scene.insert(path);
+  const std::size_t every = std::max<std::size_t>(1, traj.size() / 10);
+  for (std::size_t i = 0; i < traj.size(); i += every) {
+    auto axes = stock_objects::CornerXYZSimple(0.6f * marker, 2.0f);
+    axes->setPose(toPose(traj[i].q_wb, traj[i].p_w));
+    scene.insert(axes);
+  }
+  if (!traj.empty()) {
+    auto start = CSphere::Create(0.15f * marker, 16);
+    start->setColor(colorf(kStart));
+    start->setLocation(traj.front().p_w.x(), traj.front().p_w.y(), traj.front().p_w.z());
+    scene.insert(start);
+  }
+
+  // At the state: the body axes (arrows) and gravity.
+  const auto& s = result.state;
+  auto axes = stock_objects::CornerXYZ(marker);
+  axes->setPose(toPose(s.q_wb, s.p_w));
+  scene.insert(axes);
+  const Vec3 tip = s.p_w + 3.0 * marker * s.g_w.normalized();
+  auto arrow = CArrow::Create(static_cast<float>(s.p_w.x()), static_cast<float>(s.p_w.y()),
+                              static_cast<float>(s.p_w.z()), static_cast<float>(tip.x()),
+                              static_cast<float>(tip.y()), static_cast<float>(tip.z()), 0.25f,
+                              0.06f * marker, 0.18f * marker);
+  arrow->setColor(colorf(kGravity));
+  scene.insert(arrow);
+  auto vp = scene.getViewport();
+  vp->setCustomBackgroundColor(mrpt::img::TColorf(0.08f, 0.08f, 0.12f));
+  vp->lightParameters().ambient = mrpt::img::TColorf(0.6f, 0.6f, 0.6f, 1.0f);  // vertical arrows
+}
+
+mrpt::img::CImage renderView(mrpt::opengl::COpenGLScene& scene, int w, int h, const Vec3& target,
+                             float distance, float azimuth_deg, float elevation_deg) {
+  mrpt::opengl::CFBORender render(static_cast<unsigned>(w), static_cast<unsigned>(h));
+  auto& cam = render.getCamera(scene);
+  cam.setPointingAt(static_cast<float>(target.x()), static_cast<float>(target.y()),
+                    static_cast<float>(target.z()));
+  cam.setZoomDistance(distance);
+  cam.setAzimuthDegrees(azimuth_deg);
+  cam.setElevationDegrees(elevation_deg);
+  mrpt::img::CImage img;
+  render.render_RGB(scene, img);
+  return img;
+}
+
+void swatch(mrpt::img::CImage& img, int x, int y, const TColor& c, const std::string& text) {
+  img.filledRectangle(x, y + 3, x + 14, y + 15, c);
+  img.textOut(x + 20, y, text, TColor(230, 230, 230));
 }
 
 }  // namespace
 
 void renderMapSnapshot(const std::string& png, const InitResult& result, int width, int height) {
-  mrpt::opengl::COpenGLScene scene;
-
-  // Extent of what is shown, robust to far outliers (5-95 % quantiles per axis).
+  const auto& s = result.state;
   std::vector<float> xs, ys, zs;
   for (const auto& p : result.static_map) {
     xs.push_back(p.p_w.x());
     ys.push_back(p.p_w.y());
     zs.push_back(p.p_w.z());
   }
-  auto quantile = [](std::vector<float> v, double q) {
-    if (v.empty()) return 0.0f;
-    const auto k = static_cast<std::size_t>(q * static_cast<double>(v.size() - 1));
-    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
-    return v[k];
-  };
-  const float x0 = quantile(xs, 0.05), x1 = quantile(xs, 0.95);
-  const float y0 = quantile(ys, 0.05), y1 = quantile(ys, 0.95);
-  const float z0 = quantile(zs, 0.02), z1 = quantile(zs, 0.98);
-  const float extent = std::max({x1 - x0, y1 - y0, 4.0f});
+  const Range zr = quantileRange(zs, 0.02);
+  Range xr = quantileRange(xs, 0.05), yr = quantileRange(ys, 0.05);
+  const float extent = std::max({xr.hi - xr.lo, yr.hi - yr.lo, 4.0f});
 
-  auto grid = mrpt::opengl::CGridPlaneXY::Create(x0 - 5, x1 + 5, y0 - 5, y1 + 5, z0, 5);
-  grid->setColor(0.35f, 0.35f, 0.35f, 0.6f);
-  scene.insert(grid);
-
-  auto cloud = mrpt::opengl::CPointCloudColoured::Create();
-  cloud->setPointSize(2.0f);
-  for (const auto& p : result.static_map) {
-    float r, g, b;
-    heightColor((p.p_w.z() - z0) / std::max(z1 - z0, 0.1f), r, g, b);
-    cloud->push_back(p.p_w.x(), p.p_w.y(), p.p_w.z(), r, g, b);
+  // The trajectory's box, for the close-up.
+  Vec3 lo = s.p_w, hi = s.p_w;
+  for (const auto& p : result.trajectory) {
+    lo = lo.cwiseMin(p.p_w);
+    hi = hi.cwiseMax(p.p_w);
   }
-  scene.insert(cloud);
+  const Vec3 traj_center = 0.5 * (lo + hi);
+  const auto path_across = static_cast<float>((hi - lo).norm());
+  const float traj_extent = std::max(path_across, 0.2f);  // [m] the close-up's scale
 
-  auto rejected = mrpt::opengl::CPointCloud::Create();
-  rejected->setPointSize(3.0f);
-  rejected->setColor(1.0f, 0.1f, 0.1f);
-  for (const auto& p : result.rejected) rejected->insertPoint(p.p_w.x(), p.p_w.y(), p.p_w.z());
-  scene.insert(rejected);
+  const int header = 96;
+  const int view_h = std::max(32, height - header);
+  const int left_w = width * 3 / 5, right_w = width - left_w;
+  const float cx = 0.5f * (xr.lo + xr.hi), cy = 0.5f * (yr.lo + yr.hi);
+  const float px = static_cast<float>(s.p_w.x()), py = static_cast<float>(s.p_w.y());
+  // Look from behind and above the state pose, towards the map's center.
+  const float azimuth = static_cast<float>(std::atan2(py - cy, px - cx) * 180.0 / M_PI) + 25.0f;
 
-  auto traj = mrpt::opengl::CSetOfLines::Create();
-  traj->setLineWidth(6.0f);
-  traj->setColor(0.1f, 1.0f, 0.2f);
-  for (std::size_t i = 1; i < result.trajectory.size(); ++i) {
-    const auto& a = result.trajectory[i - 1].p_w;
-    const auto& b = result.trajectory[i].p_w;
-    traj->appendLine(a.x(), a.y(), a.z(), b.x(), b.y(), b.z());
+  mrpt::img::CImage overview, closeup;
+  {
+    mrpt::opengl::COpenGLScene scene;
+    const float pad = 5.0f;
+    ViewStyle v;
+    v.x = {xr.lo - pad, xr.hi + pad};
+    v.y = {yr.lo - pad, yr.hi + pad};
+    v.grid_z = zr.lo;
+    v.grid_step = 5.0f;
+    v.marker = std::clamp(0.04f * extent, 0.3f, 2.0f);
+    buildScene(scene, result, zr, v);
+    const Vec3 target(px + 0.35 * (cx - px), py + 0.35 * (cy - py), s.p_w.z());
+    overview = renderView(scene, left_w, view_h, target, std::clamp(0.7f * extent, 8.0f, 60.0f),
+                          azimuth, 30.0f);
   }
-  scene.insert(traj);
+  {
+    mrpt::opengl::COpenGLScene scene;
+    // A 0.1 m grid just under the trajectory.
+    const float r = 1.2f * traj_extent;
+    const auto tcx = static_cast<float>(traj_center.x()), tcy = static_cast<float>(traj_center.y());
+    ViewStyle v;
+    v.x = {std::floor(10 * (tcx - r)) / 10, std::ceil(10 * (tcx + r)) / 10};
+    v.y = {std::floor(10 * (tcy - r)) / 10, std::ceil(10 * (tcy + r)) / 10};
+    v.grid_z = static_cast<float>(lo.z()) - 0.3f * traj_extent;
+    v.grid_step = 0.1f;
+    v.marker = 0.15f * traj_extent;
+    buildScene(scene, result, zr, v);
+    closeup = renderView(scene, right_w, view_h, traj_center, 3.0f * traj_extent, azimuth, 40.0f);
+  }
 
-  // Body axes at the start and at the state, gravity arrow (2 m along g) at the state.
-  const Vec3 p_end = result.state.p_w;
-  auto axes0 = mrpt::opengl::stock_objects::CornerXYZ(1.0f);
-  scene.insert(axes0);
-  auto axes1 = mrpt::opengl::stock_objects::CornerXYZ(1.0f);
-  const Mat3 R = result.state.q_wb.toRotationMatrix();
-  mrpt::math::CMatrixDouble33 Rm;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 3; ++j) Rm(i, j) = R(i, j);
-  axes1->setPose(mrpt::poses::CPose3D::FromRotationAndTranslation(
-      Rm, mrpt::math::TVector3D(p_end.x(), p_end.y(), p_end.z())));
-  scene.insert(axes1);
-  const Vec3 tip = p_end + 3.0 * result.state.g_w.normalized();
-  auto arrow = mrpt::opengl::CArrow::Create(
-      static_cast<float>(p_end.x()), static_cast<float>(p_end.y()), static_cast<float>(p_end.z()),
-      static_cast<float>(tip.x()), static_cast<float>(tip.y()), static_cast<float>(tip.z()), 0.25f,
-      0.08f, 0.25f);
-  arrow->setColor(0.3f, 0.6f, 1.0f);
-  scene.insert(arrow);
+  mrpt::img::CImage img(width, height, mrpt::img::CH_RGB);
+  img.filledRectangle(0, 0, width - 1, height - 1, TColor(20, 20, 30));
+  img.drawImage(0, header, overview);
+  img.drawImage(left_w, header, closeup);
+  img.line(left_w, header, left_w, height - 1, TColor(120, 120, 140), 2);
 
-  mrpt::opengl::CFBORender render(static_cast<unsigned>(width), static_cast<unsigned>(height));
-  // Look from behind and above the start pose, at a point between it and the map's center, so
-  // that the trajectory, the axes and the gravity arrow stay in view.
-  auto& cam = render.getCamera(scene);
-  const float cx = 0.5f * (x0 + x1), cy = 0.5f * (y0 + y1);
-  const float px = static_cast<float>(p_end.x()), py = static_cast<float>(p_end.y());
-  cam.setPointingAt(px + 0.35f * (cx - px), py + 0.35f * (cy - py),
-                    static_cast<float>(p_end.z()));
-  cam.setZoomDistance(std::clamp(0.7f * extent, 8.0f, 60.0f));
-  cam.setAzimuthDegrees(
-      static_cast<float>(std::atan2(py - cy, px - cx) * 180.0 / M_PI) + 25.0f);
-  cam.setElevationDegrees(30.0f);
-  scene.getViewport()->setCustomBackgroundColor(mrpt::img::TColorf(0.08f, 0.08f, 0.12f));
-
-  mrpt::img::CImage img;
-  render.render_RGB(scene, img);
-
-  const auto& s = result.state;
-  const TColor white(255, 255, 255);
-  img.filledRectangle(0, 0, width - 1, 60, TColor(20, 20, 30));
+  const Vec3 g_b = s.g_b();
+  const double tilt_deg =
+      std::acos(std::clamp(-g_b.z() / std::max(g_b.norm(), 1e-9), -1.0, 1.0)) * 180.0 / M_PI;
+  const TColor white(255, 255, 255), grey(190, 190, 200);
   img.selectTextFont("10x20");
-  img.textOut(12, 10, "Free-Init static map: " + std::to_string(result.static_map.size()) +
-                          " static points, " + std::to_string(result.rejected.size()) +
-                          " rejected (red)", white);
-  img.textOut(12, 34, "status " + std::string(toString(s.status)) + "   |v| " +
-                          num(s.v_w.norm()) + " m/s   trajectory (green), gravity (blue, 3 m)",
+  img.textOut(12, 8,
+              "Free-Init static map   status: " + std::string(toString(s.status)) +
+                  "   speed at state " + num(s.v_w.norm()) + " m/s   gravity tilt " +
+                  num(tilt_deg, 2) + " deg",
               white);
+  img.selectTextFont("9x15");
+  double window = 0;
+  if (!result.trajectory.empty()) window = s.timestamp - result.trajectory.front().t;
+  img.textOut(12, 32,
+              std::to_string(result.static_map.size()) + " static points, " +
+                  std::to_string(result.rejected.size()) + " rejected; window " + num(window, 2) +
+                  " s; path " + num(path_across, 2) + " m across; |b_g| " +
+                  num(s.b_g.norm(), 4) + " rad/s, |b_a| " + num(s.b_a.norm(), 3) + " m/s^2",
+              grey);
+  int x = 12;
+  const int y = 58;
+  for (int k = 0; k < 6; ++k)
+    img.filledRectangle(x + 4 * k, y + 3, x + 4 * k + 3, y + 15, heightColor(k / 5.0f));
+  img.textOut(x + 30, y, "map by height " + num(zr.lo, 1) + ".." + num(zr.hi, 1) + " m",
+              TColor(230, 230, 230));
+  x += 270;
+  swatch(img, x, y, kRejected, "rejected (dynamic/outlier)");
+  x += 260;
+  swatch(img, x, y, kTrajectory, "trajectory, axes");
+  x += 175;
+  swatch(img, x, y, kStart, "start");
+  x += 70;
+  swatch(img, x, y, kGravity, "gravity");
+  img.textOut(12, header + 6, "overview (grid 5 m)", white);
+  img.textOut(left_w + 10, header + 6, "close-up of the trajectory (grid 0.1 m)", white);
   saveAtomically(img, png);
 }
 
@@ -150,73 +298,139 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
                         const std::vector<TruthSample>& truth, int width, int height) {
   const auto& v = result.velocities;
   if (v.empty()) throw std::runtime_error(png + ": no velocity samples to plot");
-  const double t0 = v.front().t, t1 = std::max(v.back().t, t0 + 1e-3);
+  const auto& s = result.state;
+  // The window runs from the first velocimeter sample to the state; the plot adds 10 % on each
+  // side where the ground truth is known, so that the window stands out.
+  const double w0 = v.front().t, w1 = std::max({v.back().t, s.timestamp, w0 + 1e-3});
+  const double pad = truth.empty() ? 0.0 : 0.1 * (w1 - w0);
+  const double t0 = w0 - pad, t1 = w1 + pad;
 
-  // Ground truth body velocity over the same span.
-  std::vector<std::pair<double, Vec3>> gt;
+  // Ground truth: body velocity and gyro bias over the plotted span.
+  std::vector<std::pair<double, Vec3>> gt_v, gt_bg;
   for (const auto& g : truth) {
     if (g.t < t0 || g.t > t1) continue;
-    gt.emplace_back(g.t, g.q_wb.conjugate() * g.v_w);
+    gt_v.emplace_back(g.t, g.q_wb.conjugate() * g.v_w);
+    gt_bg.emplace_back(g.t, g.b_g);
+  }
+  std::optional<TruthErrors> err;
+  if (!truth.empty() && s.ok()) {
+    try {
+      err = compareWithTruth(s, truth);
+    } catch (const std::exception&) {
+      err.reset();  // the state time is outside the truth: no error line
+    }
   }
 
   mrpt::img::CImage img(width, height, mrpt::img::CH_RGB);
   img.filledRectangle(0, 0, width - 1, height - 1, TColor(255, 255, 255));
-  img.selectTextFont("9x15");
-  const TColor black(0, 0, 0), grey(200, 200, 200);
-  const TColor est_col[3] = {TColor(220, 40, 40), TColor(30, 150, 30), TColor(40, 60, 220)};
-  const char* axis_name[3] = {"v_b.x", "v_b.y", "v_b.z"};
-  const int left = 90, right = width - 20, top = 40;
-  const int panel_h = (height - top - 50) / 3;
+  const TColor black(0, 0, 0), grey(215, 215, 215), window_col(255, 246, 214);
+  const TColor axis_col[3] = {TColor(215, 40, 40), TColor(30, 150, 30), TColor(40, 60, 220)};
+  const int left = 80, right = width - 20, top = 70, bottom = height - 30;
+  const int n_panels = 4;
+  const int panel_h = (bottom - top) / n_panels;
+  auto X = [&](double t) {
+    return left + static_cast<int>((t - t0) / (t1 - t0) * (right - left));
+  };
 
-  img.textOut(left, 10,
-              "Free-Init velocimeter: body velocity [m/s] (solid: estimate +/- 1 sigma band, "
-              "black dashed: ground truth)",
-              black);
-  for (int a = 0; a < 3; ++a) {
+  img.selectTextFont("10x20");
+  img.textOut(left, 6, "Free-Init velocimeter over the initialization window", black);
+  img.selectTextFont("9x15");
+  std::string sub = "solid: estimate (light band: +/- 1 sigma)";
+  if (!truth.empty()) sub += "   black dashed: ground truth";
+  sub += "   shaded: window   |: state time, squares: state";
+  img.textOut(left, 30, sub, black);
+  if (err)
+    img.textOut(left, 48,
+                "at the state: |v_b error| " + num(err->velocity, 3) + " m/s, gravity error " +
+                    num(err->gravity_deg, 2) + " deg, |b_g error| " + num(err->gyro_bias, 4) +
+                    " rad/s",
+                black);
+
+  // One panel: the series `est(i, a)` of the velocimeter samples for the axes `axes`, with an
+  // optional band, against the truth series.
+  auto panel = [&](int k, const std::string& title, const std::vector<int>& axes,
+                   const std::function<double(std::size_t, int)>& est,
+                   const std::function<double(std::size_t, int)>& sigma,
+                   const std::vector<std::pair<double, Vec3>>& gt,
+                   const std::optional<Vec3>& state_value) {
     double lo = 1e9, hi = -1e9;
-    for (const auto& s : v) {
-      lo = std::min(lo, s.v_b[a] - s.sigma_v_b[a]);
-      hi = std::max(hi, s.v_b[a] + s.sigma_v_b[a]);
-    }
-    for (const auto& g : gt) {
-      lo = std::min(lo, g.second[a]);
-      hi = std::max(hi, g.second[a]);
-    }
-    const double pad = std::max(0.05, 0.1 * (hi - lo));
-    lo -= pad;
-    hi += pad;
-    const int y_top = top + a * panel_h + 10, y_bot = top + (a + 1) * panel_h - 10;
-    auto X = [&](double t) {
-      return left + static_cast<int>((t - t0) / (t1 - t0) * (right - left));
-    };
+    if (state_value)
+      for (int a : axes) {
+        lo = std::min(lo, (*state_value)[a]);
+        hi = std::max(hi, (*state_value)[a]);
+      }
+    for (std::size_t i = 0; i < v.size(); ++i)
+      for (int a : axes) {
+        const double sg = sigma ? sigma(i, a) : 0.0;
+        lo = std::min(lo, est(i, a) - sg);
+        hi = std::max(hi, est(i, a) + sg);
+      }
+    for (const auto& g : gt)
+      for (int a : axes) {
+        lo = std::min(lo, g.second[a]);
+        hi = std::max(hi, g.second[a]);
+      }
+    const double margin = std::max(0.02, 0.1 * (hi - lo));
+    lo -= margin;
+    hi += margin;
+    const int y_top = top + k * panel_h + 6, y_bot = top + (k + 1) * panel_h - 6;
     auto Y = [&](double val) {
       return y_bot - static_cast<int>((val - lo) / (hi - lo) * (y_bot - y_top));
     };
-    img.rectangle(left, y_top, right, y_bot, black);
-    for (int k = 0; k <= 4; ++k) {
-      const double val = lo + (hi - lo) * k / 4.0;
+    img.filledRectangle(X(w0), y_top, X(s.timestamp), y_bot, window_col);
+    for (int q = 0; q <= 4; ++q) {
+      const double val = lo + (hi - lo) * q / 4.0;
       img.line(left, Y(val), right, Y(val), grey);
-      img.textOut(4, Y(val) - 7, num(val, 2), black);
+      img.textOut(4, Y(val) - 7, num(val, hi - lo < 0.2 ? 3 : 2), black);
     }
-    img.textOut(left + 8, y_top + 4, axis_name[a], est_col[a]);
-    for (std::size_t i = 1; i < v.size(); ++i) {
-      const TColor band(230, 230, 240);
-      img.line(X(v[i].t), Y(v[i].v_b[a] - v[i].sigma_v_b[a]), X(v[i].t),
-               Y(v[i].v_b[a] + v[i].sigma_v_b[a]), band);
+    for (int a : axes) {
+      if (sigma) {
+        const TColor band(static_cast<std::uint8_t>(235 + axis_col[a].R / 20),
+                          static_cast<std::uint8_t>(235 + axis_col[a].G / 20),
+                          static_cast<std::uint8_t>(235 + axis_col[a].B / 20));
+        for (std::size_t i = 0; i < v.size(); ++i)
+          img.line(X(v[i].t), Y(est(i, a) - sigma(i, a)), X(v[i].t), Y(est(i, a) + sigma(i, a)),
+                   band, 2);
+      }
+      for (std::size_t i = 1; i < v.size(); ++i)
+        img.line(X(v[i - 1].t), Y(est(i - 1, a)), X(v[i].t), Y(est(i, a)), axis_col[a], 3);
+      for (std::size_t i = 1; i < gt.size(); ++i)
+        if ((i / 4) % 2 == 0)  // dashed
+          img.line(X(gt[i - 1].first), Y(gt[i - 1].second[a]), X(gt[i].first),
+                   Y(gt[i].second[a]), black, 1);
+      if (state_value) {  // the state's own value, a filled square at the state time
+        const int ys = Y((*state_value)[a]);
+        img.filledRectangle(X(s.timestamp) - 5, ys - 5, X(s.timestamp) + 5, ys + 5, axis_col[a]);
+        img.rectangle(X(s.timestamp) - 5, ys - 5, X(s.timestamp) + 5, ys + 5, black);
+      }
     }
-    for (std::size_t i = 1; i < v.size(); ++i)
-      img.line(X(v[i - 1].t), Y(v[i - 1].v_b[a]), X(v[i].t), Y(v[i].v_b[a]), est_col[a], 2);
-    for (std::size_t i = 1; i < gt.size(); ++i) {
-      if ((i / 3) % 2 == 0)  // dashed
-        img.line(X(gt[i - 1].first), Y(gt[i - 1].second[a]), X(gt[i].first), Y(gt[i].second[a]),
-                 black, 1);
+    img.line(X(s.timestamp), y_top, X(s.timestamp), y_bot, black, 1);
+    img.rectangle(left, y_top, right, y_bot, black);
+    img.filledRectangle(left + 2, y_top + 2, left + 12 + 9 * static_cast<int>(title.size()),
+                        y_top + 20, TColor(255, 255, 255));
+    int tx = left + 8;
+    if (axes.size() == 1) {
+      img.textOut(tx, y_top + 4, title, axis_col[axes[0]]);
+    } else {
+      img.textOut(tx, y_top + 4, title, black);
     }
+  };
+
+  for (int a = 0; a < 3; ++a) {
+    const char* names[3] = {"v_b.x [m/s]", "v_b.y [m/s]", "v_b.z [m/s]"};
+    panel(
+        a, names[a], {a}, [&](std::size_t i, int ax) { return v[i].v_b[ax]; },
+        [&](std::size_t i, int ax) { return v[i].sigma_v_b[ax]; }, gt_v,
+        s.ok() ? std::optional<Vec3>(s.v_b()) : std::nullopt);
   }
-  const int y_axis = top + 3 * panel_h;
+  panel(
+      3, "gyro bias x y z [rad/s]: velocimeter (lines), state (squares)", {0, 1, 2},
+      [&](std::size_t i, int ax) { return v[i].b_g[ax]; }, nullptr, gt_bg,
+      s.ok() ? std::optional<Vec3>(s.b_g) : std::nullopt);
+
   for (int k = 0; k <= 5; ++k) {
-    const double t = t0 + (t1 - t0) * k / 5.0;
-    const int x = left + static_cast<int>((t - t0) / (t1 - t0) * (right - left));
-    img.textOut(x - 20, y_axis, num(t - t0, 2) + " s", black);
+    const double t = w0 + (w1 - w0) * k / 5.0;
+    img.textOut(X(t) - 20, bottom - 2, num(t - w0, 2) + " s", black);
   }
   saveAtomically(img, png);
 }
