@@ -13,6 +13,10 @@ int main(int argc, char** argv) {
     TCLAP::ValueArg<double> duration("d", "duration", "seconds (0: the preset's)", false, 0, "S", cmd);
     TCLAP::ValueArg<int> points("n", "points-per-frame", "points per frame (0: the preset's)", false, 0, "N", cmd);
     TCLAP::ValueArg<std::string> out("o", "out", "output rawlog", false, "dyna_01.rawlog", "FILE", cmd);
+    TCLAP::ValueArg<std::string> scenario("c", "scenario",
+                                          "INI file with a [scenario] section (base preset + "
+                                          "ScenarioConfig fields); see SimApp.h",
+                                          false, "", "FILE", cmd);
     TCLAP::SwitchArg in_g("", "accel-in-g", "write accelerations in g", cmd);
     cmd.parse(argc, argv);
     freeinit::mrpt_glue::SimApp app;
@@ -22,6 +26,7 @@ int main(int argc, char** argv) {
     app.params.points_per_frame = points.getValue();
     app.params.output = out.getValue();
     app.params.accel_in_g = in_g.getValue();
+    app.params.scenario_file = scenario.getValue();
     app.run(std::cout);
     return 0;
   } catch (const std::exception& e) {
