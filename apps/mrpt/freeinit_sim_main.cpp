@@ -8,11 +8,15 @@ int main(int argc, char** argv) {
   try {
     TCLAP::CmdLine cmd("freeinit-sim: Doppler LiDAR + IMU recording with ground truth, as a rawlog",
                        ' ', "0.1");
-    TCLAP::ValueArg<std::string> preset("p", "preset", "preset (dyna_01..06, stat_01..04, ...)", false, "dyna_01", "NAME", cmd);
+    TCLAP::ValueArg<std::string> preset("p", "preset", "preset (dyna_01..06, stat_01..04, ...)",
+                                        false, "dyna_01", "NAME", cmd);
     TCLAP::ValueArg<unsigned> seed("s", "seed", "random seed", false, 1, "N", cmd);
-    TCLAP::ValueArg<double> duration("d", "duration", "seconds (0: the preset's)", false, 0, "S", cmd);
-    TCLAP::ValueArg<int> points("n", "points-per-frame", "points per frame (0: the preset's)", false, 0, "N", cmd);
-    TCLAP::ValueArg<std::string> out("o", "out", "output rawlog", false, "dyna_01.rawlog", "FILE", cmd);
+    TCLAP::ValueArg<double> duration("d", "duration", "seconds (0: the preset's)", false, 0, "S",
+                                     cmd);
+    TCLAP::ValueArg<int> points("n", "points-per-frame", "points per frame (0: the preset's)",
+                                false, 0, "N", cmd);
+    TCLAP::ValueArg<std::string> out("o", "out", "output rawlog", false, "dyna_01.rawlog", "FILE",
+                                     cmd);
     TCLAP::ValueArg<std::string> scenario("c", "scenario",
                                           "INI file with a [scenario] section (base preset + "
                                           "ScenarioConfig fields); see SimApp.h",

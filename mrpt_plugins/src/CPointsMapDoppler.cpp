@@ -8,8 +8,7 @@ namespace freeinit::mrpt_glue {
 IMPLEMENTS_SERIALIZABLE(CPointsMapDoppler, CPointsMap, freeinit::mrpt_glue)
 
 void CPointsMapDoppler::insertPointDoppler(float x, float y, float z, float doppler,
-                                           float time_offset, float intensity,
-                                           std::uint16_t line) {
+                                           float time_offset, float intensity, std::uint16_t line) {
   m_x.push_back(x);
   m_y.push_back(y);
   m_z.push_back(z);
@@ -112,8 +111,7 @@ void CPointsMapDoppler::impl_copyFrom(const mrpt::maps::CPointsMap& obj) {
 }
 
 void CPointsMapDoppler::addFrom_classSpecific(const mrpt::maps::CPointsMap& other,
-                                              size_t nPreviousPoints,
-                                              bool filterOutPointsAtZero) {
+                                              size_t nPreviousPoints, bool filterOutPointsAtZero) {
   const auto* o = dynamic_cast<const CPointsMapDoppler*>(&other);
   // With filtering, the copied points can no longer be matched to their source index.
   if (o == nullptr || filterOutPointsAtZero || nPreviousPoints + o->size() != size()) return;

@@ -85,8 +85,8 @@ int FreeInitApp::run(std::ostream& log) {
   result = handler.result();
   const InitialState& s = result.state;
 
-  log << "Initialization: " << toString(s.status) << (s.message.empty() ? "" : " (" + s.message + ")")
-      << "\n";
+  log << "Initialization: " << toString(s.status)
+      << (s.message.empty() ? "" : " (" + s.message + ")") << "\n";
   log << std::fixed << std::setprecision(6) << "  timestamp " << s.timestamp << "\n"
       << std::setprecision(4) << "  v_b  " << v3(s.v_b()) << " m/s\n  g_b  " << v3(s.g_b())
       << " m/s^2\n  b_g  " << v3(s.b_g) << " rad/s\n  b_a  " << v3(s.b_a) << " m/s^2\n"
@@ -114,8 +114,7 @@ int FreeInitApp::run(std::ostream& log) {
   const std::filesystem::path out(params.out_dir);
   std::filesystem::create_directories(out);
   auto file = [&](const char* name) { return (out / name).string(); };
-  writeFileAtomically(file("effective_config.ini"),
-                      [&](std::ostream& o) { o << effective.str(); });
+  writeFileAtomically(file("effective_config.ini"), [&](std::ostream& o) { o << effective.str(); });
   writeInitialStateIni(file("initial_state.ini"), s);
   if (errors_wrt_gt) writeTruthErrors(file("errors_wrt_gt.ini"), *errors_wrt_gt);
   if (config.output.simplemap) writeStaticSimplemap(file("static_map.simplemap"), result);

@@ -7,8 +7,7 @@
 
 namespace freeinit::mrpt_glue {
 
-FreeInitObservationHandler::FreeInitObservationHandler(const AppConfig& config)
-    : config_(config) {
+FreeInitObservationHandler::FreeInitObservationHandler(const AppConfig& config) : config_(config) {
   config_.core.validate();
   if (!config_.extrinsics.from_sensor_pose) start();
 }

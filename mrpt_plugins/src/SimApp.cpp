@@ -150,8 +150,8 @@ void SimApp::run(std::ostream& log) {
   writeFileAtomically(stem + ".truth_tum.txt", [&](std::ostream& o) {
     o << "# ground truth: timestamp x y z qx qy qz qw (body = IMU frame, world z up)\n";
     for (const auto& t : truth)
-      o << std::fixed << std::setprecision(9) << t.t << " " << t.p_w.x() << " " << t.p_w.y()
-        << " " << t.p_w.z() << " " << t.q_wb.x() << " " << t.q_wb.y() << " " << t.q_wb.z() << " "
+      o << std::fixed << std::setprecision(9) << t.t << " " << t.p_w.x() << " " << t.p_w.y() << " "
+        << t.p_w.z() << " " << t.q_wb.x() << " " << t.q_wb.y() << " " << t.q_wb.z() << " "
         << t.q_wb.w() << "\n";
   });
   writeFileAtomically(stem + ".extrinsics.ini", [&](std::ostream& o) {
@@ -162,8 +162,8 @@ void SimApp::run(std::ostream& log) {
     o << "p_bl = " << rec.extrinsics.p_bl.x() << " " << rec.extrinsics.p_bl.y() << " "
       << rec.extrinsics.p_bl.z() << "\n";
   });
-  log << "Wrote " << out << " (" << records_written << " records: " << rec.imu.size()
-      << " IMU, " << rec.frames.size() << " point clouds), " << stem << ".truth.csv, " << stem
+  log << "Wrote " << out << " (" << records_written << " records: " << rec.imu.size() << " IMU, "
+      << rec.frames.size() << " point clouds), " << stem << ".truth.csv, " << stem
       << ".truth_tum.txt, " << stem << ".extrinsics.ini\n";
   log << std::setprecision(6) << "True biases: b_g = " << rec.b_g.transpose()
       << " rad/s, b_a = " << rec.b_a.transpose() << " m/s^2\n";

@@ -68,8 +68,7 @@ void visitConfig(Visitor& v, AppConfig& c) {
   v("static_detector", "max_speed", st.max_speed, "m/s", "LiDAR speed below which at rest");
   v("static_detector", "max_gyro_dev", st.max_gyro_dev, "rad/s",
     "gyro deviation from its mean at rest");
-  v("static_detector", "zupt_sigma", st.zupt_sigma, "m/s",
-    "zero-velocity pseudo-measurement std");
+  v("static_detector", "zupt_sigma", st.zupt_sigma, "m/s", "zero-velocity pseudo-measurement std");
   v("static_detector", "check_period", st.check_period, "s", "how often motion is checked");
 
   v("window", "imu_samples", c.core.window.imu_samples, "-",
@@ -97,7 +96,8 @@ void visitConfig(Visitor& v, AppConfig& c) {
   v("gravity", "loss_scale", g.loss_scale, "sigma", "Cauchy loss scale on whitened residuals");
   v("gravity", "max_iterations", g.max_iterations, "-", "Ceres iterations");
 
-  v("input", "imu_label", c.input.imu_label, "-", "sensorLabel of the IMU observations (empty: any)");
+  v("input", "imu_label", c.input.imu_label, "-",
+    "sensorLabel of the IMU observations (empty: any)");
   v("input", "lidar_label", c.input.lidar_label, "-",
     "sensorLabel of the point-cloud observations (empty: any)");
   v("input", "imu_accel_in_g", c.input.imu_accel_in_g, "bool",
@@ -105,7 +105,6 @@ void visitConfig(Visitor& v, AppConfig& c) {
   v("input", "min_imu_rate", c.input.min_imu_rate, "Hz", "slower IMU streams are rejected");
   v("input", "drop_invalid_points", c.input.drop_invalid_points, "bool",
     "drop NaN/inf points (reported) instead of failing");
-
 
   auto& o = c.output;
   v("output", "simplemap", o.simplemap, "bool", "static_map.simplemap (stock MRPT classes)");
@@ -164,8 +163,7 @@ class Loader {
     return out;
   }
 
-  void operator()(const std::string& s, const std::string& k, double& x, const char*,
-                  const char*) {
+  void operator()(const std::string& s, const std::string& k, double& x, const char*, const char*) {
     if (has(s, k)) x = numbers(s, k, 1)[0];
   }
   void operator()(const std::string& s, const std::string& k, int& x, const char*, const char*) {
@@ -229,7 +227,8 @@ void loadExtrinsics(Loader& L, AppConfig& c) {
   const bool has_R = L.has(s, "R_bl");
   const bool has_rpy = L.has(s, "roll_deg") || L.has(s, "pitch_deg") || L.has(s, "yaw_deg");
   const bool has_p = L.has(s, "p_bl");
-  if (has_R && has_rpy) L.fail(s, "R_bl", "give either R_bl or roll_deg/pitch_deg/yaw_deg, not both");
+  if (has_R && has_rpy)
+    L.fail(s, "R_bl", "give either R_bl or roll_deg/pitch_deg/yaw_deg, not both");
   Mat3 R = Mat3::Identity();
   if (has_R) {
     const auto v = L.numbers(s, "R_bl", 9);
@@ -344,10 +343,10 @@ void dumpAppConfig(const AppConfig& config, std::ostream& out) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j) r << R(i, j) << (i * 3 + j < 8 ? " " : "");
     t << p.x() << " " << p.y() << " " << p.z();
-    out << std::left << std::setw(kKeyWidth) << "R_bl" << "= " << r.str()
-        << " ; [-] LiDAR-to-IMU rotation, row-major\n"
-        << std::setw(kKeyWidth) << "p_bl" << "= " << t.str()
-        << " ; [m] LiDAR origin in the IMU frame\n";
+    out << std::left << std::setw(kKeyWidth) << "R_bl"
+        << "= " << r.str() << " ; [-] LiDAR-to-IMU rotation, row-major\n"
+        << std::setw(kKeyWidth) << "p_bl"
+        << "= " << t.str() << " ; [m] LiDAR origin in the IMU frame\n";
   }
 }
 

@@ -45,8 +45,9 @@ CObservationIMU::Ptr imuToObservation(const ImuSample& s, const std::string& lab
 
 LidarFrame frameFromObservation(const CObservationPointCloud& obs) {
   if (!obs.pointcloud)
-    throw std::invalid_argument("CObservationPointCloud '" + obs.sensorLabel +
-                                "' has no point cloud (externally stored clouds are not supported)");
+    throw std::invalid_argument(
+        "CObservationPointCloud '" + obs.sensorLabel +
+        "' has no point cloud (externally stored clouds are not supported)");
   const auto* map = dynamic_cast<const CPointsMapDoppler*>(obs.pointcloud.get());
   if (map == nullptr)
     throw std::invalid_argument("CObservationPointCloud '" + obs.sensorLabel + "' holds a " +
@@ -71,10 +72,9 @@ LidarFrame frameFromObservation(const CObservationPointCloud& obs) {
     if (i > 0 && p.time_offset < f.points[i - 1].time_offset) sorted = false;
   }
   if (!sorted) {
-    std::stable_sort(f.points.begin(), f.points.end(),
-                     [](const DopplerPoint& a, const DopplerPoint& b) {
-                       return a.time_offset < b.time_offset;
-                     });
+    std::stable_sort(
+        f.points.begin(), f.points.end(),
+        [](const DopplerPoint& a, const DopplerPoint& b) { return a.time_offset < b.time_offset; });
   }
   return f;
 }
@@ -84,8 +84,8 @@ CObservationPointCloud::Ptr frameToObservation(const LidarFrame& f, const Extrin
   auto map = CPointsMapDoppler::Create();
   map->reserve(f.points.size());
   for (const auto& p : f.points)
-    map->insertPointDoppler(p.p_l.x(), p.p_l.y(), p.p_l.z(), p.doppler, p.time_offset,
-                            p.intensity, p.line);
+    map->insertPointDoppler(p.p_l.x(), p.p_l.y(), p.p_l.z(), p.doppler, p.time_offset, p.intensity,
+                            p.line);
   auto obs = CObservationPointCloud::Create();
   obs->timestamp = fromUnix(f.stamp);
   obs->sensorLabel = label;

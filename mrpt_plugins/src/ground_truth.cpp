@@ -72,8 +72,7 @@ std::vector<TruthSample> readTruthCsv(const std::string& path) {
 }
 
 std::optional<TruthSample> truthAt(const std::vector<TruthSample>& truth, double t) {
-  if (truth.empty() || t < truth.front().t - 1e-6 || t > truth.back().t + 1e-6)
-    return std::nullopt;
+  if (truth.empty() || t < truth.front().t - 1e-6 || t > truth.back().t + 1e-6) return std::nullopt;
   auto it = std::lower_bound(truth.begin(), truth.end(), t,
                              [](const TruthSample& s, double x) { return s.t < x; });
   if (it == truth.begin()) return truth.front();

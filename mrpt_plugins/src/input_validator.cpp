@@ -80,14 +80,15 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
                        f.points.end());
         if (f.points.empty()) throw fail(r.index, "no valid point left in the cloud");
       }
-      const bool any_doppler = std::any_of(f.points.begin(), f.points.end(), [](const DopplerPoint& p) {
-        return std::isfinite(p.doppler) && p.doppler != 0.0f;
-      });
+      const bool any_doppler = std::any_of(
+          f.points.begin(), f.points.end(),
+          [](const DopplerPoint& p) { return std::isfinite(p.doppler) && p.doppler != 0.0f; });
       if (!any_doppler) throw fail(r.index, "the Doppler field is zero for every point");
       if (!in.frames.empty() && f.stamp <= in.frames.back().stamp)
-        throw fail(r.index, std::string("point cloud timestamp ") +
-                                (f.stamp == in.frames.back().stamp ? "duplicated" : "goes backwards") +
-                                " (" + fmt(f.stamp) + " after " + fmt(in.frames.back().stamp) + ")");
+        throw fail(r.index,
+                   std::string("point cloud timestamp ") +
+                       (f.stamp == in.frames.back().stamp ? "duplicated" : "goes backwards") +
+                       " (" + fmt(f.stamp) + " after " + fmt(in.frames.back().stamp) + ")");
       if (in.frames.empty()) {
         first_cloud_record = r.index;
         const mrpt::poses::CPose3D imu_p = imu_pose ? *imu_pose : mrpt::poses::CPose3D();
@@ -111,8 +112,8 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
                      "' ([input] imu_label); other observations: " + seen());
   if (in.frames.empty())
     throw InputError(file + ": no CObservationPointCloud with sensorLabel '" +
-                     config.input.lidar_label + "' ([input] lidar_label); other observations: " +
-                     seen());
+                     config.input.lidar_label +
+                     "' ([input] lidar_label); other observations: " + seen());
   if (in.imu.size() < 2)
     throw InputError(file + ": record " + std::to_string(first_imu_record) +
                      ": a single IMU sample");
@@ -120,12 +121,13 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
   // IMU rate from the median sample interval.
   std::vector<double> dts;
   for (std::size_t i = 1; i < in.imu.size(); ++i) dts.push_back(in.imu[i].t - in.imu[i - 1].t);
-  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2), dts.end());
+  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2),
+                   dts.end());
   const double rate = 1.0 / dts[dts.size() / 2];
   if (rate < config.input.min_imu_rate)
-    throw InputError(file + ": record " + std::to_string(first_imu_record) + ": IMU rate " +
-                     fmt(rate) + " Hz is below [input] min_imu_rate = " +
-                     fmt(config.input.min_imu_rate) + " Hz");
+    throw InputError(
+        file + ": record " + std::to_string(first_imu_record) + ": IMU rate " + fmt(rate) +
+        " Hz is below [input] min_imu_rate = " + fmt(config.input.min_imu_rate) + " Hz");
 
   // Units: the specific force averages to about 9.81 m/s^2 (1 g) over any short stretch.
   Vec3 mean = Vec3::Zero();
@@ -139,7 +141,8 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
   if (config.input.imu_accel_in_g && g_seen > 3.0 * kGravity)
     throw InputError(file + ": record " + std::to_string(first_imu_record) +
                      ": [input] imu_accel_in_g = true but the accelerations are already in m/s^2 "
-                     "(mean magnitude " + fmt(g_seen) + " after conversion)");
+                     "(mean magnitude " +
+                     fmt(g_seen) + " after conversion)");
 
   // The window needs imu_samples IMU samples once the LiDAR has started.
   const double t_lidar = in.frames.front().stamp;
@@ -148,8 +151,8 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
   if (after < config.core.window.imu_samples)
     throw InputError(file + ": recording shorter than the window: " + std::to_string(after) +
                      " IMU samples after the first point cloud (record " +
-                     std::to_string(first_cloud_record) + "), [window] imu_samples = " +
-                     std::to_string(config.core.window.imu_samples));
+                     std::to_string(first_cloud_record) +
+                     "), [window] imu_samples = " + std::to_string(config.core.window.imu_samples));
   return in;
 }
 

@@ -47,10 +47,10 @@ void writeInitialStateIni(const std::string& path, const InitialState& s) {
     o << "status    = " << (s.ok() ? std::string("ok") : std::string(toString(s.status)));
     if (!s.ok() && !s.message.empty()) o << " ; " << s.message;
     o << "\n";
-    o << "timestamp = " << std::fixed << std::setprecision(9) << s.timestamp
-      << std::defaultfloat << std::setprecision(17) << "\n";
-    o << "q_wb      = " << s.q_wb.w() << " " << s.q_wb.x() << " " << s.q_wb.y() << " "
-      << s.q_wb.z() << "\n";
+    o << "timestamp = " << std::fixed << std::setprecision(9) << s.timestamp << std::defaultfloat
+      << std::setprecision(17) << "\n";
+    o << "q_wb      = " << s.q_wb.w() << " " << s.q_wb.x() << " " << s.q_wb.y() << " " << s.q_wb.z()
+      << "\n";
     o << "p_w       = ";
     vec(o, s.p_w);
     o << "\nv_w       = ";

@@ -12,8 +12,7 @@
 
 namespace freeinit::mrpt_glue {
 
-std::vector<RawlogRecord> readRawlog(const std::string& path,
-                                     const RawlogReadProgress& progress) {
+std::vector<RawlogRecord> readRawlog(const std::string& path, const RawlogReadProgress& progress) {
   registerClasses();
   if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": file not found");
 

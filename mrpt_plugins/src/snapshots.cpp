@@ -16,8 +16,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <functional>
-#include <optional>
 #include <iomanip>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 
@@ -43,9 +43,11 @@ std::string num(double x, int prec = 3) {
 // Height colormap (viridis-like, our own control points): dark purple (low) -> teal -> yellow
 // (high). It holds no red, so the rejected points (red) stay apart from the map.
 TColor heightColor(float u) {
-  static const float kStops[5][3] = {
-      {0.27f, 0.00f, 0.33f}, {0.23f, 0.32f, 0.55f}, {0.13f, 0.57f, 0.55f},
-      {0.37f, 0.79f, 0.38f}, {0.99f, 0.91f, 0.15f}};
+  static const float kStops[5][3] = {{0.27f, 0.00f, 0.33f},
+                                     {0.23f, 0.32f, 0.55f},
+                                     {0.13f, 0.57f, 0.55f},
+                                     {0.37f, 0.79f, 0.38f},
+                                     {0.99f, 0.91f, 0.15f}};
   u = std::clamp(u, 0.0f, 1.0f) * 4.0f;
   const int i = std::min(static_cast<int>(u), 3);
   const float f = u - static_cast<float>(i);
@@ -91,11 +93,11 @@ mrpt::img::TColorf colorf(const TColor& c) {
 
 // What differs between the views.
 struct ViewStyle {
-  Range x, y;             ///< [m] grid extent
-  float grid_z = 0;       ///< [m] grid height
-  float grid_step = 1;    ///< [m] grid spacing
-  float marker = 1;       ///< [m] sizes the start sphere, the axes and the gravity arrow
-  float point_size = 2;   ///< [px] map points
+  Range x, y;            ///< [m] grid extent
+  float grid_z = 0;      ///< [m] grid height
+  float grid_step = 1;   ///< [m] grid spacing
+  float marker = 1;      ///< [m] sizes the start sphere, the axes and the gravity arrow
+  float point_size = 2;  ///< [px] map points
 };
 
 // One scene per view: the map colored by height over the range `z`, the rejected points, the
@@ -272,8 +274,8 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   img.textOut(12, 32,
               std::to_string(result.static_map.size()) + " static points, " +
                   std::to_string(result.rejected.size()) + " rejected; window " + num(window, 2) +
-                  " s; path " + num(path_across, 2) + " m across; |b_g| " +
-                  num(s.b_g.norm(), 4) + " rad/s, |b_a| " + num(s.b_a.norm(), 3) + " m/s^2",
+                  " s; path " + num(path_across, 2) + " m across; |b_g| " + num(s.b_g.norm(), 4) +
+                  " rad/s, |b_a| " + num(s.b_a.norm(), 3) + " m/s^2",
               grey);
   int x = 12;
   const int y = 58;
@@ -328,9 +330,7 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
   const int left = 80, right = width - 20, top = 70, bottom = height - 30;
   const int n_panels = 4;
   const int panel_h = (bottom - top) / n_panels;
-  auto X = [&](double t) {
-    return left + static_cast<int>((t - t0) / (t1 - t0) * (right - left));
-  };
+  auto X = [&](double t) { return left + static_cast<int>((t - t0) / (t1 - t0) * (right - left)); };
 
   img.selectTextFont("10x20");
   img.textOut(left, 6, "Free-Init velocimeter over the initialization window", black);
@@ -396,8 +396,8 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
         img.line(X(v[i - 1].t), Y(est(i - 1, a)), X(v[i].t), Y(est(i, a)), axis_col[a], 3);
       for (std::size_t i = 1; i < gt.size(); ++i)
         if ((i / 4) % 2 == 0)  // dashed
-          img.line(X(gt[i - 1].first), Y(gt[i - 1].second[a]), X(gt[i].first),
-                   Y(gt[i].second[a]), black, 1);
+          img.line(X(gt[i - 1].first), Y(gt[i - 1].second[a]), X(gt[i].first), Y(gt[i].second[a]),
+                   black, 1);
       if (state_value) {  // the state's own value, a filled square at the state time
         const int ys = Y((*state_value)[a]);
         img.filledRectangle(X(s.timestamp) - 5, ys - 5, X(s.timestamp) + 5, ys + 5, axis_col[a]);

@@ -86,7 +86,8 @@ TEST(FreeInitAppEndToEnd, StaticSampleStat01) {
 
 TEST(FreeInitAppEndToEnd, BadInputFailsBeforeAnyOutputIsWritten) {
   const std::string out = outDir("bad");
-  const std::string bad = (fs::temp_directory_path() / "freeinit_mrpt_app_tests" / "cut.rawlog").string();
+  const std::string bad =
+      (fs::temp_directory_path() / "freeinit_mrpt_app_tests" / "cut.rawlog").string();
   fs::create_directories(fs::path(bad).parent_path());
   fs::copy_file(kSrc + "/rawlogs/dyna_01.rawlog", bad, fs::copy_options::overwrite_existing);
   fs::resize_file(bad, fs::file_size(bad) / 2);
@@ -134,7 +135,7 @@ TEST(SimApp, CustomScenarioFromIni) {
   sim.run(log);
   const auto truth = readTruthCsv(dir + "/c.truth.csv");
   ASSERT_GE(truth.size(), 50u);
-  EXPECT_LE(truth.size(), 52u);  // 100 Hz over 0.5 s
+  EXPECT_LE(truth.size(), 52u);                      // 100 Hz over 0.5 s
   EXPECT_NEAR(truth[1].t - truth[0].t, 0.01, 1e-6);  // UNIX seconds: ~2e-7 s resolution
   EXPECT_LT((truth[0].b_g - Vec3(0.01, -0.02, 0.003)).norm(), 1e-12);
   EXPECT_LT((truth[0].b_a - Vec3(0.1, 0, -0.05)).norm(), 1e-12);

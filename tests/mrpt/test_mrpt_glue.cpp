@@ -238,7 +238,8 @@ TEST(RawlogReader, UnregisteredClassFailsInsteadOfTruncatingSilently) {
   }
   ASSERT_GT(replaced, 0u);
   const std::string p = tmpPath("unregistered.rawlog");
-  std::ofstream(p, std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  std::ofstream(p, std::ios::binary)
+      .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
   expectThrowsWith([&] { readRawlog(p); }, "record 0");
   expectThrowsWith([&] { readRawlog(p); }, "not registered");
 }
@@ -253,8 +254,7 @@ TEST(InputValidator, AcceptsAConsistentRecording) {
 
 TEST(InputValidator, RejectsEachKindOfBadInput) {
   const AppConfig cfg = sensorPoseConfig();
-  auto check = [&](std::vector<RawlogRecord> recs, const std::string& needle,
-                   const AppConfig& c) {
+  auto check = [&](std::vector<RawlogRecord> recs, const std::string& needle, const AppConfig& c) {
     expectThrowsWith([&] { validateInput(recs, c, "bad.rawlog"); }, needle);
   };
   auto imuAt = [](std::vector<RawlogRecord>& r, std::size_t k) {
@@ -270,10 +270,9 @@ TEST(InputValidator, RejectsEachKindOfBadInput) {
 
   {  // no IMU
     auto r = goodRecords();
-    r.erase(std::remove_if(r.begin(), r.end(),
-                           [](const RawlogRecord& x) {
-                             return IS_CLASS(*x.obs, mrpt::obs::CObservationIMU);
-                           }),
+    r.erase(std::remove_if(
+                r.begin(), r.end(),
+                [](const RawlogRecord& x) { return IS_CLASS(*x.obs, mrpt::obs::CObservationIMU); }),
             r.end());
     check(r, "no CObservationIMU", cfg);
   }
@@ -287,8 +286,11 @@ TEST(InputValidator, RejectsEachKindOfBadInput) {
     m->insertPoint(1, 2, 3);
     pc->pointcloud = m;
     r[k].obs = pc;
-    check(r, "record " + std::to_string(r[k].index) + ": CObservationPointCloud 'LIDAR' holds a "
-                 "mrpt::maps::CSimplePointsMap, which has no per-point Doppler", cfg);
+    check(r,
+          "record " + std::to_string(r[k].index) +
+              ": CObservationPointCloud 'LIDAR' holds a "
+              "mrpt::maps::CSimplePointsMap, which has no per-point Doppler",
+          cfg);
   }
   {  // IMU timestamp backwards, then duplicated
     auto r = goodRecords();
@@ -320,8 +322,8 @@ TEST(InputValidator, RejectsEachKindOfBadInput) {
   {  // empty cloud
     auto r = goodRecords();
     const auto k = cloudAt(r, 3);
-    r[k].obs = frameToObservation(LidarFrame{toUnix(r[k].obs->timestamp), {}}, someExtrinsics(),
-                                  "LIDAR");
+    r[k].obs =
+        frameToObservation(LidarFrame{toUnix(r[k].obs->timestamp), {}}, someExtrinsics(), "LIDAR");
     check(r, "empty point cloud", cfg);
   }
   {  // Doppler zero everywhere
@@ -365,10 +367,16 @@ TEST(AppConfigIni, ExtrinsicsMissingOrNotARotationAndBadKeysAreNamed) {
       },
       "b.ini: [extrinsics] R_bl: not a rotation matrix");
   expectThrowsWith(
-      [] { loadAppConfigFromText("[extrinsics]\nfrom_sensor_pose = true\n[velocimeter]\ndopler_sigma = 0.1\n", "c.ini"); },
+      [] {
+        loadAppConfigFromText(
+            "[extrinsics]\nfrom_sensor_pose = true\n[velocimeter]\ndopler_sigma = 0.1\n", "c.ini");
+      },
       "c.ini: [velocimeter] dopler_sigma: unknown key");
   expectThrowsWith(
-      [] { loadAppConfigFromText("[extrinsics]\nfrom_sensor_pose = true\n[window]\nimu_samples = ten\n", "d.ini"); },
+      [] {
+        loadAppConfigFromText(
+            "[extrinsics]\nfrom_sensor_pose = true\n[window]\nimu_samples = ten\n", "d.ini");
+      },
       "d.ini: [window] imu_samples: 'ten' is not a number");
   expectThrowsWith(
       [] { loadAppConfigFromText("[extrinsics]\nfrom_sensor_pose = maybe\n", "e.ini"); },

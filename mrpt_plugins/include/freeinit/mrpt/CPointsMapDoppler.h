@@ -48,12 +48,12 @@ class CPointsMapDoppler : public mrpt::maps::CPointsMap {
   void insertPointFast(float x, float y, float z = 0) override;
   void getPointAllFieldsFast(size_t index, std::vector<float>& point_data) const override;
   void setPointAllFieldsFast(size_t index, const std::vector<float>& point_data) override;
-  void loadFromRangeScan(const mrpt::obs::CObservation2DRangeScan& scan,
-                         const std::optional<const mrpt::poses::CPose3D>& robotPose =
-                             std::nullopt) override;
-  void loadFromRangeScan(const mrpt::obs::CObservation3DRangeScan& scan,
-                         const std::optional<const mrpt::poses::CPose3D>& robotPose =
-                             std::nullopt) override;
+  void loadFromRangeScan(
+      const mrpt::obs::CObservation2DRangeScan& scan,
+      const std::optional<const mrpt::poses::CPose3D>& robotPose = std::nullopt) override;
+  void loadFromRangeScan(
+      const mrpt::obs::CObservation3DRangeScan& scan,
+      const std::optional<const mrpt::poses::CPose3D>& robotPose = std::nullopt) override;
 
  protected:
   void impl_copyFrom(const mrpt::maps::CPointsMap& obj) override;

@@ -19,12 +19,12 @@ struct SimAppParams {
   /// `seed` and `preset` are the defaults of the file's keys.
   std::string scenario_file;
   std::uint64_t seed = 1;
-  double duration = 0;             ///< [s] 0: the preset's
-  int points_per_frame = 0;        ///< 0: the preset's
+  double duration = 0;                    ///< [s] 0: the preset's
+  int points_per_frame = 0;               ///< 0: the preset's
   std::string output = "dyna_01.rawlog";  ///< rawlog path; truth files go beside it
   std::string imu_label = "IMU";
   std::string lidar_label = "LIDAR";
-  bool accel_in_g = false;         ///< write accelerations in g (to exercise the unit check)
+  bool accel_in_g = false;  ///< write accelerations in g (to exercise the unit check)
 };
 
 class SimApp {

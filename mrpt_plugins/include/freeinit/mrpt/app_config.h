@@ -28,13 +28,13 @@ struct ExtrinsicsParams {
 
 /// What the app writes to its output folder. INI section [output].
 struct OutputParams {
-  bool simplemap = true;   ///< static_map.simplemap (stock MRPT classes only)
-  bool ply = true;         ///< static_map.ply
-  bool trajectory = true;  ///< trajectory_tum.txt
-  bool velocities = true;  ///< velocimeter.csv
-  bool snapshots = true;   ///< PNGs rendered offscreen
-  int snapshot_width = 1280;   ///< [px]
-  int snapshot_height = 800;   ///< [px]
+  bool simplemap = true;      ///< static_map.simplemap (stock MRPT classes only)
+  bool ply = true;            ///< static_map.ply
+  bool trajectory = true;     ///< trajectory_tum.txt
+  bool velocities = true;     ///< velocimeter.csv
+  bool snapshots = true;      ///< PNGs rendered offscreen
+  int snapshot_width = 1280;  ///< [px]
+  int snapshot_height = 800;  ///< [px]
 };
 
 struct AppConfig {

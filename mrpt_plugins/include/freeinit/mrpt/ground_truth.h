@@ -12,7 +12,7 @@
 namespace freeinit::mrpt_glue {
 
 struct TruthSample {
-  double t = 0;                 ///< [s] UNIX
+  double t = 0;  ///< [s] UNIX
   Quat q_wb = Quat::Identity();
   Vec3 p_w = Vec3::Zero();      ///< [m]
   Vec3 v_w = Vec3::Zero();      ///< [m/s]
@@ -31,11 +31,11 @@ std::vector<TruthSample> readTruthCsv(const std::string& path);
 std::optional<TruthSample> truthAt(const std::vector<TruthSample>& truth, double t);
 
 struct TruthErrors {
-  double t = 0;                ///< [s] instant compared (the state timestamp)
-  double velocity = 0;         ///< [m/s] |v_b - v_b_true|
-  double gravity_deg = 0;      ///< [deg] angle between g_b and g_b_true
-  double gyro_bias = 0;        ///< [rad/s] |b_g - b_g_true|
-  double accel_bias = 0;       ///< [m/s^2] |b_a - b_a_true|
+  double t = 0;            ///< [s] instant compared (the state timestamp)
+  double velocity = 0;     ///< [m/s] |v_b - v_b_true|
+  double gravity_deg = 0;  ///< [deg] angle between g_b and g_b_true
+  double gyro_bias = 0;    ///< [rad/s] |b_g - b_g_true|
+  double accel_bias = 0;   ///< [m/s^2] |b_a - b_a_true|
   Vec3 v_b_true = Vec3::Zero();
 };
 
