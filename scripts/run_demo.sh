@@ -7,40 +7,32 @@
 #   SAMPLE   dyna_01 (default: handheld rotational start) or stat_01 (static start), i.e. any
 #            rawlogs/<name>.rawlog, or a path to a .rawlog file
 #   OUT_DIR  output folder (default: out/<sample name>)
-# The two arguments may come in either order: one that names a rawlog is the input.
 # Environment: BUILD_DIR (default build, as for setup.sh), JOBS, SKIP_SETUP=1 (use an existing build).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
 die() { echo "[demo] error: $*" >&2; exit 1; }
-usage() { sed -n '2,11p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,10p' "$0" | sed 's/^# \{0,1\}//'; }
 
-# A rawlog path for an argument that names one, else nothing.
-as_rawlog() {
-  local a=$1
-  if [ -f "rawlogs/$a.rawlog" ]; then echo "rawlogs/$a.rawlog"
-  elif [[ "$a" == *.rawlog ]]; then echo "$a"
-  fi
-}
-
-rawlog=""; out=""
 for a in "$@"; do
   case "$a" in
     -h|--help) usage; exit 0 ;;
     -*) usage >&2; die "unknown option '$a'" ;;
   esac
-  r=$(as_rawlog "$a")
-  if [ -n "$r" ] && [ -z "$rawlog" ]; then rawlog=$r
-  elif [ -z "$out" ]; then out=$a
-  else usage >&2; die "too many arguments (got '$*')"
-  fi
 done
-rawlog=${rawlog:-rawlogs/dyna_01.rawlog}
+[ $# -le 2 ] || { usage >&2; die "too many arguments: $*"; }
+sample=${1:-dyna_01}
+if [ -f "rawlogs/$sample.rawlog" ]; then rawlog="rawlogs/$sample.rawlog"
+elif [[ "$sample" == *.rawlog ]]; then rawlog=$sample
+else
+  die "no sample '$sample': expected one of $(cd rawlogs && ls ./*.rawlog | sed 's|^\./||; s|\.rawlog$||' | tr '\n' ' ')or a path to a .rawlog file"
+fi
+out=${2:-}
 name=$(basename "$rawlog" .rawlog)
 out=${out:-out/$name}
 config=ini/freeinit.ini
 
-[ -f "$rawlog" ] || die "input rawlog '$rawlog' not found (samples: $(cd rawlogs && ls ./*.rawlog | sed 's|^\./||; s|\.rawlog$||' | tr '\n' ' '))"
+[ -f "$rawlog" ] || die "input rawlog '$rawlog' not found"
 [ -f "$config" ] || die "configuration '$config' not found"
 
 BUILD_DIR=${BUILD_DIR:-build}
