@@ -46,6 +46,10 @@ void FreeInitConfig::validate() const {
   positive(static_detector.zupt_sigma, "static_detector.zupt_sigma");
   positive(static_detector.check_period, "static_detector.check_period");
   require(window.imu_samples >= 10, "window.imu_samples", "must be >= 10");
+  require(window.refinement_passes >= 0, "window.refinement_passes", "must be >= 0");
+  require(window.seed_pass_stride >= 1, "window.seed_pass_stride", "must be >= 1");
+  nonNegative(velocimeter.aided_vel_random_walk, "velocimeter.aided_vel_random_walk");
+  nonNegative(gravity.velocity_error_correlation_time, "gravity.velocity_error_correlation_time");
   positive(gravity.accel_sigma, "gravity.accel_sigma");
   positive(gravity.accel_bias_bound, "gravity.accel_bias_bound");
   positive(gravity.accel_bias_prior_sigma, "gravity.accel_bias_prior_sigma");

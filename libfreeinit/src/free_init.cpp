@@ -71,6 +71,8 @@ struct FreeInit::Impl {
   // Zero-velocity mode.
   bool stationary = false;
   double last_check = 0;
+  static constexpr std::size_t kMotionCheckStride = 8;
+  std::size_t motion_check_counter = 0;
   std::vector<Vec3> static_dirs;  ///< points since the last motion check
   std::vector<double> static_dopplers;
 
@@ -265,7 +267,9 @@ struct FreeInit::Impl {
   /// Solves b_a and gravity; starts the next pass and returns true if there is one.
   bool endOfPass() {
     const double t0 = wallSeconds();
-    gravity = GravityEstimator(cfg.gravity).estimate(kinematics, cfg.extrinsics, div->covBg());
+    GravityEstimator::Parameters gp = cfg.gravity;
+    gp.compute_covariance = finalPass();  // earlier passes only need the estimate
+    gravity = GravityEstimator(gp).estimate(kinematics, cfg.extrinsics, div->covBg());
     result.diag.time_solver += wallSeconds() - t0;
     if (gravity.ok && pass < cfg.window.refinement_passes) {
       ++pass;
@@ -293,7 +297,8 @@ struct FreeInit::Impl {
     }
     // One usable point in point_stride (a counter, not a modulo: this runs for every point).
     const bool use = stride_counter == 0;
-    if (++stride_counter == static_cast<std::size_t>(vp.point_stride)) stride_counter = 0;
+    const int stride = vp.point_stride * (finalPass() ? 1 : cfg.window.seed_pass_stride);
+    if (++stride_counter == static_cast<std::size_t>(stride)) stride_counter = 0;
     if (!use) {
       ++diag.points_skipped;
       return;
@@ -306,27 +311,32 @@ struct FreeInit::Impl {
       const Vec3 d = pt.p_l.cast<double>() / r;
       residual = pt.doppler + d.dot(div->v_l());
       accepted = std::abs(residual) < vp.gate_min;
-      static_dirs.push_back(d);
-      static_dopplers.push_back(pt.doppler);
+      // One point in kMotionCheckStride is plenty for a 3-D velocity every check period.
+      if (++motion_check_counter % kMotionCheckStride == 0) {
+        static_dirs.push_back(d);
+        static_dopplers.push_back(pt.doppler);
+      }
     } else {
       const auto out = div->updateDoppler(pt.p_l, pt.doppler);
       accepted = out.accepted;
       residual = out.residual;
     }
     integrator.integrate(t, div->omega_b(), div->v_b());
+    if (accepted)
+      ++diag.points_used;
+    else
+      ++diag.points_rejected;
+    if (!finalPass()) return;  // earlier passes are refined: only the last one maps
     MapPoint m;
     const Vec3 p_b = cfg.extrinsics.R_bl * pt.p_l.cast<double>() + cfg.extrinsics.p_bl;
     m.p_w = (integrator.q_wb() * p_b + integrator.p_w()).cast<float>();
     m.intensity = pt.intensity;
     m.residual = static_cast<float>(residual);
-    if (accepted) {
-      ++diag.points_used;
-      result.static_map.push_back(m);
-    } else {
-      ++diag.points_rejected;
-      result.rejected.push_back(m);
-    }
+    (accepted ? result.static_map : result.rejected).push_back(m);
   }
+
+  /// The pass whose map and trajectory are the result (unless its gravity solve fails).
+  bool finalPass() const { return pass >= cfg.window.refinement_passes; }
 
   void processGyro(std::size_t k) {
     const double t = imu[k].t - t_ref;

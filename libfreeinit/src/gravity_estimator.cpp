@@ -2,6 +2,7 @@
 // the paper's differentiated form, Eq. (acc_bias_gravity_opt), and its integrated form.
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
+#include <freeinit/affine_residual.h>
 #include <freeinit/gravity_estimator.h>
 #include <freeinit/rotation.h>
 
@@ -57,37 +58,9 @@ Mat3 sqrtInformation(const Mat3& cov) {
 // from the velocimeter; rotation about different axes makes it observable.
 //
 // e_k is affine in the unknowns; after whitening in time (addWhitenedResiduals) each residual is
-//   r_k = L_k (c_k + G_g g_w + G_ba b_a + G_v0 v0_w + G_db db_g).
+//   r_k = L_k (c_k + G_g g_w + G_ba b_a + G_v0 v0_w + G_db db_g),
+// an AffineResidual3x4 with exact Jacobians L_k G_*.
 // ---------------------------------------------------------------------------------------------
-struct IntegratedVelocityResidual {
-  IntegratedVelocityResidual(const Vec3& c, const Mat3& G_g, const Mat3& G_ba, const Mat3& G_v0,
-                             const Mat3& G_db, const Mat3& sqrt_info)
-      : c_(c), G_g_(G_g), G_ba_(G_ba), G_v0_(G_v0), G_db_(G_db), sqrt_info_(sqrt_info) {}
-
-  template <typename T>
-  bool operator()(const T* const g_w_ptr, const T* const b_a_ptr, const T* const v0_w_ptr,
-                  const T* const db_g_ptr, T* residual_ptr) const {
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> g_w(g_w_ptr);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> b_a(b_a_ptr);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> v0_w(v0_w_ptr);
-    const Eigen::Map<const Eigen::Matrix<T, 3, 1>> db_g(db_g_ptr);
-    const Eigen::Matrix<T, 3, 1> e = c_.cast<T>() + G_g_.cast<T>() * g_w + G_ba_.cast<T>() * b_a +
-                                     G_v0_.cast<T>() * v0_w + G_db_.cast<T>() * db_g;
-    Eigen::Map<Eigen::Matrix<T, 3, 1>> residual(residual_ptr);
-    residual = sqrt_info_.cast<T>() * e;
-    return true;
-  }
-
-  static ceres::CostFunction* Create(const Vec3& c, const Mat3& G_g, const Mat3& G_ba,
-                                     const Mat3& G_v0, const Mat3& G_db, const Mat3& sqrt_info) {
-    return new ceres::AutoDiffCostFunction<IntegratedVelocityResidual, 3, 3, 3, 3, 3>(
-        new IntegratedVelocityResidual(c, G_g, G_ba, G_v0, G_db, sqrt_info));
-  }
-
-  Vec3 c_;
-  Mat3 G_g_, G_ba_, G_v0_, G_db_;
-  Mat3 sqrt_info_;
-};
 
 // ---------------------------------------------------------------------------------------------
 // Differentiated body residual, first term of Eq. (acc_bias_gravity_opt):
@@ -330,10 +303,10 @@ void addWhitenedResiduals(const std::vector<Vec3>& a, const std::vector<Eigen::M
     x += K * nu;
     P = ((Mat6::Identity() - K * H) * P).eval();
     P = 0.5 * (P + P.transpose()).eval();
+    const Mat3 L = weight * sqrtInformation(S);
     problem.AddResidualBlock(
-        IntegratedVelocityResidual::Create(nu.col(0), nu.middleCols<3>(1), nu.middleCols<3>(4),
-                                           nu.middleCols<3>(7), nu.middleCols<3>(10),
-                                           weight * sqrtInformation(S)),
+        new AffineResidual3x4(L * nu.col(0), L * nu.middleCols<3>(1), L * nu.middleCols<3>(4),
+                              L * nu.middleCols<3>(7), L * nu.middleCols<3>(10)),
         loss, g_w, b_a, v0_w, db_g);
   }
 }
@@ -519,6 +492,12 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
   }
   out.g_w = Vec3(g_w[0], g_w[1], g_w[2]);
   out.b_a = Vec3(b_a[0], b_a[1], b_a[2]);
+  out.delta_b_g = Vec3(db_g[0], db_g[1], db_g[2]);
+  if (!P.compute_covariance) {
+    out.ok = true;
+    out.message = summary.BriefReport();
+    return out;
+  }
 
   // Covariance of [g_w, b_a] in ambient coordinates (Ceres lifts the tangent-space covariance of
   // the sphere through its plus Jacobian, so the g block has rank 2); v0_w is marginalized.
@@ -545,7 +524,6 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
   out.cov_full.setZero();
   out.cov_full.topLeftCorner(dim, dim) = 0.5 * (cov + cov.transpose());
   out.cov = out.cov_full.topLeftCorner<6, 6>();
-  out.delta_b_g = Vec3(db_g[0], db_g[1], db_g[2]);
   out.ok = true;
   out.message = summary.BriefReport();
   return out;

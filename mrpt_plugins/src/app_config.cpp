@@ -75,6 +75,8 @@ void visitConfig(Visitor& v, AppConfig& c) {
     "window length in IMU samples (paper: ~100)");
   v("window", "refinement_passes", c.core.window.refinement_passes, "-",
     "accelerometer-aided passes after the paper's (0: the paper's single pass)");
+  v("window", "seed_pass_stride", c.core.window.seed_pass_stride, "-",
+    "extra decimation of the passes that only seed a refinement");
 
   auto& g = c.core.gravity;
   v("gravity", "formulation", g.formulation, "-", "integrated | differentiated");

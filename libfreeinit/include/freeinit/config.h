@@ -29,7 +29,7 @@ struct VelocimeterParams {
   bool doppler_updates_omega = false;
   double min_range = 1.0;             ///< [m] closer points are skipped
   double max_range = 150.0;           ///< [m]
-  int point_stride = 1;               ///< use one point in N (1: every point)
+  int point_stride = 4;               ///< use one point in N (1: every point)
   // Gating of dynamic points and gross outliers, on the Doppler residual.
   double gate_sigma = 4.0;            ///< [-] reject |r| > gate_sigma * sqrt(S) ...
   double gate_min = 0.15;             ///< [m/s] ... but never below this
@@ -62,6 +62,9 @@ struct WindowParams {
   /// the velocimeter with the body acceleration from the accelerometer, the last b_a and
   /// gravity, then solves b_a and gravity again (0: the paper's single pass).
   int refinement_passes = 1;
+  /// Extra decimation of the passes that only seed a refinement (their velocities serve the
+  /// first gravity estimate; the last pass uses `point_stride`).
+  int seed_pass_stride = 2;
 };
 
 /// Everything. The INI file has one section per member.

@@ -67,6 +67,8 @@ class GravityEstimator {
     /// Estimate a correction of the gyro bias with the integrated formulation (needs the gyro
     /// bias covariance, see estimate()).
     bool estimate_gyro_bias = true;
+    /// Compute the covariance (`cov`, `cov_full`); off, they are left at their defaults.
+    bool compute_covariance = true;
   };
 
   GravityEstimator() = default;

@@ -41,7 +41,8 @@ InitErrors evaluate(const InitialState& state, const Recording& rec) {
   err.vel_b_true_norm = v_b_true.norm();
   err.gravity_deg = angleBetween(g_b, g_b_true) * kRadToDeg;
   err.gyro_bias = (state.b_g - rec.b_g).norm();
-  err.accel_bias = (state.b_a - rec.b_a).norm();
+  err.accel_bias_vector = state.b_a - rec.b_a;
+  err.accel_bias = err.accel_bias_vector.norm();
   const Vec3 up_b = -g_b_true.normalized();
   err.accel_bias_vertical = std::abs((state.b_a - rec.b_a).dot(up_b));
   const Vec3 ba_h = rec.b_a - rec.b_a.dot(up_b) * up_b;

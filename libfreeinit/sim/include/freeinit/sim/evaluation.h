@@ -15,6 +15,7 @@ struct InitErrors {
   double gravity_deg = 0;       ///< [deg] angle between estimated and true gravity in b
   double gyro_bias = 0;         ///< [rad/s] |b_g - b_g,true|
   double accel_bias = 0;        ///< [m/s^2] |b_a - b_a,true|
+  Vec3 accel_bias_vector = Vec3::Zero();  ///< [m/s^2] b_a - b_a,true (body frame)
   double accel_bias_vertical = 0;  ///< [m/s^2] component along gravity (observable at rest)
   /// Gravity error bound when the horizontal accelerometer bias is unobservable:
   /// atan(|b_a,true horizontal| / g) [deg].
