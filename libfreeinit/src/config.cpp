@@ -32,7 +32,8 @@ void FreeInitConfig::validate() const {
   require(v.gyro_bias_prior.allFinite(), "velocimeter.gyro_bias_prior", "must be finite");
   nonNegative(v.min_range, "velocimeter.min_range");
   require(v.max_range > v.min_range, "velocimeter.max_range", "must exceed min_range");
-  require(v.point_stride >= 1, "velocimeter.point_stride", "must be >= 1");
+  require(v.point_stride >= 0, "velocimeter.point_stride", "must be >= 0 (0: automatic)");
+  positive(v.max_point_rate, "velocimeter.max_point_rate");
   positive(v.gate_sigma, "velocimeter.gate_sigma");
   positive(v.gate_min, "velocimeter.gate_min");
   nonNegative(v.gate_rel, "velocimeter.gate_rel");

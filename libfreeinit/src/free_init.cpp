@@ -55,6 +55,7 @@ struct FreeInit::Impl {
   std::size_t k_end = 0;     ///< last IMU sample of the window
   std::size_t k_next = 0;    ///< next IMU sample to process
   std::size_t f_cur = 0, p_cur = 0;  ///< next point to process
+  int point_stride = 1;      ///< the configured stride, or the automatic one
   std::size_t stride_counter = 0;  ///< usable points since the last used one (mod the stride)
 
   std::optional<Velocimeter> div;
@@ -182,6 +183,7 @@ struct FreeInit::Impl {
     }
     k0 = k;
     k_end = k0 + static_cast<std::size_t>(cfg.window.imu_samples) - 1;
+    point_stride = vp.point_stride > 0 ? vp.point_stride : automaticStride();
     boot_fit = fit;
     b_g_start = vp.gyro_bias_prior;
     const auto& sp = cfg.static_detector;
@@ -190,6 +192,18 @@ struct FreeInit::Impl {
                       sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
     startPass();
     phase = Phase::Running;
+  }
+
+  /// The stride that brings the point rate of the first buffered frame closest to max_point_rate.
+  int automaticStride() const {
+    for (const auto& f : frames) {
+      if (f.points.size() < 2) continue;
+      const double span = f.points.back().time_offset - f.points.front().time_offset;
+      if (!(span > 0)) continue;
+      const double rate = static_cast<double>(f.points.size()) / span;
+      return std::max(1, static_cast<int>(std::lround(rate / cfg.velocimeter.max_point_rate)));
+    }
+    return 1;
   }
 
   /// (Re)starts the velocimeter at the window start; all window data are buffered for pass > 0.
@@ -297,7 +311,7 @@ struct FreeInit::Impl {
     }
     // One usable point in point_stride (a counter, not a modulo: this runs for every point).
     const bool use = stride_counter == 0;
-    const int stride = vp.point_stride * (finalPass() ? 1 : cfg.window.seed_pass_stride);
+    const int stride = point_stride * (finalPass() ? 1 : cfg.window.seed_pass_stride);
     if (++stride_counter == static_cast<std::size_t>(stride)) stride_counter = 0;
     if (!use) {
       ++diag.points_skipped;

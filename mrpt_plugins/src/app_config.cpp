@@ -45,9 +45,14 @@ void visitConfig(Visitor& v, AppConfig& c) {
     "initial gyro bias x y z (e.g. from a static calibration)");
   v("velocimeter", "kinematic_propagation", vel.kinematic_propagation, "bool",
     "add -omega x v and the gyro slope to the propagation");
+  v("velocimeter", "doppler_updates_omega", vel.doppler_updates_omega, "bool",
+    "Doppler also updates omega and b_g through the lever arm (off: consider states)");
   v("velocimeter", "min_range", vel.min_range, "m", "closer points are skipped");
   v("velocimeter", "max_range", vel.max_range, "m", "farther points are skipped");
-  v("velocimeter", "point_stride", vel.point_stride, "-", "use one point in N (1: every point)");
+  v("velocimeter", "point_stride", vel.point_stride, "-",
+    "use one point in N (1: every point; 0: automatic from max_point_rate)");
+  v("velocimeter", "max_point_rate", vel.max_point_rate, "points/s",
+    "automatic stride: the one that brings the points used closest to this rate");
   v("velocimeter", "gate_sigma", vel.gate_sigma, "sigma",
     "reject a point when |residual| > gate_sigma * sqrt(S) ...");
   v("velocimeter", "gate_min", vel.gate_min, "m/s", "... but never below this ...");

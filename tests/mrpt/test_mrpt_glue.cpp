@@ -18,6 +18,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+#include <map>
+#include <sstream>
 #include <random>
 
 using namespace freeinit;
@@ -435,4 +437,49 @@ TEST(Writers, AFailedWriteLeavesNoFile) {
                std::runtime_error);
   EXPECT_FALSE(fs::exists(p));
   EXPECT_FALSE(fs::exists(p + ".tmp"));
+}
+
+// ini/freeinit.ini lists every estimator key with its default commented out (";key = value").
+// Those values must be the defaults the code uses, or the documentation lies.
+TEST(AppConfigIni, DocumentedDefaultsMatchTheCode) {
+  std::ostringstream dump;
+  freeinit::mrpt_glue::dumpAppConfig(freeinit::mrpt_glue::AppConfig{}, dump);
+  const auto parse = [](std::istream& in, bool commented) {
+    std::map<std::string, std::string> kv;  // "section.key" -> value
+    std::string line, section;
+    while (std::getline(in, line)) {
+      if (!line.empty() && line[0] == '[') section = line.substr(1, line.find(']') - 1);
+      if (commented) {
+        if (line.size() < 2 || line[0] != ';' || line.find('=') == std::string::npos) continue;
+        line = line.substr(1);
+      }
+      const auto eq = line.find('=');
+      if (eq == std::string::npos || line[0] == ';' || line[0] == '[') continue;
+      auto trim = [](std::string s) {
+        s = s.substr(0, s.find(';'));
+        const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
+        return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
+      };
+      const std::string key = trim(line.substr(0, eq));
+      if (key.find(' ') != std::string::npos) continue;  // prose comment, not a key
+      kv[section + "." + key] = trim(line.substr(eq + 1));
+    }
+    return kv;
+  };
+  std::istringstream dumped(dump.str());
+  const auto defaults = parse(dumped, false);
+  std::ifstream ini(std::string(FREEINIT_SOURCE_DIR) + "/ini/freeinit.ini");
+  ASSERT_TRUE(ini.good());
+  const auto documented = parse(ini, true);
+  std::size_t checked = 0;
+  for (const char* section : {"velocimeter", "bootstrap", "static_detector", "window", "gravity"}) {
+    for (const auto& [k, v] : defaults) {
+      if (k.rfind(std::string(section) + ".", 0) != 0) continue;
+      const auto it = documented.find(k);
+      ASSERT_NE(it, documented.end()) << k << " is not documented in ini/freeinit.ini";
+      EXPECT_EQ(it->second, v) << k;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 40u);
 }
