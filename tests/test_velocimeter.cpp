@@ -458,14 +458,9 @@ TEST(Velocimeter, CovarianceStaysPositiveDefinite) {
   }
 }
 
-// LIBRARY DEFECT (reported, test left failing on purpose): the header promises covariances "kept
-// symmetric by construction", but Velocimeter::applyTransition() forms F P F^T for P_l and P_b
-// without re-symmetrizing. The Doppler downdates are exactly symmetric, so they never remove that
-// rounding asymmetry, and as P_l contracts ~1e5-fold (from 1 to ~5e-6 (m/s)^2) the frozen
-// absolute asymmetry (~1e-17) becomes ~1e-12 of the matrix: 2.7e-12 (full) and 1.1e-12
-// (Schmidt) here. Harmless numerically today (see CovarianceStaysPositiveDefinite), but it breaks
-// the stated invariant; symmetrizing P_l and P_b after the transition (as updateGyro does) makes
-// this test pass (checked against a patched copy of velocimeter.cpp).
+// The covariance stays symmetric relative to its current scale: the transition F P F^T is
+// re-symmetrized (the Doppler downdates are exactly symmetric and would otherwise keep its rounding
+// asymmetry while P_l contracts ~1e5-fold, reaching ~3e-12 of the matrix).
 TEST(Velocimeter, CovarianceStaysSymmetricRelativeToItsCurrentScale) {
   for (const bool full : {true, false}) {
     const CovarianceHealth h = runRandomUpdates(full, full ? 41 : 42);

@@ -93,11 +93,13 @@ void Velocimeter::applyTransition() {
   const Vec3 omega_l = R_bl_.transpose() * omega_b_;
   const Mat3 F_l = Mat3::Identity() - skew(omega_l) * dt;
   P_l_ = F_l * P_l_ * F_l.transpose();
+  P_l_ = 0.5 * (P_l_ + P_l_.transpose()).eval();  // the Doppler downdates keep what this gives
   Mat9 F = Mat9::Identity();
   F.block<3, 3>(0, 0) -= skew(omega_b_) * dt;  // d(v x w)/dv = -[w]x
   F.block<3, 3>(0, 3) = skew(v_b_) * dt;        // d(v x w)/dw = [v]x
   F.block<3, 3>(6, 6) *= decay;
   P_b_ = (F * P_b_ * F.transpose()).eval();
+  P_b_ = 0.5 * (P_b_ + P_b_.transpose()).eval();
 }
 
 Velocimeter::DopplerOutcome Velocimeter::updateDoppler(const Eigen::Vector3f& p_l, double doppler) {
