@@ -303,17 +303,18 @@ struct FreeInit::Impl {
     auto& diag = result.diag;
     if (t < 0) return;  // before the window
     ++diag.points_seen;
-    const double r = pt.p_l.norm();
-    const auto& vp = cfg.velocimeter;
-    if (!finitePoint(pt) || r < vp.min_range || r > vp.max_range) {
-      ++diag.points_skipped;
-      return;
-    }
-    // One usable point in point_stride (a counter, not a modulo: this runs for every point).
+    // One point in the stride (a counter, not a modulo: this runs for every point); the others
+    // cost nothing more.
     const bool use = stride_counter == 0;
     const int stride = point_stride * (finalPass() ? 1 : cfg.window.seed_pass_stride);
     if (++stride_counter == static_cast<std::size_t>(stride)) stride_counter = 0;
+    const auto& vp = cfg.velocimeter;
     if (!use) {
+      ++diag.points_skipped;
+      return;
+    }
+    const double r = pt.p_l.norm();
+    if (!finitePoint(pt) || r < vp.min_range || r > vp.max_range) {
       ++diag.points_skipped;
       return;
     }

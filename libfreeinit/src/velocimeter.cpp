@@ -8,8 +8,8 @@ namespace freeinit {
 namespace {
 
 /// The covariance transition is applied once this much time has accumulated [s]. At 10 rad/s
-/// this keeps |A dt| below 1e-2, so the first-order transition matrix is accurate.
-constexpr double kTransitionPeriod = 1e-3;
+/// this keeps |A dt| below 2e-2, so the first-order transition matrix is accurate to ~2e-4.
+constexpr double kTransitionPeriod = 2e-3;
 
 }  // namespace
 

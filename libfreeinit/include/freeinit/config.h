@@ -68,7 +68,7 @@ struct WindowParams {
   int refinement_passes = 1;
   /// Extra decimation of the passes that only seed a refinement (their velocities serve the
   /// first gravity estimate; the last pass uses `point_stride`).
-  int seed_pass_stride = 2;
+  int seed_pass_stride = 3;
 };
 
 /// Everything. The INI file has one section per member.
