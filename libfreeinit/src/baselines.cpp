@@ -1,5 +1,6 @@
 // Baseline initializers (FAST-LIO2, DLIO, per-frame Doppler least squares), see baselines.h.
 #include <freeinit/baselines.h>
+#include <freeinit/velocity_bootstrap.h>
 #include <freeinit/rotation.h>
 
 #include <Eigen/Eigenvalues>
@@ -183,40 +184,15 @@ InitResult dopplerLeastSquares(const std::vector<ImuSample>& imu,
     return r;
   }
 
-  // IRLS with a Cauchy weight: minimize sum rho((doppler_i + d_i^T v_l) / c), the scale c
-  // re-estimated from the median absolute residual (with a floor at the sensor noise level).
-  Vec3 v_l = Vec3::Zero();
-  Mat3 info = Mat3::Zero();
-  double sigma = 0;
-  for (int iter = 0; iter < 15; ++iter) {
-    std::vector<double> abs_res(d_l.size());
-    for (std::size_t i = 0; i < d_l.size(); ++i)
-      abs_res[i] = std::abs(doppler[i] + d_l[i].dot(v_l));
-    std::vector<double> sorted = abs_res;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    sigma = std::max(1.4826 * sorted[sorted.size() / 2], 0.01);  // [m/s]
-    const double c = iter == 0 ? 1e9 : 2.3849 * sigma;           // plain LS first
-    Mat3 A = Mat3::Zero();
-    Vec3 b = Vec3::Zero();
-    for (std::size_t i = 0; i < d_l.size(); ++i) {
-      const double u = abs_res[i] / c;
-      const double w = 1.0 / (1.0 + u * u);
-      A += w * d_l[i] * d_l[i].transpose();
-      b -= w * doppler[i] * d_l[i];
-    }
-    info = A;
-    const Vec3 v_new = A.ldlt().solve(b);
-    const bool converged = (v_new - v_l).norm() < 1e-6;
-    v_l = v_new;
-    if (converged && iter > 0) break;
-  }
-  const Eigen::SelfAdjointEigenSolver<Mat3> eig(info);
-  if (!(eig.eigenvalues()(0) > 1e-6 * std::max(1.0, eig.eigenvalues()(2))) || !v_l.allFinite()) {
+  // The same robust least squares (IRLS, Cauchy) as Free-Init's bootstrap, on the whole frame.
+  const VelocityFit fit = fitLidarVelocity(d_l, doppler, BootstrapParams{}, 0.03);
+  if (!fit.ok) {
     r.state.status = InitStatus::DegenerateGeometry;
-    r.state.message = "the point directions of the last frame do not constrain the velocity";
+    r.state.message = "last frame: " + fit.message;
     return r;
   }
-  const Mat3 cov_v_l = sigma * sigma * info.inverse();
+  const Vec3& v_l = fit.v_l;
+  const Mat3& cov_v_l = fit.cov;
 
   // Mean (raw) gyro over the frame's time span for the lever arm.
   const double t_first = frame->stamp + frame->points.front().time_offset;
