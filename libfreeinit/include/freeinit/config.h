@@ -32,8 +32,8 @@ struct VelocimeterParams {
   /// Use one point in N (1: every point; 0: automatic, from max_point_rate).
   int point_stride = 0;
   /// [points/s] with point_stride = 0, the stride that brings the points used closest to this
-  /// rate, from the first frame's density (an Aeva-like 600k points/s gives 4; sparse data 1).
-  double max_point_rate = 150000.0;
+  /// rate, from the first frame's density (an Aeva-like 600k points/s gives 5; sparse data 1).
+  double max_point_rate = 120000.0;
   // Gating of dynamic points and gross outliers, on the Doppler residual.
   double gate_sigma = 4.0;            ///< [-] reject |r| > gate_sigma * sqrt(S) ...
   double gate_min = 0.15;             ///< [m/s] ... but never below this
