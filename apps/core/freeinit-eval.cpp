@@ -36,7 +36,7 @@ void printRow(const char* method, const std::string& preset, std::uint64_t seed,
 
 int main(int argc, char** argv) {
   try {
-    int seeds = 3, stride = 1, points = 0;
+    int seeds = 3, stride = 0, points = 0;  // stride 0: the configuration default
     double duration = 1.2;
     bool baselines = true, trace = false, zero_bg = false;
     int passes = -1;
@@ -72,7 +72,7 @@ int main(int argc, char** argv) {
         const auto rec = freeinit::sim::simulate(sc);
         freeinit::FreeInitConfig cfg;
         cfg.extrinsics = rec.extrinsics;
-        cfg.velocimeter.point_stride = stride;
+        if (stride > 0) cfg.velocimeter.point_stride = stride;
         if (passes >= 0) cfg.window.refinement_passes = passes;
         if (tau >= 0) cfg.gravity.velocity_error_correlation_time = tau;
         if (no_db) cfg.gravity.estimate_gyro_bias = false;
