@@ -66,11 +66,16 @@ std::string tag(const std::string& name, std::uint64_t seed) {
   return name + " seed " + std::to_string(seed);
 }
 
-TEST(FreeInitAccuracy, InitializesAndVelocityWithin5cmOnEveryPreset) {
+TEST(FreeInitAccuracy, InitializesWithAValidCovarianceAndVelocityWithin5cmOnEveryPreset) {
   for (const auto& name : sim::presetNames()) {
     for (std::uint64_t s = 1; s <= kSeeds; ++s) {
       const Outcome& o = outcome(name, s);
       ASSERT_TRUE(o.result.state.ok()) << tag(name, s) << ": " << o.result.state.message;
+      // The 18x18 covariance is a covariance: symmetric, positive semi-definite.
+      const Cov18& P = o.result.state.cov;
+      EXPECT_LT((P - P.transpose()).cwiseAbs().maxCoeff(), 1e-15) << tag(name, s);
+      const Eigen::SelfAdjointEigenSolver<Cov18> es(P);
+      EXPECT_GT(es.eigenvalues().minCoeff(), -1e-12 * es.eigenvalues().maxCoeff()) << tag(name, s);
       EXPECT_LE(o.err.vel_b, 0.05) << tag(name, s) << " |v| = " << o.err.vel_b_true_norm;
     }
   }

@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 namespace freeinit {
@@ -143,6 +144,21 @@ TEST(FreeInitBehaviour, TimeGoingBackwardsIsAnError) {
   EXPECT_THROW(fi.addImu(rec.imu[1]), std::invalid_argument);  // duplicated
   fi.addFrame(rec.frames[1]);
   EXPECT_THROW(fi.addFrame(rec.frames[0]), std::invalid_argument);
+}
+
+// A NaN time offset or a frame reaching back into the previous one would break the time order
+// of the points: refused, not silently mis-ordered.
+TEST(FreeInitBehaviour, NonFiniteTimeOffsetsAndOverlappingFramesAreErrors) {
+  const sim::Recording rec = simulatePreset("dyna_01", 0.7, 2000);
+  FreeInit fi(configFor(rec));
+  LidarFrame bad = rec.frames[0];
+  bad.points[5].time_offset = std::numeric_limits<float>::quiet_NaN();
+  EXPECT_THROW(fi.addFrame(bad), std::invalid_argument);
+  fi.addFrame(rec.frames[0]);
+  LidarFrame overlapping = rec.frames[1];
+  for (auto& p : overlapping.points) p.time_offset -= 0.05f;  // starts inside frame 0
+  EXPECT_THROW(fi.addFrame(overlapping), std::invalid_argument);
+  EXPECT_NO_THROW(fi.addFrame(rec.frames[1]));
 }
 
 TEST(FreeInitBehaviour, InvalidConfigurationNamesTheKey) {

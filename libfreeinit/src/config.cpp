@@ -54,7 +54,7 @@ void FreeInitConfig::validate() const {
   positive(gravity.accel_sigma, "gravity.accel_sigma");
   positive(gravity.accel_bias_bound, "gravity.accel_bias_bound");
   positive(gravity.accel_bias_prior_sigma, "gravity.accel_bias_prior_sigma");
-  positive(gravity.lowpass_cutoff_hz, "gravity.lowpass_cutoff_hz");
+  nonNegative(gravity.lowpass_cutoff_hz, "gravity.lowpass_cutoff_hz");  // 0: no filter
   positive(gravity.loss_scale, "gravity.loss_scale");
   require(gravity.max_iterations >= 1, "gravity.max_iterations", "must be >= 1");
   require(gravity.use_body_equation || gravity.use_lidar_equation, "gravity.use_body_equation",

@@ -5,8 +5,6 @@
 #include <freeinit/velocimeter.h>
 #include <freeinit/velocity_bootstrap.h>
 
-#include <Eigen/Eigenvalues>
-
 #include <chrono>
 #include <deque>
 #include <limits>
@@ -105,11 +103,25 @@ struct FreeInit::Impl {
       throw std::invalid_argument("LiDAR frame stamp does not increase: " +
                                   std::to_string(f.stamp) + " after " +
                                   std::to_string(frames.back().stamp));
-    for (std::size_t i = 1; i < f.points.size(); ++i)
-      if (f.points[i].time_offset < f.points[i - 1].time_offset)
+    for (std::size_t i = 0; i < f.points.size(); ++i) {
+      if (!std::isfinite(f.points[i].time_offset))
+        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) + ": point " +
+                                    std::to_string(i) + " has a non-finite time offset");
+      if (i > 0 && f.points[i].time_offset < f.points[i - 1].time_offset)
         throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
                                     ": points are not sorted by time (point " +
                                     std::to_string(i) + ")");
+    }
+    // Points are processed in time order across frames: a frame may not reach back into the
+    // previous one.
+    for (std::size_t k = frames.size(); k-- > 0 && !f.points.empty();) {
+      if (frames[k].points.empty()) continue;
+      const double prev_last = frames[k].stamp + frames[k].points.back().time_offset;
+      if (f.stamp + f.points.front().time_offset < prev_last)
+        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
+                                    " overlaps the previous frame in time");
+      break;
+    }
   }
   /// Buffers a checked frame that outlives this object (FreeInit::run), without copying it.
   void addBorrowedFrame(const LidarFrame& f) {
@@ -125,21 +137,17 @@ struct FreeInit::Impl {
   }
 
   void pump() {
-    const double t0 = wallSeconds();
+    const double t0 = wallSeconds(), solver0 = result.diag.time_solver;
     if (phase == Phase::WaitStart) tryStart();
     if (phase == Phase::Running) run();
-    result.diag.time_velocimeter += wallSeconds() - t0;
+    result.diag.time_velocimeter += wallSeconds() - t0 - (result.diag.time_solver - solver0);
     if (phase == Phase::Running && finished) {
       fail(InitStatus::NotEnoughData,
            "the recording ends before the initialization window (" +
                std::to_string(cfg.window.imu_samples) + " IMU samples) is covered");
     }
-    if (phase == Phase::WaitStart && finished) {
-      if (result.state.message.empty())
-        fail(InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
-      else
-        phase = Phase::Done;
-    }
+    if (phase == Phase::WaitStart && finished)
+      fail(InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
   }
 
   void tryStart() {
@@ -167,7 +175,7 @@ struct FreeInit::Impl {
       const DopplerPoint& pt = frames[f].points[p];
       if (pointTime(f, p) < 0 || !finitePoint(pt)) continue;
       const double r = pt.p_l.norm();
-      if (r < vp.min_range || r > vp.max_range) continue;
+      if (!(r > 0) || r < vp.min_range || r > vp.max_range) continue;
       dirs.push_back(pt.p_l.cast<double>() / r);
       dopplers.push_back(pt.doppler);
     }
@@ -233,6 +241,7 @@ struct FreeInit::Impl {
     last_check = 0;
     static_dirs.clear();
     static_dopplers.clear();
+    motion_check_counter = 0;
     if (pass > 0) setAcceleration(k0);
     recordSample(k0);
   }
@@ -252,7 +261,6 @@ struct FreeInit::Impl {
   }
 
   void run() {
-    const double t_end = imu.size() > k_end ? imu[k_end].t - t_ref : 0.0;
     while (true) {
       const bool have_point = normalizeCursor(f_cur, p_cur);
       const double tp = have_point ? pointTime(f_cur, p_cur) : 0.0;
@@ -270,10 +278,7 @@ struct FreeInit::Impl {
         ++k_next;
         continue;
       }
-      if (have_point && tp <= t_end) {
-        processPoint(tp);
-        continue;
-      }
+      // The last gyro sample of the window is processed: points after it belong to no window.
       if (!endOfPass()) return;
     }
   }
@@ -314,7 +319,7 @@ struct FreeInit::Impl {
       return;
     }
     const double r = pt.p_l.norm();
-    if (!finitePoint(pt) || r < vp.min_range || r > vp.max_range) {
+    if (!finitePoint(pt) || !(r > 0) || r < vp.min_range || r > vp.max_range) {
       ++diag.points_skipped;
       return;
     }
@@ -496,26 +501,32 @@ void FreeInit::Impl::finalize() {
   const double dt_imu = T / std::max(1, cfg.window.imu_samples - 1);
   const double var_gyro_walk =
       cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma * dt_imu * T;
-  const Mat3 cov_th = A_th * C * A_th.transpose() + Mat3::Identity() * var_gyro_walk;
-  const Mat3 cov_vb = div->covVb();
-  const Mat3 J_v_th = -R_wb * skew(v_b);  // dv_w/dtheta
-  Cov18 P = Cov18::Zero();
-  P.block<3, 3>(kTheta, kTheta) = cov_th;
-  // Position: velocity errors integrated over the window, taken as fully correlated (an upper
-  // bound for a window this short).
-  P.block<3, 3>(kPos, kPos) = R_wb * cov_vb * R_wb.transpose() * (T * T) +
-                              Mat3::Identity() * 1e-6;
-  P.block<3, 3>(kVel, kVel) =
-      R_wb * cov_vb * R_wb.transpose() + J_v_th * cov_th * J_v_th.transpose();
-  P.block<3, 3>(kTheta, kVel) = cov_th * J_v_th.transpose();
-  P.block<3, 3>(kBg, kBg) = C.block<3, 3>(6, 6);
-  P.block<3, 3>(kBa, kBa) = C.block<3, 3>(3, 3);
-  P.block<3, 3>(kTheta, kBa) = A_th * C.block<9, 3>(0, 3);
-  P.block<3, 3>(kTheta, kBg) = A_th * C.block<9, 3>(0, 6);
-  P.block<3, 3>(kBg, kBa) = C.block<3, 3>(6, 3);
-  // Gravity is fixed by the choice of world frame; its uncertainty lives in the attitude block.
-  P.block<3, 3>(kGrav, kGrav) = Mat3::Identity() * 1e-6;
-  s.cov = P.selfadjointView<Eigen::Upper>();
+  // P = G S G^T over independent error sources, so it is a covariance by construction:
+  //   [dg_w0, db_a, db_g] (solver, 9), dv_b (velocimeter, 3), gyro white noise integrated into
+  //   the attitude (3), position and gravity floors (3 + 3).
+  // dtheta = A_th [dg db_a db_g] + n_walk;  dv_w = R_wb dv_b + J_v_th dtheta (J_v_th = -R [v_b]x);
+  // dp = T R_wb dv_b + n_p (velocity errors over the window taken as fully correlated: an upper
+  // bound this short); gravity is fixed by the choice of world frame (its uncertainty lives in the
+  // attitude block), given a 1e-6 floor.
+  constexpr int kSrc = 21;
+  Eigen::Matrix<double, kSrc, kSrc> S = Eigen::Matrix<double, kSrc, kSrc>::Zero();
+  S.block<9, 9>(0, 0) = C;
+  S.block<3, 3>(9, 9) = div->covVb();
+  S.block<3, 3>(12, 12) = Mat3::Identity() * var_gyro_walk;
+  S.block<6, 6>(15, 15) = Eigen::Matrix<double, 6, 6>::Identity() * 1e-6;
+  Eigen::Matrix<double, 18, kSrc> G = Eigen::Matrix<double, 18, kSrc>::Zero();
+  G.block<3, 9>(kTheta, 0) = A_th;
+  G.block<3, 3>(kTheta, 12) = Mat3::Identity();
+  G.block<3, 3>(kPos, 9) = R_wb * T;
+  G.block<3, 3>(kPos, 15) = Mat3::Identity();
+  const Mat3 J_v_th = -R_wb * skew(v_b);
+  G.block<3, 3>(kVel, 9) = R_wb;
+  G.block<3, kSrc>(kVel, 0) += J_v_th * G.block<3, kSrc>(kTheta, 0);
+  G.block<3, 3>(kBg, 6) = Mat3::Identity();
+  G.block<3, 3>(kBa, 3) = Mat3::Identity();
+  G.block<3, 3>(kGrav, 18) = Mat3::Identity();
+  const Cov18 P = G * S * G.transpose();
+  s.cov = 0.5 * (P + P.transpose());
 
   // Express everything recorded in the first body frame in the aligned world.
   const Quat q_align(R_align);
@@ -538,17 +549,19 @@ void FreeInit::addImu(const ImuSample& s) {
   if (!impl_->imu.empty() && s.t <= impl_->imu.back().t)
     throw std::invalid_argument("IMU time does not increase: " + std::to_string(s.t) +
                                 " after " + std::to_string(impl_->imu.back().t));
+  if (impl_->phase == Impl::Phase::Done) return;  // the result is final: nothing more to keep
   impl_->imu.push_back(s);
-  if (impl_->phase != Impl::Phase::Done) impl_->pump();
+  impl_->pump();
 }
 
 void FreeInit::addFrame(const LidarFrame& f) { addFrame(LidarFrame(f)); }
 
 void FreeInit::addFrame(LidarFrame&& f) {
   impl_->checkFrame(f);
+  if (impl_->phase == Impl::Phase::Done) return;
   const LidarFrame& kept = impl_->owned_frames.emplace_back(std::move(f));
   impl_->frames.push_back({kept.stamp, kept.points});
-  if (impl_->phase != Impl::Phase::Done) impl_->pump();
+  impl_->pump();
 }
 
 void FreeInit::finish() {

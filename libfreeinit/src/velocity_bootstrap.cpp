@@ -52,7 +52,11 @@ VelocityFit fitLidarVelocity(const std::vector<Vec3>& d_l, const std::vector<dou
   fit.cov = A.inverse() * k * k;
   fit.inliers = static_cast<std::size_t>(
       std::count_if(abs_r.begin(), abs_r.end(), [&](double r) { return r < 3 * scale; }));
-  if (fit.min_info_eigen < params.min_info_eigen) {
+  if (!v.allFinite()) {
+    fit.message = "the velocity fit is not finite (invalid directions)";
+    return fit;
+  }
+  if (!(fit.min_info_eigen >= params.min_info_eigen)) {
     fit.message = "the point directions do not constrain the velocity (weakest information " +
                   std::to_string(fit.min_info_eigen) + " < " +
                   std::to_string(params.min_info_eigen) + ")";

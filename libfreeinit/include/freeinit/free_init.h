@@ -17,9 +17,12 @@ class FreeInit {
   FreeInit(FreeInit&&) noexcept;
   FreeInit& operator=(FreeInit&&) noexcept;
 
-  /// Adds one IMU sample. Throws std::invalid_argument if time goes backwards or is duplicated.
+  /// Adds one IMU sample. Throws std::invalid_argument if it is not finite or its time does not
+  /// increase (programmer or input error: validate recordings first). Ignored once ready().
   void addImu(const ImuSample& s);
-  /// Adds one LiDAR frame. Throws std::invalid_argument if stamps go backwards.
+  /// Adds one LiDAR frame. Throws std::invalid_argument if its stamp does not increase, a time
+  /// offset is not finite, its points are not sorted by time or it overlaps the previous frame in
+  /// time. Ignored once ready().
   void addFrame(const LidarFrame& f);
   /// As above, taking the frame's points without copying them.
   void addFrame(LidarFrame&& f);
@@ -31,7 +34,9 @@ class FreeInit {
   /// The result (status NotEnoughData until ready()).
   const InitResult& result() const;
 
-  /// Batch convenience: runs over whole recordings.
+  /// Batch convenience: runs over whole recordings (throws as addImu/addFrame on bad input).
+  /// The trajectory's attitudes include the gravity solve's gyro-bias correction; positions and
+  /// map points come from the last pass, integrated with the bias the previous solve corrected.
   static InitResult run(const FreeInitConfig& config, const std::vector<ImuSample>& imu,
                         const std::vector<LidarFrame>& frames);
 

@@ -60,7 +60,8 @@ class GravityEstimator {
     /// integrated residuals are then whitened in time (quasi-differenced). 0: white errors.
     double velocity_error_correlation_time = 0.0;
     /// The body and LiDAR velocities come from the same points (as in the velocimeter): when both
-    /// equations are used each gets half the information, so that together they count it once.
+    /// equations are used each gets half the information, so that together they count it once
+    /// (integrated formulation; the differentiated one weighs both fully, as the paper).
     bool equations_share_errors = true;
     double loss_scale = 3.0;           ///< Cauchy loss scale on whitened residuals [sigma]
     int max_iterations = 50;

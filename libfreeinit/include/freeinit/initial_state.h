@@ -77,7 +77,8 @@ struct MapPoint {
 /// Counters and timings, for users and for tests.
 struct Diagnostics {
   std::size_t points_seen = 0;       ///< points inside the window
-  std::size_t points_used = 0;       ///< points that updated the velocimeter
+  std::size_t points_used = 0;       ///< points that passed the gate (at rest: consistent with
+                                     ///< zero velocity) and are in the static map
   std::size_t points_skipped = 0;    ///< by decimation or range limits
   std::size_t points_rejected = 0;   ///< gated out as dynamic or outlier
   std::size_t gyro_updates = 0;

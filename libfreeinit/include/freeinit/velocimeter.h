@@ -21,7 +21,7 @@
 // P_b (9x9, [v_b omega_b b_g]). Each block is then a consistent filter using each Doppler value
 // once; a consumer combining v_l and v_b (the gravity solver's two equations) must not treat them
 // as independent. Covariance updates are symmetric rank-1 downdates, kept symmetric by
-// construction; the covariance transition is applied at most every `transition_period`.
+// construction; the covariance transition F P F^T is applied every 2 ms of accumulated time.
 #pragma once
 
 #include <freeinit/config.h>
