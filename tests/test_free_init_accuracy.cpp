@@ -10,6 +10,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_stats.h"
+
 #include <Eigen/Eigenvalues>
 
 #include <cmath>
@@ -145,10 +147,7 @@ TEST(FreeInitAccuracy, DrivingWithCalibratedGyroBias) {
 // Consistency of the reported covariance: the NEES averaged over all presets and seeds, for each
 // gauge-free quantity, lies within the two-sided 99.9% chi-square interval of its degrees of
 // freedom (Wilson-Hilferty approximation of the chi-square quantiles).
-double chi2Quantile(double dof, double z) {
-  const double a = 2.0 / (9.0 * dof);
-  return dof * std::pow(1.0 - a + z * std::sqrt(a), 3);
-}
+using test::chi2Quantile;
 
 TEST(FreeInitAccuracy, CovarianceIsConsistentOverPresetsAndSeeds) {
   double v = 0, tilt = 0, bg = 0, ba = 0;

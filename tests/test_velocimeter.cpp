@@ -6,6 +6,8 @@
 #include <freeinit/velocimeter.h>
 #include <gtest/gtest.h>
 
+#include "test_stats.h"
+
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -21,15 +23,11 @@ using Mat9 = Eigen::Matrix<double, 9, 9>;
 using Row9 = Eigen::Matrix<double, 1, 9>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 
-// Two-sided 0.999 bounds of chi-square(300) (Wilson-Hilferty, z = 3.29): the sum of 100
-// independent 3-dof NEES values of a consistent estimator falls outside with probability 1e-3.
-constexpr double kChi2_300_Lo = 225.9;
-constexpr double kChi2_300_Hi = 387.2;
-
-Vec3 randomUnit(std::mt19937_64& rng) {
-  std::normal_distribution<double> n(0.0, 1.0);
-  return Vec3(n(rng), n(rng), n(rng)).normalized();
-}
+// Two-sided 0.999 bounds of chi-square(300): the sum of 100 independent 3-dof NEES values of a
+// consistent estimator falls outside with probability 1e-3.
+const double kChi2_300_Lo = test::chi2Quantile(300, -3.29);
+const double kChi2_300_Hi = test::chi2Quantile(300, 3.29);
+using test::randomUnit;
 
 Vec3 randomNormal(std::mt19937_64& rng) {
   std::normal_distribution<double> n(0.0, 1.0);

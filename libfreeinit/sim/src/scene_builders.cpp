@@ -128,19 +128,31 @@ Scene makeStreetScene(const StreetOptions& opt, std::mt19937_64& rng) {
   return scene;
 }
 
+namespace {
+
+/// Floor, ceiling and both side walls of a straight tube along x from xa to xb (corridor,
+/// tunnel): half width hw, height H.
+void addTube(Scene& scene, double xa, double xb, double hw, double H, float floor_refl,
+             float ceiling_refl, float wall_refl) {
+  const double L = xb - xa;
+  const double xc = 0.5 * (xa + xb);
+  const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
+  scene.add(ground(xa, xb, hw, floor_refl));
+  scene.add(makeRectangle(Vec3(xc, 0, H), span(ex, -ey), 0.5 * L, hw, ceiling_refl));
+  scene.add(makeRectangle(Vec3(xc, hw, 0.5 * H), span(ex, ez), 0.5 * L, 0.5 * H, wall_refl));
+  scene.add(makeRectangle(Vec3(xc, -hw, 0.5 * H), span(ex, -ez), 0.5 * L, 0.5 * H, wall_refl));
+}
+
+}  // namespace
+
 Scene makeCorridorScene(const CorridorOptions& opt, std::mt19937_64& rng) {
   Scene scene("corridor");
   const double xa = opt.x_min - 4.0;
   const double xb = opt.x_max + 25.0;
   const double hw = opt.half_width;
   const double H = opt.height;
-  const double L = xb - xa;
-  const double xc = 0.5 * (xa + xb);
-  const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
-  scene.add(ground(xa, xb, hw, 0.3f));
-  scene.add(makeRectangle(Vec3(xc, 0, H), span(ex, -ey), 0.5 * L, hw, 0.6f));      // ceiling
-  scene.add(makeRectangle(Vec3(xc, hw, 0.5 * H), span(ex, ez), 0.5 * L, 0.5 * H, 0.7f));
-  scene.add(makeRectangle(Vec3(xc, -hw, 0.5 * H), span(ex, -ez), 0.5 * L, 0.5 * H, 0.7f));
+  const Vec3 ey = Vec3::UnitY(), ez = Vec3::UnitZ();
+  addTube(scene, xa, xb, hw, H, 0.3f, 0.6f, 0.7f);
   scene.add(makeRectangle(Vec3(xa, 0, 0.5 * H), span(ey, ez), hw, 0.5 * H, 0.5f));  // end walls
   scene.add(makeRectangle(Vec3(xb, 0, 0.5 * H), span(-ey, ez), hw, 0.5 * H, 0.5f));
   // Pillars / door frames protruding from the walls, cabinets, ceiling lamps.
@@ -173,13 +185,7 @@ Scene makeTunnelScene(const TunnelOptions& opt) {
   const double xb = opt.x_max + 400.0;
   const double hw = opt.half_width;
   const double H = opt.height;
-  const double L = xb - xa;
-  const double xc = 0.5 * (xa + xb);
-  const Vec3 ex = Vec3::UnitX(), ey = Vec3::UnitY(), ez = Vec3::UnitZ();
-  scene.add(ground(xa, xb, hw, 0.25f));
-  scene.add(makeRectangle(Vec3(xc, 0, H), span(ex, -ey), 0.5 * L, hw, 0.5f));
-  scene.add(makeRectangle(Vec3(xc, hw, 0.5 * H), span(ex, ez), 0.5 * L, 0.5 * H, 0.6f));
-  scene.add(makeRectangle(Vec3(xc, -hw, 0.5 * H), span(ex, -ez), 0.5 * L, 0.5 * H, 0.6f));
+  addTube(scene, xa, xb, hw, H, 0.25f, 0.5f, 0.6f);
   return scene;
 }
 
