@@ -136,7 +136,7 @@ Velocimeter::DopplerOutcome Velocimeter::updateDoppler(const Eigen::Vector3f& p_
   // LiDAR model: z = -d^T v_l.
   const double r_l = doppler + d.dot(v_l_);
   const Vec3 PHl = -(P_l_ * d);
-  const double S_l = d.dot(P_l_ * d) + r_doppler_;
+  const double S_l = -d.dot(PHl) + r_doppler_;  // d^T P_l d, with PHl = -P_l d
   const double gate_l = std::sqrt(std::max(gate_min2_, gate_k2_ * S_l)) +
                         params_.gate_rel * v_l_.norm();
   if (std::abs(r_l) <= gate_l) {
