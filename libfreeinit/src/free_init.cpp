@@ -29,8 +29,10 @@ bool finitePoint(const DopplerPoint& p) {
 
 // Processing is incremental: every add*() call processes, in time order, all gyro samples and
 // points that the data received so far allows (a point needs the IMU sample after it; a gyro
-// sample needs the LiDAR stream to have passed it). When the last IMU sample of the window has
-// been processed the accelerometer bias and gravity are solved and the result is final.
+// sample needs the LiDAR stream to have passed it). A seed pass covers the first
+// `seed_imu_samples` of the window; its gravity solve starts the accelerometer-aided last pass,
+// which catches up on the buffered data and then follows the stream. When the last IMU sample
+// of the window has been processed the last solve makes the result final.
 struct FreeInit::Impl {
   enum class Phase { WaitStart, Running, Done };
 
@@ -51,6 +53,7 @@ struct FreeInit::Impl {
   double t_ref = 0;          ///< UNIX time of the window start; internal times are relative
   std::size_t k0 = 0;        ///< first IMU sample of the window
   std::size_t k_end = 0;     ///< last IMU sample of the window
+  std::size_t k_stop = 0;    ///< last IMU sample of the current pass
   std::size_t k_next = 0;    ///< next IMU sample to process
   std::size_t f_cur = 0, p_cur = 0;  ///< next point to process
   int point_stride = 1;      ///< the configured stride, or the automatic one
@@ -148,6 +151,7 @@ struct FreeInit::Impl {
     }
     if (phase == Phase::WaitStart && finished)
       fail(InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
+    if (phase == Phase::Done) result.diag.time_to_result = wallSeconds() - t0;
   }
 
   void tryStart() {
@@ -217,6 +221,8 @@ struct FreeInit::Impl {
   /// (Re)starts the velocimeter at the window start; all window data are buffered for pass > 0.
   void startPass() {
     k_next = k0 + 1;
+    const int seed_n = cfg.window.seed_imu_samples;
+    k_stop = finalPass() || seed_n <= 0 ? k_end : k0 + static_cast<std::size_t>(seed_n) - 1;
     f_cur = 0;
     p_cur = 0;
     stride_counter = 0;
@@ -264,7 +270,7 @@ struct FreeInit::Impl {
     while (true) {
       const bool have_point = normalizeCursor(f_cur, p_cur);
       const double tp = have_point ? pointTime(f_cur, p_cur) : 0.0;
-      if (k_next <= k_end) {
+      if (k_next <= k_stop) {
         if (k_next >= imu.size()) return;  // wait for IMU
         const double tg = imu[k_next].t - t_ref;
         if (have_point && tp <= tg) {
@@ -273,12 +279,12 @@ struct FreeInit::Impl {
         }
         // All points before tg are processed if the LiDAR stream has passed tg.
         if (!have_point && !finished && lidarCoveredUntil() < tg) return;
-        if (k_next < k_end && k_next + 1 >= imu.size() && !finished) return;  // need the slope
+        if (k_next < k_stop && k_next + 1 >= imu.size() && !finished) return;  // need the slope
         processGyro(k_next);
         ++k_next;
         continue;
       }
-      // The last gyro sample of the window is processed: points after it belong to no window.
+      // The last gyro sample of the pass is processed: later points belong to no window.
       if (!endOfPass()) return;
     }
   }

@@ -82,6 +82,8 @@ void visitConfig(Visitor& v, AppConfig& c) {
     "accelerometer-aided passes after the paper's (0: the paper's single pass)");
   v("window", "seed_pass_stride", c.core.window.seed_pass_stride, "-",
     "extra decimation of the passes that only seed a refinement");
+  v("window", "seed_imu_samples", c.core.window.seed_imu_samples, "-",
+    "length of the seed passes (0: the whole window); shorter: lower online latency");
 
   auto& g = c.core.gravity;
   v("gravity", "formulation", g.formulation, "-", "integrated | differentiated");

@@ -69,6 +69,12 @@ struct WindowParams {
   /// Extra decimation of the passes that only seed a refinement (their velocities serve the
   /// first gravity estimate; the last pass uses `point_stride`).
   int seed_pass_stride = 3;
+  /// Length of the passes that only seed a refinement, in IMU samples from the window start
+  /// (0: the whole window). Shorter than the window, the last pass starts while the window is
+  /// still being received, so an online user waits only for the last frame and the last solve
+  /// (about 3 ms instead of one more pass over the window). Seeding from 0.3 s instead of
+  /// 0.5 s changed the mean gravity error over 13 presets x 3 seeds from 0.641 to 0.639 deg.
+  int seed_imu_samples = 60;
 };
 
 /// Everything. The INI file has one section per member.

@@ -87,6 +87,9 @@ struct Diagnostics {
   double static_duration = 0;        ///< [s] time spent in zero-velocity mode
   double time_velocimeter = 0;       ///< [s] wall time
   double time_solver = 0;            ///< [s] wall time
+  /// [s] wall time of the add*() / finish() call that made the result final: the latency from
+  /// the last measurement the window needed to the result (what an online user waits for).
+  double time_to_result = 0;
   std::string solver_report;
 };
 
