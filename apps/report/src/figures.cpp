@@ -12,6 +12,14 @@ const VelocityTrack* find(const std::vector<VelocityTrack>& tracks, const std::s
   return nullptr;
 }
 
+/// One colour per method in every figure.
+cv::Scalar methodColor(const std::string& method) {
+  const char* const kMethods[] = {"free-init", "fast-lio2", "dlio", "doppler-ls"};
+  for (std::size_t i = 0; i < 4; ++i)
+    if (method == kMethods[i]) return paletteColor(i);
+  return paletteColor(4);
+}
+
 std::string displayName(const std::string& method) {
   if (method == "free-init") return "Free-Init";
   if (method == "fast-lio2") return "FAST-LIO2 static mean";
@@ -40,18 +48,13 @@ cv::Mat velocityErrorPanel(const std::string& title, const std::vector<VelocityT
   p.log_y = true;
   timeSpan(tracks, p);
   const bool both_static = find(tracks, "fast-lio2") && find(tracks, "dlio");
-  std::size_t color = 0;
   for (const auto& tr : tracks) {
     const std::string& m = tr.method;
-    if (tr.t.empty()) {
-      ++color;
-      continue;
-    }
-    if (both_static && m == "dlio") continue;  // the same v = 0 line as FAST-LIO2
+    if (tr.t.empty() || (both_static && m == "dlio")) continue;  // the same v = 0 line as FAST-LIO2
     Series s;
     s.label = (both_static && m == "fast-lio2") ? "FAST-LIO2 / DLIO static mean (v = 0)"
                                                 : displayName(m);
-    s.color = paletteColor(color++);
+    s.color = methodColor(m);
     s.style = tr.per_frame ? Series::Style::Markers : Series::Style::Line;
     s.thickness = tr.per_frame ? 3 : 2;
     for (std::size_t i = 0; i < tr.t.size(); ++i) {
