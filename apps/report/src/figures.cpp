@@ -28,25 +28,26 @@ std::string displayName(const std::string& method) {
   return method;
 }
 
-/// The time span of Free-Init's track (the window), or of all tracks without it.
-void timeSpan(const std::vector<VelocityTrack>& tracks, Plot& p) {
-  const VelocityTrack* fi = find(tracks, "free-init");
-  if (fi != nullptr) {
+/// A plot over time spanning Free-Init's track (the window), or all tracks without it.
+Plot timePlot(const std::string& title, const std::string& y_label,
+              const std::vector<VelocityTrack>& tracks) {
+  Plot p;
+  p.title = title;
+  p.x_label = "time since the recording start [s]";
+  p.y_label = y_label;
+  if (const VelocityTrack* fi = find(tracks, "free-init")) {
     p.x_min = fi->t.front();
     p.x_max = fi->t.back();
   }
+  return p;
 }
 
 }  // namespace
 
 cv::Mat velocityErrorPanel(const std::string& title, const std::vector<VelocityTrack>& tracks,
                            int width, int height) {
-  Plot p;
-  p.title = title;
-  p.x_label = "time since the recording start [s]";
-  p.y_label = "velocity error [m/s]";
+  Plot p = timePlot(title, "velocity error [m/s]", tracks);
   p.log_y = true;
-  timeSpan(tracks, p);
   const bool both_static = find(tracks, "fast-lio2") && find(tracks, "dlio");
   for (const auto& tr : tracks) {
     const std::string& m = tr.method;
@@ -71,11 +72,7 @@ cv::Mat velocityErrorPanel(const std::string& title, const std::vector<VelocityT
 
 cv::Mat velocityComponentsPanel(const std::string& title, const std::vector<VelocityTrack>& tracks,
                                 int width, int height) {
-  Plot p;
-  p.title = title;
-  p.x_label = "time since the recording start [s]";
-  p.y_label = "body velocity [m/s]";
-  timeSpan(tracks, p);
+  Plot p = timePlot(title, "body velocity [m/s]", tracks);
   const char* axis[] = {"x", "y", "z"};
   const VelocityTrack* fi = find(tracks, "free-init");
   const VelocityTrack* ls = find(tracks, "doppler-ls");

@@ -65,7 +65,30 @@ cv::Scalar paletteColor(std::size_t i) {
 cv::Mat Plot::render(int width, int height) const {
   cv::Mat img(height, width, CV_8UC3, kWhite);
   const double fs = 0.45;  // font scale of ticks and legend
-  const int left = 70, right = 15, top = title.empty() ? 15 : 38, bottom = 48;
+  const int left = 70, right = 15, bottom = 48;
+  int top = title.empty() ? 12 : 36;
+
+  // Legend: rows of entries between the title and the plot area, so it never hides data.
+  struct Entry {
+    const Series* series;
+    cv::Point at;  // left end of the sample
+  };
+  std::vector<Entry> legend;
+  {
+    const int sample = 30, gap = 18, row_h = 18;
+    int x = left, rows = 0;
+    for (const auto& s : series_) {
+      if (s.label.empty()) continue;
+      const int w = sample + 6 + textSize(s.label, fs).width;
+      if (rows == 0 || (x + w > width - right && x > left)) {
+        ++rows;
+        x = left;
+      }
+      legend.push_back({&s, cv::Point(x, top + row_h * (rows - 1) + 6)});
+      x += w + gap;
+    }
+    top += row_h * rows + (rows > 0 ? 6 : 0);
+  }
   const cv::Rect area(left, top, width - left - right, height - top - bottom);
 
   // Limits from the data where not given.
@@ -143,7 +166,7 @@ cv::Mat Plot::render(int width, int height) const {
   }
   if (!title.empty()) {
     const auto sz = textSize(title, 0.6, 2);
-    text(img, title, {(width - sz.width) / 2, 26}, 0.6, 2);
+    text(img, title, {(width - sz.width) / 2, 24}, 0.6, 2);
   }
 
   // Data, clipped to the plot area.
@@ -163,28 +186,13 @@ cv::Mat Plot::render(int width, int height) const {
     }
   }
 
-  // Legend, top right.
-  std::vector<const Series*> shown;
-  int legend_w = 0;
-  for (const auto& s : series_)
-    if (!s.label.empty()) {
-      shown.push_back(&s);
-      legend_w = std::max(legend_w, textSize(s.label, fs).width);
-    }
-  if (!shown.empty()) {
-    const int row = 20, w = legend_w + 50, h = row * static_cast<int>(shown.size()) + 8;
-    const cv::Rect box(area.x + area.width - w - 8, area.y + 8, w, h);
-    cv::rectangle(img, box, kWhite, cv::FILLED);
-    cv::rectangle(img, box, cv::Scalar(160, 160, 160), 1);
-    for (std::size_t i = 0; i < shown.size(); ++i) {
-      const int y = box.y + 14 + row * static_cast<int>(i);
-      const Series& s = *shown[i];
-      if (s.style == Series::Style::Line)
-        cv::line(img, {box.x + 8, y}, {box.x + 36, y}, s.color, s.thickness, cv::LINE_AA);
-      else
-        cv::circle(img, {box.x + 22, y}, s.thickness + 2, s.color, -1, cv::LINE_AA);
-      text(img, s.label, {box.x + 42, y + 5}, fs);
-    }
+  for (const Entry& e : legend) {
+    const Series& s = *e.series;
+    if (s.style == Series::Style::Line)
+      cv::line(img, e.at, e.at + cv::Point(30, 0), s.color, s.thickness, cv::LINE_AA);
+    else
+      cv::circle(img, e.at + cv::Point(15, 0), s.thickness + 2, s.color, -1, cv::LINE_AA);
+    text(img, s.label, e.at + cv::Point(36, 5), fs);
   }
   return img;
 }
