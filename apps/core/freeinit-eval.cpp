@@ -82,7 +82,11 @@ Options parse(int argc, char** argv) {
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--seeds") o.seeds = static_cast<int>(number(i));
-    else if (a == "--jobs") o.jobs = static_cast<unsigned>(number(i));
+    else if (a == "--jobs") {
+      const double j = number(i);
+      if (!(j >= 0 && j <= 1024)) throw std::invalid_argument("--jobs must be in [0, 1024]");
+      o.jobs = static_cast<unsigned>(j);
+    }
     else if (a == "--md") o.md = value(i);
     else if (a == "--csv") o.csv = value(i);
     else if (a == "--plots") o.plots = value(i);
@@ -209,7 +213,7 @@ void writeFigure(const Options& o, const std::vector<std::string>& names,
                  const std::string& file, Panel&& panel) {
   std::vector<cv::Mat> panels;
   for (std::size_t p = 0; p < names.size(); ++p) {
-    if (names[p].rfind(prefix, 0) != 0 || names[p].rfind("stat", 0) == 0) continue;
+    if (names[p].rfind(prefix, 0) != 0) continue;
     const auto& job = results[p * static_cast<std::size_t>(o.seeds)];
     panels.push_back(panel(names[p] + " (seed 1)", job.tracks));
   }

@@ -45,8 +45,8 @@ void writeEvalCsv(const std::string& path, const std::vector<EvalRow>& rows);
 std::vector<EvalRow> readEvalCsv(const std::string& path);
 
 /// The summary in the paper's layout: one column per input (worst over seeds; time: mean), one
-/// row per method in each metric block, a "failed runs" block; "x" marks a value over its
-/// threshold, "x" alone a run without a state.
+/// row per method in each metric block, a "failed runs" block. "×" after a value: over its
+/// threshold on every seed ("×k/n": on k of n); "×" alone: no run gave a state.
 std::string markdownSummary(const std::vector<EvalRow>& rows, const FailureThresholds& thresholds);
 
 /// A Markdown report: `command` that produced it, the thresholds, the summary and every run.
