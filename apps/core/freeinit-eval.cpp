@@ -14,6 +14,8 @@
 #include <cstdlib>
 #include <exception>
 #include <filesystem>
+#include <functional>
+#include <map>
 #include <random>
 #include <stdexcept>
 #include <string>
@@ -79,36 +81,48 @@ Options parse(int argc, char** argv) {
     if (used != v.size()) throw std::invalid_argument(flag + ": not a number: '" + v + "'");
     return x;
   };
+  const std::map<std::string, std::function<void(int&)>> with_value = {
+      {"--seeds", [&](int& i) { o.seeds = static_cast<int>(number(i)); }},
+      {"--jobs",
+       [&](int& i) {
+         const double j = number(i);
+         if (!(j >= 0 && j <= 1024)) throw std::invalid_argument("--jobs must be in [0, 1024]");
+         o.jobs = static_cast<unsigned>(j);
+       }},
+      {"--md", [&](int& i) { o.md = value(i); }},
+      {"--csv", [&](int& i) { o.csv = value(i); }},
+      {"--plots", [&](int& i) { o.plots = value(i); }},
+      {"--fail-velocity", [&](int& i) { o.thresholds.velocity = number(i); }},
+      {"--fail-gravity", [&](int& i) { o.thresholds.gravity_deg = number(i); }},
+      {"--duration", [&](int& i) { o.duration = number(i); }},
+      {"--points", [&](int& i) { o.points = static_cast<int>(number(i)); }},
+      {"--stride", [&](int& i) { o.stride = static_cast<int>(number(i)); }},
+      {"--dlio-duration", [&](int& i) { o.methods.dlio_duration = number(i); }},
+      {"--gyro-prior", [&](int& i) { o.gyro_prior = number(i); }},
+      {"--passes", [&](int& i) { o.passes = static_cast<int>(number(i)); }},
+      {"--tau", [&](int& i) { o.tau = number(i); }},
+  };
+  const std::map<std::string, bool*> switches = {{"--no-gyro-bias-estimate", &o.no_db},
+                                                 {"--zero-gyro-bias", &o.zero_bg},
+                                                 {"--trace", &o.trace},
+                                                 {"-q", &o.quiet}};
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "--seeds") o.seeds = static_cast<int>(number(i));
-    else if (a == "--jobs") {
-      const double j = number(i);
-      if (!(j >= 0 && j <= 1024)) throw std::invalid_argument("--jobs must be in [0, 1024]");
-      o.jobs = static_cast<unsigned>(j);
-    }
-    else if (a == "--md") o.md = value(i);
-    else if (a == "--csv") o.csv = value(i);
-    else if (a == "--plots") o.plots = value(i);
-    else if (a == "--fail-velocity") o.thresholds.velocity = number(i);
-    else if (a == "--fail-gravity") o.thresholds.gravity_deg = number(i);
-    else if (a == "--duration") o.duration = number(i);
-    else if (a == "--points") o.points = static_cast<int>(number(i));
-    else if (a == "--stride") o.stride = static_cast<int>(number(i));
-    else if (a == "--no-baselines") o.methods.baselines = false;
-    else if (a == "--dlio-duration") o.methods.dlio_duration = number(i);
-    else if (a == "--gyro-prior") o.gyro_prior = number(i);
-    else if (a == "--passes") o.passes = static_cast<int>(number(i));
-    else if (a == "--tau") o.tau = number(i);
-    else if (a == "--no-gyro-bias-estimate") o.no_db = true;
-    else if (a == "--zero-gyro-bias") o.zero_bg = true;
-    else if (a == "--trace") o.trace = true;
-    else if (a == "-q") o.quiet = true;
-    else if (a == "-h" || a == "--help") {
+    if (a == "-h" || a == "--help") {
       std::fputs(kUsage, stdout);
       std::exit(0);
-    } else if (!a.empty() && a[0] == '-') throw std::invalid_argument("unknown option " + a);
-    else o.presets.push_back(a);
+    }
+    if (const auto f = with_value.find(a); f != with_value.end()) {
+      f->second(i);
+    } else if (const auto sw = switches.find(a); sw != switches.end()) {
+      *sw->second = true;
+    } else if (a == "--no-baselines") {
+      o.methods.baselines = false;
+    } else if (!a.empty() && a[0] == '-') {
+      throw std::invalid_argument("unknown option " + a);
+    } else {
+      o.presets.push_back(a);
+    }
   }
   if (o.seeds < 1) throw std::invalid_argument("--seeds must be >= 1");
   if (o.duration < 0) o.duration = o.methods.baselines ? o.methods.dlio_duration + 0.2 : 1.2;
@@ -175,8 +189,8 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
       row.gravity_bound_deg = e.gravity_deg_from_bias + 0.1;
       row.gyro_bias_err = e.gyro_bias;
       row.accel_bias_err = e.accel_bias;
-      row.position_err = report::displacementError(r, pose(r.trajectory.front().t),
-                                                   pose(r.state.timestamp));
+      row.position_err =
+          report::displacementError(r, pose(r.trajectory.front().t), pose(r.state.timestamp));
     }
     out.rows.push_back(row);
     char head[96];
@@ -186,8 +200,8 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
       out.log += "no state: " + row.status + " (" + r.state.message + ")\n";
       continue;
     }
-    appendf(out.log, "|v|=%6.2f dv=%7.4f dg=%6.3f deg dbg=%7.5f dba=%6.3f dp=%6.3f m", e.vel_b_true_norm,
-            e.vel_b, e.gravity_deg, e.gyro_bias, e.accel_bias, row.position_err);
+    appendf(out.log, "|v|=%6.2f dv=%7.4f dg=%6.3f deg dbg=%7.5f dba=%6.3f dp=%6.3f m",
+            e.vel_b_true_norm, e.vel_b, e.gravity_deg, e.gyro_bias, e.accel_bias, row.position_err);
     appendf(out.log, "  nees v=%6.2f tilt=%6.2f bg=%6.2f ba=%6.2f  %7.2f ms\n", e.nees_vel_b,
             e.nees_tilt, e.nees_gyro_bias, e.nees_accel_bias, m.time_ms);
   }

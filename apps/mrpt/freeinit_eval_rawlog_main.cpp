@@ -36,9 +36,8 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
   const auto truth = glue::readTruthCsv(truth_file);
   const auto in = glue::validateInput(glue::readRawlog(rawlog), config, rawlog);
   const freeinit::Extrinsics extrinsics =
-      config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics
-          ? *in.sensor_pose_extrinsics
-          : config.core.extrinsics;
+      config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics ? *in.sensor_pose_extrinsics
+                                                                      : config.core.extrinsics;
   const auto runs = report::runMethods(config.core, in.imu, in.frames, extrinsics, options);
 
   auto at = [&](double t) {
@@ -66,8 +65,8 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
       row.gyro_bias_err = e.gyro_bias;
       row.accel_bias_err = e.accel_bias;
       if (!r.trajectory.empty())
-        row.position_err = report::displacementError(r, pose(r.trajectory.front().t),
-                                                     pose(r.state.timestamp));
+        row.position_err =
+            report::displacementError(r, pose(r.trajectory.front().t), pose(r.state.timestamp));
     }
     out.rows.push_back(row);
   }
@@ -95,8 +94,8 @@ int main(int argc, char** argv) {
                                      "FILE", cmd);
     TCLAP::ValueArg<std::string> plots("", "plots", "folder for velocity_error.png", false, "",
                                        "DIR", cmd);
-    TCLAP::ValueArg<unsigned> jobs("j", "jobs", "parallel jobs (0: hardware concurrency)", false,
-                                   0, "N", cmd);
+    TCLAP::ValueArg<unsigned> jobs("j", "jobs", "parallel jobs (0: hardware concurrency)", false, 0,
+                                   "N", cmd);
     TCLAP::ValueArg<double> fail_v("", "fail-velocity", "failure above this velocity error [m/s]",
                                    false, 0.2, "V", cmd);
     TCLAP::ValueArg<double> fail_g("", "fail-gravity", "failure above this gravity error [deg]",

@@ -20,8 +20,8 @@ constexpr std::size_t kColumns = 14;
 
 /// The numeric fields of a row, in CSV order after "status".
 std::vector<double*> numbers(EvalRow& r) {
-  return {&r.speed,          &r.velocity_err,   &r.gravity_err_deg, &r.gravity_bound_deg,
-          &r.gyro_bias_err,  &r.accel_bias_err, &r.position_err,    &r.time_ms};
+  return {&r.speed,         &r.velocity_err,   &r.gravity_err_deg, &r.gravity_bound_deg,
+          &r.gyro_bias_err, &r.accel_bias_err, &r.position_err,    &r.time_ms};
 }
 
 std::string quoted(const std::string& s) {
@@ -85,11 +85,16 @@ std::string shortNumber(double x) {
   char buf[32];
   const double a = std::abs(x);
   if (a == 0) return "0";
-  if (a >= 100) std::snprintf(buf, sizeof(buf), "%.0f", x);
-  else if (a >= 10) std::snprintf(buf, sizeof(buf), "%.1f", x);
-  else if (a >= 1) std::snprintf(buf, sizeof(buf), "%.2f", x);
-  else if (a >= 0.001) std::snprintf(buf, sizeof(buf), "%#.2g", x);
-  else std::snprintf(buf, sizeof(buf), "%.1e", x);
+  if (a >= 100)
+    std::snprintf(buf, sizeof(buf), "%.0f", x);
+  else if (a >= 10)
+    std::snprintf(buf, sizeof(buf), "%.1f", x);
+  else if (a >= 1)
+    std::snprintf(buf, sizeof(buf), "%.2f", x);
+  else if (a >= 0.001)
+    std::snprintf(buf, sizeof(buf), "%#.2g", x);
+  else
+    std::snprintf(buf, sizeof(buf), "%.1e", x);
   return buf;
 }
 
@@ -214,9 +219,12 @@ std::string markdownSummary(const std::vector<EvalRow>& rows, const FailureThres
         }
         if (m.mean && n_values > 0) agg = sum / n_values;
         std::string cell;
-        if (runs.empty()) cell = "";
-        else if (n_values == 0) cell = n_no_state > 0 ? "×" : "–";
-        else cell = shortNumber(agg);
+        if (runs.empty())
+          cell = "";
+        else if (n_values == 0)
+          cell = n_no_state > 0 ? "×" : "–";
+        else
+          cell = shortNumber(agg);
         if (n_over > 0)
           cell += n_over == static_cast<int>(runs.size())
                       ? " ×"
@@ -230,10 +238,11 @@ std::string markdownSummary(const std::vector<EvalRow>& rows, const FailureThres
     o << "| failed runs | " << method << " |";
     for (const auto& source : sources) {
       const auto runs = runsOf(method, source);
-      const auto failed = std::count_if(runs.begin(), runs.end(),
-                                        [](const EvalRow* r) { return r->failed; });
-      o << " " << (runs.empty() ? std::string() : std::to_string(failed) + "/" +
-                                                      std::to_string(runs.size()))
+      const auto failed =
+          std::count_if(runs.begin(), runs.end(), [](const EvalRow* r) { return r->failed; });
+      o << " "
+        << (runs.empty() ? std::string()
+                         : std::to_string(failed) + "/" + std::to_string(runs.size()))
         << " |";
     }
     o << "\n";

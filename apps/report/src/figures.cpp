@@ -53,8 +53,8 @@ cv::Mat velocityErrorPanel(const std::string& title, const std::vector<VelocityT
     const std::string& m = tr.method;
     if (tr.t.empty() || (both_static && m == "dlio")) continue;  // the same v = 0 line as FAST-LIO2
     Series s;
-    s.label = (both_static && m == "fast-lio2") ? "FAST-LIO2 / DLIO static mean (v = 0)"
-                                                : displayName(m);
+    s.label =
+        (both_static && m == "fast-lio2") ? "FAST-LIO2 / DLIO static mean (v = 0)" : displayName(m);
     s.color = methodColor(m);
     s.style = tr.per_frame ? Series::Style::Markers : Series::Style::Line;
     s.thickness = tr.per_frame ? 3 : 2;

@@ -73,8 +73,7 @@ double displacementError(const InitResult& r, const PoseTruth& at_start, const P
   return (d_est - d_true).norm();
 }
 
-void parallelFor(std::size_t count, unsigned threads,
-                 const std::function<void(std::size_t)>& job) {
+void parallelFor(std::size_t count, unsigned threads, const std::function<void(std::size_t)>& job) {
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
   threads = static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(count, 1)));
   std::atomic<std::size_t> next{0};

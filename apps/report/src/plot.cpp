@@ -1,13 +1,12 @@
 #include <freeinit/atomic_file.h>
 #include <freeinit/report/plot.h>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 #include <ostream>
 #include <stdexcept>
 
@@ -57,7 +56,7 @@ cv::Size textSize(const std::string& s, double scale, int thickness = 1) {
 
 cv::Scalar paletteColor(std::size_t i) {
   // Okabe-Ito palette (BGR): blue, vermillion, bluish green, reddish purple, orange, sky blue.
-  static const cv::Scalar kColors[] = {{178, 114, 0},  {0, 94, 213},   {115, 158, 0},
+  static const cv::Scalar kColors[] = {{178, 114, 0},   {0, 94, 213},  {115, 158, 0},
                                        {167, 121, 204}, {0, 159, 230}, {233, 180, 86}};
   return kColors[i % (sizeof(kColors) / sizeof(kColors[0]))];
 }
@@ -106,16 +105,18 @@ cv::Mat Plot::render(int width, int height) const {
   if (!(x0 < x1)) x0 = 0, x1 = 1;
   if (!(y0 <= y1)) y0 = log_y ? 0.01 : 0, y1 = 1;
   if (log_y) {
-    if (auto_y) y0 = std::pow(10.0, std::floor(std::log10(y0))),
-                y1 = std::pow(10.0, std::ceil(std::log10(y1)));
+    if (auto_y)
+      y0 = std::pow(10.0, std::floor(std::log10(y0))),
+      y1 = std::pow(10.0, std::ceil(std::log10(y1)));
     if (!(y1 > y0)) y1 = y0 * 10;
   } else if (auto_y) {
     const double pad = 0.05 * std::max(y1 - y0, 1e-9);
     y0 -= pad, y1 += pad;
   }
   auto fy = [&](double y) {
-    return log_y ? (std::log10(std::max(y, y0)) - std::log10(y0)) / (std::log10(y1) - std::log10(y0))
-                 : (y - y0) / (y1 - y0);
+    return log_y
+               ? (std::log10(std::max(y, y0)) - std::log10(y0)) / (std::log10(y1) - std::log10(y0))
+               : (y - y0) / (y1 - y0);
   };
   auto px = [&](double x, double y) {
     return cv::Point2d(area.x + (x - x0) / (x1 - x0) * area.width,
@@ -216,7 +217,8 @@ void savePng(const std::string& path, const cv::Mat& image) {
   writeFileAtomically(
       path,
       [&](std::ostream& o) {
-        o.write(reinterpret_cast<const char*>(png.data()), static_cast<std::streamsize>(png.size()));
+        o.write(reinterpret_cast<const char*>(png.data()),
+                static_cast<std::streamsize>(png.size()));
       },
       true);
 }

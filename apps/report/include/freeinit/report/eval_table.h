@@ -14,20 +14,20 @@ inline constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 /// One initialization of one method on one input, with its errors against ground truth.
 /// Errors are NaN when the method gave no state (status not "ok") or the truth lacks them.
 struct EvalRow {
-  std::string source;                  ///< simulator preset or rawlog file
-  int seed = 0;                        ///< simulator seed; 0 for a rawlog
-  std::string method;                  ///< "free-init", "fast-lio2", "dlio", "doppler-ls"
-  std::string status = "ok";           ///< "ok" or the InitStatus name
-  double speed = kNoValue;             ///< [m/s] true body speed at the state time
-  double velocity_err = kNoValue;      ///< [m/s] |v_b - v_b,true| at the state time
-  double gravity_err_deg = kNoValue;   ///< [deg] gravity direction in the body frame
-  double gravity_bound_deg = kNoValue; ///< [deg] what the unobservable horizontal b_a implies
-  double gyro_bias_err = kNoValue;     ///< [rad/s]
-  double accel_bias_err = kNoValue;    ///< [m/s^2]
-  double position_err = kNoValue;      ///< [m] displacement over the window (start body frame)
-  double time_ms = kNoValue;           ///< [ms] wall time of this initialization
-  bool failed = false;                 ///< set by markFailures
-  std::string failure;                 ///< why, when failed
+  std::string source;                   ///< simulator preset or rawlog file
+  int seed = 0;                         ///< simulator seed; 0 for a rawlog
+  std::string method;                   ///< "free-init", "fast-lio2", "dlio", "doppler-ls"
+  std::string status = "ok";            ///< "ok" or the InitStatus name
+  double speed = kNoValue;              ///< [m/s] true body speed at the state time
+  double velocity_err = kNoValue;       ///< [m/s] |v_b - v_b,true| at the state time
+  double gravity_err_deg = kNoValue;    ///< [deg] gravity direction in the body frame
+  double gravity_bound_deg = kNoValue;  ///< [deg] what the unobservable horizontal b_a implies
+  double gyro_bias_err = kNoValue;      ///< [rad/s]
+  double accel_bias_err = kNoValue;     ///< [m/s^2]
+  double position_err = kNoValue;       ///< [m] displacement over the window (start body frame)
+  double time_ms = kNoValue;            ///< [ms] wall time of this initialization
+  bool failed = false;                  ///< set by markFailures
+  std::string failure;                  ///< why, when failed
 };
 
 /// A run fails when its status is not "ok" or an error is above these thresholds.

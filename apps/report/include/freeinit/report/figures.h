@@ -5,7 +5,6 @@
 #include <freeinit/report/methods.h>
 
 #include <opencv2/core.hpp>
-
 #include <string>
 #include <vector>
 
@@ -14,8 +13,8 @@ namespace freeinit::report {
 /// A method's velocity estimates over time with the truth at the same instants.
 struct VelocityTrack {
   std::string method;
-  bool per_frame = false;  ///< one estimate per LiDAR frame: drawn as markers
-  std::vector<double> t;   ///< [s] since the start of the recording
+  bool per_frame = false;           ///< one estimate per LiDAR frame: drawn as markers
+  std::vector<double> t;            ///< [s] since the start of the recording
   std::vector<Vec3> v_est, v_true;  ///< [m/s] body velocity in b
 };
 

@@ -3,7 +3,6 @@
 #pragma once
 
 #include <opencv2/core.hpp>
-
 #include <string>
 #include <vector>
 
@@ -11,11 +10,11 @@ namespace freeinit::report {
 
 struct Series {
   enum class Style { Line, Markers };
-  std::string label;       ///< legend text; empty: not in the legend
+  std::string label;  ///< legend text; empty: not in the legend
   std::vector<double> x, y;
   cv::Scalar color{0, 0, 0};  ///< BGR
   Style style = Style::Line;
-  int thickness = 2;        ///< [px] line width or marker radius
+  int thickness = 2;  ///< [px] line width or marker radius
 };
 
 class Plot {
