@@ -1,7 +1,8 @@
 // freeinit-eval-rawlog <config.ini> <a.rawlog> [b.rawlog ...]: Free-Init and the baselines on
 // recorded rawlogs with ground truth ("<name>.truth.csv" beside each, as freeinit-sim writes it),
 // with the same tables and figures as freeinit-eval. Each rawlog is read with the validated
-// reader (no silent truncation) and is one independent job.
+// reader (no silent truncation) and is one independent job; reading is serialized, the
+// initializations run in parallel.
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/ground_truth.h>
 #include <freeinit/mrpt/input_validator.h>
@@ -15,6 +16,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
+#include <mutex>
 #include <stdexcept>
 
 namespace {
@@ -34,7 +36,14 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
   if (!std::filesystem::is_regular_file(truth_file))
     throw std::runtime_error(rawlog + ": no ground truth (expected " + truth_file + ")");
   const auto truth = glue::readTruthCsv(truth_file);
-  const auto in = glue::validateInput(glue::readRawlog(rawlog), config, rawlog);
+  // Reading is one job at a time: MRPT does not document its class registry and deserialization
+  // as thread-safe. The initializations then run in parallel on plain data.
+  static std::mutex mrpt_mutex;
+  glue::ValidatedInput in;
+  {
+    const std::lock_guard<std::mutex> lock(mrpt_mutex);
+    in = glue::validateInput(glue::readRawlog(rawlog), config, rawlog);
+  }
   const freeinit::Extrinsics extrinsics =
       config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics ? *in.sensor_pose_extrinsics
                                                                       : config.core.extrinsics;
