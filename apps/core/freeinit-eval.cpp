@@ -186,7 +186,7 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
       row.speed = e.vel_b_true_norm;
       row.velocity_err = e.vel_b;
       row.gravity_err_deg = e.gravity_deg;
-      row.gravity_bound_deg = e.gravity_deg_from_bias + 0.1;
+      row.gravity_bound_deg = e.gravity_deg_from_bias + report::kGravityBoundMarginDeg;
       row.gyro_bias_err = e.gyro_bias;
       row.accel_bias_err = e.accel_bias;
       row.position_err =

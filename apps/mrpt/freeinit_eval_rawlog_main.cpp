@@ -11,6 +11,7 @@
 #include <freeinit/report/figures.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
+#include <freeinit/sim/evaluation.h>
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <cmath>
@@ -71,6 +72,10 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
       row.speed = e.v_b_true.norm();
       row.velocity_err = e.velocity;
       row.gravity_err_deg = e.gravity_deg;
+      const auto gt = at(r.state.timestamp);
+      row.gravity_bound_deg =
+          freeinit::sim::gravityErrorFromBiasDeg(gt.b_a, gt.q_wb.conjugate() * gt.g_w) +
+          report::kGravityBoundMarginDeg;
       row.gyro_bias_err = e.gyro_bias;
       row.accel_bias_err = e.accel_bias;
       if (!r.trajectory.empty())

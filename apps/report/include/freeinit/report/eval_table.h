@@ -11,6 +11,10 @@ namespace freeinit::report {
 
 inline constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 
+/// [deg] The reported gravity bound is atan(|b_a,true horizontal| / g) plus this margin, as in
+/// tests/test_free_init_accuracy.cpp (the horizontal bias is not observable at rest or cruising).
+inline constexpr double kGravityBoundMarginDeg = 0.1;
+
 /// One initialization of one method on one input, with its errors against ground truth.
 /// Errors are NaN when the method gave no state (status not "ok") or the truth lacks them.
 struct EvalRow {
