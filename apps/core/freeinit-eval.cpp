@@ -189,8 +189,9 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
       row.gravity_bound_deg = e.gravity_deg_from_bias + report::kGravityBoundMarginDeg;
       row.gyro_bias_err = e.gyro_bias;
       row.accel_bias_err = e.accel_bias;
-      row.position_err =
-          report::displacementError(r, pose(r.trajectory.front().t), pose(r.state.timestamp));
+      if (!r.trajectory.empty())
+        row.position_err =
+            report::displacementError(r, pose(r.trajectory.front().t), pose(r.state.timestamp));
     }
     out.rows.push_back(row);
     char head[96];
