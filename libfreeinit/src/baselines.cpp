@@ -1,7 +1,7 @@
 // Baseline initializers (FAST-LIO2, DLIO, per-frame Doppler least squares), see baselines.h.
 #include <freeinit/baselines.h>
-#include <freeinit/velocity_bootstrap.h>
 #include <freeinit/rotation.h>
+#include <freeinit/velocity_bootstrap.h>
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
@@ -147,6 +147,69 @@ InitResult dlio(const std::vector<ImuSample>& imu, double duration) {
   return r;
 }
 
+FrameVelocity dopplerFrameVelocity(const LidarFrame& frame, const std::vector<ImuSample>& imu,
+                                   const Extrinsics& extrinsics) {
+  FrameVelocity out;
+  if (frame.points.empty()) {
+    out.message = "frame without points";
+    return out;
+  }
+  const double t_first = frame.stamp + frame.points.front().time_offset;
+  const double t_last = frame.stamp + frame.points.back().time_offset;
+  out.t_mid = 0.5 * (t_first + t_last);
+
+  // Directions and Doppler of the frame's returns.
+  std::vector<Vec3> d_l;
+  std::vector<double> doppler;
+  d_l.reserve(frame.points.size());
+  doppler.reserve(frame.points.size());
+  for (const DopplerPoint& p : frame.points) {
+    const Vec3 p_l = p.p_l.cast<double>();
+    const double range = p_l.norm();
+    if (!(range > 1e-3) || !std::isfinite(p.doppler)) continue;
+    d_l.push_back(p_l / range);
+    doppler.push_back(p.doppler);
+  }
+  if (d_l.size() < 10) {
+    out.status = InitStatus::NoDoppler;
+    out.message = "too few valid Doppler returns in the frame";
+    return out;
+  }
+
+  // The same robust least squares (IRLS, Cauchy) as Free-Init's bootstrap, on the whole frame.
+  const VelocityFit fit = fitLidarVelocity(d_l, doppler, BootstrapParams{}, 0.03);
+  if (!fit.ok) {
+    out.status = InitStatus::DegenerateGeometry;
+    out.message = fit.message;
+    return out;
+  }
+
+  // Mean (raw) gyro over the frame's time span for the lever arm.
+  Vec3 omega_b = Vec3::Zero();
+  int n_gyro = 0;
+  for (const ImuSample& s : imu) {
+    if (s.t >= t_first && s.t <= t_last) {
+      omega_b += s.gyro;
+      ++n_gyro;
+    }
+  }
+  if (n_gyro > 0) {
+    omega_b /= n_gyro;
+  } else if (!imu.empty()) {
+    const auto nearest =
+        std::min_element(imu.begin(), imu.end(), [&](const auto& a, const auto& b) {
+          return std::abs(a.t - frame.stamp) < std::abs(b.t - frame.stamp);
+        });
+    omega_b = nearest->gyro;
+  }
+
+  // v_l = R_bl^T (v_b + omega x p_bl)  =>  v_b = R_bl v_l - omega x p_bl.
+  out.status = InitStatus::Ok;
+  out.v_b = extrinsics.R_bl * fit.v_l - omega_b.cross(extrinsics.p_bl);
+  out.cov_v_b = extrinsics.R_bl * fit.cov * extrinsics.R_bl.transpose();
+  return out;
+}
+
 InitResult dopplerLeastSquares(const std::vector<ImuSample>& imu,
                                const std::vector<LidarFrame>& frames, const Extrinsics& extrinsics,
                                int imu_samples) {
@@ -165,62 +228,15 @@ InitResult dopplerLeastSquares(const std::vector<ImuSample>& imu,
     r.state.message = "no LiDAR frame with points inside the IMU window";
     return r;
   }
-
-  // Directions and Doppler of the frame's returns.
-  std::vector<Vec3> d_l;
-  std::vector<double> doppler;
-  d_l.reserve(frame->points.size());
-  doppler.reserve(frame->points.size());
-  for (const DopplerPoint& p : frame->points) {
-    const Vec3 p_l = p.p_l.cast<double>();
-    const double range = p_l.norm();
-    if (!(range > 1e-3) || !std::isfinite(p.doppler)) continue;
-    d_l.push_back(p_l / range);
-    doppler.push_back(p.doppler);
-  }
-  if (d_l.size() < 10) {
-    r.state.status = InitStatus::NoDoppler;
-    r.state.message = "too few valid Doppler returns in the last frame";
+  const FrameVelocity fv = dopplerFrameVelocity(*frame, imu, extrinsics);
+  if (!fv.ok()) {
+    r.state.status = fv.status;
+    r.state.message = "last frame: " + fv.message;
     return r;
   }
-
-  // The same robust least squares (IRLS, Cauchy) as Free-Init's bootstrap, on the whole frame.
-  const VelocityFit fit = fitLidarVelocity(d_l, doppler, BootstrapParams{}, 0.03);
-  if (!fit.ok) {
-    r.state.status = InitStatus::DegenerateGeometry;
-    r.state.message = "last frame: " + fit.message;
-    return r;
-  }
-  const Vec3& v_l = fit.v_l;
-  const Mat3& cov_v_l = fit.cov;
-
-  // Mean (raw) gyro over the frame's time span for the lever arm.
-  const double t_first = frame->stamp + frame->points.front().time_offset;
-  const double t_last = frame->stamp + frame->points.back().time_offset;
-  Vec3 omega_b = Vec3::Zero();
-  int n_gyro = 0;
-  for (const ImuSample& s : imu) {
-    if (s.t >= t_first && s.t <= t_last) {
-      omega_b += s.gyro;
-      ++n_gyro;
-    }
-  }
-  if (n_gyro > 0) {
-    omega_b /= n_gyro;
-  } else {
-    const auto nearest =
-        std::min_element(imu.begin(), imu.end(), [&](const auto& a, const auto& b) {
-          return std::abs(a.t - frame->stamp) < std::abs(b.t - frame->stamp);
-        });
-    omega_b = nearest->gyro;
-  }
-
-  // v_l = R_bl^T (v_b + omega x p_bl)  =>  v_b = R_bl v_l - omega x p_bl.
-  const Vec3 v_b = extrinsics.R_bl * v_l - omega_b.cross(extrinsics.p_bl);
   const Mat3 R_wb = r.state.q_wb.toRotationMatrix();
-  r.state.v_w = R_wb * v_b;
-  r.state.cov.block<3, 3>(kVel, kVel) =
-      R_wb * extrinsics.R_bl * cov_v_l * extrinsics.R_bl.transpose() * R_wb.transpose();
+  r.state.v_w = R_wb * fv.v_b;
+  r.state.cov.block<3, 3>(kVel, kVel) = R_wb * fv.cov_v_b * R_wb.transpose();
   return r;
 }
 

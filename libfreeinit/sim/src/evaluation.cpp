@@ -45,8 +45,7 @@ InitErrors evaluate(const InitialState& state, const Recording& rec) {
   err.accel_bias = err.accel_bias_vector.norm();
   const Vec3 up_b = -g_b_true.normalized();
   err.accel_bias_vertical = std::abs((state.b_a - rec.b_a).dot(up_b));
-  const Vec3 ba_h = rec.b_a - rec.b_a.dot(up_b) * up_b;
-  err.gravity_deg_from_bias = std::atan2(ba_h.norm(), kGravity) * kRadToDeg;
+  err.gravity_deg_from_bias = gravityErrorFromBiasDeg(rec.b_a, g_b_true);
 
   // Linear maps from the 18-dim error state to each gauge-free error (right perturbation):
   //   dv_b = R^T dv_w + [v_b]x dtheta;   dg_b = [g_b]x dtheta (tangent);   db = db.
@@ -65,6 +64,12 @@ InitErrors evaluate(const InitialState& state, const Recording& rec) {
   err.nees_gyro_bias = nees<3>(Vec3(state.b_g - rec.b_g), Mat3(P.block<3, 3>(kBg, kBg)));
   err.nees_accel_bias = nees<3>(Vec3(state.b_a - rec.b_a), Mat3(P.block<3, 3>(kBa, kBa)));
   return err;
+}
+
+double gravityErrorFromBiasDeg(const Vec3& b_a_true, const Vec3& g_b_true) {
+  const Vec3 up_b = -g_b_true.normalized();
+  const Vec3 ba_h = b_a_true - b_a_true.dot(up_b) * up_b;
+  return std::atan2(ba_h.norm(), kGravity) * kRadToDeg;
 }
 
 }  // namespace freeinit::sim

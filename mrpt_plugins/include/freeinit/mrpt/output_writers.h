@@ -2,19 +2,16 @@
 // so every output is either complete or absent.
 #pragma once
 
+#include <freeinit/atomic_file.h>
 #include <freeinit/initial_state.h>
 
-#include <functional>
-#include <iosfwd>
 #include <string>
 #include <vector>
 
 namespace freeinit::mrpt_glue {
 
-/// Writes through `fill` into a temporary file, then renames it onto `path`.
-/// Throws std::runtime_error (naming the path) on any I/O error; the target is then untouched.
-void writeFileAtomically(const std::string& path, const std::function<void(std::ostream&)>& fill,
-                         bool binary = false);
+/// The core's atomic writer (freeinit/atomic_file.h), under the name the glue has always used.
+using freeinit::writeFileAtomically;
 
 /// The initial-state contract (DESIGN.md): [initial_state] status, timestamp, q_wb, p_w, v_w, b_g,
 /// b_a, g_w, cov (18x18 row-major, order [dtheta p v b_g b_a g]).

@@ -29,4 +29,8 @@ struct InitErrors {
 /// Compares `state` with the truth of `rec` at state.timestamp.
 InitErrors evaluate(const InitialState& state, const Recording& rec);
 
+/// The gravity error [deg] an unobservable horizontal accelerometer bias implies,
+/// atan(|b_a,true horizontal| / g), "horizontal" meaning orthogonal to the true gravity in b.
+double gravityErrorFromBiasDeg(const Vec3& b_a_true, const Vec3& g_b_true);
+
 }  // namespace freeinit::sim

@@ -1,0 +1,103 @@
+#include <freeinit/baselines.h>
+#include <freeinit/free_init.h>
+#include <freeinit/report/methods.h>
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <mutex>
+#include <thread>
+
+namespace freeinit::report {
+namespace {
+
+template <typename F>
+MethodRun timed(const char* method, F&& run) {
+  MethodRun m;
+  m.method = method;
+  const auto t0 = std::chrono::steady_clock::now();
+  m.result = run();
+  m.time_ms =
+      std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  return m;
+}
+
+/// A static-mean initializer reports v = 0 over its window (its trajectory).
+void zeroVelocityTrack(MethodRun& m) {
+  if (!m.result.state.ok()) return;
+  for (const PoseSample& p : m.result.trajectory) m.track.push_back({p.t, Vec3::Zero()});
+}
+
+}  // namespace
+
+std::vector<MethodRun> runMethods(const FreeInitConfig& config, const std::vector<ImuSample>& imu,
+                                  const std::vector<LidarFrame>& frames,
+                                  const Extrinsics& extrinsics, const MethodOptions& options) {
+  std::vector<MethodRun> runs;
+  FreeInitConfig cfg = config;
+  cfg.extrinsics = extrinsics;
+  runs.push_back(timed("free-init", [&] { return FreeInit::run(cfg, imu, frames); }));
+  for (const VelocitySample& v : runs.back().result.velocities)
+    runs.back().track.push_back({v.t, v.v_b});
+  if (!options.baselines) return runs;
+
+  const int window = cfg.window.imu_samples;
+  runs.push_back(timed("fast-lio2", [&] { return baselines::fastLio2(imu, window); }));
+  zeroVelocityTrack(runs.back());
+  runs.push_back(timed("dlio", [&] { return baselines::dlio(imu, options.dlio_duration); }));
+  zeroVelocityTrack(runs.back());
+  runs.push_back(timed("doppler-ls", [&] {
+    return baselines::dopplerLeastSquares(imu, frames, extrinsics, window);
+  }));
+  // The same fit on every frame that starts inside the window, as the method would report them.
+  MethodRun& d = runs.back();
+  d.track_per_frame = true;
+  if (!imu.empty() && imu.size() >= static_cast<std::size_t>(window)) {
+    const double t_end = imu[static_cast<std::size_t>(window) - 1].t;
+    for (const LidarFrame& f : frames) {
+      if (f.stamp < imu.front().t || f.stamp > t_end) continue;
+      const auto fv = baselines::dopplerFrameVelocity(f, imu, extrinsics);
+      if (fv.ok()) d.track.push_back({fv.t_mid, fv.v_b});
+    }
+  }
+  return runs;
+}
+
+double displacementError(const InitResult& r, const PoseTruth& at_start, const PoseTruth& at_end) {
+  if (!r.state.ok() || r.trajectory.empty()) return kNoValue;
+  const PoseSample& p0 = r.trajectory.front();
+  const Vec3 d_est = p0.q_wb.conjugate() * (r.state.p_w - p0.p_w);
+  const Vec3 d_true = at_start.R_wb.transpose() * (at_end.p_w - at_start.p_w);
+  return (d_est - d_true).norm();
+}
+
+void parallelFor(std::size_t count, unsigned threads, const std::function<void(std::size_t)>& job) {
+  if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
+  threads = static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(count, 1)));
+  std::atomic<std::size_t> next{0};
+  std::exception_ptr error;  // of the lowest failing index, whatever the scheduling
+  std::size_t error_index = count;
+  std::mutex error_mutex;
+  auto worker = [&] {
+    for (std::size_t i = next++; i < count; i = next++) {
+      try {
+        job(i);
+      } catch (...) {
+        const std::lock_guard<std::mutex> lock(error_mutex);
+        if (i < error_index) {
+          error_index = i;
+          error = std::current_exception();
+        }
+      }
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned k = 1; k < threads; ++k) pool.emplace_back(worker);
+  worker();
+  for (auto& t : pool) t.join();
+  if (error) std::rethrow_exception(error);
+}
+
+}  // namespace freeinit::report

@@ -1,0 +1,190 @@
+// The evaluation report: CSV written and read back, failure marking, the paper-layout summary,
+// the displacement error, the job pool, and the PNG writer.
+#include <freeinit/report/eval_table.h>
+#include <freeinit/report/methods.h>
+#include <freeinit/report/plot.h>
+#include <freeinit/rotation.h>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <opencv2/imgcodecs.hpp>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace freeinit::report {
+namespace {
+
+std::string tempPath(const std::string& name) {
+  return (std::filesystem::temp_directory_path() / ("freeinit_test_" + name)).string();
+}
+
+std::vector<EvalRow> sampleRows() {
+  EvalRow ok;
+  ok.source = "dyna_01";
+  ok.seed = 1;
+  ok.method = "free-init";
+  ok.speed = 1.2345678901;
+  ok.velocity_err = 0.0123456789;
+  ok.gravity_err_deg = 0.25;
+  ok.gravity_bound_deg = 0.97;
+  ok.gyro_bias_err = 1.5e-4;
+  ok.accel_bias_err = 0.039;
+  ok.position_err = 0.004;
+  ok.time_ms = 21.5;
+  EvalRow fast = ok;
+  fast.method = "fast-lio2";
+  fast.velocity_err = 1.22;  // over the 0.2 m/s threshold
+  EvalRow tilted = ok;
+  tilted.seed = 2;
+  tilted.gravity_err_deg = 3.5;  // over the 2 deg threshold
+  EvalRow none;
+  none.source = "a dir, with \"quotes\"/x.rawlog";  // needs CSV quoting
+  none.method = "dlio";
+  none.status = "not_enough_data";
+  return {ok, fast, tilted, none};
+}
+
+TEST(EvalTable, MarksFailuresByStatusAndThresholds) {
+  auto rows = sampleRows();
+  markFailures(rows, FailureThresholds{});
+  EXPECT_FALSE(rows[0].failed);
+  EXPECT_TRUE(rows[1].failed);
+  EXPECT_NE(rows[1].failure.find("velocity"), std::string::npos) << rows[1].failure;
+  EXPECT_TRUE(rows[2].failed);
+  EXPECT_NE(rows[2].failure.find("gravity"), std::string::npos) << rows[2].failure;
+  EXPECT_TRUE(rows[3].failed);
+  EXPECT_NE(rows[3].failure.find("not_enough_data"), std::string::npos);
+  // Looser thresholds: only the run without a state fails.
+  markFailures(rows, FailureThresholds{2.0, 5.0});
+  EXPECT_FALSE(rows[1].failed);
+  EXPECT_FALSE(rows[2].failed);
+  EXPECT_TRUE(rows[3].failed);
+}
+
+TEST(EvalTable, CsvReadsBackWhatWasWritten) {
+  auto rows = sampleRows();
+  markFailures(rows, FailureThresholds{});
+  const std::string path = tempPath("eval.csv");
+  writeEvalCsv(path, rows);
+  EXPECT_FALSE(std::filesystem::exists(path + ".tmp"));
+  const auto back = readEvalCsv(path);
+  ASSERT_EQ(back.size(), rows.size());
+  auto same = [](double a, double b) {  // written with 10 significant digits
+    return (std::isnan(a) && std::isnan(b)) || std::abs(a - b) <= 1e-9 * std::abs(a);
+  };
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(back[i].source, rows[i].source);
+    EXPECT_EQ(back[i].seed, rows[i].seed);
+    EXPECT_EQ(back[i].method, rows[i].method);
+    EXPECT_EQ(back[i].status, rows[i].status);
+    EXPECT_EQ(back[i].failed, rows[i].failed);
+    EXPECT_EQ(back[i].failure, rows[i].failure);
+    for (auto f : {&EvalRow::speed, &EvalRow::velocity_err, &EvalRow::gravity_err_deg,
+                   &EvalRow::gravity_bound_deg, &EvalRow::gyro_bias_err, &EvalRow::accel_bias_err,
+                   &EvalRow::position_err, &EvalRow::time_ms})
+      EXPECT_TRUE(same(back[i].*f, rows[i].*f)) << back[i].*f << " vs " << rows[i].*f;
+  }
+  std::filesystem::remove(path);
+}
+
+TEST(EvalTable, BadCsvNamesFileAndLine) {
+  const std::string path = tempPath("bad.csv");
+  writeEvalCsv(path, sampleRows());
+  {
+    std::ofstream f(path, std::ios::app);
+    f << "dyna_02,1,free-init,ok,abc,,,,,,,,0,\n";
+  }
+  try {
+    readEvalCsv(path);
+    FAIL() << "a non-number was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": line 6"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
+  EXPECT_THROW(readEvalCsv(path), std::runtime_error);  // missing file
+}
+
+TEST(EvalTable, SummaryHasThePaperLayoutAndMarksFailures) {
+  auto rows = sampleRows();
+  markFailures(rows, FailureThresholds{});
+  const std::string md = markdownSummary(rows, FailureThresholds{});
+  // Inputs are columns; one row per method in each metric block.
+  EXPECT_NE(md.find("| metric | method | dyna_01 | a dir, with \"quotes\"/x.rawlog |"),
+            std::string::npos)
+      << md;
+  // The worst of the two free-init seeds, marked: 1 of 2 over the gravity threshold.
+  EXPECT_NE(md.find("| gravity err [deg] | free-init | 3.50 ×1/2 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| velocity err [m/s] | fast-lio2 | 1.22 × |"), std::string::npos) << md;
+  // No state at all: a cross alone.
+  EXPECT_NE(md.find("| velocity err [m/s] | dlio |  | × |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| failed runs | free-init | 1/2 |"), std::string::npos) << md;
+}
+
+TEST(DisplacementError, IsFreeOfTheWorldFrame) {
+  // The truth moves 2 m along its body x axis, yawed 30 deg in its world; the estimate's world
+  // has the start yaw at zero. Same body-frame displacement: zero error.
+  const Mat3 R_true = Exp(Vec3(0, 0, 30.0 * M_PI / 180.0));
+  const PoseTruth start{R_true, Vec3(5, 6, 7)};
+  const PoseTruth end{R_true, Vec3(5, 6, 7) + R_true * Vec3(2, 0, 0)};
+  InitResult r;
+  r.state.status = InitStatus::Ok;
+  r.trajectory.push_back(PoseSample{});
+  r.state.p_w = Vec3(2, 0, 0);
+  EXPECT_NEAR(displacementError(r, start, end), 0.0, 1e-12);
+  r.state.p_w = Vec3(2, 0.3, -0.4);
+  EXPECT_NEAR(displacementError(r, start, end), 0.5, 1e-12);
+  r.state.status = InitStatus::NotEnoughData;
+  EXPECT_TRUE(std::isnan(displacementError(r, start, end)));
+}
+
+TEST(ParallelFor, RunsEveryJobOnceAndReportsTheLowestFailure) {
+  for (unsigned threads : {1u, 2u, 5u}) {
+    std::vector<std::atomic<int>> hits(37);
+    parallelFor(hits.size(), threads, [&](std::size_t i) { ++hits[i]; });
+    for (const auto& h : hits) EXPECT_EQ(h.load(), 1);
+    try {
+      parallelFor(20, threads, [](std::size_t i) {
+        if (i == 7 || i == 13) throw std::runtime_error("job " + std::to_string(i));
+      });
+      FAIL() << "no exception";
+    } catch (const std::runtime_error& e) {
+      EXPECT_STREQ(e.what(), "job 7");
+    }
+  }
+}
+
+TEST(Plot, WritesAReadablePngWithTheData) {
+  Plot p;
+  p.title = "test";
+  p.x_label = "t [s]";
+  p.y_label = "error [m/s]";
+  p.log_y = true;
+  Series s;
+  s.label = "line";
+  s.color = cv::Scalar(0, 0, 255);  // pure red, not used by the axes or text
+  s.x = {0, 1, 2};
+  s.y = {0.01, 0.1, 1};
+  p.add(s);
+  const std::string path = tempPath("plot.png");
+  savePng(path, tile({p.render(320, 240), p.render(320, 240)}, 2));
+  const cv::Mat img = cv::imread(path);
+  ASSERT_FALSE(img.empty());
+  EXPECT_EQ(img.cols, 640);
+  EXPECT_EQ(img.rows, 240);
+  int red = 0;
+  for (int y = 0; y < img.rows; ++y)
+    for (int x = 0; x < img.cols; ++x) {
+      const auto& px = img.at<cv::Vec3b>(y, x);
+      if (px[2] > 200 && px[1] < 60 && px[0] < 60) ++red;
+    }
+  EXPECT_GT(red, 200);  // two panels of a line across the plot area
+  std::filesystem::remove(path);
+}
+
+}  // namespace
+}  // namespace freeinit::report
