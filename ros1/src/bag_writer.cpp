@@ -16,6 +16,10 @@ void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
   const std::string tmp = path + ".tmp";
   try {
     rosbag::Bag bag(tmp, rosbag::bagmode::Write);
+    using C = BagWriteOptions::Compression;
+    bag.setCompression(o.compression == C::kBz2   ? rosbag::compression::BZ2
+                       : o.compression == C::kLz4 ? rosbag::compression::LZ4
+                                                  : rosbag::compression::Uncompressed);
     const double accel_scale = o.config.imu_accel_in_g ? 1.0 / kGravity : 1.0;
     std::size_t seq = 0;
     for (const ImuSample& s : imu) {

@@ -159,6 +159,23 @@ TEST(BagImport, ReleaseLayoutEqualsTheSimulatorsRawlog) {
       << log.str();
 }
 
+// Compressed bags (rosbag record --lz4 / --bz2) read the same.
+TEST(BagImport, CompressedBags) {
+  const std::string d = dir("compressed");
+  using C = ros1::BagWriteOptions::Compression;
+  for (const C c : {C::kLz4, C::kBz2}) {
+    ros1::BagWriteOptions o;
+    o.compression = c;
+    const std::string name = c == C::kLz4 ? "lz4" : "bz2";
+    ros1::writeBag(d + "/" + name + ".bag", recording().imu, recording().frames, o);
+    auto app = importer(d + "/" + name + ".bag", writeIni(d + "/import.ini", ""),
+                        d + "/" + name + ".rawlog");
+    std::ostringstream log;
+    ASSERT_EQ(app.run(log), 0) << log.str();
+    expectSameRawlog(simRawlog(), d + "/" + name + ".rawlog", 1e-8);
+  }
+}
+
 // Another layout by configuration: time as float32 seconds, big-endian data, the IMU in g, other
 // topic and field names, no line field. Float seconds carry the simulator's values exactly: the
 // rawlog must be identical (IMU values too: x / 9.81 * 9.81 is exact for these samples or off by
@@ -476,4 +493,41 @@ TEST(BagImport, LidarTimeOffsetIsApplied) {
   ASSERT_EQ(clouds.size(), 6u);
   for (std::size_t k = 0; k < clouds.size(); ++k)
     EXPECT_NEAR(clouds[k], recording().frames[k].stamp - 0.0125, 2e-7);  // mrpt::Clock: 100 ns
+}
+
+// The shipped INI files load, with the release's layout and extrinsics.
+TEST(BagImportConfig, ShippedIniFiles) {
+  const auto s = loadBagImportSettings(kSrc + "/ini/import_bag.ini");
+  const ros1::BagImportConfig defaults;
+  EXPECT_EQ(s.bag.imu_topic, "/imu/data");
+  EXPECT_EQ(s.bag.lidar_topic, "/aeva/AeriesII/point_cloud_frame");
+  EXPECT_EQ(s.bag.cloud.time.field.name, "time_offset_ns");
+  EXPECT_EQ(s.bag.cloud.time.field.type, ros1::FieldType::kInt32);
+  EXPECT_EQ(s.bag.cloud.time.scale, 1e-9);
+  EXPECT_EQ(s.bag.cloud.doppler.name, "velocity");
+  EXPECT_EQ(s.bag.cloud.line.type, ros1::FieldType::kUint8);
+  EXPECT_EQ(s.bag.doppler_mode, ros1::DopplerMode::kRelative);
+  EXPECT_FALSE(s.bag.imu_accel_in_g);
+  EXPECT_EQ(s.extrinsics.R_bl, Mat3::Identity());
+  EXPECT_EQ(s.extrinsics.p_bl, Vec3(0.018, 0.0, -0.0434));
+  const auto v = loadBagImportSettings(kSrc + "/ini/import_bag_vehicular.ini");
+  EXPECT_EQ(v.bag.cloud.time.field.name, defaults.cloud.time.field.name);
+  EXPECT_EQ(v.extrinsics.p_bl, Vec3(0.017, -0.002, -0.052));
+}
+
+// Optional fields can be left out: intensity and line are then 0.
+TEST(BagImportConfig, OptionalFieldsMayBeAbsent) {
+  HandBag h = firstSeconds();
+  for (auto& [t, m] : h.clouds)
+    for (auto& f : m.fields)
+      if (f.name == "line_index" || f.name == "intensity") f.name = "unused_" + f.name;
+  EXPECT_CONTAINS(importError(h, "no_line"), "no field 'intensity' (intensity, set intensity_field)");
+  BagImportApp app;
+  ASSERT_EQ(importError(h, "no_line_ok", "intensity_field =\nline_field =", &app), "");
+  for (const auto& r : readRawlog(app.rawlog_written))
+    if (const auto* pc = dynamic_cast<const mrpt::obs::CObservationPointCloud*>(r.obs.get())) {
+      const LidarFrame f = frameFromObservation(*pc);
+      EXPECT_EQ(f.points[7].line, 0);
+      EXPECT_EQ(f.points[7].intensity, 0.0f);
+    }
 }

@@ -18,6 +18,7 @@ struct BagWriteOptions {
   double lidar_publish_delay = 0.1;
   bool big_endian = false;   ///< PointCloud2 data big-endian (is_bigendian = true)
   bool reflectivity = true;  ///< add the Aeva driver's float32 reflectivity field (zeros)
+  enum class Compression { kNone, kBz2, kLz4 } compression = Compression::kNone;  ///< chunks
 };
 
 /// Writes `path` through a temporary file renamed when complete. Throws std::runtime_error.
