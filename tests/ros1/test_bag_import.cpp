@@ -133,7 +133,23 @@ void expectSameRawlog(const std::string& expected, const std::string& actual, do
   EXPECT_EQ(clouds, recording().frames.size());
 }
 
-ros1::BagWriteOptions releaseLayout() { return ros1::BagWriteOptions(); }
+// Writes the recording as "<d>/<name>.bag" with `options` and imports it to "<d>/<name>.rawlog"
+// with the [bag_import] `lines`.
+struct Imported {
+  BagImportApp app;
+  std::string log;
+};
+Imported writeAndImport(const std::string& d, const ros1::BagWriteOptions& options,
+                        const std::string& lines = "", const std::string& name = "rec") {
+  ros1::writeBag(d + "/" + name + ".bag", recording().imu, recording().frames, options);
+  Imported r{importer(d + "/" + name + ".bag", writeIni(d + "/" + name + ".ini", lines),
+                      d + "/" + name + ".rawlog"),
+             ""};
+  std::ostringstream log;
+  EXPECT_EQ(r.app.run(log), 0) << log.str();
+  r.log = log.str();
+  return r;
+}
 
 }  // namespace
 
@@ -143,10 +159,7 @@ ros1::BagWriteOptions releaseLayout() { return ros1::BagWriteOptions(); }
 // rounding of the result (offsets < 0.1 s: ulp 7.5e-9 s), hence 1e-8 s.
 TEST(BagImport, ReleaseLayoutEqualsTheSimulatorsRawlog) {
   const std::string d = dir("release");
-  ros1::writeBag(d + "/rec.bag", recording().imu, recording().frames, releaseLayout());
-  auto app = importer(d + "/rec.bag", writeIni(d + "/import.ini", ""), d + "/rec.rawlog");
-  std::ostringstream log;
-  ASSERT_EQ(app.run(log), 0) << log.str();
+  const auto [app, log] = writeAndImport(d, {});
   EXPECT_EQ(app.summary.imu.imported, recording().imu.size());
   EXPECT_EQ(app.summary.lidar.imported, recording().frames.size());
   EXPECT_EQ(app.summary.imu.skipped() + app.summary.lidar.skipped(), 0u);
@@ -154,9 +167,9 @@ TEST(BagImport, ReleaseLayoutEqualsTheSimulatorsRawlog) {
   EXPECT_EQ(app.summary.imu.gaps, 0u);
   EXPECT_TRUE(fs::is_regular_file(d + "/rec.extrinsics.ini"));
   expectSameRawlog(simRawlog(), d + "/rec.rawlog", 1e-8);
-  EXPECT_NE(log.str().find("/imu/data (sensor_msgs/Imu): 201 messages, 201 imported"),
+  EXPECT_NE(log.find("/imu/data (sensor_msgs/Imu): 201 messages, 201 imported"),
             std::string::npos)
-      << log.str();
+      << log;
 }
 
 // Compressed bags (rosbag record --lz4 / --bz2) read the same.
@@ -167,11 +180,7 @@ TEST(BagImport, CompressedBags) {
     ros1::BagWriteOptions o;
     o.compression = c;
     const std::string name = c == C::kLz4 ? "lz4" : "bz2";
-    ros1::writeBag(d + "/" + name + ".bag", recording().imu, recording().frames, o);
-    auto app = importer(d + "/" + name + ".bag", writeIni(d + "/import.ini", ""),
-                        d + "/" + name + ".rawlog");
-    std::ostringstream log;
-    ASSERT_EQ(app.run(log), 0) << log.str();
+    writeAndImport(d, o, "", name);
     expectSameRawlog(simRawlog(), d + "/" + name + ".rawlog", 1e-8);
   }
 }
@@ -190,27 +199,15 @@ TEST(BagImport, ConfiguredLayoutBigEndianFloatSecondsImuInG) {
   o.config.cloud.time.scale = 1.0;
   o.big_endian = true;
   o.reflectivity = false;
-  ros1::writeBag(d + "/rec.bag", recording().imu, recording().frames, o);
-  auto app = importer(d + "/rec.bag",
-                      writeIni(d + "/import.ini",
-                               "imu_topic = /xsens/imu\nlidar_topic = /lidar/points\n"
-                               "doppler_field = radial_vel\ntime_field = t\n"
-                               "time_field_type = float32\ntime_scale = 1\n"),
-                      d + "/rec.rawlog");
-  std::ostringstream log;
-  ASSERT_EQ(app.run(log), 0) << log.str();
+  const std::string lines =
+      "imu_topic = /xsens/imu\nlidar_topic = /lidar/points\ndoppler_field = radial_vel\n"
+      "time_field = t\ntime_field_type = float32\ntime_scale = 1\n";
+  writeAndImport(d, o, lines);
   expectSameRawlog(simRawlog(), d + "/rec.rawlog", 0.0);
 
   // The same bag with the IMU written in g and declared so: accelerations scaled back.
   o.config.imu_accel_in_g = true;
-  ros1::writeBag(d + "/g.bag", recording().imu, recording().frames, o);
-  auto g = importer(d + "/g.bag",
-                    writeIni(d + "/g.ini",
-                             "imu_topic = /xsens/imu\nlidar_topic = /lidar/points\n"
-                             "doppler_field = radial_vel\ntime_field = t\n"
-                             "time_field_type = float32\ntime_scale = 1\nimu_accel_unit = g\n"),
-                    d + "/g.rawlog");
-  ASSERT_EQ(g.run(log), 0) << log.str();
+  writeAndImport(d, o, lines + "imu_accel_unit = g\n", "g");
   const auto recs = readRawlog(d + "/g.rawlog");
   std::size_t k = 0;
   for (const auto& r : recs) {
@@ -231,10 +228,8 @@ TEST(BagImport, ConfiguredLayoutBigEndianFloatSecondsImuInG) {
 // offset rounding of the bag format, so the states agree to far better than their errors.
 TEST(BagImport, FreeInitOnTheImportMeetsTheSameAccuracy) {
   const std::string d = dir("accuracy");
-  ros1::writeBag(d + "/rec.bag", recording().imu, recording().frames, releaseLayout());
-  auto imp = importer(d + "/rec.bag", writeIni(d + "/import.ini", ""), d + "/rec.rawlog");
+  writeAndImport(d, {});
   std::ostringstream log;
-  ASSERT_EQ(imp.run(log), 0) << log.str();
   fs::copy_file(truthPathFor(simRawlog()), truthPathFor(d + "/rec.rawlog"));
   // The defaults of ini/freeinit.ini, without the PNG snapshots.
   {
@@ -452,7 +447,7 @@ TEST(BagImportBadBags, ImuWithoutAccelerometer) {
 
 TEST(BagImportBadBags, TruncatedBagFile) {
   const std::string d = dir("truncated");
-  ros1::writeBag(d + "/rec.bag", recording().imu, recording().frames, releaseLayout());
+  ros1::writeBag(d + "/rec.bag", recording().imu, recording().frames, {});
   fs::resize_file(d + "/rec.bag", fs::file_size(d + "/rec.bag") / 2);
   auto app = importer(d + "/rec.bag", writeIni(d + "/import.ini", ""), d + "/rec.rawlog");
   std::ostringstream log;
