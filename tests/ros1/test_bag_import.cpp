@@ -32,8 +32,11 @@ namespace {
 
 const std::string kSrc = FREEINIT_SOURCE_DIR;
 
+// A fresh folder of the running test (ctest runs the tests of this file in parallel processes).
 std::string dir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / "freeinit_bag_import_tests" / name;
+  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
+  const auto d = fs::temp_directory_path() / "freeinit_bag_import_tests" /
+                 (std::string(test->test_suite_name()) + "." + test->name()) / name;
   fs::remove_all(d);
   fs::create_directories(d);
   return d.string();
