@@ -5,11 +5,10 @@
 // import is run in a child process, so that neither the simulated recording nor the other length's
 // run counts in the peak; the import streams the bag, so its peak must not grow with the bag's
 // length (compare the two lengths).
+#include <benchmark/benchmark.h>
 #include <freeinit/ros1/BagImportApp.h>
 #include <freeinit/ros1/bag_writer.h>
 #include <freeinit/sim/simulator.h>
-
-#include <benchmark/benchmark.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>

@@ -16,8 +16,8 @@ int main(int argc, char** argv) {
                                         "INI with [bag_import] and [extrinsics] "
                                         "(see ini/import_bag.ini)",
                                         true, "", "FILE", cmd);
-    TCLAP::ValueArg<std::string> out("o", "out", "output rawlog (default: <bag>.rawlog)", false,
-                                     "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> out("o", "out", "output rawlog (default: <bag>.rawlog)", false, "",
+                                     "FILE", cmd);
     TCLAP::SwitchArg quiet("q", "quiet", "no progress bar", cmd);
     cmd.parse(argc, argv);
     freeinit::mrpt_glue::BagImportApp app;

@@ -199,16 +199,16 @@ int BagImportApp::run(std::ostream& log) {
                          "; also in each point cloud's sensorPose)");
   summary.print(log);
   log << "Wrote " << out << " (" << rawlog.records() << " records: " << rawlog.imuRecords()
-      << " IMU, " << rawlog.frameRecords() << " point clouds, " << summary.points
-      << " points) and " << ext << "\nRun: freeinit ini/freeinit.ini " << out << "\n";
+      << " IMU, " << rawlog.frameRecords() << " point clouds, " << summary.points << " points) and "
+      << ext << "\nRun: freeinit ini/freeinit.ini " << out << "\n";
   if (summary.imu.skipped() + summary.lidar.skipped() > 0 || summary.invalid_points > 0)
     log << "Warning: " << summary.imu.skipped() + summary.lidar.skipped()
         << " message(s) skipped and " << summary.invalid_points
         << " invalid point(s) dropped (see above)\n";
   if (summary.imu.gaps + summary.lidar.gaps > 0)
     log << "Warning: gaps in the recording (IMU " << summary.imu.gaps << ", LiDAR "
-        << summary.lidar.gaps << "); the largest IMU gap is "
-        << fixed(summary.imu.largest_gap, 4) << " s\n";
+        << summary.lidar.gaps << "); the largest IMU gap is " << fixed(summary.imu.largest_gap, 4)
+        << " s\n";
   return 0;
 }
 

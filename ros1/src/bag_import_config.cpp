@@ -12,9 +12,9 @@ struct TypeName {
   std::size_t size;
 };
 constexpr TypeName kTypes[] = {
-    {FieldType::kInt8, "int8", 1},     {FieldType::kUint8, "uint8", 1},
-    {FieldType::kInt16, "int16", 2},   {FieldType::kUint16, "uint16", 2},
-    {FieldType::kInt32, "int32", 4},   {FieldType::kUint32, "uint32", 4},
+    {FieldType::kInt8, "int8", 1},       {FieldType::kUint8, "uint8", 1},
+    {FieldType::kInt16, "int16", 2},     {FieldType::kUint16, "uint16", 2},
+    {FieldType::kInt32, "int32", 4},     {FieldType::kUint32, "uint32", 4},
     {FieldType::kFloat32, "float32", 4}, {FieldType::kFloat64, "float64", 8}};
 
 }  // namespace
@@ -48,10 +48,9 @@ void validate(const BagImportConfig& c) {
   if (c.lidar_topic.empty()) fail("lidar_topic", "must not be empty");
   if (c.imu_topic == c.lidar_topic) fail("lidar_topic", "must differ from imu_topic");
   const CloudLayout& l = c.cloud;
-  for (const auto& [key, spec] : {std::pair{"x_field", &l.x}, std::pair{"y_field", &l.y},
-                                  std::pair{"z_field", &l.z},
-                                  std::pair{"doppler_field", &l.doppler},
-                                  std::pair{"time_field", &l.time.field}})
+  for (const auto& [key, spec] :
+       {std::pair{"x_field", &l.x}, std::pair{"y_field", &l.y}, std::pair{"z_field", &l.z},
+        std::pair{"doppler_field", &l.doppler}, std::pair{"time_field", &l.time.field}})
     if (spec->name.empty()) fail(key, "is required");
   if (!(l.time.scale > 0) || !std::isfinite(l.time.scale)) fail("time_scale", "must be > 0");
   if (!l.time.relative && l.time.field.type != FieldType::kFloat64)

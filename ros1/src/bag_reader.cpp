@@ -90,8 +90,8 @@ double TopicSummary::meanRate() const {
 void BagSummary::print(std::ostream& out) const {
   out << "Bag " << file << ":\n";
   for (const TopicSummary* t : {&imu, &lidar}) {
-    out << "  " << t->topic << " (" << t->type << "): " << t->in_bag << " messages, "
-        << t->imported << " imported";
+    out << "  " << t->topic << " (" << t->type << "): " << t->in_bag << " messages, " << t->imported
+        << " imported";
     if (t->skipped() > 0)
       out << ", skipped " << t->out_of_order << " out of order, " << t->duplicated
           << " duplicated stamps, " << t->unusable << " unusable";
@@ -209,25 +209,27 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
   };
 
   DecodeStats decode_stats;
-  rosbag::View view(bag, rosbag::TopicQuery(std::vector<std::string>{config.imu_topic,
-                                                                     config.lidar_topic}));
+  rosbag::View view(
+      bag, rosbag::TopicQuery(std::vector<std::string>{config.imu_topic, config.lidar_topic}));
   const std::size_t total = view.size();
   std::size_t done = 0, imu_index = 0, lidar_index = 0;
   try {
     for (const rosbag::MessageInstance& m : view) {
       if (m.getTopic() == config.imu_topic) {
-        const std::string where = path + ": " + config.imu_topic + " message " +
-                                  std::to_string(imu_index++);
+        const std::string where =
+            path + ": " + config.imu_topic + " message " + std::to_string(imu_index++);
         const auto msg = m.instantiate<sensor_msgs::Imu>();
         if (!msg) throw BagError(where + ": cannot be read as sensor_msgs/Imu");
-        if (msg->angular_velocity_covariance[0] == -1 || msg->linear_acceleration_covariance[0] == -1)
+        if (msg->angular_velocity_covariance[0] == -1 ||
+            msg->linear_acceleration_covariance[0] == -1)
           throw BagError(where + ": the IMU declares no " +
                          (msg->angular_velocity_covariance[0] == -1 ? "angular velocity"
                                                                     : "linear acceleration") +
                          " (covariance[0] = -1)");
         Pending p;
         p.imu.t = msg->header.stamp.toSec();
-        p.imu.gyro = Vec3(msg->angular_velocity.x, msg->angular_velocity.y, msg->angular_velocity.z);
+        p.imu.gyro =
+            Vec3(msg->angular_velocity.x, msg->angular_velocity.y, msg->angular_velocity.z);
         p.imu.accel = accel_scale * Vec3(msg->linear_acceleration.x, msg->linear_acceleration.y,
                                          msg->linear_acceleration.z);
         if (!p.imu.gyro.allFinite() || !p.imu.accel.allFinite()) {
@@ -241,8 +243,8 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
           push(p.imu.t, 0, std::move(p), where);
         }
       } else {
-        const std::string where = path + ": " + config.lidar_topic + " message " +
-                                  std::to_string(lidar_index++);
+        const std::string where =
+            path + ": " + config.lidar_topic + " message " + std::to_string(lidar_index++);
         const auto msg = m.instantiate<sensor_msgs::PointCloud2>();
         if (!msg) throw BagError(where + ": cannot be read as sensor_msgs/PointCloud2");
         Pending p;
@@ -267,8 +269,7 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
     throw BagError(path + ": after " + std::to_string(done) + " of " + std::to_string(total) +
                    " messages: " + e.what() + " (truncated or corrupted bag?)");
   }
-  if (accel_n > 0 && accel_n < config.unit_check_samples)
-    checkUnit(path + ": " + config.imu_topic);
+  if (accel_n > 0 && accel_n < config.unit_check_samples) checkUnit(path + ": " + config.imu_topic);
   while (!buffer.empty()) emit(buffer.begin());
 
   summary.invalid_points = decode_stats.invalid_points;

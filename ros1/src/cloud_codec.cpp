@@ -35,14 +35,22 @@ void store(T v, std::uint8_t* p, bool swap) {
 
 double loadAs(const std::uint8_t* p, FieldType t, bool swap) {
   switch (t) {
-    case FieldType::kInt8: return load<std::int8_t>(p, swap);
-    case FieldType::kUint8: return load<std::uint8_t>(p, swap);
-    case FieldType::kInt16: return load<std::int16_t>(p, swap);
-    case FieldType::kUint16: return load<std::uint16_t>(p, swap);
-    case FieldType::kInt32: return load<std::int32_t>(p, swap);
-    case FieldType::kUint32: return load<std::uint32_t>(p, swap);
-    case FieldType::kFloat32: return load<float>(p, swap);
-    case FieldType::kFloat64: return load<double>(p, swap);
+    case FieldType::kInt8:
+      return load<std::int8_t>(p, swap);
+    case FieldType::kUint8:
+      return load<std::uint8_t>(p, swap);
+    case FieldType::kInt16:
+      return load<std::int16_t>(p, swap);
+    case FieldType::kUint16:
+      return load<std::uint16_t>(p, swap);
+    case FieldType::kInt32:
+      return load<std::int32_t>(p, swap);
+    case FieldType::kUint32:
+      return load<std::uint32_t>(p, swap);
+    case FieldType::kFloat32:
+      return load<float>(p, swap);
+    case FieldType::kFloat64:
+      return load<double>(p, swap);
   }
   return 0;
 }
@@ -57,14 +65,22 @@ void storeAs(double v, std::uint8_t* p, FieldType t, bool swap) {
     store<I>(static_cast<I>(std::clamp(r, lo, hi)), p, swap);
   };
   switch (t) {
-    case FieldType::kInt8: return integer(std::int8_t{});
-    case FieldType::kUint8: return integer(std::uint8_t{});
-    case FieldType::kInt16: return integer(std::int16_t{});
-    case FieldType::kUint16: return integer(std::uint16_t{});
-    case FieldType::kInt32: return integer(std::int32_t{});
-    case FieldType::kUint32: return integer(std::uint32_t{});
-    case FieldType::kFloat32: return store<float>(static_cast<float>(v), p, swap);
-    case FieldType::kFloat64: return store<double>(v, p, swap);
+    case FieldType::kInt8:
+      return integer(std::int8_t{});
+    case FieldType::kUint8:
+      return integer(std::uint8_t{});
+    case FieldType::kInt16:
+      return integer(std::int16_t{});
+    case FieldType::kUint16:
+      return integer(std::uint16_t{});
+    case FieldType::kInt32:
+      return integer(std::int32_t{});
+    case FieldType::kUint32:
+      return integer(std::uint32_t{});
+    case FieldType::kFloat32:
+      return store<float>(static_cast<float>(v), p, swap);
+    case FieldType::kFloat64:
+      return store<double>(v, p, swap);
   }
 }
 
@@ -86,8 +102,9 @@ BoundField bind(const sensor_msgs::PointCloud2& msg, const FieldSpec& spec, cons
   BoundField b;
   b.type = spec.type;
   if (spec.name.empty()) return b;
-  const auto it = std::find_if(msg.fields.begin(), msg.fields.end(),
-                               [&](const sensor_msgs::PointField& f) { return f.name == spec.name; });
+  const auto it =
+      std::find_if(msg.fields.begin(), msg.fields.end(),
+                   [&](const sensor_msgs::PointField& f) { return f.name == spec.name; });
   if (it == msg.fields.end())
     throw LayoutError(std::string("no field '") + spec.name + "' (" + role + ", set " + key +
                       ") in the cloud; its fields: " + listFields(msg));
@@ -139,7 +156,9 @@ LidarFrame decodeCloud(const sensor_msgs::PointCloud2& msg, const CloudLayout& l
     const std::uint8_t* row = msg.data.data() + r * msg.row_step;
     for (std::size_t c = 0; c < width; ++c) {
       const std::uint8_t* pt = row + c * msg.point_step;
-      auto get = [&](const BoundField& f) { return f.offset ? loadAs(pt + *f.offset, f.type, swap) : 0.0; };
+      auto get = [&](const BoundField& f) {
+        return f.offset ? loadAs(pt + *f.offset, f.type, swap) : 0.0;
+      };
       double t = get(ft) * layout.time.scale;
       if (!layout.time.relative) t -= stamp;
       DopplerPoint p;
@@ -164,10 +183,9 @@ LidarFrame decodeCloud(const sensor_msgs::PointCloud2& msg, const CloudLayout& l
       frame.points.push_back(p);
     }
   }
-  std::stable_sort(frame.points.begin(), frame.points.end(),
-                   [](const DopplerPoint& a, const DopplerPoint& b) {
-                     return a.time_offset < b.time_offset;
-                   });
+  std::stable_sort(
+      frame.points.begin(), frame.points.end(),
+      [](const DopplerPoint& a, const DopplerPoint& b) { return a.time_offset < b.time_offset; });
   if (stats) stats->invalid_points += invalid;
   return frame;
 }
@@ -184,9 +202,9 @@ void encodeCloud(const LidarFrame& frame, const CloudLayout& layout, bool reflec
   std::vector<Slot> slots;
   const FieldSpec refl{"reflectivity", FieldType::kFloat32};
   std::uint32_t offset = 0;
-  for (const FieldSpec* s : {&layout.x, &layout.y, &layout.z, &layout.intensity,
-                             reflectivity ? &refl : nullptr, &layout.doppler, &layout.time.field,
-                             &layout.line}) {
+  for (const FieldSpec* s :
+       {&layout.x, &layout.y, &layout.z, &layout.intensity, reflectivity ? &refl : nullptr,
+        &layout.doppler, &layout.time.field, &layout.line}) {
     if (s == nullptr || s->name.empty()) continue;
     sensor_msgs::PointField f;
     f.name = s->name;
@@ -211,12 +229,18 @@ void encodeCloud(const LidarFrame& frame, const CloudLayout& layout, bool reflec
     dense = dense && p.p_l.allFinite() && std::isfinite(p.doppler) && std::isfinite(p.time_offset);
     for (const Slot& s : slots) {
       double v = 0;
-      if (s.spec == &layout.x) v = p.p_l.x();
-      else if (s.spec == &layout.y) v = p.p_l.y();
-      else if (s.spec == &layout.z) v = p.p_l.z();
-      else if (s.spec == &layout.intensity) v = p.intensity;
-      else if (s.spec == &layout.doppler) v = p.doppler / layout.doppler_sign;
-      else if (s.spec == &layout.line) v = p.line;
+      if (s.spec == &layout.x)
+        v = p.p_l.x();
+      else if (s.spec == &layout.y)
+        v = p.p_l.y();
+      else if (s.spec == &layout.z)
+        v = p.p_l.z();
+      else if (s.spec == &layout.intensity)
+        v = p.intensity;
+      else if (s.spec == &layout.doppler)
+        v = p.doppler / layout.doppler_sign;
+      else if (s.spec == &layout.line)
+        v = p.line;
       else if (s.spec == &layout.time.field)
         v = (p.time_offset + (layout.time.relative ? 0.0 : frame.stamp)) / layout.time.scale;
       storeAs(v, pt + s.offset, s.spec->type, swap);

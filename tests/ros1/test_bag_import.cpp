@@ -170,8 +170,7 @@ TEST(BagImport, ReleaseLayoutEqualsTheSimulatorsRawlog) {
   EXPECT_EQ(app.summary.imu.gaps, 0u);
   EXPECT_TRUE(fs::is_regular_file(d + "/rec.extrinsics.ini"));
   expectSameRawlog(simRawlog(), d + "/rec.rawlog", 1e-8);
-  EXPECT_NE(log.find("/imu/data (sensor_msgs/Imu): 201 messages, 201 imported"),
-            std::string::npos)
+  EXPECT_NE(log.find("/imu/data (sensor_msgs/Imu): 201 messages, 201 imported"), std::string::npos)
       << log;
 }
 
@@ -266,7 +265,7 @@ TEST(BagImport, FreeInitOnTheImportMeetsTheSameAccuracy) {
 namespace {
 
 struct HandBag {
-  std::vector<std::pair<double, sensor_msgs::Imu>> imu;          // (bag time, message)
+  std::vector<std::pair<double, sensor_msgs::Imu>> imu;  // (bag time, message)
   std::vector<std::pair<double, sensor_msgs::PointCloud2>> clouds;
   std::string imu_topic = "/imu/data";
   std::string lidar_topic = "/aeva/AeriesII/point_cloud_frame";
@@ -306,8 +305,8 @@ void write(const HandBag& h, const std::string& path) {
 
 // Imports `h` with the [bag_import] lines; returns the error message ("" when it succeeded) and
 // checks that a failed import left no output.
-std::string importError(const HandBag& h, const std::string& name,
-                        const std::string& lines = "", BagImportApp* done = nullptr) {
+std::string importError(const HandBag& h, const std::string& name, const std::string& lines = "",
+                        BagImportApp* done = nullptr) {
   const std::string d = dir(name);
   write(h, d + "/bad.bag");
   auto app = importer(d + "/bad.bag", writeIni(d + "/import.ini", lines), d + "/bad.rawlog");
@@ -352,8 +351,9 @@ TEST(BagImportBadBags, MissingAndMistypedFields) {
     for (auto& f : m.fields)
       if (f.name == "velocity") f.name = "doppler";
   std::string e = importError(h, "missing_field");
-  EXPECT_CONTAINS(e, "point_cloud_frame message 0: no field 'velocity' (Doppler velocity, set "
-                     "doppler_field)");
+  EXPECT_CONTAINS(e,
+                  "point_cloud_frame message 0: no field 'velocity' (Doppler velocity, set "
+                  "doppler_field)");
   EXPECT_CONTAINS(e, "doppler float32");
   // The same bag with the field configured by name imports.
   EXPECT_EQ(importError(h, "missing_field_configured", "doppler_field = doppler"), "");
@@ -363,7 +363,8 @@ TEST(BagImportBadBags, MissingAndMistypedFields) {
     for (auto& f : m.fields)
       if (f.name == "time_offset_ns") f.datatype = sensor_msgs::PointField::FLOAT32;
   e = importError(h, "mistyped_field");
-  EXPECT_CONTAINS(e, "field 'time_offset_ns' (point time) is float32, the configuration says int32");
+  EXPECT_CONTAINS(e,
+                  "field 'time_offset_ns' (point time) is float32, the configuration says int32");
 }
 
 TEST(BagImportBadBags, TruncatedCloudData) {
@@ -401,7 +402,7 @@ TEST(BagImportBadBags, OutOfOrderAndDuplicatedStampsAreCountedSkips) {
   HandBag h = firstSeconds();
   h.imu[50].second.header.stamp = h.imu[40].second.header.stamp;  // backwards
   h.imu[51].second.header.stamp = h.imu[52].second.header.stamp;  // 52 becomes a duplicate
-  h.imu.erase(h.imu.begin() + 80, h.imu.begin() + 90);           // a 55 ms gap
+  h.imu.erase(h.imu.begin() + 80, h.imu.begin() + 90);            // a 55 ms gap
   BagImportApp app;
   ASSERT_EQ(importError(h, "order", "", &app), "");
   EXPECT_EQ(app.summary.imu.out_of_order, 1u);
@@ -464,8 +465,7 @@ TEST(BagImportBadBags, TruncatedBagFile) {
 
 // The Doppler mode is declared; ego-compensated Doppler cannot initialize Free-Init and is refused.
 TEST(BagImportBadBags, DopplerModeIsDeclaredAndEgoCompensatedIsRefused) {
-  const std::string e =
-      importError(firstSeconds(), "ego", "doppler_mode = ego_compensated");
+  const std::string e = importError(firstSeconds(), "ego", "doppler_mode = ego_compensated");
   EXPECT_CONTAINS(e, "doppler_mode = ego_compensated: Free-Init needs the raw (relative) Doppler");
   EXPECT_CONTAINS(importError(firstSeconds(), "mode_typo", "doppler_mode = absolute"),
                   "'absolute' is not one of relative | ego_compensated");
@@ -519,7 +519,8 @@ TEST(BagImportConfig, OptionalFieldsMayBeAbsent) {
   for (auto& [t, m] : h.clouds)
     for (auto& f : m.fields)
       if (f.name == "line_index" || f.name == "intensity") f.name = "unused_" + f.name;
-  EXPECT_CONTAINS(importError(h, "no_line"), "no field 'intensity' (intensity, set intensity_field)");
+  EXPECT_CONTAINS(importError(h, "no_line"),
+                  "no field 'intensity' (intensity, set intensity_field)");
   BagImportApp app;
   ASSERT_EQ(importError(h, "no_line_ok", "intensity_field =\nline_field =", &app), "");
   for (const auto& r : readRawlog(app.rawlog_written))

@@ -43,9 +43,9 @@ class BagImportApp {
   /// Throws on any error (nothing is written then). Returns the exit code (0).
   int run(std::ostream& log);
 
-  BagImportSettings settings;   ///< filled by run()
-  ros1::BagSummary summary;     ///< filled by run()
-  std::string rawlog_written;   ///< filled by run()
+  BagImportSettings settings;  ///< filled by run()
+  ros1::BagSummary summary;    ///< filled by run()
+  std::string rawlog_written;  ///< filled by run()
 };
 
 }  // namespace freeinit::mrpt_glue

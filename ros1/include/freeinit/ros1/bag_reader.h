@@ -32,18 +32,18 @@ class BagError : public std::runtime_error {
 struct TopicSummary {
   std::string topic;
   std::string type;
-  std::size_t in_bag = 0;     ///< messages on the topic
-  std::size_t imported = 0;   ///< messages passed on
-  std::size_t out_of_order = 0;   ///< skipped: stamp earlier than the previous one of the topic
-  std::size_t duplicated = 0;     ///< skipped: same stamp as the previous one of the topic
-  std::size_t unusable = 0;       ///< skipped: zero stamp, NaN values, no valid point
-  double first = 0, last = 0;     ///< [s] first and last imported stamps
-  double median_interval = 0;     ///< [s]
-  std::size_t gaps = 0;           ///< intervals > gap_factor * median_interval
-  double largest_gap = 0;         ///< [s]
-  double largest_gap_at = 0;      ///< [s] stamp at the end of the largest gap
+  std::size_t in_bag = 0;        ///< messages on the topic
+  std::size_t imported = 0;      ///< messages passed on
+  std::size_t out_of_order = 0;  ///< skipped: stamp earlier than the previous one of the topic
+  std::size_t duplicated = 0;    ///< skipped: same stamp as the previous one of the topic
+  std::size_t unusable = 0;      ///< skipped: zero stamp, NaN values, no valid point
+  double first = 0, last = 0;    ///< [s] first and last imported stamps
+  double median_interval = 0;    ///< [s]
+  std::size_t gaps = 0;          ///< intervals > gap_factor * median_interval
+  double largest_gap = 0;        ///< [s]
+  double largest_gap_at = 0;     ///< [s] stamp at the end of the largest gap
   std::size_t skipped() const { return out_of_order + duplicated + unusable; }
-  double meanRate() const;        ///< [Hz] (imported - 1) / (last - first)
+  double meanRate() const;  ///< [Hz] (imported - 1) / (last - first)
 };
 
 struct BagSummary {

@@ -35,8 +35,8 @@ LidarFrame decodeCloud(const sensor_msgs::PointCloud2& msg, const CloudLayout& l
                        bool drop_invalid, DecodeStats* stats = nullptr);
 
 /// Encodes a frame with `layout` (an unorganized cloud, height 1, is_dense when every value is
-/// finite). `reflectivity` adds a float32 "reflectivity" field of zeros, as the Aeva driver has one.
-/// Fields are packed in the order x y z intensity reflectivity doppler time line. `big_endian`
+/// finite). `reflectivity` adds a float32 "reflectivity" field of zeros, as the Aeva driver has
+/// one. Fields are packed in the order x y z intensity reflectivity doppler time line. `big_endian`
 /// writes every value big-endian (and sets is_bigendian). Used by tests and tools that write bags.
 void encodeCloud(const LidarFrame& frame, const CloudLayout& layout, bool reflectivity,
                  bool big_endian, sensor_msgs::PointCloud2& msg);
