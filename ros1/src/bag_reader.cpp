@@ -1,3 +1,4 @@
+#include <freeinit/accel_unit.h>
 #include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/cloud_codec.h>
 #include <rosbag/bag.h>
@@ -198,11 +199,12 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
   auto checkUnit = [&](const std::string& where) {
     summary.accel_mean_norm = (accel_sum / accel_n).norm();
     const double g = summary.accel_mean_norm;
-    if (!config.imu_accel_in_g && g > 0.5 && g < 1.5)
+    const AccelUnitMismatch unit = accelUnitMismatch(g, config.imu_accel_in_g);
+    if (unit == AccelUnitMismatch::kDataInG)
       throw BagError(where + ": the mean specific force of the first " + std::to_string(accel_n) +
                      " IMU samples is " + fmt(g, 3) +
                      ": the IMU reports g, not m/s^2 (set imu_accel_unit = g)");
-    if (config.imu_accel_in_g && g > 3 * kGravity)
+    if (unit == AccelUnitMismatch::kDataInMs2)
       throw BagError(where + ": imu_accel_unit = g, but the first " + std::to_string(accel_n) +
                      " IMU samples average " + fmt(g, 2) +
                      " m/s^2 after conversion: the IMU reports m/s^2");
