@@ -1,12 +1,14 @@
 // freeinit-import-bag on large bags: a dyna_05 recording (vehicle, 60,000 points per frame at
 // 10 Hz, the Aeries II-like density) written as a release-layout bag, then imported to a rawlog.
-// items/s = LiDAR points imported per second of wall time. Counters: the bag's size and the peak
+// items/s = LiDAR points imported per second of wall time. BM_ReadBag: the bag side alone (read,
+// decode, reorder; no rawlog). Counters: the bag's size and the peak
 // resident memory of the import process. The bag is made once (kept in the temp folder) and the
 // import is run in a child process, so that neither the simulated recording nor the other length's
 // run counts in the peak; the import streams the bag, so its peak must not grow with the bag's
 // length (compare the two lengths).
 #include <benchmark/benchmark.h>
 #include <freeinit/ros1/BagImportApp.h>
+#include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/bag_writer.h>
 #include <freeinit/sim/simulator.h>
 #include <sys/resource.h>
@@ -23,11 +25,10 @@ namespace {
 
 namespace fs = std::filesystem;
 
-void BM_ImportBag(benchmark::State& state) {
-  const double seconds = static_cast<double>(state.range(0));
-  const fs::path dir = fs::temp_directory_path() / "freeinit_bench_bag_import";
+// The bag of `seconds` of dyna_05, made once in a child process ("" if that failed).
+std::string makeBag(int seconds, const fs::path& dir) {
   fs::create_directories(dir);
-  const std::string bag = (dir / ("dyna_05_" + std::to_string(state.range(0)) + "s.bag")).string();
+  const std::string bag = (dir / ("dyna_05_" + std::to_string(seconds) + "s.bag")).string();
   if (!fs::exists(bag)) {
     const pid_t pid = fork();
     if (pid == 0) {
@@ -39,10 +40,34 @@ void BM_ImportBag(benchmark::State& state) {
     }
     int status = 0;
     waitpid(pid, &status, 0);
-    if (!fs::exists(bag)) {
-      state.SkipWithError("could not write the bag");
-      return;
-    }
+  }
+  return fs::exists(bag) ? bag : std::string();
+}
+
+// Reading and decoding only (no rawlog written): the bag side of the import.
+void BM_ReadBag(benchmark::State& state) {
+  const std::string bag = makeBag(static_cast<int>(state.range(0)),
+                                  fs::temp_directory_path() / "freeinit_bench_bag_import");
+  if (bag.empty()) {
+    state.SkipWithError("could not write the bag");
+    return;
+  }
+  std::size_t points = 0;
+  for (auto _ : state) {
+    freeinit::ros1::BagReadCallbacks cb;
+    cb.imu = [](const freeinit::ImuSample&) {};
+    cb.frame = [](freeinit::LidarFrame&& f) { benchmark::DoNotOptimize(f.points.data()); };
+    points += freeinit::ros1::readBag(bag, freeinit::ros1::BagImportConfig(), cb).points;
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(points));
+}
+
+void BM_ImportBag(benchmark::State& state) {
+  const fs::path dir = fs::temp_directory_path() / "freeinit_bench_bag_import";
+  const std::string bag = makeBag(static_cast<int>(state.range(0)), dir);
+  if (bag.empty()) {
+    state.SkipWithError("could not write the bag");
+    return;
   }
   const std::string ini = (dir / "import.ini").string();
   std::ofstream(ini) << "[bag_import]\n[extrinsics]\nR_bl = 1 0 0 0 1 0 0 0 1\np_bl = 0 0 0\n";
@@ -90,6 +115,7 @@ void BM_ImportBag(benchmark::State& state) {
 
 }  // namespace
 
+BENCHMARK(BM_ReadBag)->Arg(5)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 BENCHMARK(BM_ImportBag)->Arg(5)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 
 BENCHMARK_MAIN();
