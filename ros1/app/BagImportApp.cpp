@@ -1,15 +1,13 @@
+#include <freeinit/mrpt/IniLoader.h>
 #include <freeinit/mrpt/ProgressBar.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/ros1/BagImportApp.h>
 #include <mrpt/config/CConfigFile.h>
 
-#include <cctype>
-#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <ostream>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 #include <vector>
@@ -17,90 +15,18 @@
 namespace freeinit::mrpt_glue {
 namespace {
 
-// Strict reader of the [bag_import] section: every key it reads is recorded, and keys it never
-// read are errors, so that a typo cannot silently keep a default.
-class SectionReader {
- public:
-  SectionReader(const mrpt::config::CConfigFile& cfg, std::string file)
-      : cfg_(cfg), file_(std::move(file)) {}
+constexpr const char* kSection = "bag_import";
 
-  [[noreturn]] void fail(const std::string& key, const std::string& why) const {
-    throw std::invalid_argument(file_ + ": [" + kSection + "] " + key + ": " + why);
+// "<key>" names the field ("" = not read), "<key>_type" its datatype.
+void readField(IniLoader& L, const std::string& key, ros1::FieldSpec& f) {
+  L(kSection, key, f.name);
+  if (!L.has(kSection, key + "_type")) return;
+  try {
+    f.type = ros1::fieldTypeFromName(L.raw(kSection, key + "_type"));
+  } catch (const std::exception& e) {
+    L.fail(kSection, key + "_type", e.what());
   }
-  bool has(const std::string& key) {
-    known_.insert(key);
-    return cfg_.keyExists(kSection, key);
-  }
-  std::string text(const std::string& key) const {
-    std::string v = cfg_.read_string(kSection, key, "", false);
-    for (const char* c : {";", "#"})
-      if (auto p = v.find(c); p != std::string::npos) v.erase(p);
-    while (!v.empty() && std::isspace(static_cast<unsigned char>(v.back()))) v.pop_back();
-    while (!v.empty() && std::isspace(static_cast<unsigned char>(v.front()))) v.erase(0, 1);
-    return v;
-  }
-  void string(const std::string& key, std::string& x) {
-    if (has(key)) x = text(key);
-  }
-  void number(const std::string& key, double& x) {
-    if (!has(key)) return;
-    const std::string v = text(key);
-    try {
-      std::size_t used = 0;
-      x = std::stod(v, &used);
-      if (used != v.size() || !std::isfinite(x)) throw std::invalid_argument(v);
-    } catch (const std::exception&) {
-      fail(key, "'" + v + "' is not a finite number");
-    }
-  }
-  void boolean(const std::string& key, bool& x) {
-    if (!has(key)) return;
-    const std::string v = text(key);
-    if (v == "true") {
-      x = true;
-    } else if (v == "false") {
-      x = false;
-    } else {
-      fail(key, "'" + v + "' is neither true nor false");
-    }
-  }
-  /// "<key>" names the field ("" = not read), "<key>_type" its datatype.
-  void field(const std::string& key, ros1::FieldSpec& f) {
-    string(key, f.name);
-    if (!has(key + "_type")) return;
-    try {
-      f.type = ros1::fieldTypeFromName(text(key + "_type"));
-    } catch (const std::exception& e) {
-      fail(key + "_type", e.what());
-    }
-  }
-  /// One of `choices` (the index is returned through x).
-  void choice(const std::string& key, const std::vector<std::string>& choices, int& x) {
-    if (!has(key)) return;
-    const std::string v = text(key);
-    for (std::size_t i = 0; i < choices.size(); ++i)
-      if (v == choices[i]) {
-        x = static_cast<int>(i);
-        return;
-      }
-    std::string all;
-    for (const auto& c : choices) all += (all.empty() ? "" : " | ") + c;
-    fail(key, "'" + v + "' is not one of " + all);
-  }
-  void checkUnknownKeys() const {
-    std::vector<std::string> keys;
-    cfg_.getAllKeys(kSection, keys);
-    for (const auto& k : keys)
-      if (!known_.count(k)) fail(k, "unknown key");
-  }
-
-  static constexpr const char* kSection = "bag_import";
-
- private:
-  const mrpt::config::CConfigFile& cfg_;
-  std::string file_;
-  std::set<std::string> known_;
-};
+}
 
 std::string fixed(double x, int precision) {
   std::ostringstream os;
@@ -123,40 +49,38 @@ BagImportSettings loadBagImportSettings(const std::string& ini_file) {
   s.extrinsics = app.core.extrinsics;
 
   mrpt::config::CConfigFile cfg(ini_file);
-  SectionReader r(cfg, ini_file);
+  IniLoader L(cfg, ini_file);
   ros1::BagImportConfig& b = s.bag;
-  r.string("imu_topic", b.imu_topic);
-  r.string("lidar_topic", b.lidar_topic);
-  r.field("x_field", b.cloud.x);
-  r.field("y_field", b.cloud.y);
-  r.field("z_field", b.cloud.z);
-  r.field("doppler_field", b.cloud.doppler);
-  r.number("doppler_sign", b.cloud.doppler_sign);
-  int mode = 0;
-  r.choice("doppler_mode", {"relative", "ego_compensated"}, mode);
-  b.doppler_mode = mode == 0 ? ros1::DopplerMode::kRelative : ros1::DopplerMode::kEgoCompensated;
-  r.field("time_field", b.cloud.time.field);
-  r.number("time_scale", b.cloud.time.scale);
-  r.boolean("time_relative", b.cloud.time.relative);
-  r.field("intensity_field", b.cloud.intensity);
-  r.field("line_field", b.cloud.line);
-  int unit = 0;
-  r.choice("imu_accel_unit", {"m/s^2", "g"}, unit);
-  b.imu_accel_in_g = unit == 1;
-  r.number("lidar_time_offset", b.lidar_time_offset);
-  r.number("reorder_window", b.reorder_window);
-  r.boolean("drop_invalid_points", b.drop_invalid_points);
-  r.number("gap_factor", b.gap_factor);
-  r.string("imu_label", s.imu_label);
-  r.string("lidar_label", s.lidar_label);
-  r.checkUnknownKeys();
+  L(kSection, "imu_topic", b.imu_topic);
+  L(kSection, "lidar_topic", b.lidar_topic);
+  readField(L, "x_field", b.cloud.x);
+  readField(L, "y_field", b.cloud.y);
+  readField(L, "z_field", b.cloud.z);
+  readField(L, "doppler_field", b.cloud.doppler);
+  L(kSection, "doppler_sign", b.cloud.doppler_sign);
+  b.doppler_mode = L.choice(kSection, "doppler_mode", {"relative", "ego_compensated"}, 0) == 0
+                       ? ros1::DopplerMode::kRelative
+                       : ros1::DopplerMode::kEgoCompensated;
+  readField(L, "time_field", b.cloud.time.field);
+  L(kSection, "time_scale", b.cloud.time.scale);
+  L(kSection, "time_relative", b.cloud.time.relative);
+  readField(L, "intensity_field", b.cloud.intensity);
+  readField(L, "line_field", b.cloud.line);
+  b.imu_accel_in_g = L.choice(kSection, "imu_accel_unit", {"m/s^2", "g"}, 0) == 1;
+  L(kSection, "lidar_time_offset", b.lidar_time_offset);
+  L(kSection, "reorder_window", b.reorder_window);
+  L(kSection, "drop_invalid_points", b.drop_invalid_points);
+  L(kSection, "gap_factor", b.gap_factor);
+  L(kSection, "imu_label", s.imu_label);
+  L(kSection, "lidar_label", s.lidar_label);
+  L.checkUnknownKeys();
   try {
     ros1::validate(b);
   } catch (const std::exception& e) {
     throw std::invalid_argument(ini_file + ": [bag_import] " + e.what());
   }
   if (s.imu_label.empty() || s.lidar_label.empty() || s.imu_label == s.lidar_label)
-    r.fail("lidar_label", "imu_label and lidar_label must be non-empty and differ");
+    L.fail(kSection, "lidar_label", "imu_label and lidar_label must be non-empty and differ");
   return s;
 }
 

@@ -468,7 +468,7 @@ TEST(BagImportBadBags, DopplerModeIsDeclaredAndEgoCompensatedIsRefused) {
   const std::string e = importError(firstSeconds(), "ego", "doppler_mode = ego_compensated");
   EXPECT_CONTAINS(e, "doppler_mode = ego_compensated: Free-Init needs the raw (relative) Doppler");
   EXPECT_CONTAINS(importError(firstSeconds(), "mode_typo", "doppler_mode = absolute"),
-                  "'absolute' is not one of relative | ego_compensated");
+                  "'absolute' is not one of 'relative', 'ego_compensated'");
 }
 
 TEST(BagImportConfig, TyposAndBadValuesNameTheKey) {
