@@ -267,7 +267,7 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
       }
       if (cb.progress) cb.progress(++done, total);
     }
-  } catch (const rosbag::BagException& e) {
+  } catch (const ros::Exception& e) {  // format errors of the bag, overruns of a message
     throw BagError(path + ": after " + std::to_string(done) + " of " + std::to_string(total) +
                    " messages: " + e.what() + " (truncated or corrupted bag?)");
   }

@@ -5,8 +5,8 @@
 //   <out>.extrinsics.ini    [extrinsics] R_bl, p_bl, as freeinit-sim writes it
 // The configuration is an INI file: [bag_import] (topics, PointCloud2 fields and types, units,
 // LiDAR time offset, Doppler mode; see ini/import_bag.ini) and [extrinsics] (R_bl or
-// roll/pitch/yaw_deg, and p_bl, read by the main app's loader). Both outputs are written
-// atomically; any error leaves neither.
+// roll/pitch/yaw_deg, and p_bl, read by the main app's loader). Each output is written
+// atomically; a bad bag or configuration fails before either exists.
 #pragma once
 
 #include <freeinit/ros1/bag_import_config.h>
