@@ -1,12 +1,10 @@
+#include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/SimApp.h>
-#include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/ground_truth.h>
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/register.h>
 #include <freeinit/sim/simulator.h>
 #include <mrpt/config/CConfigFile.h>
-#include <mrpt/io/CFileGZOutputStream.h>
-#include <mrpt/serialization/CArchive.h>
 
 #include <cmath>
 #include <cstdio>
@@ -101,34 +99,25 @@ void SimApp::run(std::ostream& log) {
   const sim::Recording rec = sim::simulate(sc);
 
   const std::string out = params.output;
-  std::string stem = out;
-  if (stem.size() > 7 && stem.substr(stem.size() - 7) == ".rawlog") stem.resize(stem.size() - 7);
-  if (const auto dir = std::filesystem::path(out).parent_path(); !dir.empty())
-    std::filesystem::create_directories(dir);
+  const std::string stem = rawlogStem(out);
 
   // The rawlog: observations only, merged by timestamp (IMU first on ties).
   const double g_scale = params.accel_in_g ? 1.0 / kGravity : 1.0;
-  const std::string tmp = out + ".tmp";
-  records_written = 0;
-  {
-    mrpt::io::CFileGZOutputStream f;
-    if (!f.open(tmp)) throw std::runtime_error(out + ": cannot create " + tmp);
-    auto arch = mrpt::serialization::archiveFrom(f);
-    std::size_t i = 0, k = 0;
-    while (i < rec.imu.size() || k < rec.frames.size()) {
-      const bool take_imu =
-          k >= rec.frames.size() || (i < rec.imu.size() && rec.imu[i].t <= rec.frames[k].stamp);
-      if (take_imu) {
-        ImuSample s = rec.imu[i++];
-        s.accel *= g_scale;
-        arch << *imuToObservation(s, params.imu_label);
-      } else {
-        arch << *frameToObservation(rec.frames[k++], rec.extrinsics, params.lidar_label);
-      }
-      ++records_written;
+  RawlogWriter rawlog(out, rec.extrinsics, params.imu_label, params.lidar_label);
+  std::size_t i = 0, k = 0;
+  while (i < rec.imu.size() || k < rec.frames.size()) {
+    const bool take_imu =
+        k >= rec.frames.size() || (i < rec.imu.size() && rec.imu[i].t <= rec.frames[k].stamp);
+    if (take_imu) {
+      ImuSample s = rec.imu[i++];
+      s.accel *= g_scale;
+      rawlog.write(s);
+    } else {
+      rawlog.write(rec.frames[k++]);
     }
   }
-  std::filesystem::rename(tmp, out);
+  rawlog.commit();
+  records_written = rawlog.records();
 
   // Ground truth at every IMU sample.
   std::vector<TruthSample> truth;
@@ -154,14 +143,8 @@ void SimApp::run(std::ostream& log) {
         << t.p_w.z() << " " << t.q_wb.x() << " " << t.q_wb.y() << " " << t.q_wb.z() << " "
         << t.q_wb.w() << "\n";
   });
-  writeFileAtomically(stem + ".extrinsics.ini", [&](std::ostream& o) {
-    o << std::setprecision(12) << "; true extrinsics of " << out
-      << " (also in each point cloud's sensorPose)\n[extrinsics]\nR_bl = ";
-    for (int r = 0; r < 3; ++r)
-      for (int c = 0; c < 3; ++c) o << rec.extrinsics.R_bl(r, c) << (r * 3 + c < 8 ? " " : "\n");
-    o << "p_bl = " << rec.extrinsics.p_bl.x() << " " << rec.extrinsics.p_bl.y() << " "
-      << rec.extrinsics.p_bl.z() << "\n";
-  });
+  writeExtrinsicsIni(stem + ".extrinsics.ini", rec.extrinsics,
+                     "true extrinsics of " + out + " (also in each point cloud's sensorPose)");
   log << "Wrote " << out << " (" << records_written << " records: " << rec.imu.size() << " IMU, "
       << rec.frames.size() << " point clouds), " << stem << ".truth.csv, " << stem
       << ".truth_tum.txt, " << stem << ".extrinsics.ini\n";

@@ -1,5 +1,6 @@
 // INI loading and echo of AppConfig. One table of keys (visitConfig) drives both loading and
 // dumping, so the documented INI and the loader cannot drift apart.
+#include <freeinit/mrpt/IniLoader.h>
 #include <freeinit/mrpt/app_config.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
@@ -18,12 +19,6 @@
 
 namespace freeinit::mrpt_glue {
 namespace {
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return s;
-}
 
 // Calls v(section, key, value&, unit, doc) for every scalar key of the configuration.
 template <class Visitor>
@@ -129,106 +124,18 @@ void visitConfig(Visitor& v, AppConfig& c) {
     "take the extrinsics from the observations' sensorPose (LiDAR pose w.r.t. the IMU pose)");
 }
 
-class Loader {
+// The loader of visitConfig: the strict IniLoader plus the app's enumerations.
+class Loader : public IniLoader {
  public:
-  Loader(const mrpt::config::CConfigFileBase& cfg, std::string source)
-      : cfg_(cfg), source_(std::move(source)) {}
-
-  [[noreturn]] void fail(const std::string& section, const std::string& key,
-                         const std::string& what) const {
-    throw std::invalid_argument(source_ + ": [" + section + "] " + key + ": " + what);
-  }
-
-  bool has(const std::string& s, const std::string& k) {
-    known_[s].insert(lower(k));
-    return cfg_.keyExists(s, k);
-  }
-  std::string raw(const std::string& s, const std::string& k) {
-    std::string v = cfg_.read_string(s, k, "", false);
-    // Strip trailing comments and blanks (CConfigFile keeps text after the value in some cases).
-    for (const char* c : {";", "#"}) {
-      if (auto p = v.find(c); p != std::string::npos) v.erase(p);
-    }
-    while (!v.empty() && std::isspace(static_cast<unsigned char>(v.back()))) v.pop_back();
-    while (!v.empty() && std::isspace(static_cast<unsigned char>(v.front()))) v.erase(0, 1);
-    return v;
-  }
-  std::vector<double> numbers(const std::string& s, const std::string& k, std::size_t n) {
-    std::istringstream is(raw(s, k));
-    std::vector<double> out;
-    std::string tok;
-    while (is >> tok) {
-      try {
-        std::size_t used = 0;
-        out.push_back(std::stod(tok, &used));
-        if (used != tok.size()) throw std::invalid_argument(tok);
-      } catch (const std::exception&) {
-        fail(s, k, "'" + tok + "' is not a number");
-      }
-      if (!std::isfinite(out.back())) fail(s, k, "'" + tok + "' is not finite");
-    }
-    if (out.size() != n)
-      fail(s, k, "expected " + std::to_string(n) + " number(s), got " + std::to_string(out.size()));
-    return out;
-  }
-
-  void operator()(const std::string& s, const std::string& k, double& x, const char*, const char*) {
-    if (has(s, k)) x = numbers(s, k, 1)[0];
-  }
-  void operator()(const std::string& s, const std::string& k, int& x, const char*, const char*) {
-    if (!has(s, k)) return;
-    const double d = numbers(s, k, 1)[0];
-    if (d != std::floor(d) || std::abs(d) > 1e9) fail(s, k, "expected an integer");
-    x = static_cast<int>(d);
-  }
-  void operator()(const std::string& s, const std::string& k, bool& x, const char*, const char*) {
-    if (!has(s, k)) return;
-    const std::string v = lower(raw(s, k));
-    if (v == "true" || v == "1" || v == "yes" || v == "on") {
-      x = true;
-    } else if (v == "false" || v == "0" || v == "no" || v == "off") {
-      x = false;
-    } else {
-      fail(s, k, "'" + v + "' is not a boolean (true/false)");
-    }
-  }
-  void operator()(const std::string& s, const std::string& k, std::string& x, const char*,
-                  const char*) {
-    if (has(s, k)) x = raw(s, k);
-  }
-  void operator()(const std::string& s, const std::string& k, Vec3& x, const char*, const char*) {
-    if (!has(s, k)) return;
-    const auto v = numbers(s, k, 3);
-    x = Vec3(v[0], v[1], v[2]);
-  }
+  using IniLoader::IniLoader;
+  using IniLoader::operator();
   void operator()(const std::string& s, const std::string& k, GravityEstimator::Formulation& x,
                   const char*, const char*) {
-    if (!has(s, k)) return;
-    const std::string v = lower(raw(s, k));
-    if (v == "integrated") {
-      x = GravityEstimator::Formulation::Integrated;
-    } else if (v == "differentiated") {
-      x = GravityEstimator::Formulation::Differentiated;
-    } else {
-      fail(s, k, "'" + v + "' is neither 'integrated' nor 'differentiated'");
-    }
+    using F = GravityEstimator::Formulation;
+    x = choice(s, k, {"integrated", "differentiated"}, x == F::Integrated ? 0 : 1) == 0
+            ? F::Integrated
+            : F::Differentiated;
   }
-
-  /// Unknown keys in our sections are errors (a typo must not silently keep a default).
-  void checkUnknownKeys() const {
-    for (const auto& [section, keys] : known_) {
-      std::vector<std::string> present;
-      cfg_.getAllKeys(section, present);
-      for (const auto& k : present) {
-        if (keys.count(lower(k)) == 0) fail(section, k, "unknown key");
-      }
-    }
-  }
-
- private:
-  const mrpt::config::CConfigFileBase& cfg_;
-  std::string source_;
-  std::map<std::string, std::set<std::string>> known_;
 };
 
 void loadExtrinsics(Loader& L, AppConfig& c) {

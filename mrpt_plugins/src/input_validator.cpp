@@ -1,3 +1,4 @@
+#include <freeinit/accel_unit.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/input_validator.h>
 
@@ -134,11 +135,12 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
   const std::size_t n_mean = std::min<std::size_t>(in.imu.size(), 200);
   for (std::size_t i = 0; i < n_mean; ++i) mean += in.imu[i].accel;
   const double g_seen = (mean / static_cast<double>(n_mean)).norm();
-  if (g_seen > 0.5 && g_seen < 1.5)  // about 1: the unit is g
+  const AccelUnitMismatch unit = accelUnitMismatch(g_seen, config.input.imu_accel_in_g);
+  if (unit == AccelUnitMismatch::kDataInG)
     throw InputError(file + ": record " + std::to_string(first_imu_record) +
                      ": the mean accelerometer magnitude is " + fmt(g_seen) +
                      ", the IMU reports g, not m/s^2: set [input] imu_accel_in_g = true");
-  if (config.input.imu_accel_in_g && g_seen > 3.0 * kGravity)
+  if (unit == AccelUnitMismatch::kDataInMs2)
     throw InputError(file + ": record " + std::to_string(first_imu_record) +
                      ": [input] imu_accel_in_g = true but the accelerations are already in m/s^2 "
                      "(mean magnitude " +

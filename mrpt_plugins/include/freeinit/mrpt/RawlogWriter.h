@@ -1,0 +1,50 @@
+// Writes a typed rawlog as freeinit-sim does and the freeinit app reads it: CObservationIMU and
+// CObservationPointCloud (a CPointsMapDoppler, sensorPose = the extrinsics) in the order given,
+// gz-compressed, into "<path>.tmp", renamed onto the path by commit(). A writer destroyed without
+// commit() (an exception on the way) removes its temporary: the rawlog is complete or absent.
+#pragma once
+
+#include <freeinit/types.h>
+
+#include <cstddef>
+#include <memory>
+#include <string>
+
+namespace freeinit::mrpt_glue {
+
+class RawlogWriter {
+ public:
+  RawlogWriter(std::string path, const Extrinsics& extrinsics, std::string imu_label = "IMU",
+               std::string lidar_label = "LIDAR");
+  ~RawlogWriter();
+  RawlogWriter(const RawlogWriter&) = delete;
+  RawlogWriter& operator=(const RawlogWriter&) = delete;
+
+  void write(const ImuSample& s);
+  void write(const LidarFrame& f);
+  /// Closes the file and renames it onto the path. Throws std::runtime_error on I/O errors.
+  void commit();
+
+  std::size_t records() const { return records_; }
+  std::size_t imuRecords() const { return imu_; }
+  std::size_t frameRecords() const { return frames_; }
+  const std::string& path() const { return path_; }
+
+ private:
+  struct Stream;
+  std::string path_;
+  Extrinsics extrinsics_;
+  std::string imu_label_, lidar_label_;
+  std::unique_ptr<Stream> stream_;
+  std::size_t records_ = 0, imu_ = 0, frames_ = 0;
+};
+
+/// "dir/name" for "dir/name.rawlog" (the path itself otherwise): the stem of the files written
+/// beside a rawlog (<stem>.truth.csv, <stem>.extrinsics.ini).
+std::string rawlogStem(const std::string& rawlog_path);
+
+/// "<stem>.extrinsics.ini": an [extrinsics] section with R_bl (row-major) and p_bl that the app's
+/// INI loader reads; `comment` becomes its first line. Written atomically.
+void writeExtrinsicsIni(const std::string& path, const Extrinsics& e, const std::string& comment);
+
+}  // namespace freeinit::mrpt_glue

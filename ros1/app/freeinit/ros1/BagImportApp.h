@@ -1,0 +1,51 @@
+// freeinit-import-bag: a ROS1 bag (the Free-Init / FMCW-LIO release layout by default) to a typed
+// rawlog that the freeinit app reads, written with the simulator's writer (RawlogWriter):
+//   <out>.rawlog            CObservationIMU + CObservationPointCloud (CPointsMapDoppler), in stamp
+//                           order, each cloud's sensorPose = the extrinsics
+//   <out>.extrinsics.ini    [extrinsics] R_bl, p_bl, as freeinit-sim writes it
+// The configuration is an INI file: [bag_import] (topics, PointCloud2 fields and types, units,
+// LiDAR time offset, Doppler mode; see ini/import_bag.ini) and [extrinsics] (R_bl or
+// roll/pitch/yaw_deg, and p_bl, read by the main app's loader). Each output is written
+// atomically; a bad bag or configuration fails before either exists.
+#pragma once
+
+#include <freeinit/ros1/bag_import_config.h>
+#include <freeinit/ros1/bag_reader.h>
+
+#include <iosfwd>
+#include <string>
+
+namespace freeinit::mrpt_glue {
+
+struct BagImportAppParams {
+  std::string bag;
+  std::string config_file;  ///< INI with [bag_import] and [extrinsics]
+  std::string output;       ///< rawlog path ("" = the bag's path with .rawlog)
+  bool progress = true;
+  bool progress_terminal = false;
+};
+
+/// The importer's whole configuration, from its INI file.
+struct BagImportSettings {
+  ros1::BagImportConfig bag;
+  Extrinsics extrinsics;
+  std::string imu_label = "IMU";      ///< sensorLabel written on the IMU observations
+  std::string lidar_label = "LIDAR";  ///< sensorLabel written on the point clouds
+};
+
+/// Loads and validates; unknown keys, malformed values and missing extrinsics throw
+/// std::invalid_argument naming the file, section and key.
+BagImportSettings loadBagImportSettings(const std::string& ini_file);
+
+class BagImportApp {
+ public:
+  BagImportAppParams params;
+  /// Throws on any error (nothing is written then). Returns the exit code (0).
+  int run(std::ostream& log);
+
+  BagImportSettings settings;  ///< filled by run()
+  ros1::BagSummary summary;    ///< filled by run()
+  std::string rawlog_written;  ///< filled by run()
+};
+
+}  // namespace freeinit::mrpt_glue

@@ -1,0 +1,28 @@
+// Writes IMU samples and LiDAR frames as a ROS1 bag laid out as `BagWriteOptions::config` reads
+// it (topics, PointCloud2 fields and types, IMU unit, LiDAR time offset): the inverse of
+// readBag. Used by the tests to make bags from simulator recordings, and by tools that export.
+#pragma once
+
+#include <freeinit/ros1/bag_import_config.h>
+#include <freeinit/types.h>
+
+#include <string>
+#include <vector>
+
+namespace freeinit::ros1 {
+
+struct BagWriteOptions {
+  BagImportConfig config;
+  /// [s] bag (receive) time of a cloud after its header stamp, as a driver that publishes a frame
+  /// once swept; IMU messages are recorded at their stamps.
+  double lidar_publish_delay = 0.1;
+  bool big_endian = false;   ///< PointCloud2 data big-endian (is_bigendian = true)
+  bool reflectivity = true;  ///< add the Aeva driver's float32 reflectivity field (zeros)
+  enum class Compression { kNone, kBz2, kLz4 } compression = Compression::kNone;  ///< chunks
+};
+
+/// Writes `path` through a temporary file renamed when complete. Throws std::runtime_error.
+void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
+              const std::vector<LidarFrame>& frames, const BagWriteOptions& options);
+
+}  // namespace freeinit::ros1

@@ -1,0 +1,55 @@
+#include <freeinit/ros1/bag_writer.h>
+#include <freeinit/ros1/cloud_codec.h>
+#include <rosbag/bag.h>
+#include <sensor_msgs/Imu.h>
+#include <sensor_msgs/PointCloud2.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <stdexcept>
+
+namespace freeinit::ros1 {
+
+void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
+              const std::vector<LidarFrame>& frames, const BagWriteOptions& o) {
+  validate(o.config);
+  const std::string tmp = path + ".tmp";
+  try {
+    rosbag::Bag bag(tmp, rosbag::bagmode::Write);
+    using C = BagWriteOptions::Compression;
+    bag.setCompression(o.compression == C::kBz2   ? rosbag::compression::BZ2
+                       : o.compression == C::kLz4 ? rosbag::compression::LZ4
+                                                  : rosbag::compression::Uncompressed);
+    const double accel_scale = o.config.imu_accel_in_g ? 1.0 / kGravity : 1.0;
+    std::size_t seq = 0;
+    for (const ImuSample& s : imu) {
+      sensor_msgs::Imu m;
+      m.header.stamp = ros::Time(s.t);
+      m.header.seq = static_cast<std::uint32_t>(seq++);
+      m.header.frame_id = "imu";
+      m.orientation_covariance[0] = -1;  // no orientation estimate
+      m.angular_velocity.x = s.gyro.x();
+      m.angular_velocity.y = s.gyro.y();
+      m.angular_velocity.z = s.gyro.z();
+      m.linear_acceleration.x = accel_scale * s.accel.x();
+      m.linear_acceleration.y = accel_scale * s.accel.y();
+      m.linear_acceleration.z = accel_scale * s.accel.z();
+      bag.write(o.config.imu_topic, m.header.stamp, m);
+    }
+    for (const LidarFrame& f : frames) {
+      LidarFrame shifted;
+      shifted.stamp = f.stamp - o.config.lidar_time_offset;
+      shifted.points = f.points;
+      sensor_msgs::PointCloud2 m;
+      encodeCloud(shifted, o.config.cloud, o.reflectivity, o.big_endian, m);
+      bag.write(o.config.lidar_topic, ros::Time(shifted.stamp + o.lidar_publish_delay), m);
+    }
+    bag.close();
+  } catch (const std::exception& e) {
+    std::remove(tmp.c_str());
+    throw std::runtime_error(path + ": cannot write the bag: " + e.what());
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+}  // namespace freeinit::ros1
