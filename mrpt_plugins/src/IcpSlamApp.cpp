@@ -1,0 +1,303 @@
+#include <freeinit/doppler_inertial_odometry.h>
+#include <freeinit/free_init.h>
+#include <freeinit/mrpt/IcpSlamApp.h>
+#include <freeinit/mrpt/conversions.h>
+#include <freeinit/mrpt/input_validator.h>
+#include <freeinit/mrpt/map_export.h>
+#include <freeinit/mrpt/output_writers.h>
+#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt/snapshots.h>
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/vector_loadsave.h>
+#include <mrpt/maps/CPointsMap.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/poses/CPoint2D.h>
+#include <mrpt/slam/CMetricMapBuilderICP.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+namespace freeinit::mrpt_glue {
+namespace {
+
+const char* kMappingSection = "MappingApplication";
+
+/// The observations icp-slam processes in a mode, in time order. `odometry_origin` is the frame
+/// the odometry poses are expressed in (see odometryAt): the seed pose when the builder is
+/// initialized with it, the identity (w) for the stock app, whose map starts at w's origin.
+std::vector<mrpt::obs::CObservation::Ptr> icpSlamObservations(
+    IcpSeedMode mode, const std::vector<mrpt::obs::CObservation2DRangeScan::Ptr>& scans,
+    const IcpSeed* seed, const std::vector<OdometrySample>& odometry,
+    const mrpt::math::TPose2D& odometry_origin) {
+  std::vector<mrpt::obs::CObservation::Ptr> out;
+  if (mode == IcpSeedMode::Plain) {
+    out.assign(scans.begin(), scans.end());
+    return out;
+  }
+  // Seeded: the velocity at the state time (one odometry reading with velocities: icp-slam
+  // extrapolates each scan's first guess from it), then the scans after the state time.
+  const double t0 = seed->timestamp;
+  auto first = mrpt::obs::CObservationOdometry::Create();
+  first->sensorLabel = "FREEINIT_ODOMETRY";
+  first->timestamp = fromUnix(t0);
+  first->odometry = seed->pose.mean - mrpt::poses::CPose2D(odometry_origin);
+  first->hasVelocities = true;
+  first->velocityLocal = seed->velocity_local;
+  out.push_back(first);
+  for (const auto& s : scans) {
+    const double t = toUnix(s->timestamp);
+    if (t <= t0) continue;
+    if (mode == IcpSeedMode::Odometry) out.push_back(odometryAt(odometry, t, odometry_origin));
+    out.push_back(s);
+  }
+  return out;
+}
+
+struct BuilderOutput {
+  std::vector<PlanarPathSample> path;
+  mrpt::maps::CSimpleMap map;
+  std::vector<float> map_x, map_y;
+  std::string step_log;  ///< the stock app's log_estimated_path.txt: "step x y yaw"
+};
+
+/// CMetricMapBuilderICP configured exactly as the stock app configures it.
+BuilderOutput runBuilder(const mrpt::config::CConfigFileBase& ini, const IcpSeed* seed,
+                         const std::vector<mrpt::obs::CObservation::Ptr>& observations) {
+  mrpt::slam::CMetricMapBuilderICP builder;
+  builder.setVerbosityLevel(mrpt::system::LVL_ERROR);
+  builder.ICP_options.loadFromConfigFile(ini, kMappingSection);
+  builder.ICP_params.loadFromConfigFile(ini, "ICP");
+  if (seed)
+    builder.initialize(seed->map, &seed->pose);
+  else
+    builder.initialize();
+  builder.options.alwaysInsertByClass.fromString(
+      ini.read_string(kMappingSection, "alwaysInsertByClass", ""));
+  BuilderOutput out;
+  std::ostringstream steps;
+  int step = 0;
+  for (const auto& obs : observations) {
+    builder.processObservation(obs);
+    const auto pose = builder.getCurrentPoseEstimation()->getMeanVal();
+    steps << step++ << " " << std::fixed << std::setprecision(6) << pose.x() << " " << pose.y()
+          << " " << pose.yaw() << "\n";
+    if (IS_CLASS(*obs, mrpt::obs::CObservation2DRangeScan))
+      out.path.push_back(
+          {toUnix(obs->timestamp), mrpt::math::TPose2D(pose.x(), pose.y(), pose.yaw())});
+  }
+  out.step_log = steps.str();
+  builder.getCurrentlyBuiltMap(out.map);
+  if (auto pts = builder.getCurrentlyBuiltMetricMap()->mapByClass<mrpt::maps::CPointsMap>())
+    pts->getAllPoints(out.map_x, out.map_y);
+  return out;
+}
+
+void writeTumPlanar(const std::string& path, const std::vector<PlanarPathSample>& samples) {
+  writeFileAtomically(path, [&](std::ostream& o) {
+    o << "# icp-slam path: timestamp x y z qx qy qz qw (robot = body, planar)\n"
+      << std::fixed << std::setprecision(6);
+    for (const auto& s : samples)
+      o << s.t << " " << s.pose.x << " " << s.pose.y << " 0 0 0 " << std::sin(0.5 * s.pose.phi)
+        << " " << std::cos(0.5 * s.pose.phi) << "\n";
+  });
+}
+
+}  // namespace
+
+int IcpSlamApp::run(std::ostream& log) {
+  // 1. Configuration (both files), then the input: everything is checked before any output.
+  if (!std::filesystem::is_regular_file(params.icp_ini))
+    throw std::invalid_argument(params.icp_ini + ": no such file");
+  const std::string ini_text = mrpt::io::file_get_contents(params.icp_ini);
+  mrpt::config::CConfigFileMemory ini(ini_text);
+  if (!ini.sectionExists(kMappingSection) || !ini.sectionExists("ICP"))
+    throw std::invalid_argument(params.icp_ini + ": needs the [MappingApplication] and [ICP] "
+                                                 "sections of the icp-slam app");
+  const ScanSliceParams slice = loadScanSliceParams(ini, params.icp_ini);
+  AppConfig config = loadAppConfig(params.freeinit_ini);
+  log << "Reading " << params.rawlog << "\n";
+  const auto records = readRawlog(params.rawlog);
+  const ValidatedInput in = validateInput(records, config, params.rawlog);
+  for (const auto& w : in.warnings) log << "Warning: " << w << "\n";
+  if (config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics)
+    config.core.extrinsics = *in.sensor_pose_extrinsics;
+  std::vector<TruthSample> truth;
+  if (const std::string tf = truthPathFor(params.rawlog); std::filesystem::is_regular_file(tf))
+    truth = readTruthCsv(tf);
+
+  // 2. Free-Init: the seed and the levelling of the scans.
+  freeinit = FreeInit::run(config.core, in.imu, in.frames);
+  const InitialState& s = freeinit.state;
+  log << "Free-Init: " << toString(s.status) << (s.message.empty() ? "" : " (" + s.message + ")")
+      << "\n";
+  int rc = 0;
+  std::vector<IcpSeedMode> modes = params.modes;
+  if (!s.ok()) {
+    const auto n = modes.size();
+    modes.erase(std::remove_if(modes.begin(), modes.end(),
+                               [](IcpSeedMode m) { return m != IcpSeedMode::Plain; }),
+                modes.end());
+    if (modes.size() != n) {
+      log << "Seeded runs skipped: no initial state\n";
+      rc = 3;
+    }
+  }
+  const Mat3 R_level = s.ok() ? levellingRotation(s.q_wb) : Mat3::Identity();
+  std::vector<mrpt::obs::CObservation2DRangeScan::Ptr> scans;
+  for (const auto& f : in.frames)
+    scans.push_back(scanFromFrame(f, config.core.extrinsics, R_level, slice, "LIDAR"));
+  std::optional<IcpSeed> seed;
+  if (s.ok()) seed = makeIcpSeed(freeinit, slice);
+  std::vector<OdometrySample> odometry;
+  if (std::count(modes.begin(), modes.end(), IcpSeedMode::Odometry) > 0) {
+    odometry = DopplerInertialOdometry(config.core, s).run(in.imu, in.frames);
+    log << "Doppler-inertial odometry: " << odometry.size() << " poses, "
+        << std::setprecision(4) << (odometry.back().p_w - odometry.front().p_w).norm()
+        << " m travelled\n";
+  }
+  if (!odometry.empty() && !truth.empty()) {
+    // The odometry alone, at the scans after the state time: the reference the fed run starts
+    // from (no map, no loop: its drift grows with the integrated velocity error).
+    std::vector<PlanarPathSample> path;
+    for (const auto& sc : scans) {
+      const double t = toUnix(sc->timestamp);
+      if (t <= s.timestamp || t > odometry.back().t) continue;
+      const auto o = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(
+          odometryAt(odometry, t, mrpt::math::TPose2D()));
+      path.push_back({t, o->odometry.asTPose()});
+    }
+    odometry_errors = comparePathWithTruth(path, truth, s.timestamp);
+    log << std::fixed << std::setprecision(3) << "  odometry alone: ATE "
+        << odometry_errors->ate_rmse << " m, end-point " << odometry_errors->end_point << " m\n"
+        << std::defaultfloat;
+  }
+  if (seed) {
+    const auto& m = seed->pose.mean;
+    log << std::fixed << std::setprecision(3) << "Seed: pose (" << m.x() << ", " << m.y() << ", "
+        << m.phi() * 180 / M_PI << " deg), sigma (" << std::sqrt(seed->pose.cov(0, 0)) << " m, "
+        << std::sqrt(seed->pose.cov(1, 1)) << " m, " << std::sqrt(seed->pose.cov(2, 2)) * 180 / M_PI
+        << " deg), velocity (" << seed->velocity_local.vx << ", " << seed->velocity_local.vy
+        << ") m/s\n"
+        << std::defaultfloat;
+  }
+
+  // 3. One icp-slam run per mode; outputs as the stock app names them, in <out>/<mode>/.
+  const std::filesystem::path out(params.out_dir);
+  runs.clear();
+  for (const IcpSeedMode mode : modes) {
+    const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
+    const auto obs = icpSlamObservations(mode, scans, sd, odometry,
+                                         sd ? sd->pose.mean.asTPose() : mrpt::math::TPose2D());
+    BuilderOutput b = runBuilder(ini, sd, obs);
+    IcpSlamRun r;
+    r.mode = mode;
+    r.path = std::move(b.path);
+    r.keyframes = b.map.size();
+    r.map_x = std::move(b.map_x);
+    r.map_y = std::move(b.map_y);
+    const std::filesystem::path dir = out / toString(mode);
+    std::filesystem::create_directories(dir);
+    saveSimplemapAtomically((dir / "_finalmap_.simplemap").string(), b.map);
+    writeFileAtomically((dir / "log_estimated_path.txt").string(),
+                        [&](std::ostream& o) { o << b.step_log; });
+    writeTumPlanar((dir / "estimated_path_tum.txt").string(), r.path);
+    log << "icp-slam " << std::left << std::setw(9) << toString(mode) << std::right << ": "
+        << r.path.size() << " scans, " << r.keyframes << " keyframes";
+    if (!truth.empty() && s.ok()) {
+      // Compared from the state time on: the span every mode covers.
+      r.errors = comparePathWithTruth(r.path, truth, s.timestamp);
+      const PathErrors& e = *r.errors;
+      log << std::fixed << std::setprecision(3) << ", ATE " << e.ate_rmse << " m, end-point "
+          << e.end_point << " m over " << e.length << " m" << std::defaultfloat;
+      writeFileAtomically((dir / "errors_wrt_gt.ini").string(), [&](std::ostream& o) {
+        o << "; icp-slam path vs ground truth, poses at the scans from the Free-Init state time,\n"
+             "; after the best SE(2) alignment\n[errors_wrt_gt]\nmode = "
+          << toString(mode) << "\nsamples = " << e.samples << "\nate_rmse = " << e.ate_rmse
+          << "   ; [m]\nend_point = " << e.end_point << "   ; [m]\ntrue_length = " << e.length
+          << "   ; [m]\n";
+      });
+    }
+    log << "\n";
+    runs.push_back(std::move(r));
+  }
+
+  // 4. The export for the stock icp-slam app: one observations-only rawlog of stock classes per
+  // mode (no IMU, no plugin class) and a matching INI. The seed enters as the first observation
+  // (the static map, inserted at the origin of the still empty map) followed by an odometry
+  // reading holding the seed pose in w: the stock app has no initial-map option.
+  if (!params.export_dir.empty()) {
+    const std::filesystem::path ex = std::filesystem::absolute(params.export_dir);
+    std::filesystem::create_directories(ex);
+    for (const IcpSeedMode mode : modes) {
+      const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
+      std::vector<mrpt::obs::CObservation::Ptr> obs;
+      if (sd) obs.push_back(sd->map_observation);
+      const auto rest = icpSlamObservations(mode, scans, sd, odometry, mrpt::math::TPose2D());
+      obs.insert(obs.end(), rest.begin(), rest.end());
+      const std::string name = toString(mode);
+      const std::string rawlog = (ex / (name + ".rawlog")).string();
+      writeObservationRawlog(rawlog, obs);
+      mrpt::config::CConfigFileMemory cfg(ini_text);
+      cfg.write(kMappingSection, "rawlog_file", rawlog);
+      cfg.write(kMappingSection, "logOutput_dir", (ex / (name + "_icp_slam_out")).string());
+      std::string text;
+      cfg.getContent(text);
+      writeFileAtomically((ex / (name + ".ini")).string(), [&](std::ostream& o) {
+        o << "; icp-slam " << name << ".ini   (from " << params.icp_ini << " for " << rawlog
+          << ")\n"
+          << text;
+      });
+      log << "Export: icp-slam " << (ex / (name + ".ini")).string() << "\n";
+    }
+  }
+
+  // 5. Results table and the picture.
+  if (!runs.empty() && runs.front().errors) {
+    writeFileAtomically((out / "results.txt").string(), [&](std::ostream& o) {
+      o << "# mode ate_rmse[m] end_point[m] true_length[m] scans keyframes\n" << std::fixed;
+      if (odometry_errors)
+        o << "odometry_alone " << std::setprecision(3) << odometry_errors->ate_rmse << " "
+          << odometry_errors->end_point << " " << odometry_errors->length << " "
+          << odometry_errors->samples << " 0\n";
+      for (const auto& r : runs)
+        o << toString(r.mode) << " " << std::setprecision(3) << r.errors->ate_rmse << " "
+          << r.errors->end_point << " " << r.errors->length << " " << r.path.size() << " "
+          << r.keyframes << "\n";
+    });
+  }
+  if (params.snapshot && !truth.empty() && s.ok()) {
+    std::vector<TopViewPanel> panels;
+    for (const auto& r : runs) {
+      if (!r.errors) continue;
+      // Everything in the truth frame, through each run's alignment.
+      const mrpt::poses::CPose2D A(r.errors->alignment);
+      TopViewPanel p;
+      std::ostringstream t;
+      t << "icp-slam " << toString(r.mode) << ":  ATE " << std::fixed << std::setprecision(2)
+        << r.errors->ate_rmse << " m, end-point " << r.errors->end_point << " m";
+      p.title = t.str();
+      for (std::size_t k = 0; k < r.map_x.size(); ++k) {
+        const auto q = A + mrpt::poses::CPoint2D(r.map_x[k], r.map_y[k]);
+        p.map_x.push_back(static_cast<float>(q.x()));
+        p.map_y.push_back(static_cast<float>(q.y()));
+      }
+      for (const auto& ps : r.path) {
+        const auto q = A + mrpt::poses::CPoint2D(ps.pose.x, ps.pose.y);
+        p.path.emplace_back(q.x(), q.y(), 0.0);
+        if (ps.t < s.timestamp) continue;
+        if (const auto gt = truthAt(truth, ps.t)) p.truth.push_back(gt->p_w);
+      }
+      panels.push_back(std::move(p));
+    }
+    const std::string png = (out / "trajectories.png").string();
+    renderTopViewPanels(png, std::filesystem::path(params.rawlog).filename().string(), panels,
+                        params.snapshot_width, params.snapshot_height);
+    log << "Picture: " << png << "\n";
+  }
+  return rc;
+}
+
+}  // namespace freeinit::mrpt_glue
