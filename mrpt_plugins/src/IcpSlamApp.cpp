@@ -158,6 +158,16 @@ int IcpSlamApp::run(std::ostream& log) {
         << std::setprecision(4) << (odometry.back().p_w - odometry.front().p_w).norm()
         << " m travelled\n";
   }
+  // The odometry mode's scans: deskewed with the odometry (frames it covers) when configured.
+  std::vector<mrpt::obs::CObservation2DRangeScan::Ptr> odometry_scans = scans;
+  if (!odometry.empty() && slice.deskew_with_odometry) {
+    for (std::size_t k = 0; k < in.frames.size(); ++k)
+      odometry_scans[k] =
+          scanFromFrame(in.frames[k], config.core.extrinsics, R_level, slice, "LIDAR", &odometry);
+  }
+  auto scansFor = [&](IcpSeedMode m) -> const auto& {
+    return m == IcpSeedMode::Odometry ? odometry_scans : scans;
+  };
   if (!odometry.empty() && !truth.empty()) {
     // The odometry alone, at the scans after the state time: the reference the fed run starts
     // from (no map, no loop: its drift grows with the integrated velocity error).
@@ -189,7 +199,7 @@ int IcpSlamApp::run(std::ostream& log) {
   runs.clear();
   for (const IcpSeedMode mode : modes) {
     const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
-    const auto obs = icpSlamObservations(mode, scans, sd, odometry,
+    const auto obs = icpSlamObservations(mode, scansFor(mode), sd, odometry,
                                          sd ? sd->pose.mean.asTPose() : mrpt::math::TPose2D());
     BuilderOutput b = runBuilder(ini, sd, obs);
     IcpSlamRun r;
@@ -235,7 +245,8 @@ int IcpSlamApp::run(std::ostream& log) {
       const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
       std::vector<mrpt::obs::CObservation::Ptr> obs;
       if (sd) obs.push_back(sd->map_observation);
-      const auto rest = icpSlamObservations(mode, scans, sd, odometry, mrpt::math::TPose2D());
+      const auto rest =
+          icpSlamObservations(mode, scansFor(mode), sd, odometry, mrpt::math::TPose2D());
       obs.insert(obs.end(), rest.begin(), rest.end());
       const std::string name = toString(mode);
       const std::string rawlog = (ex / (name + ".rawlog")).string();

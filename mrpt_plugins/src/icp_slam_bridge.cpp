@@ -18,11 +18,6 @@ namespace {
 
 double yawOf(const Mat3& R) { return std::atan2(R(1, 0), R(0, 0)); }
 
-mrpt::math::TPose2D lerp(const mrpt::math::TPose2D& a, const mrpt::math::TPose2D& b, double u) {
-  const double dyaw = std::remainder(b.phi - a.phi, 2 * M_PI);
-  return {a.x + u * (b.x - a.x), a.y + u * (b.y - a.y), a.phi + u * dyaw};
-}
-
 }  // namespace
 
 ScanSliceParams loadScanSliceParams(const mrpt::config::CConfigFileBase& ini,
@@ -32,7 +27,7 @@ ScanSliceParams loadScanSliceParams(const mrpt::config::CConfigFileBase& ini,
   ini.getAllKeys(sec, keys);
   for (const auto& key : keys) {
     if (key != "z_min" && key != "z_max" && key != "bins" && key != "max_range" &&
-        key != "min_range")
+        key != "min_range" && key != "deskew_with_odometry")
       throw std::invalid_argument(file + ": [" + sec + "] unknown key '" + key + "'");
   }
   ScanSliceParams p;
@@ -41,6 +36,7 @@ ScanSliceParams loadScanSliceParams(const mrpt::config::CConfigFileBase& ini,
   p.bins = ini.read_int(sec, "bins", p.bins);
   p.max_range = ini.read_double(sec, "max_range", p.max_range);
   p.min_range = ini.read_double(sec, "min_range", p.min_range);
+  p.deskew_with_odometry = ini.read_bool(sec, "deskew_with_odometry", p.deskew_with_odometry);
   auto bad = [&](const char* key, const std::string& why) {
     throw std::invalid_argument(file + ": [" + sec + "] " + key + ": " + why);
   };
@@ -79,17 +75,33 @@ mrpt::obs::CObservation2DRangeScan::Ptr scanFromFrame(const LidarFrame& frame,
                                                       const Extrinsics& extrinsics,
                                                       const Mat3& R_level,
                                                       const ScanSliceParams& params,
-                                                      const std::string& label) {
-  const Vec3 origin = R_level * extrinsics.p_bl;  // the LiDAR in the levelled body frame
-  const Mat3 R = R_level * extrinsics.R_bl;
+                                                      const std::string& label,
+                                                      const std::vector<OdometrySample>* deskew) {
+  double t_sum = 0;
+  for (const auto& pt : frame.points) t_sum += pt.time_offset;
+  const double t_mean =
+      frame.stamp + (frame.points.empty() ? 0.0 : t_sum / static_cast<double>(frame.points.size()));
+  const bool moving = deskew && !deskew->empty() && !frame.points.empty() &&
+                      frame.stamp + frame.points.front().time_offset >= deskew->front().t &&
+                      frame.stamp + frame.points.back().time_offset <= deskew->back().t;
+  // Deskewing: every point is moved into the body frame at the mean time through the odometry
+  // poses at its own time, p_m = R_m^T (R_p p_b + p_p - p_m); the frame is then levelled with its
+  // own attitude at the mean time.
+  std::optional<BodyPose> mid;
+  if (moving) mid = bodyPoseAt(*deskew, t_mean);
+  const Mat3 R_lev = mid ? levellingRotation(mid->q_wb) : R_level;
+  const Vec3 origin = R_lev * extrinsics.p_bl;  // the LiDAR in the levelled body frame
   const int n = params.bins;
   const double step = M_PI / (n - 1);
   std::vector<float> range(static_cast<std::size_t>(n), std::numeric_limits<float>::infinity());
-  double t_sum = 0;
   for (const auto& pt : frame.points) {
-    t_sum += pt.time_offset;
     if (!pt.p_l.allFinite()) continue;
-    const Vec3 p = R * pt.p_l.cast<double>() + origin;  // levelled body frame
+    Vec3 p_b = extrinsics.R_bl * pt.p_l.cast<double>() + extrinsics.p_bl;
+    if (mid) {
+      const BodyPose at = bodyPoseAt(*deskew, frame.stamp + pt.time_offset);
+      p_b = mid->q_wb.conjugate() * (at.q_wb * p_b + at.p_w - mid->p_w);
+    }
+    const Vec3 p = R_lev * p_b;  // levelled body frame
     if (p.z() < params.z_min || p.z() > params.z_max) continue;
     const double dx = p.x() - origin.x(), dy = p.y() - origin.y();
     const double r = std::hypot(dx, dy);
@@ -101,8 +113,6 @@ mrpt::obs::CObservation2DRangeScan::Ptr scanFromFrame(const LidarFrame& frame,
   }
   auto scan = mrpt::obs::CObservation2DRangeScan::Create();
   scan->sensorLabel = label;
-  const double t_mean =
-      frame.stamp + (frame.points.empty() ? 0.0 : t_sum / static_cast<double>(frame.points.size()));
   scan->timestamp = fromUnix(t_mean);
   scan->aperture = static_cast<float>(M_PI);
   scan->rightToLeft = true;
@@ -160,19 +170,28 @@ IcpSeed makeIcpSeed(const InitResult& result, const ScanSliceParams& params) {
   return seed;
 }
 
-mrpt::obs::CObservation::Ptr odometryAt(const std::vector<OdometrySample>& odometry, double t,
-                                        const mrpt::math::TPose2D& frame_origin) {
+BodyPose bodyPoseAt(const std::vector<OdometrySample>& odometry, double t) {
   if (odometry.empty() || t < odometry.front().t || t > odometry.back().t)
     throw std::out_of_range("odometry: time " + std::to_string(t) + " is not covered");
   auto it = std::lower_bound(odometry.begin(), odometry.end(), t,
                              [](const OdometrySample& o, double x) { return o.t < x; });
   const OdometrySample& b = *it;
   const OdometrySample& a = it == odometry.begin() ? b : *(it - 1);
-  const double u = b.t > a.t ? (t - a.t) / (b.t - a.t) : 0.0;
-  const auto pose = lerp(planarPose(a.q_wb, a.p_w), planarPose(b.q_wb, b.p_w), u);
-  const Mat3 R_wb = a.q_wb.toRotationMatrix();
-  const Vec3 v_w = R_wb * ((1 - u) * a.v_b + u * b.v_b);
-  const Vec3 w_w = R_wb * ((1 - u) * a.omega_b + u * b.omega_b);
+  BodyPose p;
+  p.u = b.t > a.t ? (t - a.t) / (b.t - a.t) : 0.0;
+  p.q_wb = a.q_wb.slerp(p.u, b.q_wb);
+  p.p_w = (1 - p.u) * a.p_w + p.u * b.p_w;
+  p.v_b = (1 - p.u) * a.v_b + p.u * b.v_b;
+  p.omega_b = (1 - p.u) * a.omega_b + p.u * b.omega_b;
+  return p;
+}
+
+mrpt::obs::CObservation::Ptr odometryAt(const std::vector<OdometrySample>& odometry, double t,
+                                        const mrpt::math::TPose2D& frame_origin) {
+  const BodyPose b = bodyPoseAt(odometry, t);
+  const auto pose = planarPose(b.q_wb, b.p_w);
+  const Vec3 v_w = b.q_wb * b.v_b;
+  const Vec3 w_w = b.q_wb * b.omega_b;
   const Vec3 v_h = Eigen::AngleAxisd(-pose.phi, Vec3::UnitZ()) * v_w;
 
   auto obs = mrpt::obs::CObservationOdometry::Create();

@@ -41,6 +41,8 @@ struct ScanSliceParams {
   int bins = 361;           ///< bearing bins over 180 deg
   double max_range = 80.0;  ///< [m]
   double min_range = 1.0;   ///< [m]
+  /// Odometry mode: deskew every frame with the Doppler-inertial odometry before slicing it.
+  bool deskew_with_odometry = true;
 };
 /// Missing keys keep their defaults; bad values throw std::invalid_argument naming file and key.
 ScanSliceParams loadScanSliceParams(const mrpt::config::CConfigFileBase& ini,
@@ -61,13 +63,26 @@ mrpt::math::TPose2D planarPose(const Quat& q_wb, const Vec3& p_w);
 /// Rz(-yaw) R_wb: the roll/pitch part of R_wb.
 Mat3 levellingRotation(const Quat& q_wb);
 
-/// One LiDAR frame as a stock 2-D scan in the levelled body frame, stamped at the mean time of its
-/// points (the frame is not deskewed: the mean time halves the smear of a moving platform).
-mrpt::obs::CObservation2DRangeScan::Ptr scanFromFrame(const LidarFrame& frame,
-                                                      const Extrinsics& extrinsics,
-                                                      const Mat3& R_level,
-                                                      const ScanSliceParams& params,
-                                                      const std::string& label);
+/// The body pose, velocity and rate at time t, interpolated between odometry samples (slerp,
+/// linear). Throws std::out_of_range outside them.
+struct BodyPose {
+  Quat q_wb = Quat::Identity();
+  Vec3 p_w = Vec3::Zero();
+  Vec3 v_b = Vec3::Zero();
+  Vec3 omega_b = Vec3::Zero();
+  double u = 0;  ///< interpolation weight of the later sample
+};
+BodyPose bodyPoseAt(const std::vector<OdometrySample>& odometry, double t);
+
+/// One LiDAR frame as a stock 2-D scan in the levelled body frame (R_level), stamped at the mean
+/// time of its points. Without `deskew` the frame is not deskewed (the mean time halves the smear
+/// of a moving platform: +-1 m at 20 m/s and 10 Hz). With `deskew` covering the frame, every point
+/// is moved to the body frame at the mean time through the odometry, and the frame is levelled
+/// with its own attitude at that time.
+mrpt::obs::CObservation2DRangeScan::Ptr scanFromFrame(
+    const LidarFrame& frame, const Extrinsics& extrinsics, const Mat3& R_level,
+    const ScanSliceParams& params, const std::string& label,
+    const std::vector<OdometrySample>* deskew = nullptr);
 
 /// The seed: Free-Init's static map as a one-keyframe CSimpleMap (stock classes: a
 /// CObservationPointCloud of a CSimplePointsMap at the identity, points in w within the slice's
