@@ -204,10 +204,11 @@ mrpt::obs::CObservation::Ptr odometryAt(const std::vector<OdometrySample>& odome
 }
 
 PathErrors comparePathWithTruth(const std::vector<PlanarPathSample>& path,
-                                const std::vector<TruthSample>& truth, double t_from) {
+                                const std::vector<TruthSample>& truth, double t_from,
+                                double t_to) {
   std::vector<Eigen::Vector2d> est, ref;
   for (const auto& s : path) {
-    if (s.t < t_from) continue;
+    if (s.t < t_from || s.t > t_to) continue;
     const auto gt = truthAt(truth, s.t);
     if (!gt) continue;
     est.emplace_back(s.pose.x, s.pose.y);

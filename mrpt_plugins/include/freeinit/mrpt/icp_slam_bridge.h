@@ -24,6 +24,7 @@
 #include <mrpt/obs/CObservation2DRangeScan.h>
 #include <mrpt/poses/CPosePDFGaussian.h>
 
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -117,9 +118,10 @@ struct PathErrors {
   double length = 0;     ///< [m] true path length over the compared span
   mrpt::math::TPose2D alignment;  ///< truth frame <- estimate frame
 };
-/// Compares the samples with t >= t_from against the truth (body position, linearly
+/// Compares the samples with t_from <= t <= t_to against the truth (body position, linearly
 /// interpolated). Throws std::runtime_error if fewer than 2 samples are covered by the truth.
 PathErrors comparePathWithTruth(const std::vector<PlanarPathSample>& path,
-                                const std::vector<TruthSample>& truth, double t_from);
+                                const std::vector<TruthSample>& truth, double t_from,
+                                double t_to = std::numeric_limits<double>::infinity());
 
 }  // namespace freeinit::mrpt_glue
