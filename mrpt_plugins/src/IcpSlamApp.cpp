@@ -283,8 +283,17 @@ int IcpSlamApp::run(std::ostream& log) {
     std::vector<TopViewPanel> panels;
     for (const auto& r : runs) {
       if (!r.errors) continue;
-      // Everything in the truth frame, through each run's alignment.
-      const mrpt::poses::CPose2D A(r.errors->alignment);
+      // Everything in the truth frame, anchored where the comparison starts (the first scan
+      // after the state time): the picture shows how each run leaves the truth from a common
+      // start. (The ATE uses the best alignment over the whole path instead.)
+      mrpt::poses::CPose2D A(r.errors->alignment);
+      for (const auto& ps : r.path) {
+        const auto gt = ps.t >= s.timestamp ? truthAt(truth, ps.t) : std::nullopt;
+        if (!gt) continue;
+        A = mrpt::poses::CPose2D(planarPose(gt->q_wb, gt->p_w)) +
+            (mrpt::poses::CPose2D() - mrpt::poses::CPose2D(ps.pose));
+        break;
+      }
       TopViewPanel p;
       std::ostringstream t;
       t << "icp-slam " << toString(r.mode) << ":  ATE " << std::fixed << std::setprecision(2)
@@ -298,7 +307,6 @@ int IcpSlamApp::run(std::ostream& log) {
       for (const auto& ps : r.path) {
         const auto q = A + mrpt::poses::CPoint2D(ps.pose.x, ps.pose.y);
         p.path.emplace_back(q.x(), q.y(), 0.0);
-        if (ps.t < s.timestamp) continue;
         if (const auto gt = truthAt(truth, ps.t)) p.truth.push_back(gt->p_w);
       }
       panels.push_back(std::move(p));

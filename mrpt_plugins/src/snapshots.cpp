@@ -485,8 +485,14 @@ void renderTopViewPanels(const std::string& png, const std::string& title,
       map->insertPoint(p.map_x[k], p.map_y[k], 0.0f);
     scene.insert(map);
     const float step = static_cast<float>(visible_h / panel_h);  // about one point per pixel
-    scene.insert(pathCloud(p.truth, white, step, 5.0f));
-    scene.insert(pathCloud(p.path, kTrajectory, step, 5.0f));
+    // The truth wide, the estimate narrow over it (inserted first and at a lower z: that is the
+    // order MRPT 2.5.8's orthographic top view draws over the truth).
+    std::vector<Vec3> path = p.path;
+    for (auto& q : path) q.z() = 0.0;
+    std::vector<Vec3> truth = p.truth;
+    for (auto& q : truth) q.z() = -0.5;
+    scene.insert(pathCloud(path, kTrajectory, step, 4.0f));
+    scene.insert(pathCloud(truth, white, step, 9.0f));
     CFBORender render(static_cast<unsigned>(width), static_cast<unsigned>(panel_h));
     auto& cam = render.getCamera(scene);
     cam.setOrthogonal(true);
