@@ -196,6 +196,25 @@ int IcpSlamApp::run(std::ostream& log) {
 
   // 3. One icp-slam run per mode; outputs as the stock app names them, in <out>/<mode>/.
   const std::filesystem::path out(params.out_dir);
+  std::filesystem::create_directories(out);
+  if (seed) {
+    // The prior as handed over (CMetricMapBuilderICP 2.5.8 keeps its mean only).
+    writeFileAtomically((out / "icp_slam_seed.ini").string(), [&](std::ostream& o) {
+      const auto& m = seed->pose.mean;
+      o << "; Free-Init's initial state as icp-slam's prior: SE(2) pose of the body in w, its\n"
+           "; covariance (x, y, yaw marginal of the 18x18 state covariance) and the velocity\n"
+           "[icp_slam_seed]\n"
+        << std::setprecision(17) << "timestamp = " << seed->timestamp << "   ; [s] UNIX\n"
+        << std::setprecision(9) << "pose = " << m.x() << " " << m.y() << " " << m.phi()
+        << "   ; x [m], y [m], yaw [rad]\ncov = ";
+      for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) o << seed->pose.cov(r, c) << (r * 3 + c < 8 ? " " : "");
+      o << "   ; 3x3 row-major\nvelocity_local = " << seed->velocity_local.vx << " "
+        << seed->velocity_local.vy << " " << seed->velocity_local.omega
+        << "   ; vx [m/s], vy [m/s], omega [rad/s] in the robot frame\nstatic_map_points = "
+        << seed->map_points << "\n";
+    });
+  }
   runs.clear();
   for (const IcpSeedMode mode : modes) {
     const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;

@@ -142,6 +142,7 @@ IcpSeed makeIcpSeed(const InitResult& result, const ScanSliceParams& params) {
     points->insertPointFast(m.p_w.x(), m.p_w.y(), m.p_w.z());
   }
   points->mark_as_modified();
+  seed.map_points = points->size();
   auto obs = mrpt::obs::CObservationPointCloud::Create();
   obs->sensorLabel = "FREEINIT_STATIC_MAP";
   obs->timestamp = fromUnix(s.timestamp);

@@ -93,6 +93,7 @@ mrpt::obs::CObservation2DRangeScan::Ptr scanFromFrame(
 struct IcpSeed {
   mrpt::maps::CSimpleMap map;
   mrpt::obs::CObservation::Ptr map_observation;  ///< the map's one observation
+  std::size_t map_points = 0;                    ///< static-map points in the slice
   mrpt::poses::CPosePDFGaussian pose;
   mrpt::math::TTwist2D velocity_local;  ///< [m/s, rad/s] in the robot's SE(2) frame
   double timestamp = 0;                 ///< [s] UNIX, the state time
