@@ -15,6 +15,7 @@
 #include <mrpt/slam/CMetricMapBuilderICP.h>
 
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
 #include <ostream>
@@ -25,32 +26,47 @@ namespace {
 
 const char* kMappingSection = "MappingApplication";
 
-/// The observations icp-slam processes in a mode, in time order. `odometry_origin` is the frame
-/// the odometry poses are expressed in (see odometryAt): the seed pose when the builder is
-/// initialized with it, the identity (w) for the stock app, whose map starts at w's origin.
+/// Whether one odometry reading at the seed pose would stop icp-slam from ever correcting: after
+/// an odometry reading, CMetricMapBuilderICP 2.5.8 skips ICP until the odometry shows
+/// min(localization, insertion) distance or angle since the last correction (at the origin, at
+/// first), and a lone reading never shows more than the seed pose itself.
+bool seedReadingBlocksIcp(const IcpSeed& seed,
+                          const mrpt::slam::CMetricMapBuilderICP::TConfigParams& o) {
+  const auto& m = seed.pose.mean;
+  return std::hypot(m.x(), m.y()) <
+             std::min(o.localizationLinDistance, o.insertionLinDistance) &&
+         std::abs(m.phi()) < std::min(o.localizationAngDistance, o.insertionAngDistance);
+}
+
+/// The observations icp-slam processes in a mode, in time order, after the static map. Seeded:
+/// one odometry reading with the seed pose in w and its velocity (icp-slam extrapolates each
+/// scan's first guess from it, for up to 1 s) unless `seed_reading` is false, then the scans
+/// after the state time. Odometry: a reading at the state time and one at every scan.
 std::vector<mrpt::obs::CObservation::Ptr> icpSlamObservations(
     IcpSeedMode mode, const std::vector<mrpt::obs::CObservation2DRangeScan::Ptr>& scans,
-    const IcpSeed* seed, const std::vector<OdometrySample>& odometry,
-    const mrpt::math::TPose2D& odometry_origin) {
+    const IcpSeed* seed, const std::vector<OdometrySample>& odometry, bool seed_reading) {
   std::vector<mrpt::obs::CObservation::Ptr> out;
   if (mode == IcpSeedMode::Plain) {
     out.assign(scans.begin(), scans.end());
     return out;
   }
-  // Seeded: the velocity at the state time (one odometry reading with velocities: icp-slam
-  // extrapolates each scan's first guess from it), then the scans after the state time.
   const double t0 = seed->timestamp;
-  auto first = mrpt::obs::CObservationOdometry::Create();
-  first->sensorLabel = "FREEINIT_ODOMETRY";
-  first->timestamp = fromUnix(t0);
-  first->odometry = seed->pose.mean - mrpt::poses::CPose2D(odometry_origin);
-  first->hasVelocities = true;
-  first->velocityLocal = seed->velocity_local;
-  out.push_back(first);
+  if (mode == IcpSeedMode::Odometry) {
+    out.push_back(odometryAt(odometry, t0, mrpt::math::TPose2D()));
+  } else if (seed_reading) {
+    auto first = mrpt::obs::CObservationOdometry::Create();
+    first->sensorLabel = "FREEINIT_ODOMETRY";
+    first->timestamp = fromUnix(t0);
+    first->odometry = seed->pose.mean;
+    first->hasVelocities = true;
+    first->velocityLocal = seed->velocity_local;
+    out.push_back(first);
+  }
   for (const auto& s : scans) {
     const double t = toUnix(s->timestamp);
     if (t <= t0) continue;
-    if (mode == IcpSeedMode::Odometry) out.push_back(odometryAt(odometry, t, odometry_origin));
+    if (mode == IcpSeedMode::Odometry)
+      out.push_back(odometryAt(odometry, t, mrpt::math::TPose2D()));
     out.push_back(s);
   }
   return out;
@@ -63,17 +79,16 @@ struct BuilderOutput {
   std::string step_log;  ///< the stock app's log_estimated_path.txt: "step x y yaw"
 };
 
-/// CMetricMapBuilderICP configured exactly as the stock app configures it.
+/// CMetricMapBuilderICP configured exactly as the stock app configures it, initialized with the
+/// seed's map (if any) and the pose prior (if given).
 BuilderOutput runBuilder(const mrpt::config::CConfigFileBase& ini, const IcpSeed* seed,
+                         const mrpt::poses::CPosePDFGaussian* prior,
                          const std::vector<mrpt::obs::CObservation::Ptr>& observations) {
   mrpt::slam::CMetricMapBuilderICP builder;
   builder.setVerbosityLevel(mrpt::system::LVL_ERROR);
   builder.ICP_options.loadFromConfigFile(ini, kMappingSection);
   builder.ICP_params.loadFromConfigFile(ini, "ICP");
-  if (seed)
-    builder.initialize(seed->map, &seed->pose);
-  else
-    builder.initialize();
+  builder.initialize(seed ? seed->map : mrpt::maps::CSimpleMap(), prior);
   builder.options.alwaysInsertByClass.fromString(
       ini.read_string(kMappingSection, "alwaysInsertByClass", ""));
   BuilderOutput out;
@@ -197,6 +212,22 @@ int IcpSlamApp::run(std::ostream& log) {
   // 3. One icp-slam run per mode; outputs as the stock app names them, in <out>/<mode>/.
   const std::filesystem::path out(params.out_dir);
   std::filesystem::create_directories(out);
+  // How the seed enters (MRPT 2.5.8; README "What MRPT 2.5.8 does with the seed"): the map
+  // through initialize(); the pose through the first odometry reading, in w, as the stock app on
+  // the export gets it. initialize()'s pose argument is used only when a lone reading would block
+  // ICP (seeded mode, slow start): it keeps the mean only and stamps it with the wall clock, which
+  // hides later odometry from the pose estimator until the first ICP correction.
+  bool seed_reading = true;
+  if (seed) {
+    mrpt::slam::CMetricMapBuilderICP probe;
+    probe.ICP_options.loadFromConfigFile(ini, kMappingSection);
+    seed_reading = !seedReadingBlocksIcp(*seed, probe.ICP_options);
+    if (!seed_reading &&
+        std::count(modes.begin(), modes.end(), IcpSeedMode::Seeded) > 0)
+      log << "Seeded: the seed pose is closer to the window start than icp-slam's "
+             "localization/insertion distances: it goes in as initialize()'s pose prior, "
+             "without the velocity (a lone odometry reading would stop ICP)\n";
+  }
   if (seed) {
     // The prior as handed over (CMetricMapBuilderICP 2.5.8 keeps its mean only).
     writeFileAtomically((out / "icp_slam_seed.ini").string(), [&](std::ostream& o) {
@@ -218,9 +249,9 @@ int IcpSlamApp::run(std::ostream& log) {
   runs.clear();
   for (const IcpSeedMode mode : modes) {
     const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
-    const auto obs = icpSlamObservations(mode, scansFor(mode), sd, odometry,
-                                         sd ? sd->pose.mean.asTPose() : mrpt::math::TPose2D());
-    BuilderOutput b = runBuilder(ini, sd, obs);
+    const auto obs = icpSlamObservations(mode, scansFor(mode), sd, odometry, seed_reading);
+    const bool prior = mode == IcpSeedMode::Seeded && !seed_reading;
+    BuilderOutput b = runBuilder(ini, sd, prior ? &sd->pose : nullptr, obs);
     IcpSlamRun r;
     r.mode = mode;
     r.path = std::move(b.path);
@@ -254,9 +285,11 @@ int IcpSlamApp::run(std::ostream& log) {
   }
 
   // 4. The export for the stock icp-slam app: one observations-only rawlog of stock classes per
-  // mode (no IMU, no plugin class) and a matching INI. The seed enters as the first observation
-  // (the static map, inserted at the origin of the still empty map) followed by an odometry
-  // reading holding the seed pose in w: the stock app has no initial-map option.
+  // mode (no IMU, no plugin class) and a matching INI. The stock app has no initial-map option:
+  // the static map is the first observation (inserted at the origin of the still empty map),
+  // followed by the same observations as above (the seed pose as an odometry reading in w). It
+  // cannot take a pose prior: in the seeded mode of a slow start it starts at w's origin, within
+  // icp-slam's localization distance of the seed pose.
   if (!params.export_dir.empty()) {
     const std::filesystem::path ex = std::filesystem::absolute(params.export_dir);
     std::filesystem::create_directories(ex);
@@ -264,8 +297,7 @@ int IcpSlamApp::run(std::ostream& log) {
       const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
       std::vector<mrpt::obs::CObservation::Ptr> obs;
       if (sd) obs.push_back(sd->map_observation);
-      const auto rest =
-          icpSlamObservations(mode, scansFor(mode), sd, odometry, mrpt::math::TPose2D());
+      const auto rest = icpSlamObservations(mode, scansFor(mode), sd, odometry, seed_reading);
       obs.insert(obs.end(), rest.begin(), rest.end());
       const std::string name = toString(mode);
       const std::string rawlog = (ex / (name + ".rawlog")).string();

@@ -50,15 +50,15 @@ struct PresetRun {
   int rc = -1;
 };
 
-/// 3 s at 20,000 points per frame: 25 scans after the 0.5 s window, 20-60 m of driving.
-const PresetRun& run(const std::string& preset) {
+/// 3 s (default) at 20,000 points per frame: 25 scans after the 0.5 s window, 20-60 m of driving.
+const PresetRun& run(const std::string& preset, double duration = 3.0) {
   static std::map<std::string, PresetRun> cache;
   auto it = cache.find(preset);
   if (it != cache.end()) return it->second;
   const fs::path dir = testDir(preset);
   SimApp sim;
   sim.params.preset = preset;
-  sim.params.duration = 3.0;
+  sim.params.duration = duration;
   sim.params.points_per_frame = 20000;
   sim.params.output = (dir / (preset + ".rawlog")).string();
   std::ostringstream sim_log;
@@ -110,9 +110,9 @@ TEST_P(IcpSlamMovingStart, FedWithOdometryBeatsPlainByAClearMargin) {
 // The seed alone (map, pose, velocity at the state time) carries icp-slam while its one odometry
 // reading is fresh: CRobot2DPoseEstimator extrapolates with it for max_odometry_age = 1 s. Over
 // that first second the plain run, standing still, has an ATE of about 0.29 v (1.9-6 m here),
-// while the seeded run follows the truth up to what ICP itself adds: 5 cm in the street, 0.1-0.6 m
+// while the seeded run follows the truth up to what ICP itself adds: 5 cm in the street, 0.2-0.5 m
 // in the tunnel, where ICP has no grip along the axis and its matches at the end of the mapped
-// walls pull it back (measured: ratio 3 on tunnel_wheeled, 37-120 elsewhere). Margin asserted:
+// walls pull it back (measured: ratio 3.9 on tunnel_wheeled, 20-120 elsewhere). Margin asserted:
 // at most half the plain run's ATE. (After that second icp-slam has no motion prior any more and
 // falls behind like the plain run: README.)
 TEST_P(IcpSlamMovingStart, SeedCarriesTheFirstSecond) {
@@ -132,9 +132,28 @@ INSTANTIATE_TEST_SUITE_P(WheeledAndVehicular, IcpSlamMovingStart,
                          ::testing::Values("dyna_05", "dyna_06", "tunnel_wheeled",
                                            "tunnel_vehicular"));
 
+// A start at rest (stat_02: 2 s still, then 1.5 m/s on the sidewalk): the seed pose is at the
+// window start, closer than icp-slam's localization distance. Handed over naively (pose prior in
+// initialize() plus odometry readings) icp-slam 2.5.8 waits for odometry to show that distance,
+// cannot see it (the prior's wall-clock stamp hides it) and never corrects again: the fed run then
+// stopped at the start (6 s run: end-point error 3.8 m over 5.9 m; handed over as below, 0.06 m).
+// Asserted: the fed run follows the truth (end-point within 10 % of the path) and the seeded run
+// moves too (end-point within half of it).
+TEST(IcpSlamStaticStart, SeedAndOdometryDoNotFreezeIcpSlam) {
+  const PresetRun& r = run("stat_02", 4.0);
+  ASSERT_EQ(r.rc, 0) << r.log;
+  const auto& seeded = byMode(r.app, IcpSeedMode::Seeded);
+  const auto& fed = byMode(r.app, IcpSeedMode::Odometry);
+  ASSERT_TRUE(seeded.errors && fed.errors) << r.log;
+  const double L = fed.errors->length;
+  EXPECT_GT(L, 1.5) << r.log;
+  EXPECT_LT(fed.errors->end_point, 0.1 * L) << r.log;
+  EXPECT_LT(seeded.errors->end_point, 0.5 * L) << r.log;
+}
+
 // What icp-slam writes, per mode; the final maps and the export hold stock MRPT classes only, the
-// export has no IMU; the stock icp-slam app runs on every export and reproduces the app's final
-// pose in the plain and odometry modes.
+// export has no IMU; the stock icp-slam app on the export reproduces the app's final pose in
+// every mode.
 TEST(IcpSlamOutputs, StockFilesAndStockAppReproducesTheRun) {
   const PresetRun& r = run("tunnel_vehicular");
   ASSERT_EQ(r.rc, 0) << r.log;
@@ -166,12 +185,7 @@ TEST(IcpSlamOutputs, StockFilesAndStockAppReproducesTheRun) {
     const std::string cmd = "icp-slam " + (ex / (name + ".ini")).string() + " < /dev/null > " +
                             (ex / (name + ".log")).string() + " 2>&1";
     ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
-    // The stock app (mrpt-apps): its last logged pose is ours, except in the seeded mode: the
-    // stock app cannot take a pose prior, so the seed pose arrives as an odometry reading and
-    // icp-slam's pose estimator, having no localization yet, does not extrapolate the first
-    // scan's guess with the seed velocity (the builder initialized with the prior does). In the
-    // tunnel that first guess changes where ICP settles.
-    if (run.mode == IcpSeedMode::Seeded) continue;
+    // The stock app (mrpt-apps): its last logged pose is ours.
     std::ifstream f(ex / (name + "_icp_slam_out") / "log_estimated_path.txt");
     std::string line, last;
     while (std::getline(f, line))

@@ -100,10 +100,10 @@ struct IcpSeed {
 };
 IcpSeed makeIcpSeed(const InitResult& result, const ScanSliceParams& params);
 
-/// Odometry at time t (linear interpolation between the samples; throws std::out_of_range outside
-/// them) as a stock CObservationOdometry: pose (x, y, yaw) in w composed after `frame_origin`
-/// (odometry = frame_origin^-1 (+) pose; the identity keeps w) and the local velocities
-/// (hasVelocities = true), which icp-slam uses to extrapolate to each scan's time.
+/// Odometry at time t (interpolated between the samples; throws std::out_of_range outside them)
+/// as a stock CObservationOdometry: pose (x, y, yaw) in the frame `frame_origin` (odometry =
+/// frame_origin^-1 (+) pose; the identity keeps w) and the local velocities (hasVelocities =
+/// true), which icp-slam uses to extrapolate to each scan's time.
 mrpt::obs::CObservation::Ptr odometryAt(const std::vector<OdometrySample>& odometry, double t,
                                         const mrpt::math::TPose2D& frame_origin);
 
