@@ -4,7 +4,6 @@
 #include <freeinit/doppler_inertial_odometry.h>
 #include <freeinit/free_init.h>
 #include <freeinit/sim/simulator.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>

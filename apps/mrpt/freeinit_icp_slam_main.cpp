@@ -17,8 +17,8 @@ int main(int argc, char** argv) {
         "icp_slam.ini", cmd);
     TCLAP::UnlabeledValueArg<std::string> fi_ini("freeinit_ini", "Free-Init INI", true, "",
                                                  "freeinit.ini", cmd);
-    TCLAP::UnlabeledValueArg<std::string> rawlog("input", "input rawlog", true, "",
-                                                 "input.rawlog", cmd);
+    TCLAP::UnlabeledValueArg<std::string> rawlog("input", "input rawlog", true, "", "input.rawlog",
+                                                 cmd);
     TCLAP::ValueArg<std::string> mode("m", "mode", "plain, seeded, odometry or all (default)",
                                       false, "all", "MODE", cmd);
     TCLAP::ValueArg<std::string> out("o", "out", "output folder", false, "icp_slam_out", "DIR",

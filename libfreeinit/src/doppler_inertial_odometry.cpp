@@ -81,7 +81,8 @@ std::vector<OdometrySample> DopplerInertialOdometry::run(
       if (f.points.size() < 2) continue;
       const double span = f.points.back().time_offset - f.points.front().time_offset;
       if (!(span > 0)) continue;
-      stride = std::max(1, static_cast<int>(std::lround(f.points.size() / span / vp.max_point_rate)));
+      stride =
+          std::max(1, static_cast<int>(std::lround(f.points.size() / span / vp.max_point_rate)));
       break;
     }
   }

@@ -33,8 +33,7 @@ const char* kMappingSection = "MappingApplication";
 bool seedReadingBlocksIcp(const IcpSeed& seed,
                           const mrpt::slam::CMetricMapBuilderICP::TConfigParams& o) {
   const auto& m = seed.pose.mean;
-  return std::hypot(m.x(), m.y()) <
-             std::min(o.localizationLinDistance, o.insertionLinDistance) &&
+  return std::hypot(m.x(), m.y()) < std::min(o.localizationLinDistance, o.insertionLinDistance) &&
          std::abs(m.phi()) < std::min(o.localizationAngDistance, o.insertionAngDistance);
 }
 
@@ -65,8 +64,10 @@ std::vector<mrpt::obs::CObservation::Ptr> icpSlamObservations(
   for (const auto& s : scans) {
     const double t = toUnix(s->timestamp);
     if (t <= t0) continue;
-    if (mode == IcpSeedMode::Odometry)
+    if (mode == IcpSeedMode::Odometry) {
+      if (t > odometry.back().t) break;  // the odometry ends with the IMU data
       out.push_back(odometryAt(odometry, t, mrpt::math::TPose2D()));
+    }
     out.push_back(s);
   }
   return out;
@@ -120,6 +121,63 @@ void writeTumPlanar(const std::string& path, const std::vector<PlanarPathSample>
   });
 }
 
+/// The prior as handed over, with its covariance (CMetricMapBuilderICP 2.5.8 keeps the mean only).
+void writeSeedIni(const std::string& path, const IcpSeed& seed) {
+  writeFileAtomically(path, [&](std::ostream& o) {
+    const auto& m = seed.pose.mean;
+    o << "; Free-Init's initial state as icp-slam's prior: SE(2) pose of the body in w, its\n"
+         "; covariance (x, y, yaw marginal of the 18x18 state covariance) and the velocity\n"
+         "[icp_slam_seed]\n"
+      << std::setprecision(17) << "timestamp = " << seed.timestamp << "   ; [s] UNIX\n"
+      << std::setprecision(9) << "pose = " << m.x() << " " << m.y() << " " << m.phi()
+      << "   ; x [m], y [m], yaw [rad]\ncov = ";
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) o << seed.pose.cov(r, c) << (r * 3 + c < 8 ? " " : "");
+    o << "   ; 3x3 row-major\nvelocity_local = " << seed.velocity_local.vx << " "
+      << seed.velocity_local.vy << " " << seed.velocity_local.omega
+      << "   ; vx [m/s], vy [m/s], omega [rad/s] in the robot frame\nstatic_map_points = "
+      << seed.map_points << "\n";
+  });
+}
+
+/// One panel per run: its map and path in the truth frame, anchored where the comparison starts.
+void renderRuns(const std::string& png, const std::string& title,
+                const std::vector<IcpSlamRun>& runs, const std::vector<TruthSample>& truth,
+                double t_state, int width, int height) {
+  std::vector<TopViewPanel> panels;
+  for (const auto& r : runs) {
+    if (!r.errors) continue;
+    // Everything in the truth frame, anchored where the comparison starts (the first scan
+    // after the state time): the picture shows how each run leaves the truth from a common
+    // start. (The ATE uses the best alignment over the whole path instead.)
+    mrpt::poses::CPose2D A(r.errors->alignment);
+    for (const auto& ps : r.path) {
+      const auto gt = ps.t >= t_state ? truthAt(truth, ps.t) : std::nullopt;
+      if (!gt) continue;
+      A = mrpt::poses::CPose2D(planarPose(gt->q_wb, gt->p_w)) +
+          (mrpt::poses::CPose2D() - mrpt::poses::CPose2D(ps.pose));
+      break;
+    }
+    TopViewPanel p;
+    std::ostringstream t;
+    t << "icp-slam " << toString(r.mode) << ":  ATE " << std::fixed << std::setprecision(2)
+      << r.errors->ate_rmse << " m, end-point " << r.errors->end_point << " m";
+    p.title = t.str();
+    for (std::size_t k = 0; k < r.map_x.size(); ++k) {
+      const auto q = A + mrpt::poses::CPoint2D(r.map_x[k], r.map_y[k]);
+      p.map_x.push_back(static_cast<float>(q.x()));
+      p.map_y.push_back(static_cast<float>(q.y()));
+    }
+    for (const auto& ps : r.path) {
+      const auto q = A + mrpt::poses::CPoint2D(ps.pose.x, ps.pose.y);
+      p.path.emplace_back(q.x(), q.y(), 0.0);
+      if (const auto gt = truthAt(truth, ps.t)) p.truth.push_back(gt->p_w);
+    }
+    panels.push_back(std::move(p));
+  }
+  renderTopViewPanels(png, title, panels, width, height);
+}
+
 }  // namespace
 
 int IcpSlamApp::run(std::ostream& log) {
@@ -129,8 +187,9 @@ int IcpSlamApp::run(std::ostream& log) {
   const std::string ini_text = mrpt::io::file_get_contents(params.icp_ini);
   mrpt::config::CConfigFileMemory ini(ini_text);
   if (!ini.sectionExists(kMappingSection) || !ini.sectionExists("ICP"))
-    throw std::invalid_argument(params.icp_ini + ": needs the [MappingApplication] and [ICP] "
-                                                 "sections of the icp-slam app");
+    throw std::invalid_argument(params.icp_ini +
+                                ": needs the [MappingApplication] and [ICP] "
+                                "sections of the icp-slam app");
   const ScanSliceParams slice = loadScanSliceParams(ini, params.icp_ini);
   AppConfig config = loadAppConfig(params.freeinit_ini);
   log << "Reading " << params.rawlog << "\n";
@@ -169,9 +228,8 @@ int IcpSlamApp::run(std::ostream& log) {
   std::vector<OdometrySample> odometry;
   if (std::count(modes.begin(), modes.end(), IcpSeedMode::Odometry) > 0) {
     odometry = DopplerInertialOdometry(config.core, s).run(in.imu, in.frames);
-    log << "Doppler-inertial odometry: " << odometry.size() << " poses, "
-        << std::setprecision(4) << (odometry.back().p_w - odometry.front().p_w).norm()
-        << " m travelled\n";
+    log << "Doppler-inertial odometry: " << odometry.size() << " poses, " << std::setprecision(4)
+        << (odometry.back().p_w - odometry.front().p_w).norm() << " m travelled\n";
   }
   // The odometry mode's scans: deskewed with the odometry (frames it covers) when configured.
   std::vector<mrpt::obs::CObservation2DRangeScan::Ptr> odometry_scans = scans;
@@ -190,9 +248,8 @@ int IcpSlamApp::run(std::ostream& log) {
     for (const auto& sc : scans) {
       const double t = toUnix(sc->timestamp);
       if (t <= s.timestamp || t > odometry.back().t) continue;
-      const auto o = std::dynamic_pointer_cast<mrpt::obs::CObservationOdometry>(
-          odometryAt(odometry, t, mrpt::math::TPose2D()));
-      path.push_back({t, o->odometry.asTPose()});
+      const BodyPose b = bodyPoseAt(odometry, t);
+      path.push_back({t, planarPose(b.q_wb, b.p_w)});
     }
     odometry_errors = comparePathWithTruth(path, truth, s.timestamp);
     log << std::fixed << std::setprecision(3) << "  odometry alone: ATE "
@@ -222,30 +279,12 @@ int IcpSlamApp::run(std::ostream& log) {
     mrpt::slam::CMetricMapBuilderICP probe;
     probe.ICP_options.loadFromConfigFile(ini, kMappingSection);
     seed_reading = !seedReadingBlocksIcp(*seed, probe.ICP_options);
-    if (!seed_reading &&
-        std::count(modes.begin(), modes.end(), IcpSeedMode::Seeded) > 0)
+    if (!seed_reading && std::count(modes.begin(), modes.end(), IcpSeedMode::Seeded) > 0)
       log << "Seeded: the seed pose is closer to the window start than icp-slam's "
              "localization/insertion distances: it goes in as initialize()'s pose prior, "
              "without the velocity (a lone odometry reading would stop ICP)\n";
   }
-  if (seed) {
-    // The prior as handed over (CMetricMapBuilderICP 2.5.8 keeps its mean only).
-    writeFileAtomically((out / "icp_slam_seed.ini").string(), [&](std::ostream& o) {
-      const auto& m = seed->pose.mean;
-      o << "; Free-Init's initial state as icp-slam's prior: SE(2) pose of the body in w, its\n"
-           "; covariance (x, y, yaw marginal of the 18x18 state covariance) and the velocity\n"
-           "[icp_slam_seed]\n"
-        << std::setprecision(17) << "timestamp = " << seed->timestamp << "   ; [s] UNIX\n"
-        << std::setprecision(9) << "pose = " << m.x() << " " << m.y() << " " << m.phi()
-        << "   ; x [m], y [m], yaw [rad]\ncov = ";
-      for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) o << seed->pose.cov(r, c) << (r * 3 + c < 8 ? " " : "");
-      o << "   ; 3x3 row-major\nvelocity_local = " << seed->velocity_local.vx << " "
-        << seed->velocity_local.vy << " " << seed->velocity_local.omega
-        << "   ; vx [m/s], vy [m/s], omega [rad/s] in the robot frame\nstatic_map_points = "
-        << seed->map_points << "\n";
-    });
-  }
+  if (seed) writeSeedIni((out / "icp_slam_seed.ini").string(), *seed);
   runs.clear();
   for (const IcpSeedMode mode : modes) {
     const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
@@ -331,40 +370,9 @@ int IcpSlamApp::run(std::ostream& log) {
     });
   }
   if (params.snapshot && !truth.empty() && s.ok()) {
-    std::vector<TopViewPanel> panels;
-    for (const auto& r : runs) {
-      if (!r.errors) continue;
-      // Everything in the truth frame, anchored where the comparison starts (the first scan
-      // after the state time): the picture shows how each run leaves the truth from a common
-      // start. (The ATE uses the best alignment over the whole path instead.)
-      mrpt::poses::CPose2D A(r.errors->alignment);
-      for (const auto& ps : r.path) {
-        const auto gt = ps.t >= s.timestamp ? truthAt(truth, ps.t) : std::nullopt;
-        if (!gt) continue;
-        A = mrpt::poses::CPose2D(planarPose(gt->q_wb, gt->p_w)) +
-            (mrpt::poses::CPose2D() - mrpt::poses::CPose2D(ps.pose));
-        break;
-      }
-      TopViewPanel p;
-      std::ostringstream t;
-      t << "icp-slam " << toString(r.mode) << ":  ATE " << std::fixed << std::setprecision(2)
-        << r.errors->ate_rmse << " m, end-point " << r.errors->end_point << " m";
-      p.title = t.str();
-      for (std::size_t k = 0; k < r.map_x.size(); ++k) {
-        const auto q = A + mrpt::poses::CPoint2D(r.map_x[k], r.map_y[k]);
-        p.map_x.push_back(static_cast<float>(q.x()));
-        p.map_y.push_back(static_cast<float>(q.y()));
-      }
-      for (const auto& ps : r.path) {
-        const auto q = A + mrpt::poses::CPoint2D(ps.pose.x, ps.pose.y);
-        p.path.emplace_back(q.x(), q.y(), 0.0);
-        if (const auto gt = truthAt(truth, ps.t)) p.truth.push_back(gt->p_w);
-      }
-      panels.push_back(std::move(p));
-    }
     const std::string png = (out / "trajectories.png").string();
-    renderTopViewPanels(png, std::filesystem::path(params.rawlog).filename().string(), panels,
-                        params.snapshot_width, params.snapshot_height);
+    renderRuns(png, std::filesystem::path(params.rawlog).filename().string(), runs, truth,
+               s.timestamp, params.snapshot_width, params.snapshot_height);
     log << "Picture: " << png << "\n";
   }
   return rc;

@@ -49,9 +49,12 @@ ScanSliceParams loadScanSliceParams(const mrpt::config::CConfigFileBase& ini,
 
 const char* toString(IcpSeedMode m) {
   switch (m) {
-    case IcpSeedMode::Plain: return "plain";
-    case IcpSeedMode::Seeded: return "seeded";
-    case IcpSeedMode::Odometry: return "odometry";
+    case IcpSeedMode::Plain:
+      return "plain";
+    case IcpSeedMode::Seeded:
+      return "seeded";
+    case IcpSeedMode::Odometry:
+      return "odometry";
   }
   return "?";
 }
@@ -205,8 +208,7 @@ mrpt::obs::CObservation::Ptr odometryAt(const std::vector<OdometrySample>& odome
 }
 
 PathErrors comparePathWithTruth(const std::vector<PlanarPathSample>& path,
-                                const std::vector<TruthSample>& truth, double t_from,
-                                double t_to) {
+                                const std::vector<TruthSample>& truth, double t_from, double t_to) {
   std::vector<Eigen::Vector2d> est, ref;
   for (const auto& s : path) {
     if (s.t < t_from || s.t > t_to) continue;

@@ -468,7 +468,8 @@ void renderTopViewPanels(const std::string& png, const std::string& title,
     const Eigen::Vector2d c = 0.5 * (lo + hi);
     const double aspect = static_cast<double>(width) / panel_h;
     // Orthographic: MRPT 2.5.8 shows a height of half the zoom distance.
-    const double visible_h = std::max({(hi.y() - lo.y()) + 16.0, (hi.x() - lo.x() + 16.0) / aspect});
+    const double visible_h =
+        std::max({(hi.y() - lo.y()) + 16.0, (hi.x() - lo.x() + 16.0) / aspect});
     COpenGLScene scene;
     auto vp = scene.getViewport();
     vp->setCustomBackgroundColor(mrpt::img::TColorf(0.08f, 0.08f, 0.12f));

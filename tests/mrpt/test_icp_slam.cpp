@@ -7,13 +7,13 @@
 #include <gtest/gtest.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
+#include <unistd.h>
 
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
 #include <sstream>
-#include <unistd.h>
 
 using namespace freeinit;
 using namespace freeinit::mrpt_glue;
@@ -26,8 +26,8 @@ const std::string kSrc = FREEINIT_SOURCE_DIR;
 /// when the process ends.
 const fs::path& processDir() {
   struct Dir {
-    fs::path path = fs::temp_directory_path() / "freeinit_icp_slam_tests" /
-                    std::to_string(::getpid());
+    fs::path path =
+        fs::temp_directory_path() / "freeinit_icp_slam_tests" / std::to_string(::getpid());
     ~Dir() {
       std::error_code ec;
       fs::remove_all(path, ec);
@@ -124,8 +124,9 @@ TEST_P(IcpSlamMovingStart, SeedCarriesTheFirstSecond) {
   const double t0 = r.app.freeinit.state.timestamp;
   const PathErrors p = comparePathWithTruth(plain.path, truth, t0, t0 + 1.0);
   const PathErrors s = comparePathWithTruth(seeded.path, truth, t0, t0 + 1.0);
-  EXPECT_LT(s.ate_rmse, 0.5 * p.ate_rmse) << "seeded " << s.ate_rmse << " plain " << p.ate_rmse
-                                          << "\n" << r.log;
+  EXPECT_LT(s.ate_rmse, 0.5 * p.ate_rmse)
+      << "seeded " << s.ate_rmse << " plain " << p.ate_rmse << "\n"
+      << r.log;
 }
 
 INSTANTIATE_TEST_SUITE_P(WheeledAndVehicular, IcpSlamMovingStart,

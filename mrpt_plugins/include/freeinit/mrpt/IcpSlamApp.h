@@ -23,10 +23,9 @@ struct IcpSlamAppParams {
   std::string freeinit_ini;  ///< Free-Init INI (ini/freeinit.ini)
   std::string rawlog;        ///< input: Doppler LiDAR + IMU rawlog (freeinit-sim's format)
   std::string out_dir = "icp_slam_out";
-  std::vector<IcpSeedMode> modes = {IcpSeedMode::Plain, IcpSeedMode::Seeded,
-                                    IcpSeedMode::Odometry};
-  std::string export_dir;  ///< not empty: also write <dir>/<mode>.rawlog + <mode>.ini (stock)
-  bool snapshot = true;    ///< trajectories.png
+  std::vector<IcpSeedMode> modes = {IcpSeedMode::Plain, IcpSeedMode::Seeded, IcpSeedMode::Odometry};
+  std::string export_dir;      ///< not empty: also write <dir>/<mode>.rawlog + <mode>.ini (stock)
+  bool snapshot = true;        ///< trajectories.png
   int snapshot_width = 1400;   ///< [px]
   int snapshot_height = 1050;  ///< [px]
 };
