@@ -146,11 +146,10 @@ void renderRuns(const std::string& png, const std::string& title,
                 double t_state, int width, int height) {
   std::vector<TopViewPanel> panels;
   for (const auto& r : runs) {
-    if (!r.errors) continue;
-    // Everything in the truth frame, anchored where the comparison starts (the first scan
-    // after the state time): the picture shows how each run leaves the truth from a common
-    // start. (The ATE uses the best alignment over the whole path instead.)
-    mrpt::poses::CPose2D A(r.errors->alignment);
+    // With the truth, everything in its frame, anchored where the comparison starts (the first
+    // scan after the state time): the picture shows how each run leaves the truth from a common
+    // start. (The ATE uses the best alignment over the whole path instead.) Without it, in w.
+    mrpt::poses::CPose2D A;
     for (const auto& ps : r.path) {
       const auto gt = ps.t >= t_state ? truthAt(truth, ps.t) : std::nullopt;
       if (!gt) continue;
@@ -160,8 +159,10 @@ void renderRuns(const std::string& png, const std::string& title,
     }
     TopViewPanel p;
     std::ostringstream t;
-    t << "icp-slam " << toString(r.mode) << ":  ATE " << std::fixed << std::setprecision(2)
-      << r.errors->ate_rmse << " m, end-point " << r.errors->end_point << " m";
+    t << "icp-slam " << toString(r.mode) << ":  " << r.keyframes << " keyframes";
+    if (r.errors)
+      t << ", ATE " << std::fixed << std::setprecision(2) << r.errors->ate_rmse
+        << " m, end-point " << r.errors->end_point << " m";
     p.title = t.str();
     for (std::size_t k = 0; k < r.map_x.size(); ++k) {
       const auto q = A + mrpt::poses::CPoint2D(r.map_x[k], r.map_y[k]);
@@ -369,7 +370,7 @@ int IcpSlamApp::run(std::ostream& log) {
           << r.keyframes << "\n";
     });
   }
-  if (params.snapshot && !truth.empty() && s.ok()) {
+  if (params.snapshot && !runs.empty()) {
     const std::string png = (out / "trajectories.png").string();
     renderRuns(png, std::filesystem::path(params.rawlog).filename().string(), runs, truth,
                s.timestamp, params.snapshot_width, params.snapshot_height);

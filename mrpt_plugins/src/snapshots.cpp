@@ -512,8 +512,9 @@ void renderTopViewPanels(const std::string& png, const std::string& title,
   img.selectTextFont("10x20");
   img.textOut(12, 10, title, white);
   img.selectTextFont("9x15");
-  int x = width - 420;
-  swatch(img, x, 12, white, "ground truth");
+  const int x = width - 420;
+  if (std::any_of(panels.begin(), panels.end(), [](const auto& p) { return !p.truth.empty(); }))
+    swatch(img, x, 12, white, "ground truth");
   swatch(img, x + 140, 12, kTrajectory, "icp-slam path");
   swatch(img, x + 290, 12, map_grey, "icp-slam map");
   saveAtomically(img, png);

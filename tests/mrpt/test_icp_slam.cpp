@@ -3,12 +3,14 @@
 // ground truth; and the export that the stock icp-slam app runs on.
 #include <freeinit/mrpt/IcpSlamApp.h>
 #include <freeinit/mrpt/SimApp.h>
+#include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <gtest/gtest.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -199,6 +201,104 @@ TEST(IcpSlamOutputs, StockFilesAndStockAppReproducesTheRun) {
     EXPECT_NEAR(y, run.path.back().pose.y, 1e-3) << name;
     EXPECT_NEAR(yaw, run.path.back().pose.phi, 1e-4) << name;
   }
+}
+
+// The pieces of the hand-over, closed form.
+TEST(IcpSlamBridge, PathErrorsAfterAlignment) {
+  // A straight 30 m truth; the estimate is the same path in another SE(2) frame: no error.
+  std::vector<TruthSample> truth;
+  for (int k = 0; k <= 300; ++k) {
+    TruthSample t;
+    t.t = 100 + 0.01 * k;
+    t.p_w = Vec3(10.0 * (t.t - 100), 2.0, 1.0);
+    truth.push_back(t);
+  }
+  const mrpt::poses::CPose2D frame(5.0, -3.0, 0.5);
+  std::vector<PlanarPathSample> moved, stuck;
+  for (int k = 0; k <= 30; ++k) {
+    const double t = 100 + 0.1 * k;
+    const auto p = frame + mrpt::poses::CPose2D(10.0 * (t - 100), 2.0, 0.0);
+    moved.push_back({t, p.asTPose()});
+    stuck.push_back({t, mrpt::math::TPose2D(1, 1, 0)});
+  }
+  const PathErrors e = comparePathWithTruth(moved, truth, 100.0);
+  EXPECT_NEAR(e.ate_rmse, 0.0, 1e-9);
+  EXPECT_NEAR(e.end_point, 0.0, 1e-9);
+  EXPECT_NEAR(e.length, 30.0, 1e-9);
+  // A path that stopped: RMSE of 31 equally spaced points about their centroid over L = 30 m,
+  // sqrt((n^2 - 1) / 12) * 1 m with n = 31 (-> L / sqrt(12) for dense sampling); the end point is
+  // L / 2 from the centroid.
+  const PathErrors st = comparePathWithTruth(stuck, truth, 100.0);
+  EXPECT_NEAR(st.ate_rmse, std::sqrt((31.0 * 31.0 - 1) / 12.0), 1e-9);
+  EXPECT_NEAR(st.end_point, 15.0, 1e-9);
+  // The window selects samples.
+  EXPECT_EQ(comparePathWithTruth(moved, truth, 101.0, 102.0).samples, 11u);
+  EXPECT_THROW(comparePathWithTruth(moved, truth, 200.0), std::runtime_error);
+}
+
+TEST(IcpSlamBridge, ScanIsTheLevelledSliceAroundTheLidar) {
+  // A wall 10 m ahead of the body, seen by a LiDAR 0.5 m above the body and pitched 10 deg down;
+  // the frame's points span heights -2..3 m above the body. Levelled, the slice [-0.3, 1.5] m
+  // keeps the points between those heights, all at x = 10 m.
+  Extrinsics e;
+  e.R_bl = Eigen::AngleAxisd(10 * M_PI / 180, Vec3::UnitY()).toRotationMatrix();
+  e.p_bl = Vec3(0, 0, 0.5);
+  LidarFrame f;
+  f.stamp = 50.0;
+  for (int i = 0; i <= 50; ++i) {
+    DopplerPoint p;
+    const Vec3 p_b(10.0, 0.0, -2.0 + 0.1 * i);
+    p.p_l = (e.R_bl.transpose() * (p_b - e.p_bl)).cast<float>();
+    p.time_offset = 0.001f * static_cast<float>(i);
+    f.points.push_back(p);
+  }
+  ScanSliceParams sp;
+  const auto scan = scanFromFrame(f, e, Mat3::Identity(), sp, "LIDAR");
+  ASSERT_EQ(scan->getScanSize(), 361u);
+  EXPECT_NEAR(toUnix(scan->timestamp), 50.025, 1e-6);  // mean point time
+  EXPECT_NEAR(scan->sensorPose.z(), 0.5, 1e-12);
+  std::size_t valid = 0;
+  for (std::size_t i = 0; i < scan->getScanSize(); ++i) {
+    if (!scan->getScanRangeValidity(i)) continue;
+    ++valid;
+    EXPECT_EQ(i, 180u);  // straight ahead
+    EXPECT_NEAR(scan->getScanRange(i), 10.0, 1e-5);
+  }
+  EXPECT_EQ(valid, 1u);
+  // Too high a slice: nothing.
+  sp.z_min = 3.5;
+  sp.z_max = 4.0;
+  const auto none = scanFromFrame(f, e, Mat3::Identity(), sp, "LIDAR");
+  for (std::size_t i = 0; i < none->getScanSize(); ++i) EXPECT_FALSE(none->getScanRangeValidity(i));
+}
+
+TEST(IcpSlamBridge, SeedPoseCovarianceAndVelocity) {
+  InitResult r;
+  InitialState& s = r.state;
+  s.status = InitStatus::Ok;
+  s.timestamp = 10;
+  const double yaw = 0.3;
+  s.q_wb = Quat(Eigen::AngleAxisd(yaw, Vec3::UnitZ()) * Eigen::AngleAxisd(0.05, Vec3::UnitX()));
+  s.p_w = Vec3(4, 5, 1);
+  s.v_w = Eigen::AngleAxisd(yaw, Vec3::UnitZ()) * Vec3(7, 0.5, 0.1);
+  s.cov = Cov18::Identity() * 1e-4;
+  s.cov(kTheta + 2, kTheta + 2) = 4e-4;  // right perturbation about body z
+  MapPoint m;
+  m.p_w = Eigen::Vector3f(10, 5, 1.5);  // in the slice
+  r.static_map.push_back(m);
+  m.p_w = Eigen::Vector3f(10, 5, -1.0);  // the road: out
+  r.static_map.push_back(m);
+  const IcpSeed seed = makeIcpSeed(r, ScanSliceParams());
+  EXPECT_NEAR(seed.pose.mean.x(), 4, 1e-12);
+  EXPECT_NEAR(seed.pose.mean.y(), 5, 1e-12);
+  EXPECT_NEAR(seed.pose.mean.phi(), yaw, 1e-12);
+  EXPECT_EQ(seed.map_points, 1u);
+  EXPECT_NEAR(seed.velocity_local.vx, 7, 1e-12);
+  EXPECT_NEAR(seed.velocity_local.vy, 0.5, 1e-12);
+  EXPECT_NEAR(seed.pose.cov(0, 0), 1e-4, 1e-15);
+  // yaw variance = var of z of R_wb dtheta: with a 0.05 rad roll, cos^2 * 4e-4 + sin^2 * 1e-4.
+  const double c = std::cos(0.05), sn = std::sin(0.05);
+  EXPECT_NEAR(seed.pose.cov(2, 2), c * c * 4e-4 + sn * sn * 1e-4, 1e-12);
 }
 
 TEST(IcpSlamInputs, BadIniIsAClearError) {

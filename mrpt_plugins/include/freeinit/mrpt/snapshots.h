@@ -30,8 +30,9 @@ struct TopViewPanel {
   std::vector<Vec3> truth;          ///< [m] (z ignored)
 };
 
-/// Panels stacked vertically under a title band, each an orthographic top view fitted to the true
-/// path (x to the right), with the estimate in orange and the truth in white. Written atomically.
+/// Panels stacked vertically under a title band, each an orthographic top view fitted to the
+/// paths (x to the right), with the estimate in orange and the truth (if any) in white. Written
+/// atomically.
 void renderTopViewPanels(const std::string& png, const std::string& title,
                          const std::vector<TopViewPanel>& panels, int width, int height);
 
