@@ -242,6 +242,7 @@ int IcpSlamApp::run(std::ostream& log) {
   auto scansFor = [&](IcpSeedMode m) -> const auto& {
     return m == IcpSeedMode::Odometry ? odometry_scans : scans;
   };
+  std::filesystem::create_directories(params.out_dir);
   if (!odometry.empty() && !truth.empty()) {
     // The odometry alone, at the scans after the state time: the reference the fed run starts
     // from (no map, no loop: its drift grows with the integrated velocity error).
@@ -252,6 +253,8 @@ int IcpSlamApp::run(std::ostream& log) {
       const BodyPose b = bodyPoseAt(odometry, t);
       path.push_back({t, planarPose(b.q_wb, b.p_w)});
     }
+    writeTumPlanar((std::filesystem::path(params.out_dir) / "odometry_alone_tum.txt").string(),
+                   path);
     odometry_errors = comparePathWithTruth(path, truth, s.timestamp);
     log << std::fixed << std::setprecision(3) << "  odometry alone: ATE "
         << odometry_errors->ate_rmse << " m, end-point " << odometry_errors->end_point << " m\n"
