@@ -5,8 +5,9 @@
 // origin and yaw of the body at the window start) as the map frame and the body (IMU) as the
 // robot: the SE(2) pose is (p_w.x, p_w.y, yaw of R_wb). The body's roll and pitch, which SE(2)
 // cannot hold, go into the scans instead: each LiDAR frame is levelled with R_level = Rz(-yaw) R_wb
-// of the initial state before its horizontal slice is taken (ground-vehicle roll/pitch changes
-// little after that). The static map is already in w; its slice is taken by the same height band.
+// before its horizontal slice is taken, R_wb of the initial state (ground-vehicle roll/pitch
+// changes little after it) or, with odometry, of the frame's own time. The static map is already
+// in w; its slice is taken by the same height band.
 //
 // Why 2-D scans: icp-slam's ICP is planar, and MRPT 2.5.8's CPointsMap inserts a
 // CObservationPointCloud at its sensorPose only, ignoring the robot pose (fixed upstream in
