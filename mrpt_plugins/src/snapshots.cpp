@@ -100,6 +100,25 @@ struct ViewStyle {
   float point_size = 2;  ///< [px] map points
 };
 
+// A path as a dense chain of large points, one every `step` metres (GL line widths above 1 px are
+// not portable to core profiles).
+mrpt::opengl::CPointCloud::Ptr pathCloud(const std::vector<Vec3>& path, const TColor& color,
+                                         float step, float size) {
+  auto cloud = mrpt::opengl::CPointCloud::Create();
+  cloud->setPointSize(size);
+  cloud->setColor(colorf(color));
+  for (std::size_t i = 1; i < path.size(); ++i) {
+    const Vec3 a = path[i - 1], b = path[i];
+    const int n = std::max(1, static_cast<int>((b - a).norm() / step));
+    for (int k = 0; k < n; ++k) {
+      const Vec3 p = a + (b - a) * (static_cast<double>(k) / n);
+      cloud->insertPoint(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                         static_cast<float>(p.z()));
+    }
+  }
+  return cloud;
+}
+
 // One scene per view: the map colored by height over the range `z`, the rejected points, the
 // trajectory with body axes, the start, and the state's axes with gravity.
 void buildScene(mrpt::opengl::COpenGLScene& scene, const InitResult& result, const Range& z,
@@ -124,23 +143,11 @@ void buildScene(mrpt::opengl::COpenGLScene& scene, const InitResult& result, con
   for (const auto& p : result.rejected) rejected->insertPoint(p.p_w.x(), p.p_w.y(), p.p_w.z());
   scene.insert(rejected);
 
-  // The trajectory as a dense chain of large points (GL line widths above 1 px are not portable
-  // to core profiles), body axes every few poses, a sphere at the start.
+  // The trajectory, body axes every few poses, a sphere at the start.
   const auto& traj = result.trajectory;
-  auto path = CPointCloud::Create();
-  path->setPointSize(7.0f);
-  path->setColor(colorf(kTrajectory));
-  const float step = 0.05f * marker;
-  for (std::size_t i = 1; i < traj.size(); ++i) {
-    const Vec3 a = traj[i - 1].p_w, b = traj[i].p_w;
-    const int n = std::max(1, static_cast<int>((b - a).norm() / step));
-    for (int k = 0; k < n; ++k) {
-      const Vec3 p = a + (b - a) * (static_cast<double>(k) / n);
-      path->insertPoint(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                        static_cast<float>(p.z()));
-    }
-  }
-  scene.insert(path);
+  std::vector<Vec3> positions;
+  for (const auto& p : traj) positions.push_back(p.p_w);
+  scene.insert(pathCloud(positions, kTrajectory, 0.05f * marker, 7.0f));
   const std::size_t every = std::max<std::size_t>(1, traj.size() / 10);
   for (std::size_t i = 0; i < traj.size(); i += every) {
     auto axes = stock_objects::CornerXYZSimple(0.6f * marker, 2.0f);
@@ -432,6 +439,84 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
     const double t = w0 + (w1 - w0) * k / 5.0;
     img.textOut(X(t) - 20, bottom - 2, num(t - w0, 2) + " s", black);
   }
+  saveAtomically(img, png);
+}
+
+}  // namespace freeinit::mrpt_glue
+
+namespace freeinit::mrpt_glue {
+
+void renderTopViewPanels(const std::string& png, const std::string& title,
+                         const std::vector<TopViewPanel>& panels, int width, int height) {
+  using namespace mrpt::opengl;
+  const int header = 40;
+  const int n = std::max<int>(1, static_cast<int>(panels.size()));
+  const int panel_h = std::max(32, (height - header) / n);
+  mrpt::img::CImage img(width, height, mrpt::img::CH_RGB);
+  img.filledRectangle(0, 0, width - 1, height - 1, TColor(20, 20, 30));
+  const TColor white(255, 255, 255), map_grey(150, 150, 160);
+  for (int i = 0; i < static_cast<int>(panels.size()); ++i) {
+    const TopViewPanel& p = panels[static_cast<std::size_t>(i)];
+    // Fit the view to the true path (and the estimate), with a margin.
+    Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
+    for (const auto* path : {&p.truth, &p.path})
+      for (const Vec3& q : *path) {
+        lo = lo.cwiseMin(q.head<2>());
+        hi = hi.cwiseMax(q.head<2>());
+      }
+    if (!(hi.x() >= lo.x())) lo = hi = Eigen::Vector2d::Zero();
+    const Eigen::Vector2d c = 0.5 * (lo + hi);
+    const double aspect = static_cast<double>(width) / panel_h;
+    // Orthographic: MRPT 2.5.8 shows a height of half the zoom distance.
+    const double visible_h =
+        std::max({(hi.y() - lo.y()) + 16.0, (hi.x() - lo.x() + 16.0) / aspect});
+    COpenGLScene scene;
+    auto vp = scene.getViewport();
+    vp->setCustomBackgroundColor(mrpt::img::TColorf(0.08f, 0.08f, 0.12f));
+    auto grid = CGridPlaneXY::Create(static_cast<float>(c.x() - visible_h * aspect),
+                                     static_cast<float>(c.x() + visible_h * aspect),
+                                     static_cast<float>(c.y() - visible_h),
+                                     static_cast<float>(c.y() + visible_h), -0.1f, 10.0f);
+    grid->setColor(0.35f, 0.35f, 0.4f, 0.5f);
+    scene.insert(grid);
+    auto map = CPointCloud::Create();
+    map->setPointSize(2.0f);
+    map->setColor(colorf(map_grey));
+    for (std::size_t k = 0; k < p.map_x.size() && k < p.map_y.size(); ++k)
+      map->insertPoint(p.map_x[k], p.map_y[k], 0.0f);
+    scene.insert(map);
+    const float step = static_cast<float>(visible_h / panel_h);  // about one point per pixel
+    // The truth wide, the estimate narrow over it (inserted first and at a lower z: that is the
+    // order MRPT 2.5.8's orthographic top view draws over the truth).
+    std::vector<Vec3> path = p.path;
+    for (auto& q : path) q.z() = 0.0;
+    std::vector<Vec3> truth = p.truth;
+    for (auto& q : truth) q.z() = -0.5;
+    scene.insert(pathCloud(path, kTrajectory, step, 4.0f));
+    scene.insert(pathCloud(truth, white, step, 9.0f));
+    CFBORender render(static_cast<unsigned>(width), static_cast<unsigned>(panel_h));
+    auto& cam = render.getCamera(scene);
+    cam.setOrthogonal(true);
+    cam.setPointingAt(static_cast<float>(c.x()), static_cast<float>(c.y()), 0.0f);
+    cam.setZoomDistance(static_cast<float>(2.0 * visible_h));
+    cam.setAzimuthDegrees(-90.0f);
+    cam.setElevationDegrees(90.0f);
+    mrpt::img::CImage view;
+    render.render_RGB(scene, view);
+    const int y0 = header + i * panel_h;
+    img.drawImage(0, y0, view);
+    img.line(0, y0, width - 1, y0, TColor(120, 120, 140), 2);
+    img.selectTextFont("9x15");
+    img.textOut(10, y0 + 6, p.title + "   (grid 10 m)", white);
+  }
+  img.selectTextFont("10x20");
+  img.textOut(12, 10, title, white);
+  img.selectTextFont("9x15");
+  const int x = width - 420;
+  if (std::any_of(panels.begin(), panels.end(), [](const auto& p) { return !p.truth.empty(); }))
+    swatch(img, x, 12, white, "ground truth");
+  swatch(img, x + 140, 12, kTrajectory, "icp-slam path");
+  swatch(img, x + 290, 12, map_grey, "icp-slam map");
   saveAtomically(img, png);
 }
 

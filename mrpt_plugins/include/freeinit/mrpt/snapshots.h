@@ -21,4 +21,19 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
 void renderVelocityPlot(const std::string& png, const InitResult& result,
                         const std::vector<TruthSample>& truth, int width, int height);
 
+/// One panel of a top view: a map (grey points), an estimated path and the true path, all in the
+/// same planar frame.
+struct TopViewPanel {
+  std::string title;
+  std::vector<float> map_x, map_y;  ///< [m]
+  std::vector<Vec3> path;           ///< [m] (z ignored)
+  std::vector<Vec3> truth;          ///< [m] (z ignored)
+};
+
+/// Panels stacked vertically under a title band, each an orthographic top view fitted to the
+/// paths (x to the right), with the estimate in orange and the truth (if any) in white. Written
+/// atomically.
+void renderTopViewPanels(const std::string& png, const std::string& title,
+                         const std::vector<TopViewPanel>& panels, int width, int height);
+
 }  // namespace freeinit::mrpt_glue
