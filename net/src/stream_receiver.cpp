@@ -13,9 +13,12 @@ void printStats(std::ostream& o, const ReceiverStats& s) {
   o << "datagrams           = " << s.datagrams << "\n"
     << "bytes               = " << s.bytes << "\n"
     << "malformed           = " << s.malformed << "\n";
+  static const char* const keys[7] = {"",           "malformed_short  ", "malformed_magic  ",
+                                     "malformed_version", "malformed_length ", "malformed_crc    ",
+                                     "malformed_content"};
   for (int e = 1; e < 7; ++e)
     if (s.malformed_by_reason[e] > 0)
-      o << "malformed_" << e << "         = " << s.malformed_by_reason[e] << "  ; "
+      o << keys[e] << "   = " << s.malformed_by_reason[e] << "  ; "
         << toString(static_cast<DecodeError>(e)) << "\n";
   o << "duplicates          = " << s.duplicates << "\n"
     << "out_of_order        = " << s.out_of_order << "\n"
