@@ -8,6 +8,10 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <mutex>
+#include <thread>
 #include <cstdio>
 #include <filesystem>
 #include <iomanip>
@@ -22,6 +26,76 @@ using Clock = std::chrono::steady_clock;
 double secondsBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
+
+// Serializes and compresses the recording in its own thread, so that writing a large frame does
+// not delay the estimator. The queue is bounded: when the disk cannot keep up, push() waits, and
+// the source's bounded queue then drops (and counts) instead.
+class RecordWriter {
+ public:
+  RecordWriter(const std::string& path, std::size_t max_queued) : max_queued_(max_queued) {
+    if (!file_.open(path)) throw std::runtime_error(path + ": cannot create");
+    thread_ = std::thread([this] { loop(); });
+  }
+  ~RecordWriter() {
+    try {
+      close();
+    } catch (const std::exception&) {
+      // Only reached while unwinding from another error, which is the one reported.
+    }
+  }
+
+  void push(mrpt::obs::CObservation::Ptr obs) {
+    std::unique_lock<std::mutex> lock(mutex_);
+    room_.wait(lock, [&] { return queue_.size() < max_queued_ || !error_.empty(); });
+    if (!error_.empty()) throw std::runtime_error(error_);
+    queue_.push_back(std::move(obs));
+    ready_.notify_one();
+  }
+  /// Writes what is queued and closes the file; throws if writing failed.
+  void close() {
+    {
+      std::lock_guard<std::mutex> lock(mutex_);
+      closing_ = true;
+    }
+    ready_.notify_one();
+    if (thread_.joinable()) thread_.join();
+    file_.close();
+    if (!error_.empty()) throw std::runtime_error(error_);
+  }
+
+ private:
+  void loop() {
+    auto arch = mrpt::serialization::archiveFrom(file_);
+    for (;;) {
+      mrpt::obs::CObservation::Ptr obs;
+      {
+        std::unique_lock<std::mutex> lock(mutex_);
+        ready_.wait(lock, [&] { return !queue_.empty() || closing_; });
+        if (queue_.empty()) return;
+        obs = std::move(queue_.front());
+        queue_.pop_front();
+      }
+      room_.notify_one();
+      try {
+        arch << *obs;
+      } catch (const std::exception& e) {
+        std::lock_guard<std::mutex> lock(mutex_);
+        error_ = std::string("recording: ") + e.what();
+        room_.notify_all();
+        return;
+      }
+    }
+  }
+
+  mrpt::io::CFileGZOutputStream file_;
+  std::size_t max_queued_;
+  std::mutex mutex_;
+  std::condition_variable ready_, room_;
+  std::deque<mrpt::obs::CObservation::Ptr> queue_;
+  bool closing_ = false;
+  std::string error_;
+  std::thread thread_;
+};
 
 }  // namespace
 
@@ -45,13 +119,8 @@ int FreeInitOnlineApp::run(std::ostream& log) {
 
   // The recording: written to a temporary name, renamed when closed.
   record_path = params.record.empty() ? "" : (out / params.record).string();
-  mrpt::io::CFileGZOutputStream rec_file;
-  mrpt::serialization::CArchive::UniquePtr rec;
-  if (!record_path.empty()) {
-    if (!rec_file.open(record_path + ".tmp"))
-      throw std::runtime_error(record_path + ": cannot create " + record_path + ".tmp");
-    rec = mrpt::serialization::archiveUniquePtrFrom(rec_file);
-  }
+  std::unique_ptr<RecordWriter> rec;
+  if (!record_path.empty()) rec = std::make_unique<RecordWriter>(record_path + ".tmp", 128);
 
   net::UdpStreamSource source(params.source);
   source.start();
@@ -127,7 +196,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
           if (params.stop_when_ready) end = true;
         }
       }
-      if (rec) *rec << *obs;
+      if (rec) rec->push(obs);
       ++recorded;
       if (end) break;
     }
@@ -135,9 +204,9 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   }
   source.stop();
   stats = source.stats();
-  rec.reset();
-  if (!record_path.empty()) {
-    rec_file.close();
+  if (rec) {
+    rec->close();
+    rec.reset();
     std::filesystem::rename(record_path + ".tmp", record_path);
     log << "Recorded " << recorded << " observations to " << record_path << "\n";
   }
