@@ -23,8 +23,8 @@ int main(int argc, char** argv) {
     TCLAP::ValueArg<unsigned> port("p", "port", "UDP port", false, 47800, "N", cmd);
     TCLAP::ValueArg<double> wait("w", "wait", "give up if no data for S s at start (0: wait)",
                                  false, 0, "S", cmd);
-    TCLAP::ValueArg<double> idle("i", "idle-timeout", "end after S s without data", false, 2.0,
-                                 "S", cmd);
+    TCLAP::ValueArg<double> idle("i", "idle-timeout", "end after S s without data", false, 2.0, "S",
+                                 cmd);
     TCLAP::ValueArg<double> max_duration("d", "max-duration", "end after S s (0: no limit)", false,
                                          0, "S", cmd);
     TCLAP::SwitchArg stop_ready("", "stop-when-ready", "end as soon as the state is written", cmd);

@@ -12,8 +12,8 @@ int main(int argc, char** argv) {
         ' ', "0.1");
     TCLAP::ValueArg<std::string> rawlog("i", "rawlog", "rawlog to play (default: simulate)", false,
                                         "", "FILE", cmd);
-    TCLAP::ValueArg<std::string> preset("P", "preset", "simulator preset", false, "dyna_01",
-                                        "NAME", cmd);
+    TCLAP::ValueArg<std::string> preset("P", "preset", "simulator preset", false, "dyna_01", "NAME",
+                                        cmd);
     TCLAP::ValueArg<unsigned> seed("s", "seed", "simulator seed", false, 1, "N", cmd);
     TCLAP::ValueArg<double> duration("d", "duration", "simulated seconds (0: the preset's)", false,
                                      0, "S", cmd);
@@ -32,12 +32,12 @@ int main(int argc, char** argv) {
     TCLAP::ValueArg<double> drop("", "drop", "probability a datagram is lost", false, 0, "P", cmd);
     TCLAP::ValueArg<double> dup("", "duplicate", "probability a datagram is sent twice", false, 0,
                                 "P", cmd);
-    TCLAP::ValueArg<double> reorder("", "reorder", "probability a datagram is sent late", false,
-                                    0, "P", cmd);
+    TCLAP::ValueArg<double> reorder("", "reorder", "probability a datagram is sent late", false, 0,
+                                    "P", cmd);
     TCLAP::ValueArg<double> corrupt("", "corrupt", "probability a byte is flipped", false, 0, "P",
                                     cmd);
-    TCLAP::ValueArg<unsigned> fault_seed("", "fault-seed", "seed of the fault draws", false, 1,
-                                         "N", cmd);
+    TCLAP::ValueArg<unsigned> fault_seed("", "fault-seed", "seed of the fault draws", false, 1, "N",
+                                         cmd);
     TCLAP::ValueArg<double> restart("", "restart-at", "restart the sender S s into the stream",
                                     false, -1, "S", cmd);
     TCLAP::ValueArg<int> garbage("", "garbage", "N random non-packets half-way", false, 0, "N",

@@ -34,7 +34,8 @@ void CDopplerLidarImuUdp::loadConfig_sensorSpecific(const mrpt::config::CConfigF
   labels_.imu = cfg.read_string(section, "imu_label", labels_.imu);
   labels_.lidar = cfg.read_string(section, "lidar_label", labels_.lidar);
   params_.receive_buffer = cfg.read_int(section, "receive_buffer_bytes", params_.receive_buffer);
-  const int q_imu = cfg.read_int(section, "max_queued_imu", static_cast<int>(params_.max_queued_imu));
+  const int q_imu =
+      cfg.read_int(section, "max_queued_imu", static_cast<int>(params_.max_queued_imu));
   const int q_frames =
       cfg.read_int(section, "max_queued_frames", static_cast<int>(params_.max_queued_frames));
   const int window =
@@ -87,8 +88,8 @@ void CDopplerLidarImuUdp::doProcess() {
   }
   // One observation at a time: a block would count as one for grab_decimation.
   for (const auto& o : batch) appendObservation(o);
-  if (stats_period_ > 0 &&
-      std::chrono::steady_clock::now() - last_report_ > std::chrono::duration<double>(stats_period_))
+  if (stats_period_ > 0 && std::chrono::steady_clock::now() - last_report_ >
+                               std::chrono::duration<double>(stats_period_))
     report(false);
 }
 

@@ -9,15 +9,15 @@
 
 #include <chrono>
 #include <condition_variable>
-#include <deque>
-#include <mutex>
-#include <thread>
 #include <cstdio>
+#include <deque>
 #include <filesystem>
 #include <iomanip>
 #include <memory>
+#include <mutex>
 #include <ostream>
 #include <sstream>
+#include <thread>
 
 namespace freeinit::mrpt_glue {
 namespace {
@@ -124,8 +124,8 @@ int FreeInitOnlineApp::run(std::ostream& log) {
 
   net::UdpStreamSource source(params.source);
   source.start();
-  log << "Listening on UDP " << params.source.address << ":" << source.port()
-      << " (receive buffer " << source.receiveBufferGranted() << " bytes)\n";
+  log << "Listening on UDP " << params.source.address << ":" << source.port() << " (receive buffer "
+      << source.receiveBufferGranted() << " bytes)\n";
   if (on_listening) on_listening(source.port());
 
   FreeInitObservationHandler handler(config);

@@ -91,14 +91,14 @@ void StreamApp::run(std::ostream& log) {
     return a.send_ns != b.send_ns ? a.send_ns < b.send_ns : (!a.is_frame && b.is_frame);
   });
   const double span = 1e-9 * static_cast<double>(items.back().send_ns - items.front().send_ns);
-  log << "Streaming " << (params.rawlog.empty() ? "preset " + params.preset : params.rawlog)
-      << ": " << items.size() << " messages over " << span << " s to UDP " << params.address
-      << ":" << params.port << " at "
+  log << "Streaming " << (params.rawlog.empty() ? "preset " + params.preset : params.rawlog) << ": "
+      << items.size() << " messages over " << span << " s to UDP " << params.address << ":"
+      << params.port << " at "
       << (params.speed > 0 ? std::to_string(params.speed) + "x real time" : "full speed") << "\n";
 
   if (params.wait_listener > 0) {
-    const auto until = std::chrono::steady_clock::now() +
-                       std::chrono::duration<double>(params.wait_listener);
+    const auto until =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(params.wait_listener);
     while (!net::udpPortInUse(params.address, params.port)) {
       if (std::chrono::steady_clock::now() > until)
         throw std::runtime_error("nothing listens on UDP " + params.address + ":" +
@@ -117,8 +117,9 @@ void StreamApp::run(std::ostream& log) {
     const Item& it = items[i];
     const double t_stream = 1e-9 * static_cast<double>(it.send_ns - first);
     if (params.speed > 0)
-      std::this_thread::sleep_until(t0 + std::chrono::duration_cast<std::chrono::nanoseconds>(
-                                             std::chrono::duration<double>(t_stream / params.speed)));
+      std::this_thread::sleep_until(t0 +
+                                    std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::duration<double>(t_stream / params.speed)));
     if (!restarted && params.restart_at >= 0 && t_stream >= params.restart_at) {
       sender.restart();
       restarted = true;
@@ -144,8 +145,8 @@ void StreamApp::run(std::ostream& log) {
       << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
   if (stats.dropped + stats.duplicated + stats.reordered + stats.corrupted + stats.garbage > 0)
     log << "Injected faults: " << stats.dropped << " dropped, " << stats.duplicated
-        << " duplicated, " << stats.reordered << " reordered, " << stats.corrupted
-        << " corrupted, " << stats.garbage << " garbage datagrams\n";
+        << " duplicated, " << stats.reordered << " reordered, " << stats.corrupted << " corrupted, "
+        << stats.garbage << " garbage datagrams\n";
   if (stats.refused > 0)
     log << "Warning: " << stats.refused << " datagrams refused by the system (no listener?)\n";
 }

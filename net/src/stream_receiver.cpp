@@ -13,9 +13,13 @@ void printStats(std::ostream& o, const ReceiverStats& s) {
   o << "datagrams           = " << s.datagrams << "\n"
     << "bytes               = " << s.bytes << "\n"
     << "malformed           = " << s.malformed << "\n";
-  static const char* const keys[7] = {"",           "malformed_short  ", "malformed_magic  ",
-                                     "malformed_version", "malformed_length ", "malformed_crc    ",
-                                     "malformed_content"};
+  static const char* const keys[7] = {"",
+                                      "malformed_short  ",
+                                      "malformed_magic  ",
+                                      "malformed_version",
+                                      "malformed_length ",
+                                      "malformed_crc    ",
+                                      "malformed_content"};
   for (int e = 1; e < 7; ++e)
     if (s.malformed_by_reason[e] > 0)
       o << keys[e] << "   = " << s.malformed_by_reason[e] << "  ; "

@@ -20,8 +20,8 @@ void printStats(std::ostream& o, const SenderStats& s) {
     << "refused     = " << s.refused << "\n";
 }
 
-StreamSender::StreamSender(const std::string& address, std::uint16_t port,
-                           std::size_t max_datagram, const FaultParams& faults)
+StreamSender::StreamSender(const std::string& address, std::uint16_t port, std::size_t max_datagram,
+                           const FaultParams& faults)
     : max_datagram_(max_datagram), faults_(faults), rng_(faults.seed) {
   pointsPerChunk(max_datagram_);  // validates the size
   for (double p : {faults.drop, faults.duplicate, faults.reorder, faults.corrupt})
@@ -69,8 +69,8 @@ void StreamSender::sendGarbage(int n) {
     std::vector<std::uint8_t> d(size(rng_));
     for (auto& b : d) b = static_cast<std::uint8_t>(byte(rng_));
     if (i % 2 == 0 && d.size() >= 4) {  // a valid magic, so that the deeper checks are exercised
-      for (int k = 0; k < 4; ++k) d[static_cast<std::size_t>(k)] =
-                                      static_cast<std::uint8_t>(kMagic >> (8 * k));
+      for (int k = 0; k < 4; ++k)
+        d[static_cast<std::size_t>(k)] = static_cast<std::uint8_t>(kMagic >> (8 * k));
     }
     raw(d);
     ++stats_.garbage;

@@ -29,8 +29,8 @@ std::string where(const std::string& address, std::uint16_t port) {
 }  // namespace
 
 UdpSocket::UdpSocket() : fd_(::socket(AF_INET, SOCK_DGRAM, 0)) {
-  if (fd_ < 0) throw std::runtime_error(std::string("cannot create a UDP socket: ") +
-                                        std::strerror(errno));
+  if (fd_ < 0)
+    throw std::runtime_error(std::string("cannot create a UDP socket: ") + std::strerror(errno));
 }
 
 UdpSocket::~UdpSocket() { ::close(fd_); }

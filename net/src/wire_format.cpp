@@ -120,13 +120,20 @@ Extrinsics readExtrinsics(Reader& r) {
 
 const char* toString(DecodeError e) {
   switch (e) {
-    case DecodeError::None: return "ok";
-    case DecodeError::TooShort: return "shorter than a header";
-    case DecodeError::BadMagic: return "bad magic";
-    case DecodeError::BadVersion: return "unsupported version";
-    case DecodeError::BadLength: return "length fields disagree with the datagram size";
-    case DecodeError::BadCrc: return "CRC mismatch";
-    case DecodeError::BadContent: return "inconsistent content";
+    case DecodeError::None:
+      return "ok";
+    case DecodeError::TooShort:
+      return "shorter than a header";
+    case DecodeError::BadMagic:
+      return "bad magic";
+    case DecodeError::BadVersion:
+      return "unsupported version";
+    case DecodeError::BadLength:
+      return "length fields disagree with the datagram size";
+    case DecodeError::BadCrc:
+      return "CRC mismatch";
+    case DecodeError::BadContent:
+      return "inconsistent content";
   }
   return "?";
 }
@@ -164,8 +171,7 @@ std::vector<std::uint8_t> encodeImu(const std::vector<ImuMessage>& samples, std:
   return b;
 }
 
-std::vector<std::vector<std::uint8_t>> encodeFrame(const FrameMessage& frame,
-                                                   std::uint64_t session,
+std::vector<std::vector<std::uint8_t>> encodeFrame(const FrameMessage& frame, std::uint64_t session,
                                                    std::uint64_t& next_sequence,
                                                    std::size_t max_datagram) {
   const std::size_t per_chunk = pointsPerChunk(max_datagram);
@@ -229,8 +235,8 @@ DecodeError decode(const std::uint8_t* data, std::size_t n, Packet& out) {
   out.header.sequence = r.u64();
   const std::uint32_t payload = r.u32();
   r.u32();  // reserved
-  if (header_bytes != kHeaderBytes || static_cast<std::size_t>(payload) + kHeaderBytes +
-                                              kCrcBytes != n)
+  if (header_bytes != kHeaderBytes ||
+      static_cast<std::size_t>(payload) + kHeaderBytes + kCrcBytes != n)
     return DecodeError::BadLength;
   Reader crc_reader(data + n - kCrcBytes, kCrcBytes);
   if (crc_reader.u32() != crc32(data, n - kCrcBytes)) return DecodeError::BadCrc;

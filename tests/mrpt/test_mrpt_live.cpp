@@ -118,6 +118,19 @@ void runLive(LiveRun& run, const std::string& out) {
   ASSERT_TRUE(stream_error.empty()) << stream_error;
 }
 
+// The offline app on the live run's recording, writing to <out>/offline; its exit code.
+int runOffline(const LiveRun& run, const std::string& out) {
+  FreeInitApp offline;
+  offline.params.config_file = kSrc + "/ini/freeinit.ini";
+  offline.params.rawlog = run.app.record_path;
+  offline.params.out_dir = out + "/offline";
+  offline.params.progress = false;
+  std::ostringstream log;
+  const int code = offline.run(log);
+  EXPECT_TRUE(fs::is_regular_file(out + "/offline/initial_state.ini")) << log.str();
+  return code;
+}
+
 }  // namespace
 
 TEST(LiveStream, RecordingMatchesWhatWasSentAndLiveStateEqualsOffline) {
@@ -142,13 +155,7 @@ TEST(LiveStream, RecordingMatchesWhatWasSentAndLiveStateEqualsOffline) {
 
   // The offline app on the recording: the same state, to the last digit (same observations in
   // the same order through the same handler).
-  FreeInitApp offline;
-  offline.params.config_file = kSrc + "/ini/freeinit.ini";
-  offline.params.rawlog = run.app.record_path;
-  offline.params.out_dir = out + "/offline";
-  offline.params.progress = false;
-  std::ostringstream log;
-  ASSERT_EQ(offline.run(log), 0) << log.str();
+  EXPECT_EQ(runOffline(run, out), 0);
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
   EXPECT_FALSE(readText(out + "/initial_state.ini").empty());
 }
@@ -171,8 +178,8 @@ TEST(LiveStream, NetworkFaultsAreCountedAndSurvived) {
   EXPECT_GT(injected.dropped + injected.corrupted, 0u);
   EXPECT_EQ(st.sessions, 2u) << run.log;
   EXPECT_GE(st.malformed, injected.corrupted + injected.garbage) << run.log;
-  EXPECT_GE(st.malformed + st.duplicates, injected.corrupted + injected.garbage +
-                                              injected.duplicated)
+  EXPECT_GE(st.malformed + st.duplicates,
+            injected.corrupted + injected.garbage + injected.duplicated)
       << run.log;
   EXPECT_GT(st.lost, 0u) << run.log;
   EXPECT_GT(st.out_of_order, 0u) << run.log;
@@ -205,13 +212,7 @@ TEST(LiveStream, NetworkFaultsAreCountedAndSurvived) {
   EXPECT_EQ(got.clouds.size(), st.frames);
 
   // The live result, whatever it is, is the offline result on the recording.
-  FreeInitApp offline;
-  offline.params.config_file = kSrc + "/ini/freeinit.ini";
-  offline.params.rawlog = run.app.record_path;
-  offline.params.out_dir = out + "/offline";
-  offline.params.progress = false;
-  std::ostringstream log;
-  EXPECT_EQ(offline.run(log), run.exit_code) << log.str();
+  EXPECT_EQ(runOffline(run, out), run.exit_code);
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
 }
 

@@ -88,10 +88,18 @@ Output collect(const std::vector<StreamEvent>& events) {
   Output o;
   for (const auto& e : events) {
     switch (e.kind) {
-      case StreamEvent::Kind::Imu: o.imu.push_back(e.imu); break;
-      case StreamEvent::Kind::Frame: o.frames.push_back(e.frame); break;
-      case StreamEvent::Kind::SessionStart: ++o.sessions; break;
-      case StreamEvent::Kind::EndOfStream: ++o.ends; break;
+      case StreamEvent::Kind::Imu:
+        o.imu.push_back(e.imu);
+        break;
+      case StreamEvent::Kind::Frame:
+        o.frames.push_back(e.frame);
+        break;
+      case StreamEvent::Kind::SessionStart:
+        ++o.sessions;
+        break;
+      case StreamEvent::Kind::EndOfStream:
+        ++o.ends;
+        break;
     }
   }
   return o;

@@ -20,9 +20,9 @@ struct FreeInitOnlineAppParams {
   std::string out_dir = "freeinit_online_out";
   std::string record = "live.rawlog";  ///< recording, relative to out_dir ("" = none)
   net::UdpSourceParams source;         ///< address, port, queue bounds, reorder timeouts
-  double wait_first = 0;       ///< [s] give up if no data arrives for this long (0: wait forever)
-  double idle_timeout = 2.0;   ///< [s] once data flowed: end after this long without any
-  double max_duration = 0;     ///< [s] end after this long (0: no limit)
+  double wait_first = 0;      ///< [s] give up if no data arrives for this long (0: wait forever)
+  double idle_timeout = 2.0;  ///< [s] once data flowed: end after this long without any
+  double max_duration = 0;    ///< [s] end after this long (0: no limit)
   bool stop_at_end_of_stream = true;  ///< end at the sender's end-of-stream marker
   bool stop_when_ready = false;       ///< end as soon as the state is written
 };

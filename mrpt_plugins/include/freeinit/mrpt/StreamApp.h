@@ -19,17 +19,17 @@ struct StreamAppParams {
   std::string lidar_label;         ///< rawlog: the LiDAR's sensorLabel ("" = any)
   std::string preset = "dyna_01";  ///< freeinit::sim preset
   std::uint64_t seed = 1;
-  double duration = 0;        ///< [s] simulated duration (0: the preset's)
-  int points_per_frame = 0;   ///< simulated points per frame (0: the preset's)
+  double duration = 0;       ///< [s] simulated duration (0: the preset's)
+  int points_per_frame = 0;  ///< simulated points per frame (0: the preset's)
   std::string address = "127.0.0.1";
   std::uint16_t port = 47800;
   std::size_t max_datagram = 8192;  ///< [bytes] 1472 for an Ethernet MTU
-  double speed = 1.0;          ///< playback speed factor; 0: as fast as possible (a burst)
-  double wait_listener = 0;    ///< [s] wait up to this long for a local listener on the port
+  double speed = 1.0;               ///< playback speed factor; 0: as fast as possible (a burst)
+  double wait_listener = 0;         ///< [s] wait up to this long for a local listener on the port
   net::FaultParams faults;
-  double restart_at = -1;      ///< [s] into the stream: the sender restarts (new session)
-  int garbage = 0;             ///< random non-packets sent half-way
-  bool end_marker = true;      ///< send the end-of-stream marker at the end
+  double restart_at = -1;  ///< [s] into the stream: the sender restarts (new session)
+  int garbage = 0;         ///< random non-packets sent half-way
+  bool end_marker = true;  ///< send the end-of-stream marker at the end
 };
 
 class StreamApp {

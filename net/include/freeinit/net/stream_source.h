@@ -39,11 +39,11 @@ class StreamSource {
 };
 
 struct UdpSourceParams {
-  std::string address = "127.0.0.1";  ///< local address to listen on ("0.0.0.0": all)
-  std::uint16_t port = 47800;         ///< 0: an ephemeral port (see UdpStreamSource::port())
-  int receive_buffer = 16 << 20;      ///< [bytes] socket buffer asked for
-  std::size_t max_queued_imu = 4000;  ///< bounded queue towards the consumer (20 s at 200 Hz)
-  std::size_t max_queued_frames = 16; ///< frames are large: a few only
+  std::string address = "127.0.0.1";   ///< local address to listen on ("0.0.0.0": all)
+  std::uint16_t port = 47800;          ///< 0: an ephemeral port (see UdpStreamSource::port())
+  int receive_buffer = 16 << 20;       ///< [bytes] socket buffer asked for
+  std::size_t max_queued_imu = 4000;   ///< bounded queue towards the consumer (20 s at 200 Hz)
+  std::size_t max_queued_frames = 16;  ///< frames are large: a few only
   ReceiverParams receiver;
 };
 

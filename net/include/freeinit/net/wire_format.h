@@ -19,12 +19,12 @@ inline constexpr std::uint32_t kMagic = 0x4C444946;  ///< bytes "FIDL"
 inline constexpr std::uint8_t kVersion = 1;
 inline constexpr std::size_t kHeaderBytes = 32;
 inline constexpr std::size_t kCrcBytes = 4;
-inline constexpr std::size_t kImuSampleBytes = 56;       ///< i64 stamp + 6 f64
-inline constexpr std::size_t kChunkHeaderBytes = 128;    ///< frame chunk header in the payload
-inline constexpr std::size_t kPointBytes = 26;           ///< 6 f32 + u16
-inline constexpr std::size_t kMaxDatagram = 65507;       ///< largest UDP/IPv4 payload
-inline constexpr std::size_t kMinDatagram = kHeaderBytes + kChunkHeaderBytes + kPointBytes +
-                                            kCrcBytes;   ///< room for one point per chunk
+inline constexpr std::size_t kImuSampleBytes = 56;     ///< i64 stamp + 6 f64
+inline constexpr std::size_t kChunkHeaderBytes = 128;  ///< frame chunk header in the payload
+inline constexpr std::size_t kPointBytes = 26;         ///< 6 f32 + u16
+inline constexpr std::size_t kMaxDatagram = 65507;     ///< largest UDP/IPv4 payload
+inline constexpr std::size_t kMinDatagram =
+    kHeaderBytes + kChunkHeaderBytes + kPointBytes + kCrcBytes;  ///< room for one point per chunk
 inline constexpr std::uint32_t kMaxFramePoints = 4'000'000;
 
 enum class PacketType : std::uint8_t { Imu = 1, FrameChunk = 2, EndOfStream = 3 };
@@ -65,8 +65,8 @@ struct FrameChunk {
 /// A decoded, checked datagram.
 struct Packet {
   PacketHeader header;
-  std::vector<ImuMessage> imu;  ///< type Imu
-  FrameChunk chunk;             ///< type FrameChunk
+  std::vector<ImuMessage> imu;       ///< type Imu
+  FrameChunk chunk;                  ///< type FrameChunk
   std::uint64_t datagrams_sent = 0;  ///< type EndOfStream: datagrams the session sent before it
 };
 
@@ -84,8 +84,7 @@ std::size_t pointsPerChunk(std::size_t max_datagram);
 /// is advanced. Throws std::invalid_argument on a message the format cannot carry.
 std::vector<std::uint8_t> encodeImu(const std::vector<ImuMessage>& samples, std::uint64_t session,
                                     std::uint64_t& next_sequence);
-std::vector<std::vector<std::uint8_t>> encodeFrame(const FrameMessage& frame,
-                                                   std::uint64_t session,
+std::vector<std::vector<std::uint8_t>> encodeFrame(const FrameMessage& frame, std::uint64_t session,
                                                    std::uint64_t& next_sequence,
                                                    std::size_t max_datagram);
 std::vector<std::uint8_t> encodeEndOfStream(std::uint64_t session, std::uint64_t& next_sequence);
