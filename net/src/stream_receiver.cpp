@@ -28,6 +28,7 @@ void printStats(std::ostream& o, const ReceiverStats& s) {
     << "out_of_order        = " << s.out_of_order << "\n"
     << "late                = " << s.late << "\n"
     << "lost                = " << s.lost << "\n"
+    << "joined_late         = " << s.joined_late << "\n"
     << "sessions            = " << s.sessions << "\n"
     << "stale_session       = " << s.stale_session << "\n"
     << "end_of_stream       = " << s.end_of_stream << "\n"
@@ -106,6 +107,7 @@ void StreamReceiver::startSession(std::uint64_t session, std::vector<StreamEvent
   session_ = session;
   next_seq_ = 0;
   max_seq_seen_ = 0;
+  released_in_session_ = false;
   skipped_.clear();
   ++stats_.sessions;
   StreamEvent e;
@@ -119,13 +121,17 @@ void StreamReceiver::releaseInOrder(std::vector<StreamEvent>& out) {
   while (!held_.empty() && held_.begin()->first == next_seq_) {
     auto node = held_.extract(held_.begin());
     ++next_seq_;
+    released_in_session_ = true;
     handle(node.mapped().packet, node.mapped().received, out);
   }
 }
 
 void StreamReceiver::skipGap(std::vector<StreamEvent>& out) {
   const std::uint64_t first = held_.begin()->first;
-  stats_.lost += first - next_seq_;
+  if (!released_in_session_ && stats_.sessions == 1)
+    stats_.joined_late += first - next_seq_;  // sent before we listened
+  else
+    stats_.lost += first - next_seq_;
   for (std::uint64_t s = next_seq_; s < first && skipped_.size() < kMaxSkippedRemembered; ++s)
     skipped_.insert(s);
   next_seq_ = first;

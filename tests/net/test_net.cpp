@@ -239,9 +239,22 @@ TEST(StreamReceiver, AWindowFullOfLaterDatagramsGivesUpTheGap) {
   params.reorder_timeout = 1e6;  // only the window bound acts
   StreamReceiver r(params);
   std::vector<StreamEvent> ev;
-  for (std::size_t i = 1; i < 8; ++i) push(r, s.datagrams[i], ev);
-  EXPECT_EQ(r.stats().lost, 1u);  // datagram 0
-  EXPECT_EQ(collect(ev).imu.size(), 7u);
+  for (std::size_t i = 0; i < 9; ++i)
+    if (i != 1) push(r, s.datagrams[i], ev);
+  EXPECT_EQ(r.stats().lost, 1u);  // datagram 1
+  EXPECT_EQ(collect(ev).imu.size(), 8u);
+}
+
+TEST(StreamReceiver, JoiningARunningStreamIsNotCountedAsLoss) {
+  const Stream s = makeStream(11);
+  StreamReceiver r;
+  std::vector<StreamEvent> ev;
+  for (std::size_t i = 5; i < s.datagrams.size(); ++i) push(r, s.datagrams[i], ev);
+  r.tick(SteadyClock::now() + std::chrono::seconds(1), ev);
+  EXPECT_EQ(r.stats().joined_late, 5u);
+  EXPECT_EQ(r.stats().lost, 0u);
+  EXPECT_EQ(collect(ev).imu.size(), s.imu.size() - 5);
+  EXPECT_EQ(collect(ev).frames.size(), 2u);
 }
 
 TEST(StreamReceiver, SenderRestartDropsThePartialFrameAndStaleData) {

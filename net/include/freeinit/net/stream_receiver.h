@@ -39,6 +39,9 @@ struct ReceiverStats {
   std::uint64_t out_of_order = 0;       ///< arrived after a higher sequence number (then reordered)
   std::uint64_t late = 0;               ///< arrived after its gap was given up: dropped
   std::uint64_t lost = 0;               ///< sequence numbers never received (gaps given up)
+  /// Datagrams the first session sent before the receiver started (its first sequence number):
+  /// not a network loss, reported apart.
+  std::uint64_t joined_late = 0;
   std::uint64_t sessions = 0;           ///< sender sessions seen (a restart adds one)
   std::uint64_t stale_session = 0;      ///< datagrams of a session already replaced: dropped
   std::uint64_t end_of_stream = 0;      ///< end-of-stream markers received
@@ -105,6 +108,7 @@ class StreamReceiver {
   std::optional<std::uint64_t> session_;
   std::deque<std::uint64_t> retired_sessions_;  ///< bounded
   std::uint64_t next_seq_ = 0, max_seq_seen_ = 0;
+  bool released_in_session_ = false;  ///< a datagram of the current session was handled
   std::map<std::uint64_t, Held> held_;  ///< bounded by reorder_window
   std::set<std::uint64_t> skipped_;     ///< gaps given up (bounded), to tell late from dup
   std::optional<Assembly> assembly_;
