@@ -190,7 +190,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
           ready_live = true;
           log << std::fixed << std::setprecision(3) << "State written to " << state_file
               << ": latency " << 1e3 * latency.total << " ms from the receipt of the last needed "
-              << "measurement (queue " << 1e3 * latency.queue << ", estimator "
+              << "measurement (queue and conversion " << 1e3 * latency.queue << ", estimator "
               << 1e3 * latency.estimator << ", write " << 1e3 * latency.write << ")\n"
               << std::defaultfloat;
           if (params.stop_when_ready) end = true;

@@ -14,87 +14,95 @@
 namespace freeinit::mrpt_glue {
 namespace {
 
-// One message to send, at `send_ns` (stream time).
-struct Item {
-  std::int64_t send_ns = 0;
-  bool is_frame = false;
-  net::ImuMessage imu;
-  net::FrameMessage frame;
+// What is played: IMU samples and frames, each stream in time order.
+struct Messages {
+  std::vector<net::ImuMessage> imu;
+  std::vector<net::FrameMessage> frames;
 };
 
-std::int64_t frameEnd(const net::FrameMessage& f) {
-  float last = 0;
-  for (const auto& p : f.points) last = std::max(last, p.time_offset);
-  return f.stamp_ns + static_cast<std::int64_t>(static_cast<double>(last) * 1e9);
-}
+// One datagram to send at `send_ns` (stream time): an IMU sample or one chunk of a frame.
+struct Slot {
+  std::int64_t send_ns = 0;
+  bool is_chunk = false;
+  std::size_t index = 0;  ///< into Messages::imu or Messages::frames
+  std::size_t chunk = 0;
+};
 
-std::vector<Item> fromRawlog(const StreamAppParams& p) {
-  std::vector<Item> items;
+Messages fromRawlog(const StreamAppParams& p) {
+  Messages m;
   std::optional<mrpt::poses::CPose3D> imu_pose;
   for (const auto& r : readRawlog(p.rawlog)) {
     try {
       if (auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(r.obs)) {
         if (!p.imu_label.empty() && imu->sensorLabel != p.imu_label) continue;
         if (!imu_pose) imu_pose = imu->sensorPose;
-        Item it;
-        it.imu = imuMessage(*imu);
-        it.send_ns = it.imu.stamp_ns;
-        items.push_back(std::move(it));
+        m.imu.push_back(imuMessage(*imu));
       } else if (auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(r.obs)) {
         if (!p.lidar_label.empty() && pc->sensorLabel != p.lidar_label) continue;
         const mrpt::poses::CPose3D base = imu_pose ? *imu_pose : mrpt::poses::CPose3D();
-        Item it;
-        it.is_frame = true;
-        it.frame = frameMessage(*pc, extrinsicsFromPose(pc->sensorPose - base));
-        it.send_ns = frameEnd(it.frame);
-        items.push_back(std::move(it));
+        m.frames.push_back(frameMessage(*pc, extrinsicsFromPose(pc->sensorPose - base)));
       }
     } catch (const std::exception& e) {
       throw InputError(p.rawlog + ": record " + std::to_string(r.index) + ": " + e.what());
     }
   }
-  return items;
+  return m;
 }
 
 // The simulated recording, through the same observations freeinit-sim writes (so that stamps
 // are on MRPT's 100 ns clock as in a rawlog).
-std::vector<Item> fromSimulator(const StreamAppParams& p) {
+Messages fromSimulator(const StreamAppParams& p) {
   sim::ScenarioConfig sc = sim::preset(p.preset, p.seed);
   if (p.duration > 0) sc.duration = p.duration;
   if (p.points_per_frame > 0) sc.points_per_frame = p.points_per_frame;
   const sim::Recording rec = sim::simulate(sc);
-  std::vector<Item> items;
-  for (const auto& s : rec.imu) {
-    Item it;
-    it.imu = imuMessage(*imuToObservation(s, "IMU"));
-    it.send_ns = it.imu.stamp_ns;
-    items.push_back(std::move(it));
+  Messages m;
+  for (const auto& s : rec.imu) m.imu.push_back(imuMessage(*imuToObservation(s, "IMU")));
+  for (const auto& f : rec.frames)
+    m.frames.push_back(
+        frameMessage(*frameToObservation(f, rec.extrinsics, "LIDAR"), rec.extrinsics));
+  return m;
+}
+
+// Each IMU sample at its stamp; each chunk of a frame when its last point was measured (points
+// are in time order), as a scanning sensor streams them.
+std::vector<Slot> schedule(const Messages& m, std::size_t max_datagram) {
+  std::vector<Slot> slots;
+  for (std::size_t i = 0; i < m.imu.size(); ++i) slots.push_back({m.imu[i].stamp_ns, false, i, 0});
+  const std::size_t per_chunk = net::pointsPerChunk(max_datagram);
+  for (std::size_t i = 0; i < m.frames.size(); ++i) {
+    const auto& f = m.frames[i];
+    const std::size_t chunks = net::chunkCount(f.points.size(), max_datagram);
+    float last = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      for (std::size_t k = c * per_chunk; k < std::min(f.points.size(), (c + 1) * per_chunk); ++k)
+        last = std::max(last, f.points[k].time_offset);
+      slots.push_back(
+          {f.stamp_ns + static_cast<std::int64_t>(static_cast<double>(last) * 1e9), true, i, c});
+    }
   }
-  for (const auto& f : rec.frames) {
-    Item it;
-    it.is_frame = true;
-    it.frame = frameMessage(*frameToObservation(f, rec.extrinsics, "LIDAR"), rec.extrinsics);
-    it.send_ns = frameEnd(it.frame);
-    items.push_back(std::move(it));
-  }
-  return items;
+  // By send time; IMU first on ties; chunks of a frame stay in order.
+  std::stable_sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) {
+    return a.send_ns != b.send_ns ? a.send_ns < b.send_ns : (!a.is_chunk && b.is_chunk);
+  });
+  return slots;
 }
 
 }  // namespace
 
 void StreamApp::run(std::ostream& log) {
   if (!(params.speed >= 0)) throw std::invalid_argument("speed must be >= 0");
-  std::vector<Item> items = params.rawlog.empty() ? fromSimulator(params) : fromRawlog(params);
-  if (items.empty()) throw std::invalid_argument("nothing to send");
-  // Delivery order: by send time; IMU first on ties, file order otherwise.
-  std::stable_sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
-    return a.send_ns != b.send_ns ? a.send_ns < b.send_ns : (!a.is_frame && b.is_frame);
-  });
-  const double span = 1e-9 * static_cast<double>(items.back().send_ns - items.front().send_ns);
+  Messages m = params.rawlog.empty() ? fromSimulator(params) : fromRawlog(params);
+  if (m.imu.empty() && m.frames.empty()) throw std::invalid_argument("nothing to send");
+  for (std::size_t i = 0; i < m.frames.size(); ++i)
+    m.frames[i].frame_id = static_cast<std::uint32_t>(i);
+  const std::vector<Slot> slots = schedule(m, params.max_datagram);
+  const double span = 1e-9 * static_cast<double>(slots.back().send_ns - slots.front().send_ns);
   log << "Streaming " << (params.rawlog.empty() ? "preset " + params.preset : params.rawlog) << ": "
-      << items.size() << " messages over " << span << " s to UDP " << params.address << ":"
-      << params.port << " at "
-      << (params.speed > 0 ? std::to_string(params.speed) + "x real time" : "full speed") << "\n";
+      << m.imu.size() << " IMU samples and " << m.frames.size() << " frames (" << slots.size()
+      << " datagrams) over " << span << " s to UDP " << params.address << ":" << params.port
+      << " at " << (params.speed > 0 ? std::to_string(params.speed) + "x real time" : "full speed")
+      << "\n";
 
   if (params.wait_listener > 0) {
     const auto until =
@@ -110,30 +118,32 @@ void StreamApp::run(std::ostream& log) {
 
   net::StreamSender sender(params.address, params.port, params.max_datagram, params.faults);
   const auto t0 = std::chrono::steady_clock::now();
-  const std::int64_t first = items.front().send_ns;
+  const std::int64_t first = slots.front().send_ns;
   bool restarted = false, garbage_sent = false;
   imu_sent = frames_sent = 0;
-  for (std::size_t i = 0; i < items.size(); ++i) {
-    const Item& it = items[i];
-    const double t_stream = 1e-9 * static_cast<double>(it.send_ns - first);
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    const Slot& slot = slots[i];
+    const double t_stream = 1e-9 * static_cast<double>(slot.send_ns - first);
     if (params.speed > 0)
       std::this_thread::sleep_until(t0 +
                                     std::chrono::duration_cast<std::chrono::nanoseconds>(
                                         std::chrono::duration<double>(t_stream / params.speed)));
+    // A restart mid-frame loses the frame in flight, as a real sender restart would.
     if (!restarted && params.restart_at >= 0 && t_stream >= params.restart_at) {
       sender.restart();
       restarted = true;
       log << "Sender restarted at " << t_stream << " s (new session)\n";
     }
-    if (!garbage_sent && params.garbage > 0 && 2 * i >= items.size()) {
+    if (!garbage_sent && params.garbage > 0 && 2 * i >= slots.size()) {
       sender.sendGarbage(params.garbage);
       garbage_sent = true;
     }
-    if (it.is_frame) {
-      sender.sendFrame(it.frame);
-      ++frames_sent;
+    if (slot.is_chunk) {
+      const auto& f = m.frames[slot.index];
+      sender.sendFrameChunk(f, slot.chunk);
+      if (slot.chunk + 1 == net::chunkCount(f.points.size(), params.max_datagram)) ++frames_sent;
     } else {
-      sender.sendImu(it.imu);
+      sender.sendImu(m.imu[slot.index]);
       ++imu_sent;
     }
   }

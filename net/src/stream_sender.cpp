@@ -57,6 +57,11 @@ void StreamSender::sendFrame(FrameMessage f) {
   ++stats_.frames;
 }
 
+void StreamSender::sendFrameChunk(const FrameMessage& f, std::size_t chunk) {
+  emit(encodeFrameChunk(f, chunk, session_, seq_, max_datagram_));
+  if (chunk + 1 == chunkCount(f.points.size(), max_datagram_)) ++stats_.frames;
+}
+
 void StreamSender::sendEndOfStream() {
   flush();
   raw(encodeEndOfStream(session_, seq_));  // never faulted: the receiver's loss count is exact

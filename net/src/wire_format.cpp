@@ -171,48 +171,63 @@ std::vector<std::uint8_t> encodeImu(const std::vector<ImuMessage>& samples, std:
   return b;
 }
 
-std::vector<std::vector<std::uint8_t>> encodeFrame(const FrameMessage& frame, std::uint64_t session,
-                                                   std::uint64_t& next_sequence,
-                                                   std::size_t max_datagram) {
+std::size_t chunkCount(std::size_t points, std::size_t max_datagram) {
   const std::size_t per_chunk = pointsPerChunk(max_datagram);
-  const std::size_t n = frame.points.size();
-  if (n == 0 || n > kMaxFramePoints)
+  if (points == 0 || points > kMaxFramePoints)
     throw std::invalid_argument("a frame carries 1.." + std::to_string(kMaxFramePoints) +
-                                " points, not " + std::to_string(n));
-  const std::size_t chunks = (n + per_chunk - 1) / per_chunk;
+                                " points, not " + std::to_string(points));
+  const std::size_t chunks = (points + per_chunk - 1) / per_chunk;
   if (chunks > 0xFFFF)
     throw std::invalid_argument("frame needs " + std::to_string(chunks) +
                                 " chunks (at most 65535): use larger datagrams");
+  return chunks;
+}
+
+std::vector<std::uint8_t> encodeFrameChunk(const FrameMessage& frame, std::size_t chunk,
+                                           std::uint64_t session, std::uint64_t& next_sequence,
+                                           std::size_t max_datagram) {
+  const std::size_t n = frame.points.size();
+  const std::size_t chunks = chunkCount(n, max_datagram);
+  if (chunk >= chunks)
+    throw std::invalid_argument("chunk " + std::to_string(chunk) + " of a frame of " +
+                                std::to_string(chunks));
+  const std::size_t per_chunk = pointsPerChunk(max_datagram);
+  const std::size_t first = chunk * per_chunk;
+  const std::size_t m = std::min(per_chunk, n - first);
+  std::vector<std::uint8_t> b = begin(PacketType::FrameChunk, session, next_sequence);
+  b.reserve(kHeaderBytes + kChunkHeaderBytes + m * kPointBytes + kCrcBytes);
+  Writer w(b);
+  w.u32(frame.frame_id);
+  w.u16(static_cast<std::uint16_t>(chunk));
+  w.u16(static_cast<std::uint16_t>(chunks));
+  w.u32(static_cast<std::uint32_t>(n));
+  w.u32(static_cast<std::uint32_t>(first));
+  w.u32(static_cast<std::uint32_t>(m));
+  w.u32(0);
+  w.i64(frame.stamp_ns);
+  writeExtrinsics(w, frame.extrinsics);
+  for (std::size_t i = first; i < first + m; ++i) {
+    const DopplerPoint& p = frame.points[i];
+    w.f32(p.p_l.x());
+    w.f32(p.p_l.y());
+    w.f32(p.p_l.z());
+    w.f32(p.doppler);
+    w.f32(p.time_offset);
+    w.f32(p.intensity);
+    w.u16(p.line);
+  }
+  finish(b);
+  return b;
+}
+
+std::vector<std::vector<std::uint8_t>> encodeFrame(const FrameMessage& frame, std::uint64_t session,
+                                                   std::uint64_t& next_sequence,
+                                                   std::size_t max_datagram) {
+  const std::size_t chunks = chunkCount(frame.points.size(), max_datagram);
   std::vector<std::vector<std::uint8_t>> out;
   out.reserve(chunks);
-  for (std::size_t c = 0; c < chunks; ++c) {
-    const std::size_t first = c * per_chunk;
-    const std::size_t m = std::min(per_chunk, n - first);
-    std::vector<std::uint8_t> b = begin(PacketType::FrameChunk, session, next_sequence);
-    b.reserve(kHeaderBytes + kChunkHeaderBytes + m * kPointBytes + kCrcBytes);
-    Writer w(b);
-    w.u32(frame.frame_id);
-    w.u16(static_cast<std::uint16_t>(c));
-    w.u16(static_cast<std::uint16_t>(chunks));
-    w.u32(static_cast<std::uint32_t>(n));
-    w.u32(static_cast<std::uint32_t>(first));
-    w.u32(static_cast<std::uint32_t>(m));
-    w.u32(0);
-    w.i64(frame.stamp_ns);
-    writeExtrinsics(w, frame.extrinsics);
-    for (std::size_t i = first; i < first + m; ++i) {
-      const DopplerPoint& p = frame.points[i];
-      w.f32(p.p_l.x());
-      w.f32(p.p_l.y());
-      w.f32(p.p_l.z());
-      w.f32(p.doppler);
-      w.f32(p.time_offset);
-      w.f32(p.intensity);
-      w.u16(p.line);
-    }
-    finish(b);
-    out.push_back(std::move(b));
-  }
+  for (std::size_t c = 0; c < chunks; ++c)
+    out.push_back(encodeFrameChunk(frame, c, session, next_sequence, max_datagram));
   return out;
 }
 

@@ -30,7 +30,7 @@ struct FreeInitOnlineAppParams {
 /// Timings of the moment the state became ready [s].
 struct OnlineLatency {
   double total = 0;      ///< receipt of the last needed datagram -> initial_state.ini renamed
-  double queue = 0;      ///< receipt -> handed to the estimator
+  double queue = 0;      ///< receipt -> handed to the estimator (queue wait and conversion)
   double estimator = 0;  ///< the process() call that closed the window
   double write = 0;      ///< writing and renaming initial_state.ini
 };

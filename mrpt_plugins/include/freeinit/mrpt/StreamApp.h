@@ -1,8 +1,8 @@
 // freeinit-stream: plays a recording as a live Doppler LiDAR + IMU stream in the wire format
 // (docs/wire_format.md) to a UDP address, in real time or faster, optionally with network faults.
 // The recording is a simulator preset or a rawlog (read and checked by our reader). Each IMU
-// sample is sent at its timestamp, each frame when its last point was measured (stamp + the
-// largest time offset), as a sensor delivers them.
+// sample is sent at its timestamp, each chunk of a frame when its last point was measured
+// (stamp + time offset), as a scanning sensor streams them.
 #pragma once
 
 #include <freeinit/net/stream_sender.h>

@@ -36,20 +36,20 @@ struct ReceiverStats {
   std::uint64_t malformed = 0;  ///< bad size, magic, version, CRC or content (sum of the next)
   std::uint64_t malformed_by_reason[7] = {};  ///< indexed by DecodeError
   std::uint64_t duplicates = 0;               ///< a sequence number seen before
-  std::uint64_t out_of_order = 0;       ///< arrived after a higher sequence number (then reordered)
-  std::uint64_t late = 0;               ///< arrived after its gap was given up: dropped
-  std::uint64_t lost = 0;               ///< sequence numbers never received (gaps given up)
+  std::uint64_t out_of_order = 0;  ///< arrived after a higher sequence number (then reordered)
+  std::uint64_t late = 0;          ///< arrived after its gap was given up: dropped
+  std::uint64_t lost = 0;          ///< sequence numbers never received (gaps given up)
   /// Datagrams the first session sent before the receiver started (its first sequence number):
   /// not a network loss, reported apart.
   std::uint64_t joined_late = 0;
-  std::uint64_t sessions = 0;           ///< sender sessions seen (a restart adds one)
-  std::uint64_t stale_session = 0;      ///< datagrams of a session already replaced: dropped
-  std::uint64_t end_of_stream = 0;      ///< end-of-stream markers received
-  std::uint64_t imu_samples = 0;        ///< emitted
-  std::uint64_t imu_stale = 0;          ///< not newer than the last emitted one: dropped
-  std::uint64_t frames = 0;             ///< complete frames emitted
-  std::uint64_t frames_incomplete = 0;  ///< dropped for missing chunks (superseded or timed out)
-  std::uint64_t frames_stale = 0;       ///< not newer than the last emitted frame: dropped
+  std::uint64_t sessions = 0;             ///< sender sessions seen (a restart adds one)
+  std::uint64_t stale_session = 0;        ///< datagrams of a session already replaced: dropped
+  std::uint64_t end_of_stream = 0;        ///< end-of-stream markers received
+  std::uint64_t imu_samples = 0;          ///< emitted
+  std::uint64_t imu_stale = 0;            ///< not newer than the last emitted one: dropped
+  std::uint64_t frames = 0;               ///< complete frames emitted
+  std::uint64_t frames_incomplete = 0;    ///< dropped for missing chunks (superseded or timed out)
+  std::uint64_t frames_stale = 0;         ///< not newer than the last emitted frame: dropped
   std::uint64_t frames_inconsistent = 0;  ///< chunks of one frame disagreeing: dropped
 
   /// Datagrams or data dropped for any reason (everything but a clean stream).
@@ -108,7 +108,7 @@ class StreamReceiver {
   std::optional<std::uint64_t> session_;
   std::deque<std::uint64_t> retired_sessions_;  ///< bounded
   std::uint64_t next_seq_ = 0, max_seq_seen_ = 0;
-  bool released_in_session_ = false;  ///< a datagram of the current session was handled
+  bool released_in_session_ = false;    ///< a datagram of the current session was handled
   std::map<std::uint64_t, Held> held_;  ///< bounded by reorder_window
   std::set<std::uint64_t> skipped_;     ///< gaps given up (bounded), to tell late from dup
   std::optional<Assembly> assembly_;

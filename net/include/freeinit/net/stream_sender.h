@@ -42,6 +42,9 @@ class StreamSender {
 
   void sendImu(const ImuMessage& s);
   void sendFrame(FrameMessage f);  ///< frame_id is assigned here
+  /// Sends one chunk of a frame (chunkCount() of them, in order), e.g. when its points have been
+  /// measured. The caller sets f.frame_id, different from the previous frame's.
+  void sendFrameChunk(const FrameMessage& f, std::size_t chunk);
   /// Ends the session with an end-of-stream marker (carries the number of datagrams sent).
   void sendEndOfStream();
   /// Simulates a sender restart: a new random session id, sequence numbers from 0 again.
@@ -52,6 +55,7 @@ class StreamSender {
   void flush();
 
   std::uint64_t session() const { return session_; }
+  std::size_t maxDatagram() const { return max_datagram_; }
   const SenderStats& stats() const { return stats_; }
 
  private:

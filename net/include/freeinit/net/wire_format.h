@@ -84,6 +84,13 @@ std::size_t pointsPerChunk(std::size_t max_datagram);
 /// is advanced. Throws std::invalid_argument on a message the format cannot carry.
 std::vector<std::uint8_t> encodeImu(const std::vector<ImuMessage>& samples, std::uint64_t session,
                                     std::uint64_t& next_sequence);
+/// Chunks a frame of `points` needs. Throws std::invalid_argument if it cannot be carried.
+std::size_t chunkCount(std::size_t points, std::size_t max_datagram);
+/// One chunk (points [chunk * pointsPerChunk, ...)), so that a sender can stream a frame as its
+/// points are measured.
+std::vector<std::uint8_t> encodeFrameChunk(const FrameMessage& frame, std::size_t chunk,
+                                           std::uint64_t session, std::uint64_t& next_sequence,
+                                           std::size_t max_datagram);
 std::vector<std::vector<std::uint8_t>> encodeFrame(const FrameMessage& frame, std::uint64_t session,
                                                    std::uint64_t& next_sequence,
                                                    std::size_t max_datagram);
