@@ -1,3 +1,4 @@
+#include <freeinit/mrpt/FreeInitApp.h>
 #include <freeinit/mrpt/FreeInitObservationHandler.h>
 #include <freeinit/mrpt/FreeInitOnlineApp.h>
 #include <freeinit/mrpt/output_writers.h>
@@ -231,6 +232,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
     writeInitialStateIni(state_file, handler.result().state);
   }
   result = handler.result();
+  writeResultFiles(params.out_dir, config.output, result, {});
   log << "Initialization: " << toString(result.state.status)
       << (result.state.message.empty() ? "" : " (" + result.state.message + ")") << "\n";
   return result.state.ok() ? 0 : 3;

@@ -158,6 +158,9 @@ TEST(LiveStream, RecordingMatchesWhatWasSentAndLiveStateEqualsOffline) {
   EXPECT_EQ(runOffline(run, out), 0);
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
   EXPECT_FALSE(readText(out + "/initial_state.ini").empty());
+  // And the files written when the stream ended.
+  for (const char* f : {"trajectory_tum.txt", "static_map.ply", "velocimeter.csv"})
+    EXPECT_EQ(readText(out + "/" + f), readText(out + "/offline/" + f)) << f;
 }
 
 TEST(LiveStream, NetworkFaultsAreCountedAndSurvived) {

@@ -2,7 +2,8 @@
 // Doppler LiDAR + IMU wire format (docs/wire_format.md), feeds the same observation handler as the
 // offline app, in arrival order, writes initial_state.ini (atomically) the moment the window
 // closes, and records everything it fed to a rawlog, so that `freeinit` on that rawlog gives the
-// same result.
+// same result. When the stream ends it writes the other outputs (static map, trajectory, ...) as
+// the offline app does.
 #pragma once
 
 #include <freeinit/initial_state.h>
