@@ -237,7 +237,7 @@ TEST(RawlogGrabberDriver, EmitsExactlyWhatWasSent) {
 
   StreamApp streamer;
   streamer.params.rawlog = kSample;
-  streamer.params.speed = 0;  // a burst
+  streamer.params.speed = 4;
   streamer.params.port = port;
   std::ostringstream slog;
   streamer.run(slog);
