@@ -5,6 +5,7 @@
 #include <freeinit/mrpt/CDopplerLidarImuUdp.h>
 #include <freeinit/mrpt/FreeInitApp.h>
 #include <freeinit/mrpt/FreeInitOnlineApp.h>
+#include <freeinit/mrpt/SimApp.h>
 #include <freeinit/mrpt/StreamApp.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/rawlog_reader.h>
@@ -216,6 +217,36 @@ TEST(LiveStream, NetworkFaultsAreCountedAndSurvived) {
 
   // The live result, whatever it is, is the offline result on the recording.
   EXPECT_EQ(runOffline(run, out), run.exit_code);
+  EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
+}
+
+// A simulator preset played live arrives as freeinit-sim would have written it, and initializes.
+TEST(LiveStream, SimulatorPresetArrivesAsFreeinitSimWritesIt) {
+  const std::string out = outDir("preset");
+  SimApp sim;
+  sim.params.preset = "stat_01";
+  sim.params.duration = 0.8;
+  sim.params.points_per_frame = 2000;
+  sim.params.output = out + "/sim/stat_01.rawlog";
+  std::ostringstream sim_log;
+  sim.run(sim_log);
+
+  LiveRun run;
+  run.streamer.params.preset = "stat_01";
+  run.streamer.params.duration = 0.8;
+  run.streamer.params.points_per_frame = 2000;
+  run.streamer.params.speed = 4;
+  runLive(run, out);
+  ASSERT_EQ(run.exit_code, 0) << run.log;
+  EXPECT_EQ(run.app.stats.anomalies(), 0u) << run.log;
+  const Streams sent = readStreams(sim.params.output);
+  const Streams got = readStreams(run.app.record_path);
+  ASSERT_EQ(got.imu.size(), sent.imu.size());
+  ASSERT_EQ(got.clouds.size(), sent.clouds.size());
+  for (std::size_t i = 0; i < sent.imu.size(); ++i) expectSameImu(*got.imu[i], *sent.imu[i]);
+  for (std::size_t i = 0; i < sent.clouds.size(); ++i)
+    expectSameCloud(*got.clouds[i], *sent.clouds[i]);
+  EXPECT_EQ(runOffline(run, out), 0);
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
 }
 
