@@ -134,6 +134,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   recorded = 0;
   std::string input_error;
   bool data_seen = false, end = false;
+  int sessions = 0;
   auto last_data = Clock::now();
   std::vector<net::StreamEvent> events;
   while (!end) {
@@ -160,7 +161,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
       using Kind = net::StreamEvent::Kind;
       if (e.kind == Kind::SessionStart) {
         log << "Sender session " << std::hex << e.session << std::dec
-            << (source.stats().receiver.sessions > 1 ? " (the sender restarted)" : "") << "\n";
+            << (++sessions > 1 ? " (the sender restarted)" : "") << "\n";
         continue;
       }
       if (e.kind == Kind::EndOfStream) {
