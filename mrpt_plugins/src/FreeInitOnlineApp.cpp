@@ -123,11 +123,14 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   std::unique_ptr<RecordWriter> rec;
   if (!record_path.empty()) rec = std::make_unique<RecordWriter>(record_path + ".tmp", 128);
 
-  net::UdpStreamSource source(params.source);
-  source.start();
-  log << "Listening on UDP " << params.source.address << ":" << source.port() << " (receive buffer "
-      << source.receiveBufferGranted() << " bytes)\n";
-  if (on_listening) on_listening(source.port());
+  std::unique_ptr<net::StreamSource> src =
+      source ? std::move(source) : std::make_unique<net::UdpStreamSource>(params.source);
+  src->start();
+  if (const auto* udp = dynamic_cast<const net::UdpStreamSource*>(src.get())) {
+    log << "Listening on UDP " << params.source.address << ":" << udp->port() << " (receive buffer "
+        << udp->receiveBufferGranted() << " bytes)\n";
+    if (on_listening) on_listening(udp->port());
+  }
 
   FreeInitObservationHandler handler(config);
   ready_live = false;
@@ -139,7 +142,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   std::vector<net::StreamEvent> events;
   while (!end) {
     events.clear();
-    source.poll(events, 0.05);
+    src->poll(events, 0.05);
     const auto now = Clock::now();
     if (!events.empty()) {
       last_data = now;
@@ -204,8 +207,8 @@ int FreeInitOnlineApp::run(std::ostream& log) {
     }
     if (!input_error.empty()) break;
   }
-  source.stop();
-  stats = source.stats();
+  src->stop();
+  stats = src->stats();
   if (rec) {
     rec->close();
     rec.reset();

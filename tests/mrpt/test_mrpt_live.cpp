@@ -250,6 +250,61 @@ TEST(LiveStream, SimulatorPresetArrivesAsFreeinitSimWritesIt) {
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
 }
 
+// Any StreamSource can feed the online app (a vendor SDK instead of UDP): here one that hands
+// over the sample's messages directly.
+class SampleSource : public net::StreamSource {
+ public:
+  void start() override {
+    net::StreamEvent e;
+    e.kind = net::StreamEvent::Kind::SessionStart;
+    events_.push_back(e);
+    for (const auto& r : readRawlog(kSample)) {
+      e.received = net::SteadyClock::now();
+      if (auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(r.obs)) {
+        e.kind = net::StreamEvent::Kind::Imu;
+        e.imu = imuMessage(*imu);
+      } else if (auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(r.obs)) {
+        e.kind = net::StreamEvent::Kind::Frame;
+        e.frame = frameMessage(*pc, extrinsicsFromPose(pc->sensorPose));
+      }
+      events_.push_back(e);
+    }
+    e.kind = net::StreamEvent::Kind::EndOfStream;
+    events_.push_back(e);
+  }
+  void stop() override {}
+  std::size_t poll(std::vector<net::StreamEvent>& out, double) override {
+    const std::size_t n = events_.size();
+    for (auto& e : events_) out.push_back(std::move(e));
+    events_.clear();
+    return n;
+  }
+  net::SourceStats stats() const override { return {}; }
+
+ private:
+  std::vector<net::StreamEvent> events_;
+};
+
+TEST(LiveStream, AnyStreamSourceFeedsTheOnlineApp) {
+  const std::string out = outDir("source");
+  FreeInitOnlineApp app;
+  app.params.config_file = kSrc + "/ini/freeinit.ini";
+  app.params.out_dir = out;
+  app.source = std::make_unique<SampleSource>();
+  std::ostringstream log;
+  ASSERT_EQ(app.run(log), 0) << log.str();
+  EXPECT_TRUE(app.ready_live);
+  EXPECT_EQ(app.recorded, 316u);
+  FreeInitApp offline;
+  offline.params.config_file = kSrc + "/ini/freeinit.ini";
+  offline.params.rawlog = kSample;
+  offline.params.out_dir = out + "/offline";
+  offline.params.progress = false;
+  ASSERT_EQ(offline.run(log), 0) << log.str();
+  // In file order, the same observations: the same state as the offline app on the sample.
+  EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
+}
+
 // The rawlog-grabber driver as rawlog-grabber drives it: loadConfig, initialize, doProcess and
 // getObservations at its process rate.
 TEST(RawlogGrabberDriver, EmitsExactlyWhatWasSent) {

@@ -12,6 +12,7 @@
 
 #include <functional>
 #include <iosfwd>
+#include <memory>
 #include <string>
 
 namespace freeinit::mrpt_glue {
@@ -41,6 +42,8 @@ class FreeInitOnlineApp {
   FreeInitOnlineAppParams params;
   /// Called once the socket listens, with the bound port (useful with port 0).
   std::function<void(std::uint16_t)> on_listening;
+  /// Another data source (e.g. a vendor SDK) instead of the UDP receiver; run() takes it.
+  std::unique_ptr<net::StreamSource> source;
 
   /// Runs until the end of the stream (see params). Bad configuration throws before listening;
   /// observations the estimator rejects throw InputError after the recording is closed.
