@@ -85,6 +85,15 @@ void expectSameCloud(const mrpt::obs::CObservationPointCloud& a,
   for (int k = 0; k < 6; ++k) EXPECT_NEAR(a.sensorPose[k], b.sensorPose[k], 1e-12) << k;
 }
 
+// Every IMU sample and cloud sent arrived, exactly and in order.
+void expectSameStreams(const Streams& got, const Streams& sent) {
+  ASSERT_EQ(got.imu.size(), sent.imu.size());
+  ASSERT_EQ(got.clouds.size(), sent.clouds.size());
+  for (std::size_t i = 0; i < sent.imu.size(); ++i) expectSameImu(*got.imu[i], *sent.imu[i]);
+  for (std::size_t i = 0; i < sent.clouds.size(); ++i)
+    expectSameCloud(*got.clouds[i], *sent.clouds[i]);
+}
+
 // Runs the online app on a port of its own choosing while a StreamApp plays `sp` to it.
 struct LiveRun {
   FreeInitOnlineApp app;
@@ -119,11 +128,11 @@ void runLive(LiveRun& run, const std::string& out) {
   ASSERT_TRUE(stream_error.empty()) << stream_error;
 }
 
-// The offline app on the live run's recording, writing to <out>/offline; its exit code.
-int runOffline(const LiveRun& run, const std::string& out) {
+// The offline app on a rawlog, writing to <out>/offline; its exit code.
+int runOffline(const std::string& rawlog, const std::string& out) {
   FreeInitApp offline;
   offline.params.config_file = kSrc + "/ini/freeinit.ini";
-  offline.params.rawlog = run.app.record_path;
+  offline.params.rawlog = rawlog;
   offline.params.out_dir = out + "/offline";
   offline.params.progress = false;
   std::ostringstream log;
@@ -146,17 +155,11 @@ TEST(LiveStream, RecordingMatchesWhatWasSentAndLiveStateEqualsOffline) {
   EXPECT_EQ(run.app.stats.anomalies(), 0u) << run.log;
 
   // Object by object: every IMU sample and cloud of the sample arrived, exactly.
-  const Streams sent = readStreams(kSample);
-  const Streams got = readStreams(run.app.record_path);
-  ASSERT_EQ(got.imu.size(), sent.imu.size());
-  ASSERT_EQ(got.clouds.size(), sent.clouds.size());
-  for (std::size_t i = 0; i < sent.imu.size(); ++i) expectSameImu(*got.imu[i], *sent.imu[i]);
-  for (std::size_t i = 0; i < sent.clouds.size(); ++i)
-    expectSameCloud(*got.clouds[i], *sent.clouds[i]);
+  expectSameStreams(readStreams(run.app.record_path), readStreams(kSample));
 
   // The offline app on the recording: the same state, to the last digit (same observations in
   // the same order through the same handler).
-  EXPECT_EQ(runOffline(run, out), 0);
+  EXPECT_EQ(runOffline(run.app.record_path, out), 0);
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
   EXPECT_FALSE(readText(out + "/initial_state.ini").empty());
   // And the files written when the stream ended.
@@ -216,7 +219,7 @@ TEST(LiveStream, NetworkFaultsAreCountedAndSurvived) {
   EXPECT_EQ(got.clouds.size(), st.frames);
 
   // The live result, whatever it is, is the offline result on the recording.
-  EXPECT_EQ(runOffline(run, out), run.exit_code);
+  EXPECT_EQ(runOffline(run.app.record_path, out), run.exit_code);
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
 }
 
@@ -239,14 +242,8 @@ TEST(LiveStream, SimulatorPresetArrivesAsFreeinitSimWritesIt) {
   runLive(run, out);
   ASSERT_EQ(run.exit_code, 0) << run.log;
   EXPECT_EQ(run.app.stats.anomalies(), 0u) << run.log;
-  const Streams sent = readStreams(sim.params.output);
-  const Streams got = readStreams(run.app.record_path);
-  ASSERT_EQ(got.imu.size(), sent.imu.size());
-  ASSERT_EQ(got.clouds.size(), sent.clouds.size());
-  for (std::size_t i = 0; i < sent.imu.size(); ++i) expectSameImu(*got.imu[i], *sent.imu[i]);
-  for (std::size_t i = 0; i < sent.clouds.size(); ++i)
-    expectSameCloud(*got.clouds[i], *sent.clouds[i]);
-  EXPECT_EQ(runOffline(run, out), 0);
+  expectSameStreams(readStreams(run.app.record_path), readStreams(sim.params.output));
+  EXPECT_EQ(runOffline(run.app.record_path, out), 0);
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
 }
 
@@ -295,12 +292,7 @@ TEST(LiveStream, AnyStreamSourceFeedsTheOnlineApp) {
   ASSERT_EQ(app.run(log), 0) << log.str();
   EXPECT_TRUE(app.ready_live);
   EXPECT_EQ(app.recorded, 316u);
-  FreeInitApp offline;
-  offline.params.config_file = kSrc + "/ini/freeinit.ini";
-  offline.params.rawlog = kSample;
-  offline.params.out_dir = out + "/offline";
-  offline.params.progress = false;
-  ASSERT_EQ(offline.run(log), 0) << log.str();
+  ASSERT_EQ(runOffline(kSample, out), 0);
   // In file order, the same observations: the same state as the offline app on the sample.
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
 }
@@ -342,13 +334,8 @@ TEST(RawlogGrabberDriver, EmitsExactlyWhatWasSent) {
     if (auto c = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(o))
       got.clouds.push_back(c);
   }
-  const Streams sent = readStreams(kSample);
   EXPECT_EQ(sensor.stats().anomalies(), 0u);
-  ASSERT_EQ(got.imu.size(), sent.imu.size());
-  ASSERT_EQ(got.clouds.size(), sent.clouds.size());
-  for (std::size_t i = 0; i < sent.imu.size(); ++i) expectSameImu(*got.imu[i], *sent.imu[i]);
-  for (std::size_t i = 0; i < sent.clouds.size(); ++i)
-    expectSameCloud(*got.clouds[i], *sent.clouds[i]);
+  expectSameStreams(got, readStreams(kSample));
 }
 
 TEST(RawlogGrabberDriver, BadConfigurationNamesTheKey) {
