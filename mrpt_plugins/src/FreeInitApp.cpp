@@ -24,6 +24,24 @@ std::string v3(const Vec3& v) {
 
 }  // namespace
 
+void writeResultFiles(const std::string& out_dir, const OutputParams& output,
+                      const InitResult& result, const std::vector<TruthSample>& truth) {
+  const std::filesystem::path out(out_dir);
+  auto file = [&](const char* name) { return (out / name).string(); };
+  if (output.simplemap) writeStaticSimplemap(file("static_map.simplemap"), result);
+  if (output.ply) writePly(file("static_map.ply"), result.static_map);
+  if (output.trajectory) writeTum(file("trajectory_tum.txt"), result.trajectory);
+  if (output.velocities) writeVelocityCsv(file("velocimeter.csv"), result.velocities);
+  if (output.snapshots) {
+    if (!result.static_map.empty())
+      renderMapSnapshot(file("static_map.png"), result, output.snapshot_width,
+                        output.snapshot_height);
+    if (!result.velocities.empty())
+      renderVelocityPlot(file("velocity.png"), result, truth, output.snapshot_width,
+                         output.snapshot_height);
+  }
+}
+
 int FreeInitApp::run(std::ostream& log) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
@@ -117,18 +135,7 @@ int FreeInitApp::run(std::ostream& log) {
   writeFileAtomically(file("effective_config.ini"), [&](std::ostream& o) { o << effective.str(); });
   writeInitialStateIni(file("initial_state.ini"), s);
   if (errors_wrt_gt) writeTruthErrors(file("errors_wrt_gt.ini"), *errors_wrt_gt);
-  if (config.output.simplemap) writeStaticSimplemap(file("static_map.simplemap"), result);
-  if (config.output.ply) writePly(file("static_map.ply"), result.static_map);
-  if (config.output.trajectory) writeTum(file("trajectory_tum.txt"), result.trajectory);
-  if (config.output.velocities) writeVelocityCsv(file("velocimeter.csv"), result.velocities);
-  if (config.output.snapshots) {
-    if (!result.static_map.empty())
-      renderMapSnapshot(file("static_map.png"), result, config.output.snapshot_width,
-                        config.output.snapshot_height);
-    if (!result.velocities.empty())
-      renderVelocityPlot(file("velocity.png"), result, truth, config.output.snapshot_width,
-                         config.output.snapshot_height);
-  }
+  writeResultFiles(params.out_dir, config.output, result, truth);
   const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
   log << "Outputs in " << out.string() << " (" << std::setprecision(3) << secs << " s total)\n";
   return s.ok() ? 0 : 3;

@@ -10,6 +10,7 @@
 #include <iosfwd>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace freeinit::mrpt_glue {
 
@@ -20,6 +21,11 @@ struct FreeInitAppParams {
   bool progress = true;            ///< progress bars on the log stream
   bool progress_terminal = false;  ///< the log is a terminal: redraw the bars in place
 };
+
+/// Writes the [output] files other than initial_state.ini (static map .simplemap / .ply,
+/// trajectory, velocimeter CSV, snapshots) into `out_dir`, each atomically. `truth` may be empty.
+void writeResultFiles(const std::string& out_dir, const OutputParams& output,
+                      const InitResult& result, const std::vector<TruthSample>& truth);
 
 class FreeInitApp {
  public:

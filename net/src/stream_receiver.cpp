@@ -1,0 +1,228 @@
+#include <freeinit/net/stream_receiver.h>
+
+#include <algorithm>
+#include <ostream>
+
+namespace freeinit::net {
+namespace {
+constexpr std::size_t kMaxRetiredSessions = 16;
+constexpr std::size_t kMaxSkippedRemembered = 4096;
+}  // namespace
+
+void printStats(std::ostream& o, const ReceiverStats& s) {
+  o << "datagrams           = " << s.datagrams << "\n"
+    << "bytes               = " << s.bytes << "\n"
+    << "malformed           = " << s.malformed << "\n";
+  static const char* const keys[7] = {"",
+                                      "malformed_short  ",
+                                      "malformed_magic  ",
+                                      "malformed_version",
+                                      "malformed_length ",
+                                      "malformed_crc    ",
+                                      "malformed_content"};
+  for (int e = 1; e < 7; ++e)
+    if (s.malformed_by_reason[e] > 0)
+      o << keys[e] << "   = " << s.malformed_by_reason[e] << "  ; "
+        << toString(static_cast<DecodeError>(e)) << "\n";
+  o << "duplicates          = " << s.duplicates << "\n"
+    << "out_of_order        = " << s.out_of_order << "\n"
+    << "late                = " << s.late << "\n"
+    << "lost                = " << s.lost << "\n"
+    << "joined_late         = " << s.joined_late << "\n"
+    << "sessions            = " << s.sessions << "\n"
+    << "stale_session       = " << s.stale_session << "\n"
+    << "end_of_stream       = " << s.end_of_stream << "\n"
+    << "imu_samples         = " << s.imu_samples << "\n"
+    << "imu_stale           = " << s.imu_stale << "\n"
+    << "frames              = " << s.frames << "\n"
+    << "frames_incomplete   = " << s.frames_incomplete << "\n"
+    << "frames_stale        = " << s.frames_stale << "\n"
+    << "frames_inconsistent = " << s.frames_inconsistent << "\n";
+}
+
+StreamReceiver::StreamReceiver(const ReceiverParams& params) : params_(params) {
+  if (params_.reorder_window == 0) params_.reorder_window = 1;
+}
+
+void StreamReceiver::push(const std::uint8_t* data, std::size_t n, SteadyClock::time_point now,
+                          std::vector<StreamEvent>& out) {
+  ++stats_.datagrams;
+  stats_.bytes += n;
+  Packet p;
+  const DecodeError err = decode(data, n, p);
+  if (err != DecodeError::None) {
+    ++stats_.malformed;
+    ++stats_.malformed_by_reason[static_cast<int>(err)];
+    tick(now, out);
+    return;
+  }
+  const std::uint64_t session = p.header.session;
+  if (!session_ || session != *session_) {
+    if (std::find(retired_sessions_.begin(), retired_sessions_.end(), session) !=
+        retired_sessions_.end()) {
+      ++stats_.stale_session;
+      tick(now, out);
+      return;
+    }
+    startSession(session, out);
+  }
+  const std::uint64_t seq = p.header.sequence;
+  if (seq < next_seq_) {
+    if (skipped_.erase(seq) > 0)
+      ++stats_.late;
+    else
+      ++stats_.duplicates;
+  } else if (held_.count(seq) > 0) {
+    ++stats_.duplicates;
+  } else {
+    if (seq < max_seq_seen_) ++stats_.out_of_order;
+    max_seq_seen_ = std::max(max_seq_seen_, seq);
+    held_.emplace(seq, Held{std::move(p), now});
+    releaseInOrder(out);
+    while (held_.size() > params_.reorder_window) skipGap(out);
+  }
+  tick(now, out);
+}
+
+void StreamReceiver::tick(SteadyClock::time_point now, std::vector<StreamEvent>& out) {
+  const auto timeout = std::chrono::duration<double>(params_.reorder_timeout);
+  while (!held_.empty()) {
+    auto oldest = held_.begin()->second.received;
+    for (const auto& h : held_) oldest = std::min(oldest, h.second.received);
+    if (now - oldest <= timeout) break;
+    skipGap(out);
+  }
+  if (assembly_ &&
+      now - assembly_->last_chunk > std::chrono::duration<double>(params_.frame_timeout))
+    dropAssembly();
+}
+
+void StreamReceiver::startSession(std::uint64_t session, std::vector<StreamEvent>& out) {
+  if (session_) {
+    while (!held_.empty()) skipGap(out);  // what the old session still holds, in order
+    dropAssembly();
+    retired_sessions_.push_back(*session_);
+    if (retired_sessions_.size() > kMaxRetiredSessions) retired_sessions_.pop_front();
+  }
+  session_ = session;
+  next_seq_ = 0;
+  max_seq_seen_ = 0;
+  released_in_session_ = false;
+  skipped_.clear();
+  ++stats_.sessions;
+  StreamEvent e;
+  e.kind = StreamEvent::Kind::SessionStart;
+  e.session = session;
+  e.received = SteadyClock::now();
+  out.push_back(std::move(e));
+}
+
+void StreamReceiver::releaseInOrder(std::vector<StreamEvent>& out) {
+  while (!held_.empty() && held_.begin()->first == next_seq_) {
+    auto node = held_.extract(held_.begin());
+    ++next_seq_;
+    released_in_session_ = true;
+    handle(node.mapped().packet, node.mapped().received, out);
+  }
+}
+
+void StreamReceiver::skipGap(std::vector<StreamEvent>& out) {
+  const std::uint64_t first = held_.begin()->first;
+  if (!released_in_session_ && stats_.sessions == 1)
+    stats_.joined_late += first - next_seq_;  // sent before we listened
+  else
+    stats_.lost += first - next_seq_;
+  for (std::uint64_t s = next_seq_; s < first && skipped_.size() < kMaxSkippedRemembered; ++s)
+    skipped_.insert(s);
+  next_seq_ = first;
+  releaseInOrder(out);
+}
+
+void StreamReceiver::handle(Packet& p, SteadyClock::time_point received,
+                            std::vector<StreamEvent>& out) {
+  switch (p.header.type) {
+    case PacketType::Imu:
+      for (const auto& s : p.imu) {
+        if (last_imu_ns_ && s.stamp_ns <= *last_imu_ns_) {
+          ++stats_.imu_stale;
+          continue;
+        }
+        last_imu_ns_ = s.stamp_ns;
+        ++stats_.imu_samples;
+        StreamEvent e;
+        e.kind = StreamEvent::Kind::Imu;
+        e.session = *session_;
+        e.imu = s;
+        e.received = received;
+        out.push_back(std::move(e));
+      }
+      break;
+    case PacketType::FrameChunk:
+      handleChunk(p.chunk, received, out);
+      break;
+    case PacketType::EndOfStream: {
+      ++stats_.end_of_stream;
+      dropAssembly();
+      StreamEvent e;
+      e.kind = StreamEvent::Kind::EndOfStream;
+      e.session = *session_;
+      e.received = received;
+      out.push_back(std::move(e));
+      break;
+    }
+  }
+}
+
+void StreamReceiver::handleChunk(FrameChunk& c, SteadyClock::time_point received,
+                                 std::vector<StreamEvent>& out) {
+  if (assembly_ && assembly_->frame.frame_id != c.frame_id) dropAssembly();  // superseded
+  if (!assembly_) {
+    Assembly a;
+    a.frame.frame_id = c.frame_id;
+    a.frame.stamp_ns = c.stamp_ns;
+    a.frame.extrinsics = c.extrinsics;
+    a.frame.points.resize(c.total_points);
+    a.chunk_count = c.chunk_count;
+    a.have.assign(c.chunk_count, false);
+    assembly_ = std::move(a);
+  }
+  Assembly& a = *assembly_;
+  if (a.frame.stamp_ns != c.stamp_ns || a.frame.points.size() != c.total_points ||
+      a.chunk_count != c.chunk_count || a.frame.extrinsics.R_bl != c.extrinsics.R_bl ||
+      a.frame.extrinsics.p_bl != c.extrinsics.p_bl) {
+    ++stats_.frames_inconsistent;
+    assembly_.reset();
+    return;
+  }
+  if (a.have[c.chunk_index]) {
+    ++stats_.duplicates;  // the same chunk again under a new sequence number
+    return;
+  }
+  std::copy(c.points.begin(), c.points.end(),
+            a.frame.points.begin() + static_cast<std::ptrdiff_t>(c.first_point));
+  a.have[c.chunk_index] = true;
+  ++a.received_chunks;
+  a.last_chunk = received;
+  if (a.received_chunks < a.chunk_count) return;
+
+  if (last_frame_ns_ && a.frame.stamp_ns <= *last_frame_ns_) {
+    ++stats_.frames_stale;
+  } else {
+    last_frame_ns_ = a.frame.stamp_ns;
+    ++stats_.frames;
+    StreamEvent e;
+    e.kind = StreamEvent::Kind::Frame;
+    e.session = *session_;
+    e.frame = std::move(a.frame);
+    e.received = received;
+    out.push_back(std::move(e));
+  }
+  assembly_.reset();
+}
+
+void StreamReceiver::dropAssembly() {
+  if (assembly_) ++stats_.frames_incomplete;
+  assembly_.reset();
+}
+
+}  // namespace freeinit::net
