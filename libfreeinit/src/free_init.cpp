@@ -294,7 +294,9 @@ struct FreeInit::Impl {
     const double t0 = wallSeconds();
     GravityEstimator::Parameters gp = cfg.gravity;
     gp.compute_covariance = finalPass();  // earlier passes only need the estimate
-    gravity = GravityEstimator(gp).estimate(kinematics, cfg.extrinsics, div->covBg());
+    // Each solve starts from the previous pass's estimate (same window start, same frame w0).
+    const GravityEstimate previous = gravity;
+    gravity = GravityEstimator(gp).estimate(kinematics, cfg.extrinsics, div->covBg(), &previous);
     result.diag.time_solver += wallSeconds() - t0;
     if (gravity.ok && pass < cfg.window.refinement_passes) {
       ++pass;

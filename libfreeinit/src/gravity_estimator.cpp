@@ -315,7 +315,8 @@ void addWhitenedResiduals(const std::vector<Vec3>& a, const std::vector<Eigen::M
 
 GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& samples,
                                            const Extrinsics& extrinsics,
-                                           const Mat3& gyro_bias_cov) const {
+                                           const Mat3& gyro_bias_cov,
+                                           const GravityEstimate* start) const {
   const Parameters& P = params_;
   if (!P.use_body_equation && !P.use_lidar_equation)
     throw std::invalid_argument(
@@ -351,8 +352,14 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
   mean_f_w /= static_cast<double>(n);
   Vec3 g_init =
       mean_f_w.norm() > 1e-6 ? Vec3(-mean_f_w.normalized() * kGravity) : Vec3(0, 0, -kGravity);
+  Vec3 b_a_init = Vec3::Zero();
+  if (start != nullptr && start->ok && start->g_w.allFinite() && start->b_a.allFinite() &&
+      start->b_a.cwiseAbs().maxCoeff() <= P.accel_bias_bound) {
+    g_init = start->g_w.normalized() * kGravity;
+    b_a_init = start->b_a;
+  }
   double g_w[3] = {g_init.x(), g_init.y(), g_init.z()};
-  double b_a[3] = {0, 0, 0};
+  double b_a[3] = {b_a_init.x(), b_a_init.y(), b_a_init.z()};
   double v0_w[3] = {0, 0, 0};
   double db_g[3] = {0, 0, 0};
   const bool estimate_db = P.formulation == Formulation::Integrated && P.estimate_gyro_bias &&

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <utility>
 
 namespace freeinit::mrpt_glue {
 
@@ -51,7 +52,7 @@ bool FreeInitObservationHandler::process(const mrpt::obs::CObservation::Ptr& obs
       config_.core.extrinsics = extrinsicsFromPose(pc->sensorPose - imu_p);
       start();
     }
-    estimator_->addFrame(f);
+    estimator_->addFrame(std::move(f));
     ++frame_count_;
     return true;
   }

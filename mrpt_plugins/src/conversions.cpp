@@ -81,13 +81,20 @@ LidarFrame frameFromObservation(const CObservationPointCloud& obs) {
 
 CObservationPointCloud::Ptr frameToObservation(const LidarFrame& f, const Extrinsics& extrinsics,
                                                const std::string& label) {
+  return frameToObservation(f.stamp, f.points, extrinsics, label);
+}
+
+CObservationPointCloud::Ptr frameToObservation(double stamp,
+                                               const std::vector<DopplerPoint>& points,
+                                               const Extrinsics& extrinsics,
+                                               const std::string& label) {
   auto map = CPointsMapDoppler::Create();
-  map->reserve(f.points.size());
-  for (const auto& p : f.points)
+  map->reserve(points.size());
+  for (const auto& p : points)
     map->insertPointDoppler(p.p_l.x(), p.p_l.y(), p.p_l.z(), p.doppler, p.time_offset, p.intensity,
                             p.line);
   auto obs = CObservationPointCloud::Create();
-  obs->timestamp = fromUnix(f.stamp);
+  obs->timestamp = fromUnix(stamp);
   obs->sensorLabel = label;
   obs->sensorPose = poseFromExtrinsics(extrinsics);
   obs->pointcloud = map;

@@ -46,9 +46,7 @@ mrpt::obs::CObservation::Ptr toObservation(const net::StreamEvent& e, const Stre
     return obs;
   }
   if (e.kind == Kind::Frame) {
-    LidarFrame f;
-    f.points = e.frame.points;
-    auto obs = frameToObservation(f, e.frame.extrinsics, labels.lidar);
+    auto obs = frameToObservation(0.0, e.frame.points, e.frame.extrinsics, labels.lidar);
     obs->timestamp = fromUnixNs(e.frame.stamp_ns);
     return obs;
   }

@@ -80,9 +80,11 @@ class GravityEstimator {
   /// `gyro_bias_cov`, when positive definite, is the covariance [(rad/s)^2] of the gyro bias used
   /// to integrate R_wb; the integrated formulation then also estimates its correction, which a
   /// rotating platform makes observable (a zero matrix: the attitude is taken as exact).
+  /// `start`, if given and ok, is an earlier estimate in the same world frame (e.g. of a seed
+  /// pass over the same window start): the solve starts from its g_w and b_a.
   GravityEstimate estimate(const std::vector<KinematicSample>& samples,
-                           const Extrinsics& extrinsics,
-                           const Mat3& gyro_bias_cov = Mat3::Zero()) const;
+                           const Extrinsics& extrinsics, const Mat3& gyro_bias_cov = Mat3::Zero(),
+                           const GravityEstimate* start = nullptr) const;
 
  private:
   Parameters params_;
