@@ -5,7 +5,6 @@
 #include <freeinit/free_init.h>
 #include <freeinit/sim/evaluation.h>
 #include <freeinit/sim/simulator.h>
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -64,6 +63,22 @@ TEST(FreeInitBehaviour, RecordingShorterThanTheWindowIsNotEnoughData) {
   const InitResult r = FreeInit::run(configFor(rec), rec.imu, rec.frames);
   EXPECT_EQ(r.state.status, InitStatus::NotEnoughData);
   EXPECT_FALSE(r.state.message.empty());
+}
+
+// A seed pass longer than the window covers the window: with a 40-sample window the default
+// seed length (60) and 0 (the whole window) are the same configuration and give the same result.
+TEST(FreeInitBehaviour, SeedLongerThanTheWindowIsTheWholeWindow) {
+  const sim::Recording rec = simulatePreset("dyna_01", 0.5, 5000);
+  FreeInitConfig cfg = configFor(rec);
+  cfg.window.imu_samples = 40;
+  ASSERT_GT(cfg.window.seed_imu_samples, cfg.window.imu_samples);
+  const InitResult a = FreeInit::run(cfg, rec.imu, rec.frames);
+  cfg.window.seed_imu_samples = 0;
+  const InitResult b = FreeInit::run(cfg, rec.imu, rec.frames);
+  ASSERT_TRUE(a.state.ok()) << a.state.message;
+  EXPECT_EQ(a.state.v_w, b.state.v_w);
+  EXPECT_EQ(a.state.b_a, b.state.b_a);
+  EXPECT_EQ(a.state.q_wb.coeffs(), b.state.q_wb.coeffs());
 }
 
 TEST(FreeInitBehaviour, NoLidarIsNotEnoughData) {

@@ -49,9 +49,8 @@ void FreeInitConfig::validate() const {
   require(window.imu_samples >= 10, "window.imu_samples", "must be >= 10");
   require(window.refinement_passes >= 0, "window.refinement_passes", "must be >= 0");
   require(window.seed_pass_stride >= 1, "window.seed_pass_stride", "must be >= 1");
-  require(window.seed_imu_samples == 0 ||
-              (window.seed_imu_samples >= 10 && window.seed_imu_samples <= window.imu_samples),
-          "window.seed_imu_samples", "must be 0 (the whole window) or in [10, imu_samples]");
+  require(window.seed_imu_samples == 0 || window.seed_imu_samples >= 10, "window.seed_imu_samples",
+          "must be 0 (the whole window) or >= 10");
   nonNegative(velocimeter.aided_vel_random_walk, "velocimeter.aided_vel_random_walk");
   nonNegative(gravity.velocity_error_correlation_time, "gravity.velocity_error_correlation_time");
   positive(gravity.accel_sigma, "gravity.accel_sigma");

@@ -6,6 +6,8 @@
 #include <cmath>
 #include <stdexcept>
 
+#include "velocimeter_steps.h"
+
 namespace freeinit {
 
 DopplerInertialOdometry::DopplerInertialOdometry(const FreeInitConfig& config,
@@ -49,15 +51,8 @@ std::vector<OdometrySample> DopplerInertialOdometry::run(
   // Accelerometer-aided propagation: a_b = f - b_a + R_wb^T g_w and its slope to the next sample
   // (gravity in b turns as dg_b/dt = -omega x g_b).
   auto setAcceleration = [&](std::size_t k) {
-    const Vec3 g_b = (R_wb0 * integrator.R_wb()).transpose() * s.g_w;
-    const Vec3 a_k = imu[k].accel - s.b_a + g_b;
-    Vec3 slope = Vec3::Zero();
-    if (k + 1 < imu.size()) {
-      const double dt = imu[k + 1].t - imu[k].t;
-      const Vec3 g_b_next = g_b - div.omega_b().cross(g_b) * dt;
-      slope = (imu[k + 1].accel - s.b_a + g_b_next - a_k) / dt;
-    }
-    div.setAcceleration(a_k, slope);
+    detail::setAidedAcceleration(div, imu, k, s.b_a,
+                                 (R_wb0 * integrator.R_wb()).transpose() * s.g_w);
   };
   std::vector<OdometrySample> out;
   out.reserve(imu.size() - k0);
@@ -74,18 +69,8 @@ std::vector<OdometrySample> DopplerInertialOdometry::run(
   record(t_ref);
 
   // Point stride: as configured, or the one that brings the point rate closest to max_point_rate.
-  int stride = vp.point_stride;
-  if (stride <= 0) {
-    stride = 1;
-    for (const auto& f : frames) {
-      if (f.points.size() < 2) continue;
-      const double span = f.points.back().time_offset - f.points.front().time_offset;
-      if (!(span > 0)) continue;
-      stride =
-          std::max(1, static_cast<int>(std::lround(f.points.size() / span / vp.max_point_rate)));
-      break;
-    }
-  }
+  const int stride = vp.point_stride > 0 ? vp.point_stride
+                                         : detail::automaticPointStride(frames, vp.max_point_rate);
 
   // Points and gyro samples in time order: a point is processed before the gyro sample after it.
   std::size_t f = 0, p = 0, counter = 0;
@@ -105,18 +90,13 @@ std::vector<OdometrySample> DopplerInertialOdometry::run(
       if (tp <= 0) continue;  // part of the initialization window
       const bool use = counter == 0;
       counter = (counter + 1) % static_cast<std::size_t>(stride);
-      const double r = pt->p_l.norm();
-      if (!use || !pt->p_l.allFinite() || !std::isfinite(pt->doppler) || !(r > 0) ||
-          r < vp.min_range || r > vp.max_range)
-        continue;
+      if (!use || !detail::usablePoint(*pt, vp)) continue;
       div.propagate(tp);
       div.updateDoppler(pt->p_l, pt->doppler);
       integrator.integrate(tp, div.omega_b(), div.v_b());
     }
     div.propagate(tg);
-    const bool has_next = k + 1 < imu.size();
-    div.updateGyro(imu[k].gyro, has_next ? imu[k + 1].gyro : imu[k].gyro,
-                   has_next ? imu[k + 1].t - imu[k].t : 0.0);
+    detail::updateGyroAt(div, imu, k);
     integrator.integrate(tg, div.omega_b(), div.v_b());
     if (accel_aided_) setAcceleration(k);
     record(imu[k].t);

@@ -6,12 +6,14 @@
 #include <freeinit/velocity_bootstrap.h>
 
 #include <chrono>
+#include <cmath>
 #include <deque>
 #include <limits>
-#include <cmath>
 #include <optional>
 #include <stdexcept>
 #include <string>
+
+#include "velocimeter_steps.h"
 
 namespace freeinit {
 namespace {
@@ -19,10 +21,6 @@ namespace {
 double wallSeconds() {
   using Clock = std::chrono::steady_clock;
   return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
-
-bool finitePoint(const DopplerPoint& p) {
-  return p.p_l.allFinite() && std::isfinite(p.doppler) && std::isfinite(p.time_offset);
 }
 
 }  // namespace
@@ -50,14 +48,14 @@ struct FreeInit::Impl {
   InitResult result;
 
   // Window and cursors.
-  double t_ref = 0;          ///< UNIX time of the window start; internal times are relative
-  std::size_t k0 = 0;        ///< first IMU sample of the window
-  std::size_t k_end = 0;     ///< last IMU sample of the window
-  std::size_t k_stop = 0;    ///< last IMU sample of the current pass
-  std::size_t k_next = 0;    ///< next IMU sample to process
+  double t_ref = 0;                  ///< UNIX time of the window start; internal times are relative
+  std::size_t k0 = 0;                ///< first IMU sample of the window
+  std::size_t k_end = 0;             ///< last IMU sample of the window
+  std::size_t k_stop = 0;            ///< last IMU sample of the current pass
+  std::size_t k_next = 0;            ///< next IMU sample to process
   std::size_t f_cur = 0, p_cur = 0;  ///< next point to process
-  int point_stride = 1;      ///< the configured stride, or the automatic one
-  std::size_t stride_counter = 0;  ///< usable points since the last used one (mod the stride)
+  int point_stride = 1;              ///< the configured stride, or the automatic one
+  std::size_t stride_counter = 0;    ///< usable points since the last used one (mod the stride)
 
   std::optional<Velocimeter> div;
   PoseIntegrator integrator;
@@ -103,17 +101,17 @@ struct FreeInit::Impl {
   void checkFrame(const LidarFrame& f) const {
     if (!std::isfinite(f.stamp)) throw std::invalid_argument("LiDAR frame stamp is not finite");
     if (!frames.empty() && f.stamp <= frames.back().stamp)
-      throw std::invalid_argument("LiDAR frame stamp does not increase: " +
-                                  std::to_string(f.stamp) + " after " +
-                                  std::to_string(frames.back().stamp));
+      throw std::invalid_argument(
+          "LiDAR frame stamp does not increase: " + std::to_string(f.stamp) + " after " +
+          std::to_string(frames.back().stamp));
     for (std::size_t i = 0; i < f.points.size(); ++i) {
       if (!std::isfinite(f.points[i].time_offset))
         throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) + ": point " +
                                     std::to_string(i) + " has a non-finite time offset");
       if (i > 0 && f.points[i].time_offset < f.points[i - 1].time_offset)
         throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
-                                    ": points are not sorted by time (point " +
-                                    std::to_string(i) + ")");
+                                    ": points are not sorted by time (point " + std::to_string(i) +
+                                    ")");
     }
     // Points are processed in time order across frames: a frame may not reach back into the
     // previous one.
@@ -145,9 +143,9 @@ struct FreeInit::Impl {
     if (phase == Phase::Running) run();
     result.diag.time_velocimeter += wallSeconds() - t0 - (result.diag.time_solver - solver0);
     if (phase == Phase::Running && finished) {
-      fail(InitStatus::NotEnoughData,
-           "the recording ends before the initialization window (" +
-               std::to_string(cfg.window.imu_samples) + " IMU samples) is covered");
+      fail(InitStatus::NotEnoughData, "the recording ends before the initialization window (" +
+                                          std::to_string(cfg.window.imu_samples) +
+                                          " IMU samples) is covered");
     }
     if (phase == Phase::WaitStart && finished)
       fail(InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
@@ -177,9 +175,8 @@ struct FreeInit::Impl {
     dopplers.reserve(cfg.bootstrap.points);
     for (; normalizeCursor(f, p) && static_cast<int>(dirs.size()) < cfg.bootstrap.points; ++p) {
       const DopplerPoint& pt = frames[f].points[p];
-      if (pointTime(f, p) < 0 || !finitePoint(pt)) continue;
+      if (pointTime(f, p) < 0 || !detail::usablePoint(pt, vp)) continue;
       const double r = pt.p_l.norm();
-      if (!(r > 0) || r < vp.min_range || r > vp.max_range) continue;
       dirs.push_back(pt.p_l.cast<double>() / r);
       dopplers.push_back(pt.doppler);
     }
@@ -195,34 +192,25 @@ struct FreeInit::Impl {
     }
     k0 = k;
     k_end = k0 + static_cast<std::size_t>(cfg.window.imu_samples) - 1;
-    point_stride = vp.point_stride > 0 ? vp.point_stride : automaticStride();
+    point_stride = vp.point_stride > 0 ? vp.point_stride
+                                       : detail::automaticPointStride(frames, vp.max_point_rate);
     boot_fit = fit;
     b_g_start = vp.gyro_bias_prior;
     const auto& sp = cfg.static_detector;
-    boot_static = sp.enabled && fit.v_l.norm() < sp.max_speed &&
-                  (imu[k0].gyro - vp.gyro_bias_prior).norm() <
-                      sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
+    boot_static =
+        sp.enabled && fit.v_l.norm() < sp.max_speed &&
+        (imu[k0].gyro - vp.gyro_bias_prior).norm() < sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
     startPass();
     phase = Phase::Running;
-  }
-
-  /// The stride that brings the point rate of the first buffered frame closest to max_point_rate.
-  int automaticStride() const {
-    for (const auto& f : frames) {
-      if (f.points.size() < 2) continue;
-      const double span = f.points.back().time_offset - f.points.front().time_offset;
-      if (!(span > 0)) continue;
-      const double rate = static_cast<double>(f.points.size()) / span;
-      return std::max(1, static_cast<int>(std::lround(rate / cfg.velocimeter.max_point_rate)));
-    }
-    return 1;
   }
 
   /// (Re)starts the velocimeter at the window start; all window data are buffered for pass > 0.
   void startPass() {
     k_next = k0 + 1;
     const int seed_n = cfg.window.seed_imu_samples;
-    k_stop = finalPass() || seed_n <= 0 ? k_end : k0 + static_cast<std::size_t>(seed_n) - 1;
+    k_stop = finalPass() || seed_n <= 0
+                 ? k_end
+                 : k0 + static_cast<std::size_t>(std::min(seed_n, cfg.window.imu_samples)) - 1;
     f_cur = 0;
     p_cur = 0;
     stride_counter = 0;
@@ -255,15 +243,8 @@ struct FreeInit::Impl {
   /// Aided passes: the body acceleration a_b = f - b_a + R_w0b^T g_w0 at sample k and its slope to
   /// sample k + 1 (gravity in b turns as dg_b/dt = -omega x g_b).
   void setAcceleration(std::size_t k) {
-    const Vec3 g_b = integrator.R_wb().transpose() * gravity.g_w;
-    const Vec3 a_k = imu[k].accel - gravity.b_a + g_b;
-    Vec3 slope = Vec3::Zero();
-    if (k + 1 < imu.size()) {
-      const double dt = imu[k + 1].t - imu[k].t;
-      const Vec3 g_b_next = g_b - div->omega_b().cross(g_b) * dt;
-      slope = (imu[k + 1].accel - gravity.b_a + g_b_next - a_k) / dt;
-    }
-    div->setAcceleration(a_k, slope);
+    detail::setAidedAcceleration(*div, imu, k, gravity.b_a,
+                                 integrator.R_wb().transpose() * gravity.g_w);
   }
 
   void run() {
@@ -298,7 +279,14 @@ struct FreeInit::Impl {
     const GravityEstimate previous = gravity;
     gravity = GravityEstimator(gp).estimate(kinematics, cfg.extrinsics, div->covBg(), &previous);
     result.diag.time_solver += wallSeconds() - t0;
-    if (gravity.ok && pass < cfg.window.refinement_passes) {
+    if (!gravity.ok && !finalPass()) {
+      // The data of the window are not all there yet: nothing beyond the seed to report.
+      fail(InitStatus::SolverFailed, "accelerometer bias / gravity of the seed pass (first " +
+                                         std::to_string(k_stop - k0 + 1) +
+                                         " IMU samples): " + gravity.message);
+      return false;
+    }
+    if (pass < cfg.window.refinement_passes) {
       ++pass;
       // The next pass integrates with the corrected gyro bias (same prior width: the window's
       // data must not be counted twice).
@@ -326,11 +314,11 @@ struct FreeInit::Impl {
       ++diag.points_skipped;
       return;
     }
-    const double r = pt.p_l.norm();
-    if (!finitePoint(pt) || !(r > 0) || r < vp.min_range || r > vp.max_range) {
+    if (!detail::usablePoint(pt, vp)) {
       ++diag.points_skipped;
       return;
     }
+    const double r = pt.p_l.norm();
     div->propagate(t);
     bool accepted;
     double residual;
@@ -374,9 +362,7 @@ struct FreeInit::Impl {
       div->updateZeroVelocity(sp.zupt_sigma);
       checkMotion(k, t);
     }
-    const bool has_next = k + 1 < imu.size();
-    div->updateGyro(imu[k].gyro, has_next ? imu[k + 1].gyro : imu[k].gyro,
-                    has_next ? imu[k + 1].t - imu[k].t : 0.0);
+    detail::updateGyroAt(*div, imu, k);
     ++result.diag.gyro_updates;
     integrator.integrate(t, div->omega_b(), div->v_b());
     if (pass > 0) setAcceleration(k);
@@ -507,8 +493,7 @@ void FreeInit::Impl::finalize() {
   A_th.block<3, 3>(0, 6) = skew(g_b) * R_w0b.transpose() * skew(ge.g_w) * M_end / g2 -
                            up_b * up_b.transpose() * R_w0b.transpose() * M_end;
   const double dt_imu = T / std::max(1, cfg.window.imu_samples - 1);
-  const double var_gyro_walk =
-      cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma * dt_imu * T;
+  const double var_gyro_walk = cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma * dt_imu * T;
   // P = G S G^T over independent error sources, so it is a covariance by construction:
   //   [dg_w0, db_a, db_g] (solver, 9), dv_b (velocimeter, 3), gyro white noise integrated into
   //   the attitude (3), position and gravity floors (3 + 3).
@@ -555,8 +540,8 @@ void FreeInit::addImu(const ImuSample& s) {
   if (!s.gyro.allFinite() || !s.accel.allFinite() || !std::isfinite(s.t))
     throw std::invalid_argument("IMU sample at t=" + std::to_string(s.t) + " is not finite");
   if (!impl_->imu.empty() && s.t <= impl_->imu.back().t)
-    throw std::invalid_argument("IMU time does not increase: " + std::to_string(s.t) +
-                                " after " + std::to_string(impl_->imu.back().t));
+    throw std::invalid_argument("IMU time does not increase: " + std::to_string(s.t) + " after " +
+                                std::to_string(impl_->imu.back().t));
   if (impl_->phase == Impl::Phase::Done) return;  // the result is final: nothing more to keep
   impl_->imu.push_back(s);
   impl_->pump();

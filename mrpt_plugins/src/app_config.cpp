@@ -78,7 +78,7 @@ void visitConfig(Visitor& v, AppConfig& c) {
   v("window", "seed_pass_stride", c.core.window.seed_pass_stride, "-",
     "extra decimation of the passes that only seed a refinement");
   v("window", "seed_imu_samples", c.core.window.seed_imu_samples, "-",
-    "length of the seed passes (0: the whole window); shorter: lower online latency");
+    "length of the seed passes (0: the whole window; 60 = 0.3 s at 200 Hz); shorter: lower online latency");
 
   auto& g = c.core.gravity;
   v("gravity", "formulation", g.formulation, "-", "integrated | differentiated");
