@@ -119,7 +119,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   std::vector<std::string> stale = {state_file, file("stream_stats.ini"),
                                     file("effective_config.ini")};
   for (const auto& name : resultFileNames()) stale.push_back((out / name).string());
-  if (!record_path.empty()) stale.push_back(record_path);
+  if (!record_path.empty()) stale.insert(stale.end(), {record_path, record_path + ".tmp"});
   for (const auto& path : stale) std::filesystem::remove(path);
   writeFileAtomically(file("effective_config.ini"), [&](std::ostream& o) { o << effective.str(); });
 
