@@ -491,6 +491,21 @@ TEST(StreamApp, RawlogInGIsRefusedOrConverted) {
   EXPECT_EQ(i, sent.imu.size());
 }
 
+// The recorder's writer: a final flush that fails (here: the temporary is /dev/full, which takes
+// the open but no byte) is an error, and nothing is renamed onto the rawlog's path.
+TEST(RawlogWriter, AFailedFinalFlushIsAnErrorNotARename) {
+  const std::string out = outDir("writer_full");
+  fs::create_directories(out);
+  const std::string path = out + "/full.rawlog";
+  fs::create_symlink("/dev/full", path + ".tmp");
+  RawlogWriter writer(path);
+  ImuSample s;
+  s.t = 1.0;
+  writer.write(s);  // small: it stays in zlib's buffer until the close
+  EXPECT_THROW(writer.commit(), std::runtime_error);
+  EXPECT_FALSE(fs::exists(fs::symlink_status(path)));
+}
+
 TEST(StreamConversions, NanosecondsAndClockTicksAgree) {
   const auto t = fromUnix(1700000000.1234567);
   EXPECT_EQ(fromUnixNs(toUnixNs(t)), t);
