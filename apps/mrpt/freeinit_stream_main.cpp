@@ -43,6 +43,8 @@ int main(int argc, char** argv) {
     TCLAP::ValueArg<int> garbage("", "garbage", "N random non-packets half-way", false, 0, "N",
                                  cmd);
     TCLAP::SwitchArg no_end("", "no-end-marker", "do not send the end-of-stream marker", cmd);
+    TCLAP::SwitchArg in_g("", "imu-accel-in-g",
+                          "the rawlog's accelerations are in g (sent as m/s^2)", cmd);
     cmd.parse(argc, argv);
     if (port.getValue() == 0 || port.getValue() > 65535)
       throw std::invalid_argument("--port must be in 1..65535");
@@ -66,6 +68,7 @@ int main(int argc, char** argv) {
     p.restart_at = restart.getValue();
     p.garbage = garbage.getValue();
     p.end_marker = !no_end.getValue();
+    p.imu_accel_in_g = in_g.getValue();
     app.run(std::cout);
     return 0;
   } catch (const std::exception& e) {

@@ -65,8 +65,9 @@ void CDopplerLidarImuUdp::initialize() {
     m_state = ssError;
     throw std::runtime_error("[" + m_sensorLabel + "] " + e.what());
   }
-  std::cout << "[" << m_sensorLabel << "] listening for the Doppler LiDAR + IMU stream on UDP "
-            << params_.address << ":" << params_.port << "\n";
+  if (const auto* udp = dynamic_cast<const net::UdpStreamSource*>(source_.get()))
+    std::cout << "[" << m_sensorLabel << "] listening for the Doppler LiDAR + IMU stream on UDP "
+              << params_.address << ":" << udp->port() << "\n";  // the bound port (port = 0)
   last_report_ = std::chrono::steady_clock::now();
   m_state = ssWorking;
 }

@@ -22,22 +22,33 @@ std::string v3(const Vec3& v) {
   return os.str();
 }
 
+constexpr const char* kSimplemapFile = "static_map.simplemap";
+constexpr const char* kPlyFile = "static_map.ply";
+constexpr const char* kTrajectoryFile = "trajectory_tum.txt";
+constexpr const char* kVelocityCsvFile = "velocimeter.csv";
+constexpr const char* kMapPngFile = "static_map.png";
+constexpr const char* kVelocityPngFile = "velocity.png";
+
 }  // namespace
+
+std::vector<std::string> resultFileNames() {
+  return {kSimplemapFile,   kPlyFile,    kTrajectoryFile,
+          kVelocityCsvFile, kMapPngFile, kVelocityPngFile};
+}
 
 void writeResultFiles(const std::string& out_dir, const OutputParams& output,
                       const InitResult& result, const std::vector<TruthSample>& truth) {
   const std::filesystem::path out(out_dir);
   auto file = [&](const char* name) { return (out / name).string(); };
-  if (output.simplemap) writeStaticSimplemap(file("static_map.simplemap"), result);
-  if (output.ply) writePly(file("static_map.ply"), result.static_map);
-  if (output.trajectory) writeTum(file("trajectory_tum.txt"), result.trajectory);
-  if (output.velocities) writeVelocityCsv(file("velocimeter.csv"), result.velocities);
+  if (output.simplemap) writeStaticSimplemap(file(kSimplemapFile), result);
+  if (output.ply) writePly(file(kPlyFile), result.static_map);
+  if (output.trajectory) writeTum(file(kTrajectoryFile), result.trajectory);
+  if (output.velocities) writeVelocityCsv(file(kVelocityCsvFile), result.velocities);
   if (output.snapshots) {
     if (!result.static_map.empty())
-      renderMapSnapshot(file("static_map.png"), result, output.snapshot_width,
-                        output.snapshot_height);
+      renderMapSnapshot(file(kMapPngFile), result, output.snapshot_width, output.snapshot_height);
     if (!result.velocities.empty())
-      renderVelocityPlot(file("velocity.png"), result, truth, output.snapshot_width,
+      renderVelocityPlot(file(kVelocityPngFile), result, truth, output.snapshot_width,
                          output.snapshot_height);
   }
 }

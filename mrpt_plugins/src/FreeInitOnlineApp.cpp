@@ -1,12 +1,11 @@
 #include <freeinit/mrpt/FreeInitApp.h>
 #include <freeinit/mrpt/FreeInitObservationHandler.h>
 #include <freeinit/mrpt/FreeInitOnlineApp.h>
+#include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/register.h>
 #include <freeinit/mrpt/stream_conversions.h>
-#include <mrpt/io/CFileGZOutputStream.h>
-#include <mrpt/serialization/CArchive.h>
 
 #include <chrono>
 #include <condition_variable>
@@ -28,22 +27,17 @@ double secondsBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-// Serializes and compresses the recording in its own thread, so that writing a large frame does
-// not delay the estimator. The queue is bounded: when the disk cannot keep up, push() waits, and
-// the source's bounded queue then drops (and counts) instead.
+// Serializes and compresses the recording (a RawlogWriter) in its own thread, so that writing a
+// large frame does not delay the estimator. The queue is bounded: when the disk cannot keep up,
+// push() waits, and the source's bounded queue then drops (and counts) instead. Destroyed without
+// commit() (an error on the way), it leaves no file behind.
 class RecordWriter {
  public:
-  RecordWriter(const std::string& path, std::size_t max_queued) : max_queued_(max_queued) {
-    if (!file_.open(path)) throw std::runtime_error(path + ": cannot create");
+  RecordWriter(const std::string& path, std::size_t max_queued)
+      : writer_(path), max_queued_(max_queued) {
     thread_ = std::thread([this] { loop(); });
   }
-  ~RecordWriter() {
-    try {
-      close();
-    } catch (const std::exception&) {
-      // Only reached while unwinding from another error, which is the one reported.
-    }
-  }
+  ~RecordWriter() { stop(); }
 
   void push(mrpt::obs::CObservation::Ptr obs) {
     std::unique_lock<std::mutex> lock(mutex_);
@@ -52,21 +46,25 @@ class RecordWriter {
     queue_.push_back(std::move(obs));
     ready_.notify_one();
   }
-  /// Writes what is queued and closes the file; throws if writing failed.
-  void close() {
+  /// Writes what is queued, closes the file and renames it onto its path; throws if writing
+  /// failed (then no file is left).
+  void commit() {
+    stop();
+    if (!error_.empty()) throw std::runtime_error(error_);
+    writer_.commit();
+  }
+  const std::string& path() const { return writer_.path(); }
+
+ private:
+  void stop() {
     {
       std::lock_guard<std::mutex> lock(mutex_);
       closing_ = true;
     }
     ready_.notify_one();
     if (thread_.joinable()) thread_.join();
-    file_.close();
-    if (!error_.empty()) throw std::runtime_error(error_);
   }
-
- private:
   void loop() {
-    auto arch = mrpt::serialization::archiveFrom(file_);
     for (;;) {
       mrpt::obs::CObservation::Ptr obs;
       {
@@ -78,7 +76,7 @@ class RecordWriter {
       }
       room_.notify_one();
       try {
-        arch << *obs;
+        writer_.write(*obs);
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex_);
         error_ = std::string("recording: ") + e.what();
@@ -88,7 +86,7 @@ class RecordWriter {
     }
   }
 
-  mrpt::io::CFileGZOutputStream file_;
+  RawlogWriter writer_;
   std::size_t max_queued_;
   std::mutex mutex_;
   std::condition_variable ready_, room_;
@@ -114,14 +112,20 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   const std::filesystem::path out(params.out_dir);
   std::filesystem::create_directories(out);
   auto file = [&](const char* name) { return (out / name).string(); };
-  writeFileAtomically(file("effective_config.ini"), [&](std::ostream& o) { o << effective.str(); });
   const std::string state_file = file("initial_state.ini");
-  std::remove(state_file.c_str());  // a state from an earlier run must not pass for this one
-
-  // The recording: written to a temporary name, renamed when closed.
   record_path = params.record.empty() ? "" : (out / params.record).string();
+  // Outputs of an earlier run must not pass for this one's, nor sit next to them: remove every
+  // file this run may write (the result files depend on [output] and on how the run ends).
+  std::vector<std::string> stale = {state_file, file("stream_stats.ini"),
+                                    file("effective_config.ini")};
+  for (const auto& name : resultFileNames()) stale.push_back((out / name).string());
+  if (!record_path.empty()) stale.insert(stale.end(), {record_path, record_path + ".tmp"});
+  for (const auto& path : stale) std::filesystem::remove(path);
+  writeFileAtomically(file("effective_config.ini"), [&](std::ostream& o) { o << effective.str(); });
+
+  // The recording: written to a temporary name, renamed when committed.
   std::unique_ptr<RecordWriter> rec;
-  if (!record_path.empty()) rec = std::make_unique<RecordWriter>(record_path + ".tmp", 128);
+  if (!record_path.empty()) rec = std::make_unique<RecordWriter>(record_path, 128);
 
   std::unique_ptr<net::StreamSource> src =
       source ? std::move(source) : std::make_unique<net::UdpStreamSource>(params.source);
@@ -134,6 +138,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
 
   FreeInitObservationHandler handler(config);
   ready_live = false;
+  stats_at_ready = {};
   recorded = 0;
   std::string input_error;
   bool data_seen = false, end = false;
@@ -193,11 +198,20 @@ int FreeInitOnlineApp::run(std::ostream& log) {
           latency.write = secondsBetween(t_processed, t_written);
           latency.total = secondsBetween(e.received, t_written);
           ready_live = true;
+          stats_at_ready = src->stats();
           log << std::fixed << std::setprecision(3) << "State written to " << state_file
               << ": latency " << 1e3 * latency.total << " ms from the receipt of the last needed "
               << "measurement (queue and conversion " << 1e3 * latency.queue << ", estimator "
               << 1e3 * latency.estimator << ", write " << 1e3 * latency.write << ")\n"
               << std::defaultfloat;
+          log << (stats_at_ready.anomalies() > 0 ? "Warning: " : "")
+              << "anomalies_before_ready = " << stats_at_ready.anomalies() << " ("
+              << stats_at_ready.receiver.lost << " datagrams lost, "
+              << stats_at_ready.queue_dropped_imu << " IMU samples and "
+              << stats_at_ready.queue_dropped_frames << " frames dropped, "
+              << stats_at_ready.receiver.frames_incomplete +
+                     stats_at_ready.receiver.frames_inconsistent
+              << " frames incomplete or inconsistent)\n";
           if (params.stop_when_ready) end = true;
         }
       }
@@ -210,9 +224,8 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   src->stop();
   stats = src->stats();
   if (rec) {
-    rec->close();
+    rec->commit();
     rec.reset();
-    std::filesystem::rename(record_path + ".tmp", record_path);
     log << "Recorded " << recorded << " observations to " << record_path << "\n";
   }
   std::ostringstream st;
@@ -224,7 +237,12 @@ int FreeInitOnlineApp::run(std::ostream& log) {
       o << std::setprecision(6) << "latency_total_ms    = " << 1e3 * latency.total
         << "\nlatency_queue_ms    = " << 1e3 * latency.queue
         << "\nlatency_estimator_ms= " << 1e3 * latency.estimator
-        << "\nlatency_write_ms    = " << 1e3 * latency.write << "\n";
+        << "\nlatency_write_ms    = " << 1e3 * latency.write
+        << "\n; stream anomalies before the state was written (data possibly in the window)"
+        << "\nanomalies_before_ready = " << stats_at_ready.anomalies()
+        << "\nlost_before_ready   = " << stats_at_ready.receiver.lost
+        << "\nqueue_dropped_imu_before_ready    = " << stats_at_ready.queue_dropped_imu
+        << "\nqueue_dropped_frames_before_ready = " << stats_at_ready.queue_dropped_frames << "\n";
   });
   if (stats.anomalies() > 0)
     log << "Warning: " << stats.anomalies()
@@ -232,7 +250,11 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   if (!input_error.empty()) throw InputError(input_error);
 
   if (!handler.ready()) {
-    handler.finish();
+    try {
+      handler.finish();
+    } catch (const std::invalid_argument& ex) {
+      throw InputError(std::string("live stream: ") + ex.what());
+    }
     writeInitialStateIni(state_file, handler.result().state);
   }
   result = handler.result();

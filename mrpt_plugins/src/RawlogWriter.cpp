@@ -2,8 +2,12 @@
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/register.h>
-#include <mrpt/io/CFileGZOutputStream.h>
+#include <mrpt/io/CStream.h>
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/serialization/CArchive.h>
+#include <zlib.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -14,8 +18,49 @@
 
 namespace freeinit::mrpt_glue {
 
+namespace {
+
+// A write-only gzip file stream whose close() reports failure (MRPT 2.5.8's CFileGZOutputStream
+// ignores gzclose's result, where a full disk shows up as the last buffered block is flushed).
+class GzFileOut : public mrpt::io::CStream {
+ public:
+  ~GzFileOut() override { close(); }
+  bool open(const std::string& path) {
+    file_ = gzopen(path.c_str(), "wb");
+    return file_ != nullptr;
+  }
+  /// True if everything written reached the file.
+  bool close() {
+    if (file_ == nullptr) return false;
+    const int rc = gzclose(file_);
+    file_ = nullptr;
+    return rc == Z_OK;
+  }
+  std::size_t Write(const void* buffer, std::size_t count) override {
+    if (file_ == nullptr || count == 0) return 0;
+    const int n = gzwrite(file_, buffer, static_cast<unsigned>(count));
+    return n > 0 ? static_cast<std::size_t>(n) : 0;  // a short count makes CArchive throw
+  }
+  std::size_t Read(void*, std::size_t) override {
+    throw std::logic_error("GzFileOut is write-only");
+  }
+  std::uint64_t Seek(std::int64_t, CStream::TSeekOrigin) override {
+    throw std::logic_error("GzFileOut cannot seek");
+  }
+  std::uint64_t getTotalBytesCount() const override { return position_(); }
+  std::uint64_t getPosition() const override { return position_(); }
+
+ private:
+  std::uint64_t position_() const {
+    return file_ == nullptr ? 0 : static_cast<std::uint64_t>(gztell(file_));
+  }
+  gzFile file_ = nullptr;
+};
+
+}  // namespace
+
 struct RawlogWriter::Stream {
-  mrpt::io::CFileGZOutputStream file;
+  GzFileOut file;
   std::unique_ptr<mrpt::serialization::CArchive> archive;
 };
 
@@ -53,11 +98,22 @@ void RawlogWriter::write(const LidarFrame& f) {
   ++frames_;
 }
 
+void RawlogWriter::write(const mrpt::obs::CObservation& obs) {
+  *stream_->archive << obs;
+  ++records_;
+  if (dynamic_cast<const mrpt::obs::CObservationIMU*>(&obs) != nullptr) ++imu_;
+  if (dynamic_cast<const mrpt::obs::CObservationPointCloud*>(&obs) != nullptr) ++frames_;
+}
+
 void RawlogWriter::commit() {
   if (!stream_) throw std::logic_error(path_ + ": committed twice");
   stream_->archive.reset();
-  stream_->file.close();
+  const bool closed = stream_->file.close();
   stream_.reset();
+  if (!closed) {
+    std::remove((path_ + ".tmp").c_str());
+    throw std::runtime_error(path_ + ": writing " + path_ + ".tmp failed (disk full?)");
+  }
   std::error_code ec;
   std::filesystem::rename(path_ + ".tmp", path_, ec);
   if (ec) {

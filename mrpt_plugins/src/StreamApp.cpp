@@ -1,5 +1,6 @@
 #include <freeinit/mrpt/StreamApp.h>
 #include <freeinit/mrpt/conversions.h>
+#include <freeinit/mrpt/input_validator.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/stream_conversions.h>
 #include <freeinit/net/udp_socket.h>
@@ -28,19 +29,30 @@ struct Slot {
   std::size_t chunk = 0;
 };
 
+// The rawlog through the offline app's validator (the same labels, extrinsics from sensorPose,
+// unit and Doppler checks); the messages are built from the observations themselves so that the
+// stamps stay exact (the validator's are seconds in a double).
 Messages fromRawlog(const StreamAppParams& p) {
+  AppConfig cfg;
+  cfg.input.imu_label = p.imu_label;
+  cfg.input.lidar_label = p.lidar_label;
+  cfg.input.imu_accel_in_g = p.imu_accel_in_g;
+  cfg.input.min_imu_rate = 0;       // the receiver judges the rate
+  cfg.core.window.imu_samples = 0;  // any length can be streamed
+  const std::vector<RawlogRecord> records = readRawlog(p.rawlog);
+  const ValidatedInput in = validateInput(records, cfg, p.rawlog);
+  const Extrinsics extrinsics = in.sensor_pose_extrinsics.value_or(Extrinsics{});
+  const double accel_scale = p.imu_accel_in_g ? kGravity : 1.0;
   Messages m;
-  std::optional<mrpt::poses::CPose3D> imu_pose;
-  for (const auto& r : readRawlog(p.rawlog)) {
+  for (const auto& r : records) {
     try {
       if (auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(r.obs)) {
         if (!p.imu_label.empty() && imu->sensorLabel != p.imu_label) continue;
-        if (!imu_pose) imu_pose = imu->sensorPose;
         m.imu.push_back(imuMessage(*imu));
+        m.imu.back().accel *= accel_scale;  // the wire carries m/s^2
       } else if (auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(r.obs)) {
         if (!p.lidar_label.empty() && pc->sensorLabel != p.lidar_label) continue;
-        const mrpt::poses::CPose3D base = imu_pose ? *imu_pose : mrpt::poses::CPose3D();
-        m.frames.push_back(frameMessage(*pc, extrinsicsFromPose(pc->sensorPose - base)));
+        m.frames.push_back(frameMessage(*pc, extrinsics));
       }
     } catch (const std::exception& e) {
       throw InputError(p.rawlog + ": record " + std::to_string(r.index) + ": " + e.what());

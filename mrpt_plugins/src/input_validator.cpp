@@ -23,6 +23,49 @@ std::string fmt(double x) {
 
 }  // namespace
 
+std::optional<std::string> dopplerProblem(const std::vector<DopplerPoint>& points) {
+  const bool any_doppler = std::any_of(points.begin(), points.end(), [](const DopplerPoint& p) {
+    return std::isfinite(p.doppler) && p.doppler != 0.0f;
+  });
+  if (any_doppler) return std::nullopt;
+  return std::string(
+      "the Doppler field is zero for every point (an ego-motion-compensated sensor? Free-Init "
+      "needs the raw range rate)");
+}
+
+std::optional<std::string> imuRateProblem(const std::vector<ImuSample>& imu, double min_rate) {
+  if (imu.size() < 2) return std::nullopt;
+  // IMU rate from the median sample interval.
+  std::vector<double> dts;
+  for (std::size_t i = 1; i < imu.size(); ++i) dts.push_back(imu[i].t - imu[i - 1].t);
+  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2),
+                   dts.end());
+  const double rate = 1.0 / dts[dts.size() / 2];
+  if (rate >= min_rate) return std::nullopt;
+  return "IMU rate " + fmt(rate) + " Hz is below [input] min_imu_rate = " + fmt(min_rate) + " Hz";
+}
+
+std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, bool declared_g) {
+  if (imu.empty()) return std::nullopt;
+  // Units: the specific force averages to about 9.81 m/s^2 (1 g) over any short stretch.
+  Vec3 mean = Vec3::Zero();
+  const std::size_t n_mean = std::min(imu.size(), kImuCheckSamples);
+  for (std::size_t i = 0; i < n_mean; ++i) mean += imu[i].accel;
+  const double g_seen = (mean / static_cast<double>(n_mean)).norm();
+  switch (accelUnitMismatch(g_seen, declared_g)) {
+    case AccelUnitMismatch::kDataInG:
+      return "the mean accelerometer magnitude is " + fmt(g_seen) +
+             ", the IMU reports g, not m/s^2: set [input] imu_accel_in_g = true";
+    case AccelUnitMismatch::kDataInMs2:
+      return "[input] imu_accel_in_g = true but the accelerations are already in m/s^2 (mean "
+             "magnitude " +
+             fmt(g_seen) + " after conversion)";
+    case AccelUnitMismatch::kNone:
+      break;
+  }
+  return std::nullopt;
+}
+
 ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const AppConfig& config,
                              const std::string& file) {
   ValidatedInput in;
@@ -81,10 +124,7 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
                        f.points.end());
         if (f.points.empty()) throw fail(r.index, "no valid point left in the cloud");
       }
-      const bool any_doppler = std::any_of(
-          f.points.begin(), f.points.end(),
-          [](const DopplerPoint& p) { return std::isfinite(p.doppler) && p.doppler != 0.0f; });
-      if (!any_doppler) throw fail(r.index, "the Doppler field is zero for every point");
+      if (const auto problem = dopplerProblem(f.points)) throw fail(r.index, *problem);
       if (!in.frames.empty() && f.stamp <= in.frames.back().stamp)
         throw fail(r.index,
                    std::string("point cloud timestamp ") +
@@ -119,32 +159,11 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
     throw InputError(file + ": record " + std::to_string(first_imu_record) +
                      ": a single IMU sample");
 
-  // IMU rate from the median sample interval.
-  std::vector<double> dts;
-  for (std::size_t i = 1; i < in.imu.size(); ++i) dts.push_back(in.imu[i].t - in.imu[i - 1].t);
-  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2),
-                   dts.end());
-  const double rate = 1.0 / dts[dts.size() / 2];
-  if (rate < config.input.min_imu_rate)
-    throw InputError(
-        file + ": record " + std::to_string(first_imu_record) + ": IMU rate " + fmt(rate) +
-        " Hz is below [input] min_imu_rate = " + fmt(config.input.min_imu_rate) + " Hz");
-
-  // Units: the specific force averages to about 9.81 m/s^2 (1 g) over any short stretch.
-  Vec3 mean = Vec3::Zero();
-  const std::size_t n_mean = std::min<std::size_t>(in.imu.size(), 200);
-  for (std::size_t i = 0; i < n_mean; ++i) mean += in.imu[i].accel;
-  const double g_seen = (mean / static_cast<double>(n_mean)).norm();
-  const AccelUnitMismatch unit = accelUnitMismatch(g_seen, config.input.imu_accel_in_g);
-  if (unit == AccelUnitMismatch::kDataInG)
-    throw InputError(file + ": record " + std::to_string(first_imu_record) +
-                     ": the mean accelerometer magnitude is " + fmt(g_seen) +
-                     ", the IMU reports g, not m/s^2: set [input] imu_accel_in_g = true");
-  if (unit == AccelUnitMismatch::kDataInMs2)
-    throw InputError(file + ": record " + std::to_string(first_imu_record) +
-                     ": [input] imu_accel_in_g = true but the accelerations are already in m/s^2 "
-                     "(mean magnitude " +
-                     fmt(g_seen) + " after conversion)");
+  const std::string at_first_imu = file + ": record " + std::to_string(first_imu_record) + ": ";
+  if (const auto problem = imuRateProblem(in.imu, config.input.min_imu_rate))
+    throw InputError(at_first_imu + *problem);
+  if (const auto problem = accelUnitProblem(in.imu, config.input.imu_accel_in_g))
+    throw InputError(at_first_imu + *problem);
 
   // The window needs imu_samples IMU samples once the LiDAR has started.
   const double t_lidar = in.frames.front().stamp;

@@ -1,5 +1,9 @@
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/stream_conversions.h>
+#include <mrpt/system/datetime.h>
+
+#include <stdexcept>
+#include <string>
 
 namespace freeinit::mrpt_glue {
 namespace {
@@ -8,12 +12,25 @@ constexpr std::int64_t kUnixEpochTicks = 116444736000000000LL;
 }  // namespace
 
 std::int64_t toUnixNs(mrpt::Clock::time_point t) {
-  return (static_cast<std::int64_t>(t.time_since_epoch().count()) - kUnixEpochTicks) * 100;
+  if (t == INVALID_TIMESTAMP) throw std::invalid_argument("observation has no timestamp");
+  // Range check on ticks first, so that the multiplication below cannot overflow.
+  const std::int64_t ticks = static_cast<std::int64_t>(t.time_since_epoch().count());
+  constexpr std::int64_t kMaxTicks = (net::kMaxStampNs - 1) / 100 + kUnixEpochTicks;
+  if (ticks < kUnixEpochTicks || ticks > kMaxTicks)
+    throw std::invalid_argument("timestamp " + std::to_string(ticks) +
+                                " (100 ns ticks since 1601) is outside the stream's range "
+                                "1970 .. 2116");
+  return (ticks - kUnixEpochTicks) * 100;
 }
 
 mrpt::Clock::time_point fromUnixNs(std::int64_t ns) {
-  const std::int64_t ticks = (ns >= 0 ? ns + 50 : ns - 50) / 100 + kUnixEpochTicks;
-  return mrpt::Clock::time_point(mrpt::Clock::duration(ticks));
+  // Round to the nearest tick, halves away from zero, without forming ns +/- 50.
+  std::int64_t q = ns / 100;
+  const std::int64_t r = ns % 100;  // same sign as ns
+  if (r >= 50) ++q;
+  if (r <= -50) --q;
+  // |q| <= 9.3e16 and the epoch offset is 1.2e17: the sum fits easily.
+  return mrpt::Clock::time_point(mrpt::Clock::duration(q + kUnixEpochTicks));
 }
 
 net::ImuMessage imuMessage(const mrpt::obs::CObservationIMU& obs) {

@@ -7,6 +7,7 @@ namespace freeinit::net {
 namespace {
 constexpr std::size_t kMaxRetiredSessions = 16;
 constexpr std::size_t kMaxSkippedRemembered = 4096;
+constexpr std::uint64_t kMaxSequenceJump = std::uint64_t{1} << 32;
 }  // namespace
 
 void printStats(std::ostream& o, const ReceiverStats& s) {
@@ -64,9 +65,17 @@ void StreamReceiver::push(const std::uint8_t* data, std::size_t n, SteadyClock::
       tick(now, out);
       return;
     }
-    startSession(session, out);
+    startSession(session, now, out);
   }
   const std::uint64_t seq = p.header.sequence;
+  if (seq > next_seq_ && seq - next_seq_ >= kMaxSequenceJump) {
+    // A valid CRC on a sequence number no sender reaches: treating it as real would count
+    // billions of datagrams lost and give up every later one as late.
+    ++stats_.malformed;
+    ++stats_.malformed_by_reason[static_cast<int>(DecodeError::BadContent)];
+    tick(now, out);
+    return;
+  }
   if (seq < next_seq_) {
     if (skipped_.erase(seq) > 0)
       ++stats_.late;
@@ -97,7 +106,8 @@ void StreamReceiver::tick(SteadyClock::time_point now, std::vector<StreamEvent>&
     dropAssembly();
 }
 
-void StreamReceiver::startSession(std::uint64_t session, std::vector<StreamEvent>& out) {
+void StreamReceiver::startSession(std::uint64_t session, SteadyClock::time_point now,
+                                  std::vector<StreamEvent>& out) {
   if (session_) {
     while (!held_.empty()) skipGap(out);  // what the old session still holds, in order
     dropAssembly();
@@ -113,7 +123,7 @@ void StreamReceiver::startSession(std::uint64_t session, std::vector<StreamEvent
   StreamEvent e;
   e.kind = StreamEvent::Kind::SessionStart;
   e.session = session;
-  e.received = SteadyClock::now();
+  e.received = now;
   out.push_back(std::move(e));
 }
 
@@ -184,6 +194,7 @@ void StreamReceiver::handleChunk(FrameChunk& c, SteadyClock::time_point received
     a.frame.points.resize(c.total_points);
     a.chunk_count = c.chunk_count;
     a.have.assign(c.chunk_count, false);
+    a.spans.assign(c.chunk_count, {0, 0});
     assembly_ = std::move(a);
   }
   Assembly& a = *assembly_;
@@ -201,9 +212,24 @@ void StreamReceiver::handleChunk(FrameChunk& c, SteadyClock::time_point received
   std::copy(c.points.begin(), c.points.end(),
             a.frame.points.begin() + static_cast<std::ptrdiff_t>(c.first_point));
   a.have[c.chunk_index] = true;
+  a.spans[c.chunk_index] = {c.first_point, static_cast<std::uint32_t>(c.points.size())};
   ++a.received_chunks;
   a.last_chunk = received;
   if (a.received_chunks < a.chunk_count) return;
+
+  // All chunks are here; they must tile the frame in index order (no overlap, no hole), or some
+  // points were never written.
+  std::uint64_t next_point = 0;
+  bool tiled = true;
+  for (const auto& [first, count] : a.spans) {
+    tiled = tiled && first == next_point;
+    next_point += count;
+  }
+  if (!tiled || next_point != a.frame.points.size()) {
+    ++stats_.frames_inconsistent;
+    assembly_.reset();
+    return;
+  }
 
   if (last_frame_ns_ && a.frame.stamp_ns <= *last_frame_ns_) {
     ++stats_.frames_stale;

@@ -59,17 +59,18 @@ int UdpSocket::setReceiveBuffer(int bytes) {
   return granted;
 }
 
-std::size_t UdpSocket::receive(std::uint8_t* buf, std::size_t capacity, double timeout_s) {
+std::optional<std::size_t> UdpSocket::receive(std::uint8_t* buf, std::size_t capacity,
+                                              double timeout_s) {
   pollfd p{fd_, POLLIN, 0};
   const int r = ::poll(&p, 1, static_cast<int>(timeout_s * 1000.0));
   if (r < 0) {
-    if (errno == EINTR) return 0;
+    if (errno == EINTR) return std::nullopt;
     throw std::runtime_error(std::string("poll on the UDP socket failed: ") + std::strerror(errno));
   }
-  if (r == 0) return 0;
+  if (r == 0) return std::nullopt;
   const ssize_t n = ::recv(fd_, buf, capacity, MSG_TRUNC);
   if (n < 0) {
-    if (errno == EINTR || errno == EAGAIN || errno == ECONNREFUSED) return 0;
+    if (errno == EINTR || errno == EAGAIN || errno == ECONNREFUSED) return std::nullopt;
     throw std::runtime_error(std::string("UDP receive failed: ") + std::strerror(errno));
   }
   // A datagram larger than the buffer is cut: its length fields no longer match, the decoder

@@ -38,11 +38,11 @@ void UdpStreamSource::loop() {
   std::vector<StreamEvent> events;
   try {
     while (running_) {
-      const std::size_t n = socket_->receive(buf.data(), buf.size(), 0.01);
+      const std::optional<std::size_t> n = socket_->receive(buf.data(), buf.size(), 0.01);
       const auto now = SteadyClock::now();
       std::lock_guard<std::mutex> lock(mutex_);
-      if (n > 0)
-        receiver_.push(buf.data(), n, now, events);
+      if (n)  // an empty datagram too: it is counted as malformed (too short)
+        receiver_.push(buf.data(), *n, now, events);
       else
         receiver_.tick(now, events);
       enqueue(events);

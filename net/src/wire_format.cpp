@@ -269,7 +269,8 @@ DecodeError decode(const std::uint8_t* data, std::size_t n, Packet& out) {
         s.stamp_ns = p.i64();
         for (int i = 0; i < 3; ++i) s.gyro(i) = p.f64();
         for (int i = 0; i < 3; ++i) s.accel(i) = p.f64();
-        if (!s.gyro.allFinite() || !s.accel.allFinite()) return DecodeError::BadContent;
+        if (!validStamp(s.stamp_ns) || !s.gyro.allFinite() || !s.accel.allFinite())
+          return DecodeError::BadContent;
       }
       return DecodeError::None;
     }
@@ -290,7 +291,8 @@ DecodeError decode(const std::uint8_t* data, std::size_t n, Packet& out) {
       if (m == 0 || c.chunk_count == 0 || c.chunk_index >= c.chunk_count ||
           c.total_points > kMaxFramePoints ||
           static_cast<std::uint64_t>(c.first_point) + m > c.total_points ||
-          !c.extrinsics.R_bl.allFinite() || !c.extrinsics.p_bl.allFinite())
+          !validStamp(c.stamp_ns) || !c.extrinsics.R_bl.allFinite() ||
+          !c.extrinsics.p_bl.allFinite())
         return DecodeError::BadContent;
       c.points.resize(m);
       for (auto& pt : c.points) {

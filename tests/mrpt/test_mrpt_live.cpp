@@ -5,17 +5,21 @@
 #include <freeinit/mrpt/CDopplerLidarImuUdp.h>
 #include <freeinit/mrpt/FreeInitApp.h>
 #include <freeinit/mrpt/FreeInitOnlineApp.h>
+#include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/SimApp.h>
 #include <freeinit/mrpt/StreamApp.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/stream_conversions.h>
+#include <freeinit/net/stream_source.h>
 #include <freeinit/net/udp_socket.h>
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFileMemory.h>
 
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <map>
 #include <sstream>
 #include <thread>
@@ -153,6 +157,8 @@ TEST(LiveStream, RecordingMatchesWhatWasSentAndLiveStateEqualsOffline) {
   EXPECT_TRUE(run.app.ready_live) << run.log;
   EXPECT_GT(run.app.latency.total, 0);
   EXPECT_EQ(run.app.stats.anomalies(), 0u) << run.log;
+  EXPECT_NE(readText(out + "/stream_stats.ini").find("anomalies_before_ready = 0\n"),
+            std::string::npos);
 
   // Object by object: every IMU sample and cloud of the sample arrived, exactly.
   expectSameStreams(readStreams(run.app.record_path), readStreams(kSample));
@@ -192,6 +198,14 @@ TEST(LiveStream, NetworkFaultsAreCountedAndSurvived) {
   EXPECT_GT(st.out_of_order, 0u) << run.log;
   EXPECT_EQ(st.end_of_stream, 1u) << run.log;
   EXPECT_NE(run.log.find("Warning:"), std::string::npos) << "anomalies must be reported";
+  // What was lost before the state was written is reported with it.
+  ASSERT_TRUE(run.app.ready_live) << run.log;
+  EXPECT_LE(run.app.stats_at_ready.anomalies(), run.app.stats.anomalies());
+  EXPECT_NE(readText(out + "/stream_stats.ini")
+                .find("anomalies_before_ready = " +
+                      std::to_string(run.app.stats_at_ready.anomalies()) + "\n"),
+            std::string::npos);
+  EXPECT_NE(run.log.find("anomalies_before_ready = "), std::string::npos) << run.log;
 
   // Whatever arrived is exact, and nothing arrived twice or out of order.
   const Streams sent = readStreams(kSample);
@@ -251,6 +265,9 @@ TEST(LiveStream, SimulatorPresetArrivesAsFreeinitSimWritesIt) {
 // over the sample's messages directly.
 class SampleSource : public net::StreamSource {
  public:
+  /// Applied to every IMU and frame event; returning false leaves the event out.
+  std::function<bool(net::StreamEvent&)> edit = [](net::StreamEvent&) { return true; };
+
   void start() override {
     net::StreamEvent e;
     e.kind = net::StreamEvent::Kind::SessionStart;
@@ -264,7 +281,7 @@ class SampleSource : public net::StreamSource {
         e.kind = net::StreamEvent::Kind::Frame;
         e.frame = frameMessage(*pc, extrinsicsFromPose(pc->sensorPose));
       }
-      events_.push_back(e);
+      if (edit(e)) events_.push_back(e);
     }
     e.kind = net::StreamEvent::Kind::EndOfStream;
     events_.push_back(e);
@@ -297,6 +314,63 @@ TEST(LiveStream, AnyStreamSourceFeedsTheOnlineApp) {
   EXPECT_EQ(readText(out + "/initial_state.ini"), readText(out + "/offline/initial_state.ini"));
 }
 
+// The offline validator's checks hold online too: bad input stops the run before any state is
+// written (each of these inputs gives a state from the estimator if it reaches it).
+TEST(LiveStream, BadInputIsRefusedAsOffline) {
+  struct Case {
+    const char* what;
+    std::function<bool(net::StreamEvent&)> edit;
+    const char* error;
+  };
+  int imu_seen = 0;
+  const std::vector<Case> cases = {
+      {"accelerometer in g",
+       [](net::StreamEvent& e) {
+         if (e.kind == net::StreamEvent::Kind::Imu) e.imu.accel /= kGravity;
+         return true;
+       },
+       "imu_accel_in_g = true"},
+      {"ego-compensated Doppler",
+       [](net::StreamEvent& e) {
+         if (e.kind == net::StreamEvent::Kind::Frame)
+           for (auto& p : e.frame.points) p.doppler = 0;
+         return true;
+       },
+       "Doppler field is zero for every point"},
+      {"IMU at an eighth of its rate (below min_imu_rate = 50 Hz)",
+       [&imu_seen](net::StreamEvent& e) {
+         return e.kind != net::StreamEvent::Kind::Imu || imu_seen++ % 8 == 0;
+       },
+       "below [input] min_imu_rate"},
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.what);
+    const std::string out = outDir("bad_input");
+    // Outputs of an earlier run in the same directory: none may survive next to this run's.
+    const std::vector<std::string> stale = {"initial_state.ini", "static_map.ply",
+                                            "trajectory_tum.txt", "stream_stats.ini"};
+    fs::create_directories(out);
+    for (const auto& f : stale) std::ofstream(out + "/" + f) << "earlier run\n";
+    FreeInitOnlineApp app;
+    app.params.config_file = kSrc + "/ini/freeinit.ini";
+    app.params.out_dir = out;
+    auto src = std::make_unique<SampleSource>();
+    src->edit = c.edit;
+    app.source = std::move(src);
+    std::ostringstream log;
+    try {
+      app.run(log);
+      ADD_FAILURE() << "accepted: " << log.str();
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(c.error), std::string::npos) << e.what();
+    }
+    EXPECT_FALSE(app.ready_live);
+    EXPECT_FALSE(fs::exists(out + "/initial_state.ini"));
+    for (const auto& f : stale)
+      EXPECT_NE(readText(out + "/" + f), "earlier run\n") << f << " of an earlier run is left";
+  }
+}
+
 // The rawlog-grabber driver as rawlog-grabber drives it: loadConfig, initialize, doProcess and
 // getObservations at its process rate.
 TEST(RawlogGrabberDriver, EmitsExactlyWhatWasSent) {
@@ -321,13 +395,19 @@ TEST(RawlogGrabberDriver, EmitsExactlyWhatWasSent) {
   streamer.run(slog);
 
   std::vector<mrpt::obs::CObservation::Ptr> objs;
-  for (int i = 0; i < 400; ++i) {
+  // Until the end-of-stream marker had been received before a doProcess (the source queues a
+  // datagram's items with its statistics, so nothing received is left behind), or a deadline
+  // generous for a loaded machine.
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (std::chrono::steady_clock::now() < deadline) {
+    const bool ended = sensor.stats().receiver.end_of_stream > 0;
     sensor.doProcess();
     for (const auto& [t, o] : sensor.getObservations())
       objs.push_back(std::dynamic_pointer_cast<mrpt::obs::CObservation>(o));
-    if (sensor.stats().receiver.end_of_stream > 0 && i > 10) break;
+    if (ended) break;
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
   }
+  ASSERT_GT(sensor.stats().receiver.end_of_stream, 0u) << "no end of stream within 20 s";
   Streams got;
   for (const auto& o : objs) {
     if (auto m = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(o)) got.imu.push_back(m);
@@ -350,8 +430,105 @@ TEST(RawlogGrabberDriver, BadConfigurationNamesTheKey) {
   }
 }
 
+// freeinit-stream checks a rawlog as the offline app does; an IMU in g is refused unless declared,
+// and then sent in m/s^2.
+TEST(StreamApp, RawlogInGIsRefusedOrConverted) {
+  const std::string out = outDir("stream_in_g");
+  const std::string in_g = out + "/in_g.rawlog";
+  {
+    RawlogWriter writer(in_g);
+    for (const auto& r : readRawlog(kSample)) {
+      if (auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(r.obs)) {
+        ImuSample sample = imuFromObservation(*imu);
+        sample.accel /= kGravity;
+        auto o = imuToObservation(sample, imu->sensorLabel);
+        o->timestamp = imu->timestamp;
+        o->sensorPose = imu->sensorPose;
+        writer.write(*o);
+      } else {
+        writer.write(*r.obs);
+      }
+    }
+    writer.commit();
+  }
+  StreamApp refused;
+  refused.params.rawlog = in_g;
+  refused.params.speed = 0;
+  std::ostringstream log;
+  try {
+    refused.run(log);
+    FAIL() << "streamed accelerations in g as m/s^2";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("imu_accel_in_g"), std::string::npos) << e.what();
+  }
+
+  net::UdpSourceParams sp;
+  sp.port = 0;
+  sp.max_queued_imu = 100000;
+  sp.max_queued_frames = 1000;
+  net::UdpStreamSource source(sp);
+  source.start();
+  StreamApp converted;
+  converted.params.rawlog = in_g;
+  converted.params.imu_accel_in_g = true;
+  converted.params.speed = 0;
+  converted.params.port = source.port();
+  converted.run(log);
+  std::vector<net::StreamEvent> ev;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(20);
+  while (source.stats().receiver.end_of_stream == 0 && std::chrono::steady_clock::now() < deadline)
+    source.poll(ev, 0.05);
+  source.poll(ev, 0.0);
+  const Streams sent = readStreams(kSample);
+  std::size_t i = 0;
+  for (const auto& e : ev) {
+    if (e.kind != net::StreamEvent::Kind::Imu) continue;
+    ASSERT_LT(i, sent.imu.size());
+    // x / g * g is x to within an ulp or two.
+    const Vec3 want = imuFromObservation(*sent.imu[i++]).accel;
+    EXPECT_LT((e.imu.accel - want).norm(), 1e-12 * want.norm());
+  }
+  EXPECT_EQ(i, sent.imu.size());
+}
+
+// The recorder's writer: a final flush that fails (here: the temporary is /dev/full, which takes
+// the open but no byte) is an error, and nothing is renamed onto the rawlog's path.
+TEST(RawlogWriter, AFailedFinalFlushIsAnErrorNotARename) {
+  const std::string out = outDir("writer_full");
+  fs::create_directories(out);
+  const std::string path = out + "/full.rawlog";
+  fs::create_symlink("/dev/full", path + ".tmp");
+  RawlogWriter writer(path);
+  ImuSample s;
+  s.t = 1.0;
+  writer.write(s);  // small: it stays in zlib's buffer until the close
+  EXPECT_THROW(writer.commit(), std::runtime_error);
+  EXPECT_FALSE(fs::exists(fs::symlink_status(path)));
+}
+
 TEST(StreamConversions, NanosecondsAndClockTicksAgree) {
   const auto t = fromUnix(1700000000.1234567);
   EXPECT_EQ(fromUnixNs(toUnixNs(t)), t);
   EXPECT_NEAR(1e-9 * static_cast<double>(toUnixNs(t)), toUnix(t), 1e-6);
+}
+
+TEST(StreamConversions, OutOfRangeStampsThrowAndRoundingCannotOverflow) {
+  EXPECT_THROW(toUnixNs(INVALID_TIMESTAMP), std::invalid_argument);
+  EXPECT_THROW(toUnixNs(fromUnix(-1.0)), std::invalid_argument);  // before 1970
+  EXPECT_EQ(toUnixNs(fromUnixNs(0)), 0);
+  // The last whole tick below 2^62 ns converts; the next one does not.
+  constexpr std::int64_t kLast = (freeinit::net::kMaxStampNs - 1) / 100 * 100;
+  EXPECT_EQ(toUnixNs(fromUnixNs(kLast)), kLast);
+  EXPECT_THROW(toUnixNs(fromUnixNs(kLast + 100)), std::invalid_argument);
+  // Nearest tick, halves away from zero, up to the int64 limits (ns +/- 50 would overflow there).
+  const auto ticks = [](std::int64_t ns) { return fromUnixNs(ns).time_since_epoch().count(); };
+  EXPECT_EQ(ticks(149) - ticks(0), 1);
+  EXPECT_EQ(ticks(150) - ticks(0), 2);
+  EXPECT_EQ(ticks(-149) - ticks(0), -1);
+  EXPECT_EQ(ticks(-150) - ticks(0), -2);
+  constexpr std::int64_t kMax = std::numeric_limits<std::int64_t>::max();  // ...807
+  constexpr std::int64_t kMin = std::numeric_limits<std::int64_t>::min();  // ...808
+  EXPECT_EQ(ticks(kMax) - ticks(0), kMax / 100);                           // remainder 7: down
+  EXPECT_EQ(ticks(kMin) - ticks(0), kMin / 100);       // remainder -8: towards zero
+  EXPECT_EQ(ticks(kMax - 57) - ticks(0), kMax / 100);  // remainder 50: away from zero
 }

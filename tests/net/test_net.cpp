@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <limits>
 #include <random>
 #include <thread>
 
@@ -162,6 +163,29 @@ TEST(WireFormat, EveryCorruptionAndTruncationIsRejected) {
   EXPECT_EQ(crc32(reinterpret_cast<const std::uint8_t*>("123456789"), 9), 0xCBF43926U);
 }
 
+TEST(WireFormat, StampsOutsideTheStreamRangeAreMalformed) {
+  for (const std::int64_t stamp :
+       {std::int64_t{-1}, kMaxStampNs, std::numeric_limits<std::int64_t>::min(),
+        std::numeric_limits<std::int64_t>::max()}) {
+    std::uint64_t seq = 0;
+    ImuMessage s = imu(0);
+    s.stamp_ns = stamp;
+    Packet p;
+    const auto d = encodeImu({s}, 1, seq);
+    EXPECT_EQ(decode(d.data(), d.size(), p), DecodeError::BadContent) << stamp;
+    FrameMessage f = frame(0, 10);
+    f.stamp_ns = stamp;
+    const auto c = encodeFrame(f, 1, seq, 8192);
+    EXPECT_EQ(decode(c[0].data(), c[0].size(), p), DecodeError::BadContent) << stamp;
+  }
+  std::uint64_t seq = 0;
+  ImuMessage s = imu(0);
+  s.stamp_ns = kMaxStampNs - 1;
+  Packet p;
+  const auto d = encodeImu({s}, 1, seq);
+  EXPECT_EQ(decode(d.data(), d.size(), p), DecodeError::None);
+}
+
 TEST(WireFormat, RejectsWhatItCannotCarry) {
   std::uint64_t seq = 0;
   EXPECT_THROW(encodeFrame(frame(0, 0), 1, seq, 8192), std::invalid_argument);
@@ -232,6 +256,31 @@ TEST(StreamReceiver, ALostChunkDropsItsFrameAndIsCounted) {
   EXPECT_EQ(r.stats().duplicates, 0u);
 }
 
+TEST(StreamReceiver, ChunksThatDoNotTileTheFrameDropIt) {
+  Stream s = makeStream(11);
+  // Datagrams 10..13 are frame 0's chunks of 308, 308, 308 and 76 points. Move the last one onto
+  // points 0..75: every chunk arrives and the counts add up, but points 924..999 were never sent.
+  std::vector<std::uint8_t>& d = s.datagrams[13];
+  Packet p;
+  ASSERT_EQ(decode(d.data(), d.size(), p), DecodeError::None);
+  ASSERT_EQ(p.chunk.chunk_index, 3);
+  ASSERT_EQ(p.chunk.first_point, 924u);
+  for (int i = 0; i < 4; ++i) d[kHeaderBytes + 12 + i] = 0;  // first point index
+  const std::uint32_t crc = crc32(d.data(), d.size() - kCrcBytes);
+  for (int i = 0; i < 4; ++i)
+    d[d.size() - kCrcBytes + i] = static_cast<std::uint8_t>(crc >> (8 * i));
+  ASSERT_EQ(decode(d.data(), d.size(), p), DecodeError::None);
+
+  StreamReceiver r;
+  std::vector<StreamEvent> ev;
+  for (const auto& datagram : s.datagrams) push(r, datagram, ev);
+  const Output o = collect(ev);
+  ASSERT_EQ(o.frames.size(), 1u);
+  expectSamePoints(o.frames[0].points, s.frames[1].points);
+  EXPECT_EQ(r.stats().frames_inconsistent, 1u);
+  EXPECT_EQ(o.imu.size(), s.imu.size());
+}
+
 TEST(StreamReceiver, AWindowFullOfLaterDatagramsGivesUpTheGap) {
   const Stream s = makeStream(11);
   ReceiverParams params;
@@ -255,6 +304,34 @@ TEST(StreamReceiver, JoiningARunningStreamIsNotCountedAsLoss) {
   EXPECT_EQ(r.stats().lost, 0u);
   EXPECT_EQ(collect(ev).imu.size(), s.imu.size() - 5);
   EXPECT_EQ(collect(ev).frames.size(), 2u);
+}
+
+TEST(StreamReceiver, ASequenceNumberFarAheadIsMalformedNotAGap) {
+  const Stream s = makeStream(11);
+  StreamReceiver r;
+  std::vector<StreamEvent> ev;
+  for (std::size_t i = 0; i < 5; ++i) push(r, s.datagrams[i], ev);
+  std::uint64_t far = 5 + (std::uint64_t{1} << 32);  // valid CRC, impossible sequence number
+  const auto bogus = encodeImu({imu(100)}, 11, far);
+  push(r, bogus, ev);
+  for (std::size_t i = 5; i < s.datagrams.size(); ++i) push(r, s.datagrams[i], ev);
+  r.tick(SteadyClock::now() + std::chrono::seconds(1), ev);
+  EXPECT_EQ(r.stats().malformed_by_reason[static_cast<int>(DecodeError::BadContent)], 1u);
+  EXPECT_EQ(r.stats().lost, 0u);
+  EXPECT_EQ(r.stats().late, 0u);
+  EXPECT_EQ(collect(ev).imu.size(), s.imu.size());
+  EXPECT_EQ(collect(ev).frames.size(), 2u);
+}
+
+TEST(StreamReceiver, SessionStartCarriesTheReceiptTimeGiven) {
+  const Stream s = makeStream(11);
+  StreamReceiver r;
+  std::vector<StreamEvent> ev;
+  const auto t = SteadyClock::time_point(std::chrono::seconds(12345));
+  push(r, s.datagrams[0], ev, t);
+  ASSERT_FALSE(ev.empty());
+  EXPECT_EQ(ev.front().kind, StreamEvent::Kind::SessionStart);
+  EXPECT_EQ(ev.front().received, t);
 }
 
 TEST(StreamReceiver, SenderRestartDropsThePartialFrameAndStaleData) {
@@ -353,6 +430,23 @@ TEST(UdpLoopback, FaultyStreamIsSurvivedAndCounted) {
   EXPECT_EQ(st.queue_dropped_frames + st.queue_dropped_imu, 0u);
 }
 
+TEST(UdpLoopback, AnEmptyDatagramIsCountedAsMalformed) {
+  UdpSourceParams sp;
+  sp.port = 0;
+  UdpStreamSource source(sp);
+  source.start();
+  UdpSocket socket;
+  socket.connect("127.0.0.1", source.port());
+  const std::uint8_t none = 0;
+  ASSERT_TRUE(socket.send(&none, 0));
+  const auto deadline = SteadyClock::now() + std::chrono::seconds(20);
+  while (source.stats().receiver.datagrams < 1 && SteadyClock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  const SourceStats st = source.stats();
+  EXPECT_EQ(st.receiver.datagrams, 1u);
+  EXPECT_EQ(st.receiver.malformed_by_reason[static_cast<int>(DecodeError::TooShort)], 1u);
+}
+
 TEST(UdpLoopback, AConsumerTooSlowGetsCountedDropsNotAGap) {
   UdpSourceParams sp;
   sp.port = 0;
@@ -366,8 +460,13 @@ TEST(UdpLoopback, AConsumerTooSlowGetsCountedDropsNotAGap) {
     if (k % 20 == 19) sender.sendFrame(frame(k / 20, 200));
   }
   sender.sendEndOfStream();
-  // The consumer sleeps while the sender bursts, then drains.
-  std::this_thread::sleep_for(std::chrono::milliseconds(300));
+  // The consumer waits until the receiver thread has taken every datagram (not a fixed sleep: on
+  // a loaded machine that may be too short), then drains.
+  const std::uint64_t sent = sender.stats().datagrams;
+  const auto deadline = SteadyClock::now() + std::chrono::seconds(20);
+  while (source.stats().receiver.datagrams < sent && SteadyClock::now() < deadline)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  ASSERT_EQ(source.stats().receiver.datagrams, sent) << "datagrams not all received in 20 s";
   std::vector<StreamEvent> ev;
   for (int i = 0; i < 100 && collect(ev).ends == 0; ++i) source.poll(ev, 0.05);
   const Output o = collect(ev);

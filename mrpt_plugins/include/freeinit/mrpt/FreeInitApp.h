@@ -22,6 +22,9 @@ struct FreeInitAppParams {
   bool progress_terminal = false;  ///< the log is a terminal: redraw the bars in place
 };
 
+/// Names of every file writeResultFiles may write (whatever [output] enables).
+std::vector<std::string> resultFileNames();
+
 /// Writes the [output] files other than initial_state.ini (static map .simplemap / .ply,
 /// trajectory, velocimeter CSV, snapshots) into `out_dir`, each atomically. `truth` may be empty.
 void writeResultFiles(const std::string& out_dir, const OutputParams& output,

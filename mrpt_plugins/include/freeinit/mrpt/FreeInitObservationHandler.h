@@ -20,9 +20,14 @@ class FreeInitObservationHandler {
   /// Processes one observation. Returns true if it was used (an IMU or point cloud with the
   /// configured label), false if ignored (other sensors, or the state is already ready()).
   /// Throws std::invalid_argument on an unusable observation (no Doppler, time going back...).
+  /// The input checks of the offline validator apply here too (input_validator.h): every cloud's
+  /// Doppler; the IMU rate and accelerometer unit on the first min(kImuCheckSamples,
+  /// [window] imu_samples) IMU samples, which are held back (with the clouds between them) until
+  /// they pass, so the estimator never sees data that fails them.
   bool process(const mrpt::obs::CObservation::Ptr& obs);
 
-  /// End of input: closes a window still open with what is there.
+  /// End of input: checks the IMU if not yet done, then closes a window still open with what is
+  /// there.
   void finish();
 
   bool ready() const;
@@ -35,12 +40,20 @@ class FreeInitObservationHandler {
   std::size_t frameCount() const { return frame_count_; }
 
  private:
-  void start();  // builds the estimator once the extrinsics are known
+  void checkImu();  // throws std::invalid_argument if the held-back IMU fails the input checks
+  void feed();      // hands the held-back data to the estimator once checked and extrinsics known
 
   AppConfig config_;
   std::unique_ptr<FreeInit> estimator_;
   std::optional<mrpt::poses::CPose3D> imu_pose_;
-  std::vector<ImuSample> pending_imu_;  ///< IMU before the first cloud when from_sensor_pose
+  bool extrinsics_known_ = false;
+  bool imu_checked_ = false;
+  std::size_t imu_check_samples_ = 0;
+  /// IMU samples and clouds in arrival order, held until the checks passed and (when
+  /// from_sensor_pose) the first cloud gave the extrinsics.
+  std::vector<ImuSample> held_imu_;
+  std::vector<std::pair<std::size_t, LidarFrame>> held_frames_;  ///< (IMU samples before it, cloud)
+  double last_imu_t_ = 0;
   InitResult empty_;
   std::size_t imu_count_ = 0, frame_count_ = 0;
 };

@@ -56,6 +56,9 @@ class FreeInitOnlineApp {
   bool ready_live = false;  ///< the state was written while the stream ran (not at its end)
   OnlineLatency latency;
   net::SourceStats stats;
+  /// The source's statistics when the state was written (ready_live): data lost before then
+  /// may have been inside the window.
+  net::SourceStats stats_at_ready;
   std::size_t recorded = 0;  ///< observations recorded (and fed, up to the ready point)
   std::string record_path;   ///< full path of the recording
 };

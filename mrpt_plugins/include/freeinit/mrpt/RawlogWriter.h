@@ -1,7 +1,8 @@
 // Writes a typed rawlog as freeinit-sim does and the freeinit app reads it: CObservationIMU and
 // CObservationPointCloud (a CPointsMapDoppler, sensorPose = the extrinsics) in the order given,
-// gz-compressed, into "<path>.tmp", renamed onto the path by commit(). A writer destroyed without
-// commit() (an exception on the way) removes its temporary: the rawlog is complete or absent.
+// or any observation as it is, gz-compressed, into "<path>.tmp", renamed onto the path by
+// commit(). A writer destroyed without commit() (an exception on the way) removes its temporary,
+// and so does a commit() whose final flush fails: the rawlog is complete or absent.
 #pragma once
 
 #include <freeinit/types.h>
@@ -10,19 +11,27 @@
 #include <memory>
 #include <string>
 
+namespace mrpt::obs {
+class CObservation;
+}
+
 namespace freeinit::mrpt_glue {
 
 class RawlogWriter {
  public:
-  RawlogWriter(std::string path, const Extrinsics& extrinsics, std::string imu_label = "IMU",
-               std::string lidar_label = "LIDAR");
+  /// `extrinsics` and the labels are only used by the typed write()s.
+  explicit RawlogWriter(std::string path, const Extrinsics& extrinsics = {},
+                        std::string imu_label = "IMU", std::string lidar_label = "LIDAR");
   ~RawlogWriter();
   RawlogWriter(const RawlogWriter&) = delete;
   RawlogWriter& operator=(const RawlogWriter&) = delete;
 
   void write(const ImuSample& s);
   void write(const LidarFrame& f);
-  /// Closes the file and renames it onto the path. Throws std::runtime_error on I/O errors.
+  /// Any observation, serialized as it is (counted as IMU / frame record by its class).
+  void write(const mrpt::obs::CObservation& obs);
+  /// Closes the file and renames it onto the path. Throws std::runtime_error on I/O errors
+  /// (including a failed final flush), removing the temporary instead of renaming it.
   void commit();
 
   std::size_t records() const { return records_; }

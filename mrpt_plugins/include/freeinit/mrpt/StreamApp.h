@@ -1,6 +1,7 @@
 // freeinit-stream: plays a recording as a live Doppler LiDAR + IMU stream in the wire format
 // (docs/wire_format.md) to a UDP address, in real time or faster, optionally with network faults.
-// The recording is a simulator preset or a rawlog (read and checked by our reader). Each IMU
+// The recording is a simulator preset or a rawlog (read by our reader and checked by the offline
+// app's validator: a rawlog it refuses is refused here too). Each IMU
 // sample is sent at its timestamp, each chunk of a frame when its last point was measured
 // (stamp + time offset), as a scanning sensor streams them.
 #pragma once
@@ -17,6 +18,7 @@ struct StreamAppParams {
   std::string rawlog;              ///< play this rawlog; empty: simulate `preset`
   std::string imu_label;           ///< rawlog: the IMU's sensorLabel ("" = any)
   std::string lidar_label;         ///< rawlog: the LiDAR's sensorLabel ("" = any)
+  bool imu_accel_in_g = false;     ///< rawlog: accelerations in g (sent as m/s^2); checked
   std::string preset = "dyna_01";  ///< freeinit::sim preset
   std::uint64_t seed = 1;
   double duration = 0;       ///< [s] simulated duration (0: the preset's)

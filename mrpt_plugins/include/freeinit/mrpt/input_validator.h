@@ -21,6 +21,19 @@ struct ValidatedInput {
   std::vector<std::string> warnings;
 };
 
+// Checks shared by the offline validator and the live FreeInitObservationHandler, so that both
+// refuse the same input. Each returns what is wrong (without file or record), or nothing.
+
+/// Samples whose mean judges the accelerometer unit, and (live) the IMU rate before any is used.
+inline constexpr std::size_t kImuCheckSamples = 200;
+/// Doppler zero (or non-finite) for every point: an ego-motion-compensated or Doppler-less sensor.
+std::optional<std::string> dopplerProblem(const std::vector<DopplerPoint>& points);
+/// Median-interval rate of `imu` (>= 2 samples) below `min_rate` [Hz].
+std::optional<std::string> imuRateProblem(const std::vector<ImuSample>& imu, double min_rate);
+/// The mean of the first kImuCheckSamples accelerations (already scaled by the declared unit)
+/// says the declared unit ([input] imu_accel_in_g) is wrong.
+std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, bool declared_g);
+
 /// Throws InputError for: no IMU or no LiDAR observations with the configured labels, IMU without
 /// gyro/accel fields, clouds without Doppler (any class but CPointsMapDoppler), empty clouds,
 /// NaN/inf points (unless [input] drop_invalid_points), timestamps going backwards or duplicated,

@@ -14,9 +14,10 @@
 
 namespace freeinit::mrpt_glue {
 
-/// [ns] since the UNIX epoch, exact (a Clock tick is 100 ns).
+/// [ns] since the UNIX epoch, exact (a Clock tick is 100 ns). Throws std::invalid_argument for
+/// INVALID_TIMESTAMP and for times the wire cannot carry (outside [0, net::kMaxStampNs)).
 std::int64_t toUnixNs(mrpt::Clock::time_point t);
-/// Rounds to the nearest 100 ns tick.
+/// Rounds to the nearest 100 ns tick (halves away from zero); defined for every int64.
 mrpt::Clock::time_point fromUnixNs(std::int64_t ns);
 
 /// sensorLabel of the observations built from a stream.

@@ -18,6 +18,7 @@
 #include <map>
 #include <optional>
 #include <set>
+#include <utility>
 #include <vector>
 
 namespace freeinit::net {
@@ -92,11 +93,14 @@ class StreamReceiver {
     FrameMessage frame;
     std::uint16_t chunk_count = 0;
     std::vector<bool> have;
+    /// Per chunk index: (first point, points), to check that the chunks tile the frame.
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> spans;
     std::size_t received_chunks = 0;
     SteadyClock::time_point last_chunk;
   };
 
-  void startSession(std::uint64_t session, std::vector<StreamEvent>& out);
+  void startSession(std::uint64_t session, SteadyClock::time_point now,
+                    std::vector<StreamEvent>& out);
   void releaseInOrder(std::vector<StreamEvent>& out);
   void skipGap(std::vector<StreamEvent>& out);
   void handle(Packet& p, SteadyClock::time_point received, std::vector<StreamEvent>& out);

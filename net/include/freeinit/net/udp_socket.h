@@ -4,6 +4,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <optional>
 #include <string>
 
 namespace freeinit::net {
@@ -22,8 +23,9 @@ class UdpSocket {
   /// Asks for a receive buffer of `bytes`; returns the size the kernel granted.
   int setReceiveBuffer(int bytes);
 
-  /// Waits up to `timeout_s` for a datagram; returns its size, 0 on timeout. Throws on errors.
-  std::size_t receive(std::uint8_t* buf, std::size_t capacity, double timeout_s);
+  /// Waits up to `timeout_s` for a datagram; returns its size (0 for an empty datagram), nothing
+  /// on timeout. Throws on errors.
+  std::optional<std::size_t> receive(std::uint8_t* buf, std::size_t capacity, double timeout_s);
 
   /// Sets the destination of send(). Throws on an invalid address.
   void connect(const std::string& address, std::uint16_t port);

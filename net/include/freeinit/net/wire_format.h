@@ -26,6 +26,10 @@ inline constexpr std::size_t kMaxDatagram = 65507;     ///< largest UDP/IPv4 pay
 inline constexpr std::size_t kMinDatagram =
     kHeaderBytes + kChunkHeaderBytes + kPointBytes + kCrcBytes;  ///< room for one point per chunk
 inline constexpr std::uint32_t kMaxFramePoints = 4'000'000;
+/// Stamps [ns] outside [0, kMaxStampNs) are rejected (year 1970 .. ~2116): every accepted stamp
+/// converts to MRPT's clock and back, and +/- a few seconds of arithmetic on it cannot overflow.
+inline constexpr std::int64_t kMaxStampNs = std::int64_t{1} << 62;
+inline bool validStamp(std::int64_t ns) { return ns >= 0 && ns < kMaxStampNs; }
 
 enum class PacketType : std::uint8_t { Imu = 1, FrameChunk = 2, EndOfStream = 3 };
 
