@@ -142,6 +142,60 @@ TEST(DisplacementError, IsFreeOfTheWorldFrame) {
   EXPECT_TRUE(std::isnan(displacementError(r, start, end)));
 }
 
+TEST(MakeEvalRow, ErrorsAgainstTheTruthAtTheStateTime) {
+  // The truth is yawed 30 deg and tilted in its world; the estimate's world differs by a yaw
+  // (gauge-free errors must not see it). Errors put in by hand on top of the truth.
+  const Mat3 R_true = Exp(Vec3(0.1, 0, 30.0 * M_PI / 180.0));
+  auto truth = [&](double t) {
+    StateTruth gt;
+    gt.R_wb = R_true;
+    gt.p_w = Vec3(5, 6, 7) + t * (R_true * Vec3(2, 0, 0));
+    gt.v_w = R_true * Vec3(2, 0, 0);
+    gt.b_g = Vec3(0.01, 0, 0);
+    gt.b_a = R_true.transpose() * Vec3(0.3, 0.4, 0.1);  // horizontal 0.5 m/s^2 in w
+    return gt;
+  };
+  const Quat q_gauge(Eigen::AngleAxisd(0.7, Vec3::UnitZ()));
+  MethodRun m;
+  m.method = "free-init";
+  m.time_ms = 12;
+  InitialState& s = m.result.state;
+  s.status = InitStatus::Ok;
+  s.timestamp = 2;
+  s.q_wb = q_gauge * Quat(R_true);
+  s.v_w = q_gauge * (R_true * Vec3(2, 0.3, -0.4));  // 0.5 m/s off in b
+  s.g_w = q_gauge * Vec3(0, 0, -kGravity);
+  s.b_g = truth(2).b_g + Vec3(0, 0.002, 0);
+  s.b_a = truth(2).b_a + Vec3(0, 0, 0.05);
+  s.p_w = q_gauge * (R_true * Vec3(4, 0, 0));  // 2 s at 2 m/s along body x
+  PoseSample p0;
+  p0.t = 0;
+  p0.q_wb = s.q_wb;
+  m.result.trajectory.push_back(p0);
+  const EvalRow row = makeEvalRow("dyna_01", 3, m, truth);
+  EXPECT_EQ(row.source, "dyna_01");
+  EXPECT_EQ(row.seed, 3);
+  EXPECT_EQ(row.method, "free-init");
+  EXPECT_EQ(row.status, "ok");
+  EXPECT_EQ(row.time_ms, 12);
+  EXPECT_NEAR(row.speed, 2, 1e-12);
+  EXPECT_NEAR(row.velocity_err, 0.5, 1e-12);
+  EXPECT_NEAR(row.gravity_err_deg, 0, 1e-6);
+  EXPECT_NEAR(row.gravity_bound_deg,
+              std::atan2(0.5, kGravity) * 180 / M_PI + kGravityBoundMarginDeg, 1e-9);
+  EXPECT_NEAR(row.gyro_bias_err, 0.002, 1e-12);
+  EXPECT_NEAR(row.accel_bias_err, 0.05, 1e-12);
+  EXPECT_NEAR(row.position_err, 0, 1e-9);
+  // No state: status only, every error NaN, the truth not asked.
+  s.status = InitStatus::NotEnoughData;
+  const EvalRow none =
+      makeEvalRow("x", 0, m, [](double) -> StateTruth { throw std::runtime_error("truth asked"); });
+  EXPECT_EQ(none.status, toString(InitStatus::NotEnoughData));
+  EXPECT_TRUE(std::isnan(none.velocity_err));
+  EXPECT_TRUE(std::isnan(none.gravity_bound_deg));
+  EXPECT_TRUE(std::isnan(none.position_err));
+}
+
 TEST(ParallelFor, RunsEveryJobOnceAndReportsTheLowestFailure) {
   for (unsigned threads : {1u, 2u, 5u}) {
     std::vector<std::atomic<int>> hits(37);

@@ -169,47 +169,36 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
   const auto runs = report::runMethods(cfg, rec.imu, rec.frames, rec.extrinsics, o.methods);
 
   JobResult out;
-  auto pose = [&](double t) {
+  const report::TruthFn truth = [&](double t) {
     const auto s = rec.truth(t);
-    return report::PoseTruth{s.R_wb, s.p_w};
+    report::StateTruth gt;
+    gt.R_wb = s.R_wb;
+    gt.p_w = s.p_w;
+    gt.v_w = s.v_w;
+    gt.g_w = rec.g_w;
+    gt.b_g = rec.b_g;
+    gt.b_a = rec.b_a;
+    return gt;
   };
   for (const auto& m : runs) {
-    const auto& r = m.result;
-    report::EvalRow row;
-    row.source = name;
-    row.seed = seed;
-    row.method = m.method;
-    row.status = freeinit::toString(r.state.status);
-    row.time_ms = m.time_ms;
-    const auto e = sim::evaluate(r.state, rec);
-    if (e.valid) {
-      row.speed = e.vel_b_true_norm;
-      row.velocity_err = e.vel_b;
-      row.gravity_err_deg = e.gravity_deg;
-      row.gravity_bound_deg = e.gravity_deg_from_bias + report::kGravityBoundMarginDeg;
-      row.gyro_bias_err = e.gyro_bias;
-      row.accel_bias_err = e.accel_bias;
-      if (!r.trajectory.empty())
-        row.position_err =
-            report::displacementError(r, pose(r.trajectory.front().t), pose(r.state.timestamp));
-    }
+    const report::EvalRow row = report::makeEvalRow(name, seed, m, truth);
     out.rows.push_back(row);
     char head[96];
     std::snprintf(head, sizeof(head), "%-10s %-16s %2d  ", m.method.c_str(), name.c_str(), seed);
     out.log += head;
-    if (!e.valid) {
-      out.log += "no state: " + row.status + " (" + r.state.message + ")\n";
+    if (!m.result.state.ok()) {
+      out.log += "no state: " + row.status + " (" + m.result.state.message + ")\n";
       continue;
     }
-    appendf(out.log, "|v|=%6.2f dv=%7.4f dg=%6.3f deg dbg=%7.5f dba=%6.3f dp=%6.3f m",
-            e.vel_b_true_norm, e.vel_b, e.gravity_deg, e.gyro_bias, e.accel_bias, row.position_err);
+    const auto e = sim::evaluate(m.result.state, rec);  // the NEES of the reported covariance
+    appendf(out.log, "|v|=%6.2f dv=%7.4f dg=%6.3f deg dbg=%7.5f dba=%6.3f dp=%6.3f m", row.speed,
+            row.velocity_err, row.gravity_err_deg, row.gyro_bias_err, row.accel_bias_err,
+            row.position_err);
     appendf(out.log, "  nees v=%6.2f tilt=%6.2f bg=%6.2f ba=%6.2f  %7.2f ms\n", e.nees_vel_b,
             e.nees_tilt, e.nees_gyro_bias, e.nees_accel_bias, m.time_ms);
   }
-  out.tracks = report::velocityTracks(runs, rec.config.t0, [&](double t) -> Vec3 {
-    const auto s = rec.truth(t);
-    return s.R_wb.transpose() * s.v_w;
-  });
+  out.tracks =
+      report::velocityTracks(runs, rec.config.t0, [&](double t) -> Vec3 { return truth(t).v_b(); });
   if (o.trace) {
     const auto& fi = out.tracks.front();
     for (std::size_t i = 0; i < fi.t.size(); i += 5) {
