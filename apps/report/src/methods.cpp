@@ -119,9 +119,20 @@ void parallelFor(std::size_t count, unsigned threads, const std::function<void(s
     }
   };
   std::vector<std::thread> pool;
-  for (unsigned k = 1; k < threads; ++k) pool.emplace_back(worker);
+  auto join = [&] {
+    for (auto& t : pool) t.join();
+  };
+  try {
+    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(worker);
+  } catch (...) {
+    // No thread (std::system_error) or no memory: the started threads must end before `pool`
+    // goes (a joinable std::thread's destructor terminates). They run the jobs to the end.
+    next = count;
+    join();
+    throw;
+  }
   worker();
-  for (auto& t : pool) t.join();
+  join();
   if (error) std::rethrow_exception(error);
 }
 
