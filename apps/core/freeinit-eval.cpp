@@ -10,6 +10,7 @@
 #include <freeinit/sim/presets.h>
 #include <freeinit/sim/simulator.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -81,25 +82,30 @@ Options parse(int argc, char** argv) {
     if (used != v.size()) throw std::invalid_argument(flag + ": not a number: '" + v + "'");
     return x;
   };
+  // A whole number in [lo, hi]: a fraction or an out-of-range value is an error, not rounded
+  // (checked on the double, before any conversion).
+  auto integer = [&](int& i, int lo, int hi) {
+    const std::string flag = argv[i];
+    const double x = number(i);
+    if (!(x >= lo && x <= hi) || x != std::floor(x))
+      throw std::invalid_argument(flag + ": must be a whole number in [" + std::to_string(lo) +
+                                  ", " + std::to_string(hi) + "], not '" + argv[i] + "'");
+    return static_cast<int>(x);
+  };
   const std::map<std::string, std::function<void(int&)>> with_value = {
-      {"--seeds", [&](int& i) { o.seeds = static_cast<int>(number(i)); }},
-      {"--jobs",
-       [&](int& i) {
-         const double j = number(i);
-         if (!(j >= 0 && j <= 1024)) throw std::invalid_argument("--jobs must be in [0, 1024]");
-         o.jobs = static_cast<unsigned>(j);
-       }},
+      {"--seeds", [&](int& i) { o.seeds = integer(i, 1, 100000); }},
+      {"--jobs", [&](int& i) { o.jobs = static_cast<unsigned>(integer(i, 0, 1024)); }},
       {"--md", [&](int& i) { o.md = value(i); }},
       {"--csv", [&](int& i) { o.csv = value(i); }},
       {"--plots", [&](int& i) { o.plots = value(i); }},
       {"--fail-velocity", [&](int& i) { o.thresholds.velocity = number(i); }},
       {"--fail-gravity", [&](int& i) { o.thresholds.gravity_deg = number(i); }},
       {"--duration", [&](int& i) { o.duration = number(i); }},
-      {"--points", [&](int& i) { o.points = static_cast<int>(number(i)); }},
-      {"--stride", [&](int& i) { o.stride = static_cast<int>(number(i)); }},
+      {"--points", [&](int& i) { o.points = integer(i, 1, 100000000); }},
+      {"--stride", [&](int& i) { o.stride = integer(i, 1, 1000000); }},
       {"--dlio-duration", [&](int& i) { o.methods.dlio_duration = number(i); }},
       {"--gyro-prior", [&](int& i) { o.gyro_prior = number(i); }},
-      {"--passes", [&](int& i) { o.passes = static_cast<int>(number(i)); }},
+      {"--passes", [&](int& i) { o.passes = integer(i, 0, 1000); }},
       {"--tau", [&](int& i) { o.tau = number(i); }},
   };
   const std::map<std::string, bool*> switches = {{"--no-gyro-bias-estimate", &o.no_db},
@@ -124,7 +130,6 @@ Options parse(int argc, char** argv) {
       o.presets.push_back(a);
     }
   }
-  if (o.seeds < 1) throw std::invalid_argument("--seeds must be >= 1");
   if (o.duration < 0) o.duration = o.methods.baselines ? o.methods.dlio_duration + 0.2 : 1.2;
   if (o.presets.empty()) o.presets = sim::presetNames();
   for (const auto& p : o.presets) sim::presetInfo(p);  // throws on an unknown name
