@@ -76,7 +76,8 @@ double displacementError(const InitResult& r, const PoseTruth& at_start, const P
 
 /// Runs `job(i)` for i in [0, count) on `threads` threads (0: hardware concurrency). Each index
 /// runs exactly once, in no particular order; after all threads end, the exception of the lowest
-/// failing index (if any) is rethrown.
+/// failing index (if any) is rethrown. If a thread cannot be started, the threads already
+/// started finish their current jobs and that error is rethrown (not every index has run).
 void parallelFor(std::size_t count, unsigned threads, const std::function<void(std::size_t)>& job);
 
 }  // namespace freeinit::report
