@@ -105,6 +105,18 @@ TEST(EvalTable, BadCsvNamesFileAndLine) {
   } catch (const std::runtime_error& e) {
     EXPECT_NE(std::string(e.what()).find(path + ": line 6"), std::string::npos) << e.what();
   }
+  // A seed that is not a whole number (it was truncated before).
+  writeEvalCsv(path, sampleRows());
+  {
+    std::ofstream f(path, std::ios::app);
+    f << "dyna_02,2.7,free-init,ok,,,,,,,,,0,\n";
+  }
+  try {
+    readEvalCsv(path);
+    FAIL() << "a fractional seed was accepted";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find(path + ": line 6: seed"), std::string::npos) << e.what();
+  }
   std::filesystem::remove(path);
   EXPECT_THROW(readEvalCsv(path), std::runtime_error);  // missing file
 }

@@ -72,15 +72,9 @@ Options parse(int argc, char** argv) {
   };
   auto number = [&](int& i) {
     const std::string flag = argv[i], v = value(i);
-    std::size_t used = 0;
-    double x = 0;
-    try {
-      x = std::stod(v, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != v.size()) throw std::invalid_argument(flag + ": not a number: '" + v + "'");
-    return x;
+    const auto x = report::parseDouble(v);
+    if (!x) throw std::invalid_argument(flag + ": not a number: '" + v + "'");
+    return *x;
   };
   // A whole number in [lo, hi]: a fraction or an out-of-range value is an error, not rounded
   // (checked on the double, before any conversion).
