@@ -5,6 +5,9 @@
 #include <freeinit/report/plot.h>
 #include <freeinit/rotation.h>
 #include <gtest/gtest.h>
+#include <pthread.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cmath>
@@ -13,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
 
 namespace freeinit::report {
@@ -222,6 +226,35 @@ TEST(ParallelFor, RunsEveryJobOnceAndReportsTheLowestFailure) {
       EXPECT_STREQ(e.what(), "job 7");
     }
   }
+}
+
+/// In a child process: address space for one more thread stack only, then parallelFor with 4
+/// threads. The second thread cannot start; the first must be joined before the error is rethrown
+/// (a joinable std::thread destroyed in the unwinding would call std::terminate: SIGABRT).
+void parallelForWhenAThreadCannotStart() {
+  pthread_attr_t attr;
+  std::size_t stack = 0;
+  if (pthread_getattr_default_np(&attr) != 0 || pthread_attr_getstacksize(&attr, &stack) != 0)
+    std::_Exit(2);
+  long pages = 0;
+  if (!(std::ifstream("/proc/self/statm") >> pages)) std::_Exit(3);
+  const auto used = static_cast<rlim_t>(pages) * static_cast<rlim_t>(sysconf(_SC_PAGESIZE));
+  const rlimit limit{used + stack + stack / 2, RLIM_INFINITY};
+  if (setrlimit(RLIMIT_AS, &limit) != 0) std::_Exit(4);
+  std::atomic<int> ran{0};
+  try {
+    parallelFor(1000, 4, [&](std::size_t) { ++ran; });
+  } catch (const std::system_error&) {
+    std::_Exit(ran.load() < 1000 ? 0 : 5);  // not every index ran: the pool stopped early
+  }
+  std::_Exit(6);  // every thread started: the limit did not bite
+}
+
+TEST(ParallelFor, JoinsTheStartedThreadsWhenAThreadCannotStart) {
+  // "threadsafe": the child is a fresh run of this test alone, without the thread stacks that
+  // glibc caches from earlier tests (a cached stack needs no new address space).
+  ::testing::FLAGS_gtest_death_test_style = "threadsafe";
+  EXPECT_EXIT(parallelForWhenAThreadCannotStart(), ::testing::ExitedWithCode(0), "");
 }
 
 TEST(Plot, WritesAReadablePngWithTheData) {
