@@ -283,8 +283,7 @@ int IcpSlamApp::run(std::ostream& log) {
       const BodyPose b = bodyPoseAt(odometry, t);
       path.push_back({t, planarPose(b.q_wb, b.p_w)});
     }
-    writeTumPlanar((std::filesystem::path(params.out_dir) / kOdometryAloneFile).string(),
-                   path);
+    writeTumPlanar((std::filesystem::path(params.out_dir) / kOdometryAloneFile).string(), path);
     odometry_errors = comparePathWithTruth(path, truth, s.timestamp);
     log << std::fixed << std::setprecision(3) << "  odometry alone: ATE "
         << odometry_errors->ate_rmse << " m, end-point " << odometry_errors->end_point << " m\n"
@@ -334,8 +333,7 @@ int IcpSlamApp::run(std::ostream& log) {
     const std::filesystem::path dir = out / toString(mode);
     std::filesystem::create_directories(dir);
     saveSimplemapAtomically((dir / kMapFile).string(), b.map);
-    writeFileAtomically((dir / kStepLogFile).string(),
-                        [&](std::ostream& o) { o << b.step_log; });
+    writeFileAtomically((dir / kStepLogFile).string(), [&](std::ostream& o) { o << b.step_log; });
     writeTumPlanar((dir / kPathFile).string(), r.path);
     log << "icp-slam " << std::left << std::setw(9) << toString(mode) << std::right << ": "
         << r.path.size() << " scans, " << r.keyframes << " keyframes";
