@@ -98,29 +98,20 @@ TEST(EvalTable, CsvReadsBackWhatWasWritten) {
 
 TEST(EvalTable, BadCsvNamesFileAndLine) {
   const std::string path = tempPath("bad.csv");
-  writeEvalCsv(path, sampleRows());
-  {
-    std::ofstream f(path, std::ios::app);
-    f << "dyna_02,1,free-init,ok,abc,,,,,,,,0,\n";
-  }
-  try {
-    readEvalCsv(path);
-    FAIL() << "a non-number was accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(path + ": line 6"), std::string::npos) << e.what();
-  }
-  // A seed that is not a whole number (it was truncated before).
-  writeEvalCsv(path, sampleRows());
-  {
-    std::ofstream f(path, std::ios::app);
-    f << "dyna_02,2.7,free-init,ok,,,,,,,,,0,\n";
-  }
-  try {
-    readEvalCsv(path);
-    FAIL() << "a fractional seed was accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(path + ": line 6: seed"), std::string::npos) << e.what();
-  }
+  // The sample rows (lines 1-5) and one bad line: the error names the file, line 6 and `what`.
+  auto expectError = [&](const std::string& bad_line, const std::string& what) {
+    writeEvalCsv(path, sampleRows());
+    std::ofstream(path, std::ios::app) << bad_line << "\n";
+    try {
+      readEvalCsv(path);
+      ADD_FAILURE() << "accepted: " << bad_line;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ": line 6: " + what), std::string::npos)
+          << e.what();
+    }
+  };
+  expectError("dyna_02,1,free-init,ok,abc,,,,,,,,0,", "not a number");
+  expectError("dyna_02,2.7,free-init,ok,,,,,,,,,0,", "seed");  // was truncated to 2
   std::filesystem::remove(path);
   EXPECT_THROW(readEvalCsv(path), std::runtime_error);  // missing file
 }
