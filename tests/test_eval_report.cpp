@@ -5,6 +5,9 @@
 #include <freeinit/report/plot.h>
 #include <freeinit/rotation.h>
 #include <gtest/gtest.h>
+#include <pthread.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <cmath>
@@ -13,6 +16,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <vector>
 
 namespace freeinit::report {
@@ -94,17 +98,20 @@ TEST(EvalTable, CsvReadsBackWhatWasWritten) {
 
 TEST(EvalTable, BadCsvNamesFileAndLine) {
   const std::string path = tempPath("bad.csv");
-  writeEvalCsv(path, sampleRows());
-  {
-    std::ofstream f(path, std::ios::app);
-    f << "dyna_02,1,free-init,ok,abc,,,,,,,,0,\n";
-  }
-  try {
-    readEvalCsv(path);
-    FAIL() << "a non-number was accepted";
-  } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find(path + ": line 6"), std::string::npos) << e.what();
-  }
+  // The sample rows (lines 1-5) and one bad line: the error names the file, line 6 and `what`.
+  auto expectError = [&](const std::string& bad_line, const std::string& what) {
+    writeEvalCsv(path, sampleRows());
+    std::ofstream(path, std::ios::app) << bad_line << "\n";
+    try {
+      readEvalCsv(path);
+      ADD_FAILURE() << "accepted: " << bad_line;
+    } catch (const std::runtime_error& e) {
+      EXPECT_NE(std::string(e.what()).find(path + ": line 6: " + what), std::string::npos)
+          << e.what();
+    }
+  };
+  expectError("dyna_02,1,free-init,ok,abc,,,,,,,,0,", "not a number");
+  expectError("dyna_02,2.7,free-init,ok,,,,,,,,,0,", "seed");  // was truncated to 2
   std::filesystem::remove(path);
   EXPECT_THROW(readEvalCsv(path), std::runtime_error);  // missing file
 }
@@ -142,6 +149,60 @@ TEST(DisplacementError, IsFreeOfTheWorldFrame) {
   EXPECT_TRUE(std::isnan(displacementError(r, start, end)));
 }
 
+TEST(MakeEvalRow, ErrorsAgainstTheTruthAtTheStateTime) {
+  // The truth is yawed 30 deg and tilted in its world; the estimate's world differs by a yaw
+  // (gauge-free errors must not see it). Errors put in by hand on top of the truth.
+  const Mat3 R_true = Exp(Vec3(0.1, 0, 30.0 * M_PI / 180.0));
+  auto truth = [&](double t) {
+    StateTruth gt;
+    gt.R_wb = R_true;
+    gt.p_w = Vec3(5, 6, 7) + t * (R_true * Vec3(2, 0, 0));
+    gt.v_w = R_true * Vec3(2, 0, 0);
+    gt.b_g = Vec3(0.01, 0, 0);
+    gt.b_a = R_true.transpose() * Vec3(0.3, 0.4, 0.1);  // horizontal 0.5 m/s^2 in w
+    return gt;
+  };
+  const Quat q_gauge(Eigen::AngleAxisd(0.7, Vec3::UnitZ()));
+  MethodRun m;
+  m.method = "free-init";
+  m.time_ms = 12;
+  InitialState& s = m.result.state;
+  s.status = InitStatus::Ok;
+  s.timestamp = 2;
+  s.q_wb = q_gauge * Quat(R_true);
+  s.v_w = q_gauge * (R_true * Vec3(2, 0.3, -0.4));  // 0.5 m/s off in b
+  s.g_w = q_gauge * Vec3(0, 0, -kGravity);
+  s.b_g = truth(2).b_g + Vec3(0, 0.002, 0);
+  s.b_a = truth(2).b_a + Vec3(0, 0, 0.05);
+  s.p_w = q_gauge * (R_true * Vec3(4, 0, 0));  // 2 s at 2 m/s along body x
+  PoseSample p0;
+  p0.t = 0;
+  p0.q_wb = s.q_wb;
+  m.result.trajectory.push_back(p0);
+  const EvalRow row = makeEvalRow("dyna_01", 3, m, truth);
+  EXPECT_EQ(row.source, "dyna_01");
+  EXPECT_EQ(row.seed, 3);
+  EXPECT_EQ(row.method, "free-init");
+  EXPECT_EQ(row.status, "ok");
+  EXPECT_EQ(row.time_ms, 12);
+  EXPECT_NEAR(row.speed, 2, 1e-12);
+  EXPECT_NEAR(row.velocity_err, 0.5, 1e-12);
+  EXPECT_NEAR(row.gravity_err_deg, 0, 1e-6);
+  EXPECT_NEAR(row.gravity_bound_deg,
+              std::atan2(0.5, kGravity) * 180 / M_PI + kGravityBoundMarginDeg, 1e-9);
+  EXPECT_NEAR(row.gyro_bias_err, 0.002, 1e-12);
+  EXPECT_NEAR(row.accel_bias_err, 0.05, 1e-12);
+  EXPECT_NEAR(row.position_err, 0, 1e-9);
+  // No state: status only, every error NaN, the truth not asked.
+  s.status = InitStatus::NotEnoughData;
+  const EvalRow none =
+      makeEvalRow("x", 0, m, [](double) -> StateTruth { throw std::runtime_error("truth asked"); });
+  EXPECT_EQ(none.status, toString(InitStatus::NotEnoughData));
+  EXPECT_TRUE(std::isnan(none.velocity_err));
+  EXPECT_TRUE(std::isnan(none.gravity_bound_deg));
+  EXPECT_TRUE(std::isnan(none.position_err));
+}
+
 TEST(ParallelFor, RunsEveryJobOnceAndReportsTheLowestFailure) {
   for (unsigned threads : {1u, 2u, 5u}) {
     std::vector<std::atomic<int>> hits(37);
@@ -156,6 +217,34 @@ TEST(ParallelFor, RunsEveryJobOnceAndReportsTheLowestFailure) {
       EXPECT_STREQ(e.what(), "job 7");
     }
   }
+}
+
+/// In a child process: address space for one more thread stack only, then parallelFor with 4
+/// threads. The second thread cannot start; the first must be joined before the error is rethrown
+/// (a joinable std::thread destroyed in the unwinding would call std::terminate: SIGABRT).
+void parallelForWhenAThreadCannotStart() {
+  pthread_attr_t attr;
+  std::size_t stack = 0;
+  if (pthread_getattr_default_np(&attr) != 0 || pthread_attr_getstacksize(&attr, &stack) != 0)
+    std::_Exit(2);
+  long pages = 0;
+  if (!(std::ifstream("/proc/self/statm") >> pages)) std::_Exit(3);
+  const auto used = static_cast<rlim_t>(pages) * static_cast<rlim_t>(sysconf(_SC_PAGESIZE));
+  const rlimit limit{used + stack + stack / 2, RLIM_INFINITY};
+  if (setrlimit(RLIMIT_AS, &limit) != 0) std::_Exit(4);
+  try {
+    parallelFor(1000, 4, [](std::size_t) {});
+  } catch (const std::system_error&) {
+    std::_Exit(0);
+  }
+  std::_Exit(6);  // every thread started: the limit did not bite
+}
+
+TEST(ParallelFor, JoinsTheStartedThreadsWhenAThreadCannotStart) {
+  // "threadsafe": the child is a fresh run of this test alone, without the thread stacks that
+  // glibc caches from earlier tests (a cached stack needs no new address space).
+  ::testing::FLAGS_gtest_death_test_style = "threadsafe";
+  EXPECT_EXIT(parallelForWhenAThreadCannotStart(), ::testing::ExitedWithCode(0), "");
 }
 
 TEST(Plot, WritesAReadablePngWithTheData) {

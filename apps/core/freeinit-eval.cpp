@@ -10,6 +10,7 @@
 #include <freeinit/sim/presets.h>
 #include <freeinit/sim/simulator.h>
 
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
@@ -71,35 +72,34 @@ Options parse(int argc, char** argv) {
   };
   auto number = [&](int& i) {
     const std::string flag = argv[i], v = value(i);
-    std::size_t used = 0;
-    double x = 0;
-    try {
-      x = std::stod(v, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != v.size()) throw std::invalid_argument(flag + ": not a number: '" + v + "'");
-    return x;
+    const auto x = report::parseDouble(v);
+    if (!x) throw std::invalid_argument(flag + ": not a number: '" + v + "'");
+    return *x;
+  };
+  // A whole number in [lo, hi]: a fraction or an out-of-range value is an error, not rounded
+  // (checked on the double, before any conversion).
+  auto integer = [&](int& i, int lo, int hi) {
+    const std::string flag = argv[i];
+    const double x = number(i);
+    if (!(x >= lo && x <= hi) || x != std::floor(x))
+      throw std::invalid_argument(flag + ": must be a whole number in [" + std::to_string(lo) +
+                                  ", " + std::to_string(hi) + "], not '" + argv[i] + "'");
+    return static_cast<int>(x);
   };
   const std::map<std::string, std::function<void(int&)>> with_value = {
-      {"--seeds", [&](int& i) { o.seeds = static_cast<int>(number(i)); }},
-      {"--jobs",
-       [&](int& i) {
-         const double j = number(i);
-         if (!(j >= 0 && j <= 1024)) throw std::invalid_argument("--jobs must be in [0, 1024]");
-         o.jobs = static_cast<unsigned>(j);
-       }},
+      {"--seeds", [&](int& i) { o.seeds = integer(i, 1, 100000); }},
+      {"--jobs", [&](int& i) { o.jobs = static_cast<unsigned>(integer(i, 0, 1024)); }},
       {"--md", [&](int& i) { o.md = value(i); }},
       {"--csv", [&](int& i) { o.csv = value(i); }},
       {"--plots", [&](int& i) { o.plots = value(i); }},
       {"--fail-velocity", [&](int& i) { o.thresholds.velocity = number(i); }},
       {"--fail-gravity", [&](int& i) { o.thresholds.gravity_deg = number(i); }},
       {"--duration", [&](int& i) { o.duration = number(i); }},
-      {"--points", [&](int& i) { o.points = static_cast<int>(number(i)); }},
-      {"--stride", [&](int& i) { o.stride = static_cast<int>(number(i)); }},
+      {"--points", [&](int& i) { o.points = integer(i, 1, 100000000); }},
+      {"--stride", [&](int& i) { o.stride = integer(i, 1, 1000000); }},
       {"--dlio-duration", [&](int& i) { o.methods.dlio_duration = number(i); }},
       {"--gyro-prior", [&](int& i) { o.gyro_prior = number(i); }},
-      {"--passes", [&](int& i) { o.passes = static_cast<int>(number(i)); }},
+      {"--passes", [&](int& i) { o.passes = integer(i, 0, 1000); }},
       {"--tau", [&](int& i) { o.tau = number(i); }},
   };
   const std::map<std::string, bool*> switches = {{"--no-gyro-bias-estimate", &o.no_db},
@@ -124,7 +124,6 @@ Options parse(int argc, char** argv) {
       o.presets.push_back(a);
     }
   }
-  if (o.seeds < 1) throw std::invalid_argument("--seeds must be >= 1");
   if (o.duration < 0) o.duration = o.methods.baselines ? o.methods.dlio_duration + 0.2 : 1.2;
   if (o.presets.empty()) o.presets = sim::presetNames();
   for (const auto& p : o.presets) sim::presetInfo(p);  // throws on an unknown name
@@ -169,47 +168,36 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
   const auto runs = report::runMethods(cfg, rec.imu, rec.frames, rec.extrinsics, o.methods);
 
   JobResult out;
-  auto pose = [&](double t) {
+  const report::TruthFn truth = [&](double t) {
     const auto s = rec.truth(t);
-    return report::PoseTruth{s.R_wb, s.p_w};
+    report::StateTruth gt;
+    gt.R_wb = s.R_wb;
+    gt.p_w = s.p_w;
+    gt.v_w = s.v_w;
+    gt.g_w = rec.g_w;
+    gt.b_g = rec.b_g;
+    gt.b_a = rec.b_a;
+    return gt;
   };
   for (const auto& m : runs) {
-    const auto& r = m.result;
-    report::EvalRow row;
-    row.source = name;
-    row.seed = seed;
-    row.method = m.method;
-    row.status = freeinit::toString(r.state.status);
-    row.time_ms = m.time_ms;
-    const auto e = sim::evaluate(r.state, rec);
-    if (e.valid) {
-      row.speed = e.vel_b_true_norm;
-      row.velocity_err = e.vel_b;
-      row.gravity_err_deg = e.gravity_deg;
-      row.gravity_bound_deg = e.gravity_deg_from_bias + report::kGravityBoundMarginDeg;
-      row.gyro_bias_err = e.gyro_bias;
-      row.accel_bias_err = e.accel_bias;
-      if (!r.trajectory.empty())
-        row.position_err =
-            report::displacementError(r, pose(r.trajectory.front().t), pose(r.state.timestamp));
-    }
+    const report::EvalRow row = report::makeEvalRow(name, seed, m, truth);
     out.rows.push_back(row);
     char head[96];
     std::snprintf(head, sizeof(head), "%-10s %-16s %2d  ", m.method.c_str(), name.c_str(), seed);
     out.log += head;
-    if (!e.valid) {
-      out.log += "no state: " + row.status + " (" + r.state.message + ")\n";
+    if (!m.result.state.ok()) {
+      out.log += "no state: " + row.status + " (" + m.result.state.message + ")\n";
       continue;
     }
-    appendf(out.log, "|v|=%6.2f dv=%7.4f dg=%6.3f deg dbg=%7.5f dba=%6.3f dp=%6.3f m",
-            e.vel_b_true_norm, e.vel_b, e.gravity_deg, e.gyro_bias, e.accel_bias, row.position_err);
+    const auto e = sim::evaluate(m.result.state, rec);  // the NEES of the reported covariance
+    appendf(out.log, "|v|=%6.2f dv=%7.4f dg=%6.3f deg dbg=%7.5f dba=%6.3f dp=%6.3f m", row.speed,
+            row.velocity_err, row.gravity_err_deg, row.gyro_bias_err, row.accel_bias_err,
+            row.position_err);
     appendf(out.log, "  nees v=%6.2f tilt=%6.2f bg=%6.2f ba=%6.2f  %7.2f ms\n", e.nees_vel_b,
             e.nees_tilt, e.nees_gyro_bias, e.nees_accel_bias, m.time_ms);
   }
-  out.tracks = report::velocityTracks(runs, rec.config.t0, [&](double t) -> Vec3 {
-    const auto s = rec.truth(t);
-    return s.R_wb.transpose() * s.v_w;
-  });
+  out.tracks =
+      report::velocityTracks(runs, rec.config.t0, [&](double t) -> Vec3 { return truth(t).v_b(); });
   if (o.trace) {
     const auto& fi = out.tracks.front();
     for (std::size_t i = 0; i < fi.t.size(); i += 5) {

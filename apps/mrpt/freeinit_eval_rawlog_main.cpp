@@ -11,10 +11,8 @@
 #include <freeinit/report/figures.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
-#include <freeinit/sim/evaluation.h>
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
-#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <mutex>
@@ -50,44 +48,22 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
                                                                       : config.core.extrinsics;
   const auto runs = report::runMethods(config.core, in.imu, in.frames, extrinsics, options);
 
-  auto at = [&](double t) {
+  const report::TruthFn at = [&](double t) {
     const auto s = glue::truthAt(truth, t);
     if (!s) throw std::runtime_error(truth_file + ": does not cover t = " + std::to_string(t));
-    return *s;
-  };
-  auto pose = [&](double t) {
-    const auto s = at(t);
-    return report::PoseTruth{s.q_wb.toRotationMatrix(), s.p_w};
+    report::StateTruth gt;
+    gt.R_wb = s->q_wb.toRotationMatrix();
+    gt.p_w = s->p_w;
+    gt.v_w = s->v_w;
+    gt.g_w = s->g_w;
+    gt.b_g = s->b_g;
+    gt.b_a = s->b_a;
+    return gt;
   };
   JobResult out;
-  for (const auto& m : runs) {
-    const auto& r = m.result;
-    report::EvalRow row;
-    row.source = rawlog;
-    row.method = m.method;
-    row.status = freeinit::toString(r.state.status);
-    row.time_ms = m.time_ms;
-    if (r.state.ok()) {
-      const auto e = glue::compareWithTruth(r.state, truth);
-      row.speed = e.v_b_true.norm();
-      row.velocity_err = e.velocity;
-      row.gravity_err_deg = e.gravity_deg;
-      const auto gt = at(r.state.timestamp);
-      row.gravity_bound_deg =
-          freeinit::sim::gravityErrorFromBiasDeg(gt.b_a, gt.q_wb.conjugate() * gt.g_w) +
-          report::kGravityBoundMarginDeg;
-      row.gyro_bias_err = e.gyro_bias;
-      row.accel_bias_err = e.accel_bias;
-      if (!r.trajectory.empty())
-        row.position_err =
-            report::displacementError(r, pose(r.trajectory.front().t), pose(r.state.timestamp));
-    }
-    out.rows.push_back(row);
-  }
-  out.tracks = report::velocityTracks(runs, in.imu.front().t, [&](double t) -> Vec3 {
-    const auto s = at(t);
-    return s.q_wb.conjugate() * s.v_w;
-  });
+  for (const auto& m : runs) out.rows.push_back(report::makeEvalRow(rawlog, 0, m, at));
+  out.tracks =
+      report::velocityTracks(runs, in.imu.front().t, [&](double t) -> Vec3 { return at(t).v_b(); });
   return out;
 }
 

@@ -24,6 +24,34 @@
 namespace freeinit::mrpt_glue {
 namespace {
 
+// The files this app writes: in <out>, in <out>/<mode>/ and in the export folder (<mode>.*).
+constexpr const char* kSeedIniFile = "icp_slam_seed.ini";
+constexpr const char* kOdometryAloneFile = "odometry_alone_tum.txt";
+constexpr const char* kResultsFile = "results.txt";
+constexpr const char* kPictureFile = "trajectories.png";
+constexpr const char* kMapFile = "_finalmap_.simplemap";
+constexpr const char* kStepLogFile = "log_estimated_path.txt";
+constexpr const char* kPathFile = "estimated_path_tum.txt";
+constexpr const char* kErrorsFile = "errors_wrt_gt.ini";
+
+/// Removes whatever an earlier run of this app left in its output folders (only the files it
+/// writes, for every mode), so that a run that fails half-way leaves no result that looks current.
+/// Creates nothing; throws std::filesystem::filesystem_error when a file cannot be removed.
+void removeEarlierOutputs(const IcpSlamAppParams& p) {
+  namespace fs = std::filesystem;
+  const fs::path out(p.out_dir);
+  for (const char* f : {kSeedIniFile, kOdometryAloneFile, kResultsFile, kPictureFile})
+    fs::remove(out / f);
+  for (const IcpSeedMode m : {IcpSeedMode::Plain, IcpSeedMode::Seeded, IcpSeedMode::Odometry}) {
+    for (const char* f : {kMapFile, kStepLogFile, kPathFile, kErrorsFile})
+      fs::remove(out / toString(m) / f);
+    if (!p.export_dir.empty()) {
+      fs::remove(fs::path(p.export_dir) / (std::string(toString(m)) + ".rawlog"));
+      fs::remove(fs::path(p.export_dir) / (std::string(toString(m)) + ".ini"));
+    }
+  }
+}
+
 const char* kMappingSection = "MappingApplication";
 
 /// Whether one odometry reading at the seed pose would stop icp-slam from ever correcting: after
@@ -182,6 +210,8 @@ void renderRuns(const std::string& png, const std::string& title,
 }  // namespace
 
 int IcpSlamApp::run(std::ostream& log) {
+  // 0. No output of an earlier run survives this one, whether it succeeds or fails.
+  removeEarlierOutputs(params);
   // 1. Configuration (both files), then the input: everything is checked before any output.
   if (!std::filesystem::is_regular_file(params.icp_ini))
     throw std::invalid_argument(params.icp_ini + ": no such file");
@@ -253,8 +283,7 @@ int IcpSlamApp::run(std::ostream& log) {
       const BodyPose b = bodyPoseAt(odometry, t);
       path.push_back({t, planarPose(b.q_wb, b.p_w)});
     }
-    writeTumPlanar((std::filesystem::path(params.out_dir) / "odometry_alone_tum.txt").string(),
-                   path);
+    writeTumPlanar((std::filesystem::path(params.out_dir) / kOdometryAloneFile).string(), path);
     odometry_errors = comparePathWithTruth(path, truth, s.timestamp);
     log << std::fixed << std::setprecision(3) << "  odometry alone: ATE "
         << odometry_errors->ate_rmse << " m, end-point " << odometry_errors->end_point << " m\n"
@@ -288,7 +317,7 @@ int IcpSlamApp::run(std::ostream& log) {
              "localization/insertion distances: it goes in as initialize()'s pose prior, "
              "without the velocity (a lone odometry reading would stop ICP)\n";
   }
-  if (seed) writeSeedIni((out / "icp_slam_seed.ini").string(), *seed);
+  if (seed) writeSeedIni((out / kSeedIniFile).string(), *seed);
   runs.clear();
   for (const IcpSeedMode mode : modes) {
     const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
@@ -303,10 +332,9 @@ int IcpSlamApp::run(std::ostream& log) {
     r.map_y = std::move(b.map_y);
     const std::filesystem::path dir = out / toString(mode);
     std::filesystem::create_directories(dir);
-    saveSimplemapAtomically((dir / "_finalmap_.simplemap").string(), b.map);
-    writeFileAtomically((dir / "log_estimated_path.txt").string(),
-                        [&](std::ostream& o) { o << b.step_log; });
-    writeTumPlanar((dir / "estimated_path_tum.txt").string(), r.path);
+    saveSimplemapAtomically((dir / kMapFile).string(), b.map);
+    writeFileAtomically((dir / kStepLogFile).string(), [&](std::ostream& o) { o << b.step_log; });
+    writeTumPlanar((dir / kPathFile).string(), r.path);
     log << "icp-slam " << std::left << std::setw(9) << toString(mode) << std::right << ": "
         << r.path.size() << " scans, " << r.keyframes << " keyframes";
     if (!truth.empty() && s.ok()) {
@@ -315,7 +343,7 @@ int IcpSlamApp::run(std::ostream& log) {
       const PathErrors& e = *r.errors;
       log << std::fixed << std::setprecision(3) << ", ATE " << e.ate_rmse << " m, end-point "
           << e.end_point << " m over " << e.length << " m" << std::defaultfloat;
-      writeFileAtomically((dir / "errors_wrt_gt.ini").string(), [&](std::ostream& o) {
+      writeFileAtomically((dir / kErrorsFile).string(), [&](std::ostream& o) {
         o << "; icp-slam path vs ground truth, poses at the scans from the Free-Init state time,\n"
              "; after the best SE(2) alignment\n[errors_wrt_gt]\nmode = "
           << toString(mode) << "\nsamples = " << e.samples << "\nate_rmse = " << e.ate_rmse
@@ -361,7 +389,7 @@ int IcpSlamApp::run(std::ostream& log) {
 
   // 5. Results table and the picture.
   if (!runs.empty() && runs.front().errors) {
-    writeFileAtomically((out / "results.txt").string(), [&](std::ostream& o) {
+    writeFileAtomically((out / kResultsFile).string(), [&](std::ostream& o) {
       o << "# mode ate_rmse[m] end_point[m] true_length[m] scans keyframes\n" << std::fixed;
       if (odometry_errors)
         o << "odometry_alone " << std::setprecision(3) << odometry_errors->ate_rmse << " "
@@ -374,7 +402,7 @@ int IcpSlamApp::run(std::ostream& log) {
     });
   }
   if (params.snapshot && !runs.empty()) {
-    const std::string png = (out / "trajectories.png").string();
+    const std::string png = (out / kPictureFile).string();
     renderRuns(png, std::filesystem::path(params.rawlog).filename().string(), runs, truth,
                s.timestamp, params.snapshot_width, params.snapshot_height);
     log << "Picture: " << png << "\n";

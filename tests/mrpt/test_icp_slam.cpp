@@ -321,4 +321,35 @@ TEST(IcpSlamInputs, BadIniIsAClearError) {
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
+TEST(IcpSlamInputs, FailedRunLeavesNoEarlierOutput) {
+  // The files of an earlier run (results of every mode, the export) and one the app does not own.
+  const fs::path dir = testDir("stale");
+  const fs::path out = dir / "out", ex = dir / "export";
+  const std::vector<fs::path> stale = {out / "results.txt",
+                                       out / "odometry_alone_tum.txt",
+                                       out / "icp_slam_seed.ini",
+                                       out / "trajectories.png",
+                                       out / "odometry" / "errors_wrt_gt.ini",
+                                       out / "plain" / "estimated_path_tum.txt",
+                                       out / "seeded" / "_finalmap_.simplemap",
+                                       ex / "seeded.rawlog",
+                                       ex / "plain.ini"};
+  const fs::path foreign = out / "notes.txt";
+  for (const auto& f : stale) {
+    fs::create_directories(f.parent_path());
+    std::ofstream(f) << "earlier run\n";
+  }
+  std::ofstream(foreign) << "mine\n";
+  IcpSlamApp app;
+  app.params.icp_ini = kSrc + "/ini/icp_slam.ini";
+  app.params.freeinit_ini = kSrc + "/ini/freeinit.ini";
+  app.params.rawlog = (dir / "missing.rawlog").string();  // bad input: no such file
+  app.params.out_dir = out.string();
+  app.params.export_dir = ex.string();
+  std::ostringstream log;
+  EXPECT_ANY_THROW(app.run(log));
+  for (const auto& f : stale) EXPECT_FALSE(fs::exists(f)) << f;
+  EXPECT_TRUE(fs::exists(foreign));
+}
+
 }  // namespace

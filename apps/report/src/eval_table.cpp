@@ -68,15 +68,9 @@ std::vector<std::string> splitCsv(const std::string& line, const std::string& wh
 
 double parseNumber(const std::string& s, const std::string& where) {
   if (s.empty()) return kNoValue;
-  std::size_t used = 0;
-  double x = 0;
-  try {
-    x = std::stod(s, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != s.size()) throw std::runtime_error(where + ": not a number: '" + s + "'");
-  return x;
+  const auto x = parseDouble(s);
+  if (!x) throw std::runtime_error(where + ": not a number: '" + s + "'");
+  return *x;
 }
 
 /// Compact number for tables: 3 significant digits, no exponent for the ranges seen here.
@@ -165,7 +159,10 @@ std::vector<EvalRow> readEvalCsv(const std::string& path) {
                                std::to_string(kColumns));
     EvalRow r;
     r.source = c[0];
-    r.seed = static_cast<int>(parseNumber(c[1], where));
+    const auto seed = parseDouble(c[1]);
+    if (!seed || !(*seed >= 0 && *seed <= 1e9) || *seed != std::floor(*seed))
+      throw std::runtime_error(where + ": seed is not a whole number >= 0: '" + c[1] + "'");
+    r.seed = static_cast<int>(*seed);
     r.method = c[2];
     r.status = c[3];
     std::size_t i = 4;
@@ -276,6 +273,18 @@ void writeEvalMarkdown(const std::string& path, const std::vector<EvalRow>& rows
         << (r.failed ? r.failure : std::string()) << " |\n";
     }
   });
+}
+
+std::optional<double> parseDouble(const std::string& s) {
+  std::size_t used = 0;
+  double x = 0;
+  try {
+    x = std::stod(s, &used);
+  } catch (const std::exception&) {
+    return std::nullopt;
+  }
+  if (used != s.size()) return std::nullopt;
+  return x;
 }
 
 }  // namespace freeinit::report

@@ -1,6 +1,8 @@
 #include <freeinit/baselines.h>
 #include <freeinit/free_init.h>
 #include <freeinit/report/methods.h>
+#include <freeinit/rotation.h>
+#include <freeinit/sim/evaluation.h>
 
 #include <algorithm>
 #include <atomic>
@@ -73,6 +75,29 @@ double displacementError(const InitResult& r, const PoseTruth& at_start, const P
   return (d_est - d_true).norm();
 }
 
+EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run,
+                    const TruthFn& truth) {
+  const InitResult& r = run.result;
+  EvalRow row;
+  row.source = source;
+  row.seed = seed;
+  row.method = run.method;
+  row.status = toString(r.state.status);
+  row.time_ms = run.time_ms;
+  if (!r.state.ok()) return row;
+  const StateTruth gt = truth(r.state.timestamp);
+  const Vec3 v_b_true = gt.v_b(), g_b_true = gt.g_b();
+  row.speed = v_b_true.norm();
+  row.velocity_err = (r.state.v_b() - v_b_true).norm();
+  row.gravity_err_deg = angleBetween(r.state.g_b(), g_b_true) * 180.0 / M_PI;
+  row.gravity_bound_deg = sim::gravityErrorFromBiasDeg(gt.b_a, g_b_true) + kGravityBoundMarginDeg;
+  row.gyro_bias_err = (r.state.b_g - gt.b_g).norm();
+  row.accel_bias_err = (r.state.b_a - gt.b_a).norm();
+  if (!r.trajectory.empty())
+    row.position_err = displacementError(r, truth(r.trajectory.front().t), gt);
+  return row;
+}
+
 void parallelFor(std::size_t count, unsigned threads, const std::function<void(std::size_t)>& job) {
   if (threads == 0) threads = std::max(1u, std::thread::hardware_concurrency());
   threads = static_cast<unsigned>(std::min<std::size_t>(threads, std::max<std::size_t>(count, 1)));
@@ -94,9 +119,20 @@ void parallelFor(std::size_t count, unsigned threads, const std::function<void(s
     }
   };
   std::vector<std::thread> pool;
-  for (unsigned k = 1; k < threads; ++k) pool.emplace_back(worker);
+  auto join = [&] {
+    for (auto& t : pool) t.join();
+  };
+  try {
+    for (unsigned k = 1; k < threads; ++k) pool.emplace_back(worker);
+  } catch (...) {
+    // No thread (std::system_error) or no memory: the started threads must end before `pool`
+    // goes (a joinable std::thread's destructor terminates). They run the jobs to the end.
+    next = count;
+    join();
+    throw;
+  }
   worker();
-  for (auto& t : pool) t.join();
+  join();
   if (error) std::rethrow_exception(error);
 }
 

@@ -43,7 +43,8 @@ class IcpSlamApp {
  public:
   IcpSlamAppParams params;
 
-  /// Bad input or configuration throws before any output exists. Returns 0, or 3 when Free-Init
+  /// First removes the files an earlier run wrote in out_dir (and export_dir), every mode's; then
+  /// bad input or configuration throws before any output exists. Returns 0, or 3 when Free-Init
   /// did not initialize and a seeded mode was asked for (the plain run is still done).
   int run(std::ostream& log);
 

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <limits>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -42,6 +43,10 @@ struct FailureThresholds {
 
 /// Sets `failed` and `failure` on every row.
 void markFailures(std::vector<EvalRow>& rows, const FailureThresholds& thresholds);
+
+/// All of `s` as a number (std::stod's syntax); nullopt when it is empty, not a number, out of
+/// double's range, or anything is left over ("2x").
+std::optional<double> parseDouble(const std::string& s);
 
 /// CSV with a header line; text fields quoted when needed, missing values empty. Atomic write.
 void writeEvalCsv(const std::string& path, const std::vector<EvalRow>& rows);
