@@ -44,7 +44,8 @@ const char* const kUsage =
     "  --no-baselines       Free-Init only\n"
     "  --dlio-duration S    DLIO's static calibration time (3)\n"
     "  --gyro-prior SIGMA   gyro-bias prior: the truth plus noise of this std [rad/s]\n"
-    "  --passes N, --tau S, --no-gyro-bias-estimate, --zero-gyro-bias: estimator variants\n"
+    "  --passes N, --seed-samples N, --tau S, --no-gyro-bias-estimate, --zero-gyro-bias:\n"
+    "                       estimator variants\n"
     "  --trace              print Free-Init's velocity errors over the window\n"
     "  -q                   no per-run lines\n";
 
@@ -54,7 +55,7 @@ struct Options {
   std::string md, csv, plots;
   report::FailureThresholds thresholds;
   double duration = -1;  // < 0: default by baselines
-  int points = 0, stride = 0, passes = -1;
+  int points = 0, stride = 0, passes = -1, seed_samples = -1;
   double tau = -1, gyro_prior = 0;
   bool zero_bg = false, no_db = false, trace = false, quiet = false;
   report::MethodOptions methods;
@@ -100,6 +101,7 @@ Options parse(int argc, char** argv) {
       {"--dlio-duration", [&](int& i) { o.methods.dlio_duration = number(i); }},
       {"--gyro-prior", [&](int& i) { o.gyro_prior = number(i); }},
       {"--passes", [&](int& i) { o.passes = integer(i, 0, 1000); }},
+      {"--seed-samples", [&](int& i) { o.seed_samples = integer(i, 0, 1000000); }},
       {"--tau", [&](int& i) { o.tau = number(i); }},
   };
   const std::map<std::string, bool*> switches = {{"--no-gyro-bias-estimate", &o.no_db},
@@ -156,6 +158,7 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
   freeinit::FreeInitConfig cfg;
   if (o.stride > 0) cfg.velocimeter.point_stride = o.stride;
   if (o.passes >= 0) cfg.window.refinement_passes = o.passes;
+  if (o.seed_samples >= 0) cfg.window.seed_imu_samples = o.seed_samples;
   if (o.tau >= 0) cfg.gravity.velocity_error_correlation_time = o.tau;
   if (o.no_db) cfg.gravity.estimate_gyro_bias = false;
   if (o.gyro_prior > 0) {
