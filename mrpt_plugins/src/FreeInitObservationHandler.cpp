@@ -13,7 +13,7 @@ FreeInitObservationHandler::FreeInitObservationHandler(const AppConfig& config) 
   config_.core.validate();
   extrinsics_known_ = !config_.extrinsics.from_sensor_pose;
   imu_check_samples_ = std::max<std::size_t>(
-      2, std::min(kImuCheckSamples, static_cast<std::size_t>(config_.core.window.imu_samples)));
+      2, std::min(kLiveImuCheckSamples, static_cast<std::size_t>(config_.core.window.imu_samples)));
 }
 
 void FreeInitObservationHandler::checkImu() {

@@ -21,9 +21,10 @@ class FreeInitObservationHandler {
   /// configured label), false if ignored (other sensors, or the state is already ready()).
   /// Throws std::invalid_argument on an unusable observation (no Doppler, time going back...).
   /// The input checks of the offline validator apply here too (input_validator.h): every cloud's
-  /// Doppler; the IMU rate and accelerometer unit on the first min(kImuCheckSamples,
-  /// [window] imu_samples) IMU samples, which are held back (with the clouds between them) until
-  /// they pass, so the estimator never sees data that fails them.
+  /// Doppler; the IMU rate and accelerometer unit on the first kLiveImuCheckSamples IMU samples,
+  /// which are held back (with the clouds between them) until they pass, so the estimator never
+  /// sees data that fails them. Few samples, so that the estimator keeps up with a live stream
+  /// from early on (holding back a whole window made the closing call process all of it).
   bool process(const mrpt::obs::CObservation::Ptr& obs);
 
   /// End of input: checks the IMU if not yet done, then closes a window still open with what is

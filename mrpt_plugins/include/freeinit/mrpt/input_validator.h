@@ -26,6 +26,9 @@ struct ValidatedInput {
 
 /// Samples whose mean judges the accelerometer unit, and (live) the IMU rate before any is used.
 inline constexpr std::size_t kImuCheckSamples = 200;
+/// What the observation handler checks before it feeds the estimator (0.1 s at 200 Hz): enough
+/// for the rate and for g vs m/s^2 (a mean of 1 g vs 9.81), few enough to keep latency low.
+inline constexpr std::size_t kLiveImuCheckSamples = 20;
 /// Doppler zero (or non-finite) for every point: an ego-motion-compensated or Doppler-less sensor.
 std::optional<std::string> dopplerProblem(const std::vector<DopplerPoint>& points);
 /// Median-interval rate of `imu` (>= 2 samples) below `min_rate` [Hz].
