@@ -75,6 +75,8 @@ const char* toString(InitStatus s) {
     case InitStatus::NoDoppler: return "no_doppler";
     case InitStatus::DegenerateGeometry: return "degenerate_geometry";
     case InitStatus::SolverFailed: return "solver_failed";
+    case InitStatus::AmbiguousMotion: return "ambiguous_motion";
+    case InitStatus::InconsistentData: return "inconsistent_data";
   }
   return "unknown";
 }

@@ -33,6 +33,9 @@ void writeInitialStateIni(const std::string& path, const InitialState& s) {
     for (int i = 0; i < 18; ++i)
       for (int j = 0; j < 18; ++j) o << " " << s.cov(i, j);
     o << "\n";
+    o << "warnings  = " << s.warnings.size() << "\n";
+    for (std::size_t i = 0; i < s.warnings.size(); ++i)
+      o << "warning_" << i + 1 << " = " << s.warnings[i] << "\n";
   });
 }
 

@@ -16,6 +16,9 @@ enum class InitStatus {
   NoDoppler,           ///< no usable Doppler returns (all gated, or zero everywhere)
   DegenerateGeometry,  ///< the point directions do not constrain the velocity
   SolverFailed,        ///< the accelerometer bias / gravity problem has no usable solution
+  AmbiguousMotion,     ///< the data cannot decide whether the platform or the scene moves
+  InconsistentData,    ///< the measurements contradict each other beyond their noise (e.g. a
+                       ///< wrong calibration): no state is reported
 };
 
 /// Short machine-friendly name of a status ("ok", "not_enough_data", ...).
@@ -41,6 +44,9 @@ struct InitialState {
   Vec3 b_a = Vec3::Zero();       ///< [m/s^2]
   Vec3 g_w = Vec3(0, 0, -kGravity);  ///< [m/s^2]
   Cov18 cov = Cov18::Identity();
+  /// What a user must know about an Ok state (e.g. a bias at its bound, residuals larger than the
+  /// configured noise): one sentence each. Empty when nothing is suspicious.
+  std::vector<std::string> warnings;
 
   bool ok() const { return status == InitStatus::Ok; }
   /// Body velocity in the body frame.
