@@ -21,6 +21,13 @@ void nonNegative(double v, const char* key) {
 }  // namespace
 
 void FreeInitConfig::validate() const {
+  const auto& e = estimator;
+  positive(e.bootstrap_duration, "estimator.bootstrap_duration");
+  require(e.bootstrap_points >= 10, "estimator.bootstrap_points", "must be >= 10");
+  positive(e.initial_tilt_sigma, "estimator.initial_tilt_sigma");
+  require(e.max_iterations >= 1, "estimator.max_iterations", "must be >= 1");
+  nonNegative(e.accel_bias_random_walk, "estimator.accel_bias_random_walk");
+  positive(e.rest_velocity_sigma, "estimator.rest_velocity_sigma");
   const auto& v = velocimeter;
   positive(v.doppler_sigma, "velocimeter.doppler_sigma");
   positive(v.gyro_sigma, "velocimeter.gyro_sigma");

@@ -1,19 +1,10 @@
 #include <freeinit/free_init.h>
-#include <freeinit/gravity_estimator.h>
-#include <freeinit/pose_integrator.h>
-#include <freeinit/rotation.h>
-#include <freeinit/velocimeter.h>
-#include <freeinit/velocity_bootstrap.h>
 
 #include <chrono>
-#include <cmath>
-#include <deque>
-#include <limits>
-#include <optional>
 #include <stdexcept>
-#include <string>
 
-#include "velocimeter_steps.h"
+#include "measurement_sequencer.h"
+#include "pipeline.h"
 
 namespace freeinit {
 namespace {
@@ -25,511 +16,30 @@ double wallSeconds() {
 
 }  // namespace
 
-// Processing is incremental: every add*() call processes, in time order, all gyro samples and
-// points that the data received so far allows (a point needs the IMU sample after it; a gyro
-// sample needs the LiDAR stream to have passed it). A seed pass covers the first
-// `seed_imu_samples` of the window; its gravity solve starts the accelerometer-aided last pass,
-// which catches up on the buffered data and then follows the stream. When the last IMU sample
-// of the window has been processed the last solve makes the result final.
+// The facade owns its parts: the sequencer that buffers and orders the two streams, and the
+// pipeline the configuration selects (joint_pipeline.cpp, paper_pipeline.cpp), which reads the
+// sequencer and writes the result.
 struct FreeInit::Impl {
-  enum class Phase { WaitStart, Running, Done };
-
-  FreeInitConfig cfg;
-  std::vector<ImuSample> imu;
-  /// A buffered frame: its points stay where the caller or owned_frames keeps them.
-  struct FrameRef {
-    double stamp;
-    const std::vector<DopplerPoint>& points;
-  };
-  std::deque<LidarFrame> owned_frames;  ///< frames handed to addFrame (stable addresses)
-  std::vector<FrameRef> frames;         ///< all frames in time order
-  bool finished = false;
-  Phase phase = Phase::WaitStart;
-  InitResult result;
-
-  // Window and cursors.
-  double t_ref = 0;                  ///< UNIX time of the window start; internal times are relative
-  std::size_t k0 = 0;                ///< first IMU sample of the window
-  std::size_t k_end = 0;             ///< last IMU sample of the window
-  std::size_t k_stop = 0;            ///< last IMU sample of the current pass
-  std::size_t k_next = 0;            ///< next IMU sample to process
-  std::size_t f_cur = 0, p_cur = 0;  ///< next point to process
-  int point_stride = 1;              ///< the configured stride, or the automatic one
-  std::size_t stride_counter = 0;    ///< usable points since the last used one (mod the stride)
-
-  std::optional<Velocimeter> div;
-  PoseIntegrator integrator;
-  std::vector<KinematicSample> kinematics;
-
-  // Passes: the paper's, then accelerometer-aided refinements (see WindowParams).
-  int pass = 0;
-  Vec3 b_g_start = Vec3::Zero();  ///< gyro bias the velocimeter starts from in this pass
-  VelocityFit boot_fit;
-  bool boot_static = false;
-  GravityEstimate gravity;  ///< of the last finished pass
-
-  // Zero-velocity mode.
-  bool stationary = false;
-  double last_check = 0;
-  static constexpr std::size_t kMotionCheckStride = 8;
-  std::size_t motion_check_counter = 0;
-  std::vector<Vec3> static_dirs;  ///< points since the last motion check
-  std::vector<double> static_dopplers;
-
-  explicit Impl(const FreeInitConfig& c) : cfg(c) { cfg.validate(); }
-
-  double pointTime(std::size_t f, std::size_t p) const {
-    return (frames[f].stamp - t_ref) + frames[f].points[p].time_offset;
-  }
-  /// Moves (f, p) to the next existing point; false when the buffered frames are exhausted.
-  bool normalizeCursor(std::size_t& f, std::size_t& p) const {
-    while (f < frames.size() && p >= frames[f].points.size()) {
-      ++f;
-      p = 0;
-    }
-    return f < frames.size();
-  }
-  /// Time of the last buffered point (relative), or -inf.
-  double lidarCoveredUntil() const {
-    for (std::size_t f = frames.size(); f-- > 0;)
-      if (!frames[f].points.empty())
-        return (frames[f].stamp - t_ref) + frames[f].points.back().time_offset;
-    return -std::numeric_limits<double>::infinity();
-  }
-
-  /// Throws std::invalid_argument unless f can follow the buffered frames.
-  void checkFrame(const LidarFrame& f) const {
-    if (!std::isfinite(f.stamp)) throw std::invalid_argument("LiDAR frame stamp is not finite");
-    if (!frames.empty() && f.stamp <= frames.back().stamp)
-      throw std::invalid_argument(
-          "LiDAR frame stamp does not increase: " + std::to_string(f.stamp) + " after " +
-          std::to_string(frames.back().stamp));
-    for (std::size_t i = 0; i < f.points.size(); ++i) {
-      if (!std::isfinite(f.points[i].time_offset))
-        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) + ": point " +
-                                    std::to_string(i) + " has a non-finite time offset");
-      if (i > 0 && f.points[i].time_offset < f.points[i - 1].time_offset)
-        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
-                                    ": points are not sorted by time (point " + std::to_string(i) +
-                                    ")");
-    }
-    // Points are processed in time order across frames: a frame may not reach back into the
-    // previous one.
-    for (std::size_t k = frames.size(); k-- > 0 && !f.points.empty();) {
-      if (frames[k].points.empty()) continue;
-      const double prev_last = frames[k].stamp + frames[k].points.back().time_offset;
-      if (f.stamp + f.points.front().time_offset < prev_last)
-        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
-                                    " overlaps the previous frame in time");
-      break;
-    }
-  }
-  /// Buffers a checked frame that outlives this object (FreeInit::run), without copying it.
-  void addBorrowedFrame(const LidarFrame& f) {
-    checkFrame(f);
-    frames.push_back({f.stamp, f.points});
-    if (phase != Phase::Done) pump();
-  }
-
-  void fail(InitStatus s, const std::string& msg) {
-    result.state.status = s;
-    result.state.message = msg;
-    phase = Phase::Done;
+  explicit Impl(const FreeInitConfig& c) : cfg(c) {
+    cfg.validate();
+    pipeline = cfg.estimator.method == EstimatorParams::Method::Joint
+                   ? detail::makeJointPipeline(cfg, seq)
+                   : detail::makePaperPipeline(cfg, seq);
   }
 
   void pump() {
-    const double t0 = wallSeconds(), solver0 = result.diag.time_solver;
-    if (phase == Phase::WaitStart) tryStart();
-    if (phase == Phase::Running) run();
-    result.diag.time_velocimeter += wallSeconds() - t0 - (result.diag.time_solver - solver0);
-    if (phase == Phase::Running && finished) {
-      fail(InitStatus::NotEnoughData, "the recording ends before the initialization window (" +
-                                          std::to_string(cfg.window.imu_samples) +
-                                          " IMU samples) is covered");
-    }
-    if (phase == Phase::WaitStart && finished)
-      fail(InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
-    if (phase == Phase::Done) result.diag.time_to_result = wallSeconds() - t0;
-  }
-
-  void tryStart() {
-    if (cfg.velocimeter.doppler_ego_compensated) {
-      fail(InitStatus::NoDoppler,
-           "the Doppler values are ego-compensated: they carry no ego velocity; Free-Init needs "
-           "the raw (range-rate) Doppler");
-      return;
-    }
-    // Window start: the first IMU sample at or after the first LiDAR point.
-    std::size_t f = 0, p = 0;
-    if (!normalizeCursor(f, p) || imu.empty()) return;
-    const double tp0 = frames[f].stamp + frames[f].points[p].time_offset;
-    std::size_t k = 0;
-    while (k < imu.size() && imu[k].t < tp0) ++k;
-    if (k + 1 >= imu.size()) return;  // need the sample and the next one (gyro slope)
-    t_ref = imu[k].t;
-    // Bootstrap points: the first ones at or after the window start.
-    std::vector<Vec3> dirs;
-    std::vector<double> dopplers;
-    const auto& vp = cfg.velocimeter;
-    dirs.reserve(cfg.bootstrap.points);
-    dopplers.reserve(cfg.bootstrap.points);
-    for (; normalizeCursor(f, p) && static_cast<int>(dirs.size()) < cfg.bootstrap.points; ++p) {
-      const DopplerPoint& pt = frames[f].points[p];
-      if (pointTime(f, p) < 0 || !detail::usablePoint(pt, vp)) continue;
-      const double r = pt.p_l.norm();
-      dirs.push_back(pt.p_l.cast<double>() / r);
-      dopplers.push_back(pt.doppler);
-    }
-    if (static_cast<int>(dirs.size()) < cfg.bootstrap.points && !finished) return;
-    if (dirs.size() < 10) {
-      fail(InitStatus::NoDoppler, "fewer than 10 usable LiDAR returns in the window");
-      return;
-    }
-    const VelocityFit fit = fitLidarVelocity(dirs, dopplers, cfg.bootstrap, vp.doppler_sigma);
-    if (!fit.ok) {
-      fail(InitStatus::DegenerateGeometry, "bootstrap: " + fit.message);
-      return;
-    }
-    k0 = k;
-    k_end = k0 + static_cast<std::size_t>(cfg.window.imu_samples) - 1;
-    point_stride = vp.point_stride > 0 ? vp.point_stride
-                                       : detail::automaticPointStride(frames, vp.max_point_rate);
-    boot_fit = fit;
-    b_g_start = vp.gyro_bias_prior;
-    const auto& sp = cfg.static_detector;
-    boot_static =
-        sp.enabled && fit.v_l.norm() < sp.max_speed &&
-        (imu[k0].gyro - vp.gyro_bias_prior).norm() < sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
-    startPass();
-    phase = Phase::Running;
-  }
-
-  /// (Re)starts the velocimeter at the window start; all window data are buffered for pass > 0.
-  void startPass() {
-    k_next = k0 + 1;
-    const int seed_n = cfg.window.seed_imu_samples;
-    k_stop = finalPass() || seed_n <= 0
-                 ? k_end
-                 : k0 + static_cast<std::size_t>(std::min(seed_n, cfg.window.imu_samples)) - 1;
-    f_cur = 0;
-    p_cur = 0;
-    stride_counter = 0;
-    kinematics.clear();
-    result.static_map.clear();
-    result.rejected.clear();
-    result.velocities.clear();
-    result.trajectory.clear();
-    auto& d = result.diag;
-    d.points_seen = d.points_used = d.points_skipped = d.points_rejected = d.gyro_updates = 0;
-    VelocimeterParams vp = cfg.velocimeter;
-    vp.gyro_bias_prior = b_g_start;
-    div.emplace(vp, cfg.extrinsics);
-    // The bootstrap points are processed again by the filter: its covariance is widened so that
-    // it acts as a starting point and a gate, not as information counted twice.
-    div->start(0.0, boot_fit.v_l, boot_fit.cov * 100.0, imu[k0].gyro);
-    div->setOmegaSlope((imu[k0 + 1].gyro - imu[k0].gyro) / (imu[k0 + 1].t - imu[k0].t));
-    integrator.reset(0.0, div->omega_b(), div->v_b());
-    stationary = boot_static;
-    d.static_start = boot_static;
-    d.static_duration = 0;
-    last_check = 0;
-    static_dirs.clear();
-    static_dopplers.clear();
-    motion_check_counter = 0;
-    if (pass > 0) setAcceleration(k0);
-    recordSample(k0);
-  }
-
-  /// Aided passes: the body acceleration a_b = f - b_a + R_w0b^T g_w0 at sample k and its slope to
-  /// sample k + 1 (gravity in b turns as dg_b/dt = -omega x g_b).
-  void setAcceleration(std::size_t k) {
-    detail::setAidedAcceleration(*div, imu, k, gravity.b_a,
-                                 integrator.R_wb().transpose() * gravity.g_w);
-  }
-
-  void run() {
-    while (true) {
-      const bool have_point = normalizeCursor(f_cur, p_cur);
-      const double tp = have_point ? pointTime(f_cur, p_cur) : 0.0;
-      if (k_next <= k_stop) {
-        if (k_next >= imu.size()) return;  // wait for IMU
-        const double tg = imu[k_next].t - t_ref;
-        if (have_point && tp <= tg) {
-          processPoint(tp);
-          continue;
-        }
-        // All points before tg are processed if the LiDAR stream has passed tg.
-        if (!have_point && !finished && lidarCoveredUntil() < tg) return;
-        if (k_next < k_stop && k_next + 1 >= imu.size() && !finished) return;  // need the slope
-        processGyro(k_next);
-        ++k_next;
-        continue;
-      }
-      // The last gyro sample of the pass is processed: later points belong to no window.
-      if (!endOfPass()) return;
-    }
-  }
-
-  /// Solves b_a and gravity; starts the next pass and returns true if there is one.
-  bool endOfPass() {
+    if (done) return;
     const double t0 = wallSeconds();
-    GravityEstimator::Parameters gp = cfg.gravity;
-    gp.compute_covariance = finalPass();  // earlier passes only need the estimate
-    // Each solve starts from the previous pass's estimate (same window start, same frame w0).
-    const GravityEstimate previous = gravity;
-    gravity = GravityEstimator(gp).estimate(kinematics, cfg.extrinsics, div->covBg(), &previous);
-    result.diag.time_solver += wallSeconds() - t0;
-    if (!gravity.ok && !finalPass()) {
-      // The data of the window are not all there yet: nothing beyond the seed to report.
-      fail(InitStatus::SolverFailed, "accelerometer bias / gravity of the seed pass (first " +
-                                         std::to_string(k_stop - k0 + 1) +
-                                         " IMU samples): " + gravity.message);
-      return false;
-    }
-    if (pass < cfg.window.refinement_passes) {
-      ++pass;
-      // The next pass integrates with the corrected gyro bias (same prior width: the window's
-      // data must not be counted twice).
-      b_g_start = div->b_g() + gravity.delta_b_g;
-      startPass();
-      return true;
-    }
-    finalize();
-    return false;
+    done = pipeline->pump(result);
+    if (done) result.diag.time_to_result = wallSeconds() - t0;
   }
 
-  void processPoint(double t) {
-    const DopplerPoint& pt = frames[f_cur].points[p_cur];
-    ++p_cur;
-    auto& diag = result.diag;
-    if (t < 0) return;  // before the window
-    ++diag.points_seen;
-    // One point in the stride (a counter, not a modulo: this runs for every point); the others
-    // cost nothing more.
-    const bool use = stride_counter == 0;
-    const int stride = point_stride * (finalPass() ? 1 : cfg.window.seed_pass_stride);
-    if (++stride_counter == static_cast<std::size_t>(stride)) stride_counter = 0;
-    const auto& vp = cfg.velocimeter;
-    if (!use) {
-      ++diag.points_skipped;
-      return;
-    }
-    if (!detail::usablePoint(pt, vp)) {
-      ++diag.points_skipped;
-      return;
-    }
-    const double r = pt.p_l.norm();
-    div->propagate(t);
-    bool accepted;
-    double residual;
-    if (stationary) {
-      // Zero-velocity mode: points only feed the motion check and the map.
-      const Vec3 d = pt.p_l.cast<double>() / r;
-      residual = pt.doppler + d.dot(div->v_l());
-      accepted = std::abs(residual) < vp.gate_min;
-      // One point in kMotionCheckStride is plenty for a 3-D velocity every check period.
-      if (++motion_check_counter % kMotionCheckStride == 0) {
-        static_dirs.push_back(d);
-        static_dopplers.push_back(pt.doppler);
-      }
-    } else {
-      const auto out = div->updateDoppler(pt.p_l, pt.doppler);
-      accepted = out.accepted;
-      residual = out.residual;
-    }
-    integrator.integrate(t, div->omega_b(), div->v_b());
-    if (accepted)
-      ++diag.points_used;
-    else
-      ++diag.points_rejected;
-    if (!finalPass()) return;  // earlier passes are refined: only the last one maps
-    MapPoint m;
-    const Vec3 p_b = cfg.extrinsics.R_bl * pt.p_l.cast<double>() + cfg.extrinsics.p_bl;
-    m.p_w = (integrator.q_wb() * p_b + integrator.p_w()).cast<float>();
-    m.intensity = pt.intensity;
-    m.residual = static_cast<float>(residual);
-    (accepted ? result.static_map : result.rejected).push_back(m);
-  }
-
-  /// The pass whose map and trajectory are the result (unless its gravity solve fails).
-  bool finalPass() const { return pass >= cfg.window.refinement_passes; }
-
-  void processGyro(std::size_t k) {
-    const double t = imu[k].t - t_ref;
-    div->propagate(t);
-    const auto& sp = cfg.static_detector;
-    if (stationary) {
-      div->updateZeroVelocity(sp.zupt_sigma);
-      checkMotion(k, t);
-    }
-    detail::updateGyroAt(*div, imu, k);
-    ++result.diag.gyro_updates;
-    integrator.integrate(t, div->omega_b(), div->v_b());
-    if (pass > 0) setAcceleration(k);
-    recordSample(k);
-  }
-
-  /// Leaves zero-velocity mode as soon as the Doppler or the gyro shows motion.
-  void checkMotion(std::size_t k, double t) {
-    const auto& sp = cfg.static_detector;
-    // The gyro deviates from the bias estimate by more than its own uncertainty allows.
-    const double sigma_bg = std::sqrt(div->covBg().diagonal().maxCoeff());
-    bool moving = (imu[k].gyro - div->b_g()).norm() > sp.max_gyro_dev + 3.0 * sigma_bg;
-    Vec3 v_ls = Vec3::Zero();
-    if (t - last_check >= sp.check_period) {
-      // Robust (IRLS) velocity of the points since the last check: moving objects in view must
-      // not look like ego motion.
-      const VelocityFit fit = fitLidarVelocity(static_dirs, static_dopplers, cfg.bootstrap,
-                                               cfg.velocimeter.doppler_sigma);
-      // Moving: faster than max_speed, and significantly non-zero (5 sigma) given how well the
-      // few points of a sparse scene constrain the velocity.
-      if (fit.ok && fit.v_l.norm() > sp.max_speed &&
-          fit.v_l.dot(fit.cov.ldlt().solve(fit.v_l)) > 25.0) {
-        v_ls = fit.v_l;
-        moving = true;
-      }
-      static_dirs.clear();
-      static_dopplers.clear();
-      last_check = t;
-    }
-    if (!moving) return;
-    stationary = false;
-    result.diag.static_duration = t;
-    div->releaseZeroVelocity(std::max(0.2, 2.0 * v_ls.norm()), 0.5);
-  }
-
-  void recordSample(std::size_t k) {
-    KinematicSample s;
-    s.t = imu[k].t - t_ref;
-    s.R_wb = integrator.R_wb();
-    s.v_b = div->v_b();
-    s.cov_v_b = div->covVb();
-    s.v_l = div->v_l();
-    s.cov_v_l = div->covVl();
-    s.omega_b = div->omega_b();
-    s.accel = imu[k].accel;
-    kinematics.push_back(s);
-    VelocitySample v;
-    v.t = imu[k].t;
-    v.v_l = s.v_l;
-    v.v_b = s.v_b;
-    v.omega_b = s.omega_b;
-    v.b_g = div->b_g();
-    v.sigma_v_b = s.cov_v_b.diagonal().cwiseSqrt();
-    v.stationary = stationary;
-    result.velocities.push_back(v);
-    PoseSample p;
-    p.t = imu[k].t;
-    p.q_wb = integrator.q_wb().normalized();
-    p.p_w = integrator.p_w();
-    result.trajectory.push_back(p);
-  }
-
-  void finalize();
+  FreeInitConfig cfg;
+  detail::MeasurementSequencer seq;
+  std::unique_ptr<detail::Pipeline> pipeline;
+  InitResult result;
+  bool done = false;
 };
-
-void FreeInit::Impl::finalize() {
-  phase = Phase::Done;
-  auto& diag = result.diag;
-  if (stationary) diag.static_duration = imu[k_end].t - t_ref;
-  const double T = imu[k_end].t - t_ref;
-  diag.update_rate_hz = T > 0 ? static_cast<double>(diag.points_used + diag.gyro_updates) / T : 0;
-  if (diag.points_used < 10 && !diag.static_start) {
-    fail(InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
-    return;
-  }
-  const GravityEstimate& ge = gravity;
-  diag.solver_report = ge.message;
-  if (!ge.ok) {
-    fail(InitStatus::SolverFailed, "accelerometer bias / gravity: " + ge.message);
-    return;
-  }
-
-  // Gyro-bias correction of the attitude (left, world-frame perturbation, see GravityEstimate):
-  // R_w0b,true(t) = Exp(-M(t) db) R_w0b(t), M(t) = int_0^t R_w0b dt.
-  std::vector<Mat3> M(kinematics.size(), Mat3::Zero());
-  for (std::size_t k = 1; k < kinematics.size(); ++k)
-    M[k] = M[k - 1] + 0.5 * (kinematics[k].t - kinematics[k - 1].t) *
-                          (kinematics[k - 1].R_wb + kinematics[k].R_wb);
-  const Vec3& db = ge.delta_b_g;
-  for (std::size_t k = 0; k < result.trajectory.size() && k < M.size(); ++k) {
-    auto& q = result.trajectory[k].q_wb;
-    q = (Quat(Exp(Vec3(-M[k] * db))) * q).normalized();
-  }
-  const Mat3 M_end = M.back();
-  const Mat3 R_w0b = Exp(Vec3(-M_end * db)) * integrator.R_wb();
-
-  // Gravity-aligned world with the yaw of the first body frame (w0).
-  const Mat3 R_align = alignToGravity(ge.g_w);
-  const Mat3 R_wb = R_align * R_w0b;
-  InitialState& s = result.state;
-  s.status = InitStatus::Ok;
-  s.message.clear();
-  s.timestamp = imu[k_end].t;
-  s.q_wb = Quat(R_wb).normalized();
-  s.p_w = R_align * integrator.p_w();
-  const Vec3 v_b = div->v_b();
-  s.v_w = R_wb * v_b;
-  s.b_g = div->b_g() + db;
-  s.b_a = ge.b_a;
-  s.g_w = Vec3(0, 0, -kGravity);
-
-  // Covariance, order [dtheta p v b_g b_a g], dtheta a right perturbation of R_wb.
-  // x = [dg_w0, db_a, db_g] has the solver's covariance; where the solver did not estimate the
-  // gyro bias its block is the velocimeter's (uncorrelated).
-  Eigen::Matrix<double, 9, 9> C = ge.cov_full;
-  if (C.block<3, 3>(6, 6).isZero()) {
-    C.block<3, 3>(6, 6) = div->covBg();
-  }
-  // Tilt: g_b = R_w0b^T g_w0 with R_w0b,true = Exp(-M_end db) R_w0b, so
-  //   dg_b = R_w0b^T (dg_w0 - [g_w0]x M_end db),  and g_b,true = g_b + [g_b]x dtheta gives the
-  // tangent part dtheta = -[g_b]x dg_b / |g|^2. Yaw (about gravity) from the gyro bias only:
-  //   the right perturbation of Exp(-M_end db) R_w0b is -R_w0b^T M_end db.
-  const Vec3 g_b = R_w0b.transpose() * ge.g_w;
-  const Vec3 up_b = -g_b.normalized();
-  const double g2 = kGravity * kGravity;
-  Eigen::Matrix<double, 3, 9> A_th = Eigen::Matrix<double, 3, 9>::Zero();
-  A_th.block<3, 3>(0, 0) = -skew(g_b) * R_w0b.transpose() / g2;
-  A_th.block<3, 3>(0, 6) = skew(g_b) * R_w0b.transpose() * skew(ge.g_w) * M_end / g2 -
-                           up_b * up_b.transpose() * R_w0b.transpose() * M_end;
-  const double dt_imu = T / std::max(1, cfg.window.imu_samples - 1);
-  const double var_gyro_walk = cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma * dt_imu * T;
-  // P = G S G^T over independent error sources, so it is a covariance by construction:
-  //   [dg_w0, db_a, db_g] (solver, 9), dv_b (velocimeter, 3), gyro white noise integrated into
-  //   the attitude (3), position and gravity floors (3 + 3).
-  // dtheta = A_th [dg db_a db_g] + n_walk;  dv_w = R_wb dv_b + J_v_th dtheta (J_v_th = -R [v_b]x);
-  // dp = T R_wb dv_b + n_p (velocity errors over the window taken as fully correlated: an upper
-  // bound this short); gravity is fixed by the choice of world frame (its uncertainty lives in the
-  // attitude block), given a 1e-6 floor.
-  constexpr int kSrc = 21;
-  Eigen::Matrix<double, kSrc, kSrc> S = Eigen::Matrix<double, kSrc, kSrc>::Zero();
-  S.block<9, 9>(0, 0) = C;
-  S.block<3, 3>(9, 9) = div->covVb();
-  S.block<3, 3>(12, 12) = Mat3::Identity() * var_gyro_walk;
-  S.block<6, 6>(15, 15) = Eigen::Matrix<double, 6, 6>::Identity() * 1e-6;
-  Eigen::Matrix<double, 18, kSrc> G = Eigen::Matrix<double, 18, kSrc>::Zero();
-  G.block<3, 9>(kTheta, 0) = A_th;
-  G.block<3, 3>(kTheta, 12) = Mat3::Identity();
-  G.block<3, 3>(kPos, 9) = R_wb * T;
-  G.block<3, 3>(kPos, 15) = Mat3::Identity();
-  const Mat3 J_v_th = -R_wb * skew(v_b);
-  G.block<3, 3>(kVel, 9) = R_wb;
-  G.block<3, kSrc>(kVel, 0) += J_v_th * G.block<3, kSrc>(kTheta, 0);
-  G.block<3, 3>(kBg, 6) = Mat3::Identity();
-  G.block<3, 3>(kBa, 3) = Mat3::Identity();
-  G.block<3, 3>(kGrav, 18) = Mat3::Identity();
-  const Cov18 P = G * S * G.transpose();
-  s.cov = 0.5 * (P + P.transpose());
-
-  // Express everything recorded in the first body frame in the aligned world.
-  const Quat q_align(R_align);
-  for (auto& m : result.static_map) m.p_w = (R_align * m.p_w.cast<double>()).cast<float>();
-  for (auto& m : result.rejected) m.p_w = (R_align * m.p_w.cast<double>()).cast<float>();
-  for (auto& p : result.trajectory) {
-    p.q_wb = (q_align * p.q_wb).normalized();
-    p.p_w = R_align * p.p_w;
-  }
-}
 
 FreeInit::FreeInit(const FreeInitConfig& config) : impl_(std::make_unique<Impl>(config)) {}
 FreeInit::~FreeInit() = default;
@@ -537,32 +47,27 @@ FreeInit::FreeInit(FreeInit&&) noexcept = default;
 FreeInit& FreeInit::operator=(FreeInit&&) noexcept = default;
 
 void FreeInit::addImu(const ImuSample& s) {
-  if (!s.gyro.allFinite() || !s.accel.allFinite() || !std::isfinite(s.t))
-    throw std::invalid_argument("IMU sample at t=" + std::to_string(s.t) + " is not finite");
-  if (!impl_->imu.empty() && s.t <= impl_->imu.back().t)
-    throw std::invalid_argument("IMU time does not increase: " + std::to_string(s.t) + " after " +
-                                std::to_string(impl_->imu.back().t));
-  if (impl_->phase == Impl::Phase::Done) return;  // the result is final: nothing more to keep
-  impl_->imu.push_back(s);
+  impl_->seq.checkImu(s);
+  if (impl_->done) return;  // the result is final: nothing more to keep
+  impl_->seq.addImu(s);
   impl_->pump();
 }
 
 void FreeInit::addFrame(const LidarFrame& f) { addFrame(LidarFrame(f)); }
 
 void FreeInit::addFrame(LidarFrame&& f) {
-  impl_->checkFrame(f);
-  if (impl_->phase == Impl::Phase::Done) return;
-  const LidarFrame& kept = impl_->owned_frames.emplace_back(std::move(f));
-  impl_->frames.push_back({kept.stamp, kept.points});
+  impl_->seq.checkFrame(f);
+  if (impl_->done) return;
+  impl_->seq.addFrame(std::move(f));
   impl_->pump();
 }
 
 void FreeInit::finish() {
-  impl_->finished = true;
-  if (impl_->phase != Impl::Phase::Done) impl_->pump();
+  impl_->seq.finish();
+  impl_->pump();
 }
 
-bool FreeInit::ready() const { return impl_->phase == Impl::Phase::Done; }
+bool FreeInit::ready() const { return impl_->done; }
 const InitResult& FreeInit::result() const { return impl_->result; }
 
 InitResult FreeInit::run(const FreeInitConfig& config, const std::vector<ImuSample>& imu,
@@ -573,7 +78,9 @@ InitResult FreeInit::run(const FreeInitConfig& config, const std::vector<ImuSamp
   for (const auto& f : frames) {
     const double t_last = f.points.empty() ? f.stamp : f.stamp + f.points.back().time_offset;
     while (k < imu.size() && imu[k].t <= t_last) fi.addImu(imu[k++]);
-    fi.impl_->addBorrowedFrame(f);  // `frames` outlives fi: no copy
+    if (fi.ready()) return std::move(fi.impl_->result);
+    fi.impl_->seq.addBorrowedFrame(f);  // `frames` outlives fi: no copy
+    fi.impl_->pump();
     if (fi.ready()) return std::move(fi.impl_->result);
   }
   while (k < imu.size() && !fi.ready()) fi.addImu(imu[k++]);

@@ -23,6 +23,23 @@ namespace {
 // Calls v(section, key, value&, unit, doc) for every scalar key of the configuration.
 template <class Visitor>
 void visitConfig(Visitor& v, AppConfig& c) {
+  auto& est = c.core.estimator;
+  v("estimator", "method", est.method, "-",
+    "joint (one filter and smoother over the window) | paper (velocimeter, then gravity solve)");
+  v("estimator", "bootstrap_duration", est.bootstrap_duration, "s",
+    "span of the start decision (what moves)");
+  v("estimator", "bootstrap_points", est.bootstrap_points, "-",
+    "returns of that span used, at most (evenly spread)");
+  v("estimator", "initial_tilt_sigma", est.initial_tilt_sigma, "rad",
+    "std of roll and pitch at the window start (large: the tilt comes from the data)");
+  v("estimator", "max_iterations", est.max_iterations, "-", "smoother iterations, at most");
+  v("estimator", "zero_rate_at_rest", est.zero_rate_at_rest, "bool",
+    "while the IMU shows rest the gyro measures its bias");
+  v("estimator", "rest_velocity_sigma", est.rest_velocity_sigma, "m/s",
+    "std of the zero body velocity while the IMU shows rest");
+  v("estimator", "accel_bias_random_walk", est.accel_bias_random_walk, "m/s^2/sqrt(s)",
+    "accelerometer bias random walk");
+
   auto& vel = c.core.velocimeter;
   v("velocimeter", "doppler_sigma", vel.doppler_sigma, "m/s", "Doppler noise std");
   v("velocimeter", "gyro_sigma", vel.gyro_sigma, "rad/s", "gyro white noise per sample");
@@ -136,6 +153,11 @@ class Loader : public IniLoader {
             ? F::Integrated
             : F::Differentiated;
   }
+  void operator()(const std::string& s, const std::string& k, EstimatorParams::Method& x,
+                  const char*, const char*) {
+    using M = EstimatorParams::Method;
+    x = choice(s, k, {"joint", "paper"}, x == M::Joint ? 0 : 1) == 0 ? M::Joint : M::Paper;
+  }
 };
 
 void loadExtrinsics(Loader& L, AppConfig& c) {
@@ -227,6 +249,9 @@ class Dumper {
   static void write(std::ostream& o, const Vec3& x) { o << x.x() << " " << x.y() << " " << x.z(); }
   static void write(std::ostream& o, GravityEstimator::Formulation f) {
     o << (f == GravityEstimator::Formulation::Integrated ? "integrated" : "differentiated");
+  }
+  static void write(std::ostream& o, EstimatorParams::Method m) {
+    o << (m == EstimatorParams::Method::Joint ? "joint" : "paper");
   }
   std::ostream& out_;
   std::string current_;

@@ -79,8 +79,36 @@ struct WindowParams {
   int seed_imu_samples = 60;
 };
 
+/// Which estimator solves the window, and the settings of the joint one. INI section
+/// [estimator].
+struct EstimatorParams {
+  enum class Method {
+    /// One Doppler-aided inertial filter and smoother over the window: attitude, velocity and
+    /// both biases at once, the accelerometer in the propagation from the first instant
+    /// (doppler_inertial_filter.h). Reaches the physical limit of the data.
+    Joint,
+    /// The paper's two stages: the Doppler-inertial velocimeter, then the accelerometer bias and
+    /// gravity solve (velocimeter.h, gravity_estimator.h). Kept as the paper's reference.
+    Paper,
+  };
+  Method method = Method::Joint;
+  double bootstrap_duration = 0.1;   ///< [s] span of the start decision (what moves)
+  int bootstrap_points = 3000;       ///< returns of that span used (evenly spread), at most
+  /// [rad] std of roll and pitch at the window start, about the start decision's gravity: large,
+  /// so that the tilt comes from the window's data (the yaw is the world's gauge).
+  double initial_tilt_sigma = 0.2;
+  int max_iterations = 6;            ///< smoother (Gauss-Newton) iterations, at most
+  /// While the IMU shows rest, the platform does not rotate: the gyro then measures its bias.
+  bool zero_rate_at_rest = true;
+  /// [m/s] std of the zero body velocity while the IMU shows rest (gentle: the Doppler measures
+  /// the velocity anyway; this mostly adds the vertical the field of view sees poorly).
+  double rest_velocity_sigma = 0.005;
+  double accel_bias_random_walk = 1e-3;  ///< [m/s^2/sqrt(s)]
+};
+
 /// Everything. The INI file has one section per member.
 struct FreeInitConfig {
+  EstimatorParams estimator;
   VelocimeterParams velocimeter;
   BootstrapParams bootstrap;
   StaticParams static_detector;

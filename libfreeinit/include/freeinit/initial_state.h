@@ -91,6 +91,12 @@ struct Diagnostics {
   double update_rate_hz = 0;         ///< velocimeter updates per second of data
   bool static_start = false;         ///< the window started at rest
   double static_duration = 0;        ///< [s] time spent in zero-velocity mode
+  double doppler_residual_rms = 0;   ///< [m/s] RMS of the used points' Doppler residuals at the
+                                     ///< estimate (compare with the configured Doppler noise)
+  double window_duration = 0;        ///< [s] from the window start to the state time
+  std::size_t frames_in_window = 0;  ///< LiDAR frames with points in the window
+  bool imu_at_rest_at_start = false; ///< the IMU showed only noise over the start decision's span
+  int iterations = 0;                ///< smoother iterations (joint estimator)
   double time_velocimeter = 0;       ///< [s] wall time
   double time_solver = 0;            ///< [s] wall time
   /// [s] wall time of the add*() / finish() call that made the result final: the latency from

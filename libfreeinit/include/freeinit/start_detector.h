@@ -1,0 +1,95 @@
+// What moves at the window start: the platform's velocity and gravity from the first instants,
+// chosen among the motions the Doppler returns support, with every sensor's say.
+//
+// A Doppler return measures the velocity of the LiDAR relative to what it hits. The static world,
+// a passing car and a bus filling the view each give a consistent set of returns; which one is the
+// world is decided by how much of the field of view supports it (a moving object covers a small
+// part of it, the world the rest) and by the IMU: a platform at rest shows only sensor noise in the
+// gyro and the accelerometer, and a platform that moves can only have got there by accelerating.
+//
+// Model over the bootstrap span [0, T] (times from the window start, body frame b0 at t = 0):
+//   v_b(t) = R_0t^T (v_b0 + C(t) + g_b0 t),   C(t) = int_0^t R_0s f(s) ds,
+// R_0t the body rotation since t = 0 from the gyro (prior bias removed), f the specific force.
+// b_a is not separated from gravity over so short a span (g_b0 carries g_b0 - b_a). A return of
+// direction d at time t, u = R_bl d, w = R_0t u, measures
+//   z = -u^T (v_b(t) + omega(t) x p_bl)   <=>   z + u^T (omega x p_bl) + w^T C = -w^T v_b0 - t w^T g_b0,
+// linear in (v_b0, g_b0). Hypotheses are drawn by RANSAC on the first part of the span (gravity
+// fixed at the mean specific force there), refined on the whole span by iteratively reweighted
+// least squares (Cauchy) in all six unknowns, and scored by inliers and field-of-view coverage.
+#pragma once
+
+#include <freeinit/types.h>
+
+#include <string>
+#include <vector>
+
+namespace freeinit {
+
+/// Settings of the start decision.
+struct StartDetectorParams {
+  double doppler_sigma = 0.03;    ///< [m/s]
+  double gyro_sigma = 0.002;      ///< [rad/s] per sample
+  double accel_sigma = 0.02;      ///< [m/s^2] per sample
+  double gyro_bias_sigma = 0.015; ///< [rad/s] prior std of the gyro bias (about b_g_prior)
+  double gate = 0.15;             ///< [m/s] inlier threshold on the Doppler residual
+  double max_speed = 0.05;        ///< [m/s] a refined speed below this is rest
+  /// A rest hypothesis supported by at least this fraction of the best hypothesis' coverage wins
+  /// when the IMU shows rest.
+  double rest_coverage_ratio = 0.2;
+  /// Two motions whose coverages are within this ratio of each other cannot be told apart.
+  double ambiguity_ratio = 0.8;
+  /// [1/(m/s)^2] smallest eigenvalue of the velocity information of the chosen motion's
+  /// inliers below which the directions do not constrain the velocity.
+  double min_info_eigen = 100.0;
+  int ransac_iterations = 64;
+  int max_hypotheses = 3;
+};
+
+/// One Doppler return of the bootstrap span.
+struct StartPoint {
+  double t = 0;              ///< [s] from the window start
+  Vec3 d_l = Vec3::Zero();   ///< unit direction in the LiDAR frame
+  double doppler = 0;        ///< [m/s]
+};
+
+/// A motion the returns support.
+struct StartHypothesis {
+  Vec3 v_b0 = Vec3::Zero();  ///< [m/s] body velocity at the window start, in b0
+  Vec3 g_b0 = Vec3::Zero();  ///< [m/s^2] gravity (minus the accelerometer bias) in b0
+  /// Covariance of (v_b0, g_b0), the gyro-bias uncertainty marginalized.
+  Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Identity();
+  std::size_t inliers = 0;
+  double coverage = 0;       ///< [0, 1] share of the occupied direction cells that support it
+  double residual_rms = 0;   ///< [m/s] of the inliers
+  double min_info_eigen = 0; ///< [1/(m/s)^2] weakest direction of the inliers' velocity information
+  bool rest = false;         ///< |v_b0| below max_speed
+};
+
+struct StartDecision {
+  enum class Kind {
+    Moving,     ///< the platform moves: `chosen`
+    Rest,       ///< the platform stands: `chosen` (v_b0 ~ 0)
+    Ambiguous,   ///< the data cannot decide what moves (message says why)
+    NoData,      ///< too few returns (message says why)
+    Degenerate,  ///< the returns' directions do not constrain the velocity
+  };
+  Kind kind = Kind::NoData;
+  std::string message;
+  StartHypothesis chosen;
+  std::vector<StartHypothesis> hypotheses;  ///< every refined hypothesis, best coverage first
+  bool imu_still = false;                   ///< the IMU shows only noise over the span
+};
+
+/// True when the IMU samples show only noise: the spread of each of the gyro and the accelerometer
+/// about its mean is consistent (99.9 % chi-square, with margin) with the configured white noise.
+bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
+                  double gyro_sigma, double accel_sigma);
+
+/// Decides the motion at the window start from the IMU samples `imu[k0..k1]` (times absolute;
+/// imu[k0].t is the window start) and the returns of [imu[k0].t, imu[k1].t] (times relative to
+/// the window start). `b_g_prior` is removed from the gyro. Deterministic.
+StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std::size_t k1,
+                          const std::vector<StartPoint>& points, const Extrinsics& extrinsics,
+                          const Vec3& b_g_prior, const StartDetectorParams& params);
+
+}  // namespace freeinit

@@ -1,0 +1,36 @@
+// The two ways the facade can solve an initialization window, behind one interface.
+#pragma once
+
+#include <freeinit/config.h>
+#include <freeinit/initial_state.h>
+
+#include <memory>
+#include <string>
+
+#include "measurement_sequencer.h"
+
+namespace freeinit::detail {
+
+/// An estimator over the sequencer's buffered data. pump() processes, in time order, everything
+/// the data received so far allow, and returns true once `result` is final (initialized or not).
+/// The sequencer outlives the pipeline; the pipeline reads it only.
+class Pipeline {
+ public:
+  virtual ~Pipeline() = default;
+  virtual bool pump(InitResult& result) = 0;
+};
+
+/// The joint window estimator (EstimatorParams::Method::Joint).
+std::unique_ptr<Pipeline> makeJointPipeline(const FreeInitConfig& config,
+                                            const MeasurementSequencer& sequencer);
+/// The paper's two stages (EstimatorParams::Method::Paper).
+std::unique_ptr<Pipeline> makePaperPipeline(const FreeInitConfig& config,
+                                            const MeasurementSequencer& sequencer);
+
+/// Marks `result` as not initialized.
+inline void failResult(InitResult& result, InitStatus status, const std::string& message) {
+  result.state.status = status;
+  result.state.message = message;
+}
+
+}  // namespace freeinit::detail

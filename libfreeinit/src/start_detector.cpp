@@ -1,0 +1,375 @@
+#include <freeinit/rotation.h>
+#include <freeinit/start_detector.h>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+namespace freeinit {
+namespace {
+
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+
+/// Chi-square quantile (Wilson-Hilferty) for `dof` degrees of freedom at the standard-normal
+/// quantile z.
+double chi2Quantile(double dof, double z) {
+  const double a = 2.0 / (9.0 * dof);
+  return dof * std::pow(1.0 - a + z * std::sqrt(a), 3);
+}
+
+Vec3 rotationIncrement(const Vec3& w0, const Vec3& w1, double tau) {
+  return 0.5 * (w0 + w1) * tau + w0.cross(w1) * (tau * tau / 12.0);
+}
+
+/// A return as a linear equation in theta = (v_b0, g_b0): e = a^T theta + noise.
+struct Row {
+  Vec3 w = Vec3::Zero();  ///< direction in b0
+  Vec3 u = Vec3::Zero();  ///< direction in b(t)
+  Vec3 pxu = Vec3::Zero();  ///< p_bl x u (lever arm sensitivity to the gyro bias)
+  Mat3 R_t = Mat3::Identity();  ///< R_0t
+  Vec3 C_t = Vec3::Zero();
+  double t = 0;
+  double e = 0;
+  Vec3 d_l = Vec3::Zero();
+  double residual(const Vec3& v, const Vec3& g) const { return e + w.dot(v) + t * w.dot(g); }
+  Vec6 a() const {
+    Vec6 r;
+    r << -w, -t * w;
+    return r;
+  }
+};
+
+/// Field-of-view cells of the returns: a grid over the observed azimuth/elevation extent.
+class CoverageGrid {
+ public:
+  explicit CoverageGrid(const std::vector<Row>& rows) {
+    for (const Row& r : rows) {
+      const double az = std::atan2(r.d_l.y(), r.d_l.x());
+      const double el = std::asin(std::clamp(r.d_l.z(), -1.0, 1.0));
+      az_lo_ = std::min(az_lo_, az);
+      az_hi_ = std::max(az_hi_, az);
+      el_lo_ = std::min(el_lo_, el);
+      el_hi_ = std::max(el_hi_, el);
+    }
+    cell_.reserve(rows.size());
+    totals_.assign(kAz * kEl, 0);
+    for (const Row& r : rows) {
+      const int c = cellOf(r.d_l);
+      cell_.push_back(c);
+      ++totals_[static_cast<std::size_t>(c)];
+    }
+  }
+  /// Share of the occupied cells (at least 2 returns) in which most returns are inliers.
+  double coverage(const std::vector<bool>& inlier) const {
+    std::vector<int> in(totals_.size(), 0);
+    for (std::size_t i = 0; i < cell_.size(); ++i)
+      if (inlier[i]) ++in[static_cast<std::size_t>(cell_[i])];
+    int occupied = 0, supported = 0;
+    for (std::size_t c = 0; c < totals_.size(); ++c) {
+      if (totals_[c] < 2) continue;
+      ++occupied;
+      if (2 * in[c] > totals_[c]) ++supported;
+    }
+    return occupied > 0 ? static_cast<double>(supported) / occupied : 0.0;
+  }
+
+ private:
+  static constexpr int kAz = 16, kEl = 8;
+  int cellOf(const Vec3& d) const {
+    const double az = std::atan2(d.y(), d.x());
+    const double el = std::asin(std::clamp(d.z(), -1.0, 1.0));
+    const auto bin = [](double x, double lo, double hi, int n) {
+      if (!(hi > lo)) return 0;
+      return std::clamp(static_cast<int>((x - lo) / (hi - lo) * n), 0, n - 1);
+    };
+    return bin(az, az_lo_, az_hi_, kAz) * kEl + bin(el, el_lo_, el_hi_, kEl);
+  }
+  double az_lo_ = 1e9, az_hi_ = -1e9, el_lo_ = 1e9, el_hi_ = -1e9;
+  std::vector<int> cell_;
+  std::vector<int> totals_;
+};
+
+/// IRLS (Cauchy) refinement of theta = (v_b0, g_b0, db_g) from a start, with a weak gravity
+/// prior and the gyro-bias prior. A gyro-bias error db turns the body-frame velocity by
+/// -t db x v_b(t) over the span and the lever-arm velocity by -db x p_bl, so that the Doppler of a
+/// return changes by (p_bl x u - t v_b(t) x u)^T db (first order; the effect of db on the
+/// integrated specific force, t^2 |f| db, is neglected). At speed this is what limits the gravity
+/// of so short a span: it must be in its covariance.
+StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, const Vec3& v_start,
+                       const Vec3& g_prior, bool fix_velocity, const StartDetectorParams& p) {
+  using Vec9 = Eigen::Matrix<double, 9, 1>;
+  using Mat9 = Eigen::Matrix<double, 9, 9>;
+  Vec3 v = v_start, g = g_prior, db = Vec3::Zero();
+  const double inv_r = 1.0 / (p.doppler_sigma * p.doppler_sigma);
+  // Gravity prior: the mean specific force is within a few m/s^2 of it on any real platform.
+  const double g_prior_var = 4.0 * 4.0;
+  const double bg_prior_var = p.gyro_bias_sigma * p.gyro_bias_sigma;
+  auto rowOf = [&](const Row& r, Vec9& a) {
+    const Vec3 v_b = r.R_t.transpose() * (v + r.C_t + g * r.t);
+    a << -r.w, -r.t * r.w, r.pxu - r.t * v_b.cross(r.u);
+  };
+  auto residual = [&](const Row& r, const Vec9& a) {
+    return r.e - a.head<6>().dot((Vec6() << v, g).finished()) - a.tail<3>().dot(db);
+  };
+  Mat9 A = Mat9::Zero();
+  const std::vector<double> scales = {0.5, 0.3, 0.2, 0.15, 0.1, 0.1, 0.1};
+  Vec9 a;
+  for (const double c : scales) {
+    A.setZero();
+    Vec9 b = Vec9::Zero();
+    A.block<3, 3>(3, 3).diagonal().setConstant(1.0 / g_prior_var);
+    b.segment<3>(3) = g_prior / g_prior_var;
+    A.block<3, 3>(6, 6).diagonal().setConstant(1.0 / bg_prior_var);
+    if (fix_velocity) {
+      A.topLeftCorner<3, 3>().diagonal().setConstant(1e12);
+      b.head<3>() = v_start * 1e12;
+    }
+    for (const Row& r : rows) {
+      rowOf(r, a);
+      const double res = residual(r, a);
+      const double u = res / std::max(c, 3.0 * p.doppler_sigma);
+      const double w = inv_r / (1.0 + u * u);
+      A.noalias() += w * a * a.transpose();
+      // Linear in theta given the row: e = a^T theta (the db column depends on v, g: iterate).
+      b.noalias() += w * r.e * a;
+    }
+    const Vec9 theta = A.ldlt().solve(b);
+    if (!theta.allFinite()) break;
+    v = theta.head<3>();
+    g = theta.segment<3>(3);
+    db = theta.tail<3>();
+  }
+  StartHypothesis h;
+  h.v_b0 = v;
+  h.g_b0 = g;
+  std::vector<bool> inl(rows.size(), false);
+  double ss = 0;
+  Mat9 info = Mat9::Zero();
+  info.block<3, 3>(3, 3).diagonal().setConstant(1.0 / g_prior_var);
+  info.block<3, 3>(6, 6).diagonal().setConstant(1.0 / bg_prior_var);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    rowOf(rows[i], a);
+    const double res = residual(rows[i], a);
+    if (std::abs(res) > p.gate) continue;
+    inl[i] = true;
+    ++h.inliers;
+    ss += res * res;
+    info.noalias() += inv_r * a * a.transpose();
+  }
+  h.residual_rms = h.inliers > 0 ? std::sqrt(ss / static_cast<double>(h.inliers)) : 0.0;
+  const double k = std::max(1.0, h.residual_rms / p.doppler_sigma);
+  const Mat9 cov = info.ldlt().solve(Mat9::Identity()) * k * k;
+  h.cov = cov.topLeftCorner<6, 6>();
+  h.coverage = grid.coverage(inl);
+  h.rest = v.norm() < p.max_speed;
+  h.min_info_eigen = Eigen::SelfAdjointEigenSolver<Mat3>(info.topLeftCorner<3, 3>()).eigenvalues()(0);
+  return h;
+}
+
+/// The chosen motion's returns must constrain the velocity in every direction.
+StartDecision& checkConditioning(StartDecision& d, const StartDetectorParams& p) {
+  if (d.chosen.min_info_eigen >= p.min_info_eigen) return d;
+  d.kind = StartDecision::Kind::Degenerate;
+  d.message = "the point directions do not constrain the velocity (weakest information " +
+              std::to_string(d.chosen.min_info_eigen) + " < " + std::to_string(p.min_info_eigen) +
+              " 1/(m/s)^2)";
+  return d;
+}
+
+}  // namespace
+
+bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
+                  double gyro_sigma, double accel_sigma) {
+  if (end <= begin + 2 || end > imu.size()) return false;
+  const double n = static_cast<double>(end - begin);
+  Vec3 mg = Vec3::Zero(), ma = Vec3::Zero();
+  for (std::size_t i = begin; i < end; ++i) {
+    mg += imu[i].gyro;
+    ma += imu[i].accel;
+  }
+  mg /= n;
+  ma /= n;
+  double sg = 0, sa = 0;
+  for (std::size_t i = begin; i < end; ++i) {
+    sg += (imu[i].gyro - mg).squaredNorm();
+    sa += (imu[i].accel - ma).squaredNorm();
+  }
+  // Spread about the mean: chi-square with 3 (n - 1) dof for white noise; a factor 1.5 on the
+  // variance leaves room for a datasheet that is a little optimistic.
+  const double limit = 1.5 * chi2Quantile(3.0 * (n - 1.0), 3.09);
+  return sg / (gyro_sigma * gyro_sigma) < limit && sa / (accel_sigma * accel_sigma) < limit;
+}
+
+StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std::size_t k1,
+                          const std::vector<StartPoint>& points, const Extrinsics& extrinsics,
+                          const Vec3& b_g_prior, const StartDetectorParams& p) {
+  StartDecision out;
+  if (k1 <= k0 || k1 >= imu.size()) {
+    out.message = "no IMU samples over the start of the window";
+    return out;
+  }
+  const double t_ref = imu[k0].t;
+  // Strapdown integration in b0 over the span: R_0i and C_i at every sample.
+  const std::size_t n_imu = k1 - k0 + 1;
+  std::vector<Mat3> R(n_imu, Mat3::Identity());
+  std::vector<Vec3> C(n_imu, Vec3::Zero());
+  for (std::size_t i = 1; i < n_imu; ++i) {
+    const ImuSample& a = imu[k0 + i - 1];
+    const ImuSample& b = imu[k0 + i];
+    const double dt = b.t - a.t;
+    R[i] = R[i - 1] * Exp(rotationIncrement(Vec3(a.gyro - b_g_prior), Vec3(b.gyro - b_g_prior), dt));
+    C[i] = C[i - 1] + 0.5 * dt * (R[i - 1] * a.accel + R[i] * b.accel);
+  }
+  const double T = imu[k1].t - t_ref;
+  const Vec3 g_mean = -C.back() / T;  // exact at rest, off by the mean acceleration otherwise
+  out.imu_still = imuShowsRest(imu, k0, k1 + 1, p.gyro_sigma, p.accel_sigma);
+
+  // Every return as a linear equation.
+  std::vector<Row> rows;
+  rows.reserve(points.size());
+  std::size_t i = 0;
+  for (const StartPoint& sp : points) {
+    if (sp.t < 0 || sp.t > T) continue;
+    while (i + 1 < n_imu - 1 && imu[k0 + i + 1].t - t_ref <= sp.t) ++i;
+    const ImuSample& a = imu[k0 + i];
+    const ImuSample& b = imu[k0 + i + 1];
+    const double tau = sp.t - (a.t - t_ref);
+    const double alpha = tau / (b.t - a.t);
+    const Vec3 gyro = a.gyro + alpha * (b.gyro - a.gyro) - b_g_prior;
+    const Vec3 accel = a.accel + alpha * (b.accel - a.accel);
+    const Mat3 R_t = R[i] * Exp(rotationIncrement(Vec3(a.gyro - b_g_prior), gyro, tau));
+    const Vec3 C_t = C[i] + 0.5 * tau * (R[i] * a.accel + R_t * accel);
+    Row r;
+    const Vec3 u = extrinsics.R_bl * sp.d_l;
+    r.u = u;
+    r.pxu = extrinsics.p_bl.cross(u);
+    r.R_t = R_t;
+    r.C_t = C_t;
+    r.w = R_t * u;
+    r.t = sp.t;
+    r.d_l = sp.d_l;
+    r.e = sp.doppler + u.dot(gyro.cross(extrinsics.p_bl)) + r.w.dot(C_t);
+    rows.push_back(r);
+  }
+  if (rows.size() < 10) {
+    out.message = "fewer than 10 usable LiDAR returns at the start of the window";
+    return out;
+  }
+  // The returns' directions must constrain a 3-D velocity at all.
+  Mat3 info = Mat3::Zero();
+  for (const Row& r : rows) info.noalias() += r.w * r.w.transpose();
+  info /= p.doppler_sigma * p.doppler_sigma;
+  const double weakest = Eigen::SelfAdjointEigenSolver<Mat3>(info).eigenvalues()(0);
+  if (!(weakest >= p.min_info_eigen)) {
+    out.kind = StartDecision::Kind::Degenerate;
+    out.message = "the point directions do not constrain the velocity (weakest information " +
+                  std::to_string(weakest) + " < " + std::to_string(p.min_info_eigen) +
+                  " 1/(m/s)^2)";
+    return out;
+  }
+  const CoverageGrid grid(rows);
+
+  // Hypotheses: RANSAC on the first part of the span (gravity at its mean there), removing the
+  // inliers of each hypothesis found.
+  std::size_t n_slice = 0;
+  const double t_slice = 0.015;
+  while (n_slice < rows.size() && (rows[n_slice].t <= t_slice || n_slice < 200)) ++n_slice;
+  std::vector<std::size_t> pool(n_slice);
+  for (std::size_t j = 0; j < n_slice; ++j) pool[j] = j;
+  std::mt19937_64 rng(0x5eed ^ rows.size());
+  std::vector<Vec3> starts;
+  const double ransac_gate = 2.0 * p.gate;
+  for (int h = 0; h < p.max_hypotheses && pool.size() >= 10; ++h) {
+    std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
+    std::size_t best = 0;
+    Vec3 best_v = Vec3::Zero();
+    for (int it = 0; it < p.ransac_iterations; ++it) {
+      Mat3 W;
+      Vec3 e;
+      for (int k = 0; k < 3; ++k) {
+        const Row& r = rows[pool[pick(rng)]];
+        W.row(k) = r.w.transpose();
+        e(k) = r.e + r.t * r.w.dot(g_mean);
+      }
+      if (std::abs(W.determinant()) < 1e-3) continue;
+      const Vec3 v = -W.inverse() * e;
+      std::size_t count = 0;
+      for (std::size_t j : pool)
+        if (std::abs(rows[j].residual(v, g_mean)) < ransac_gate) ++count;
+      if (count > best) {
+        best = count;
+        best_v = v;
+      }
+    }
+    if (best < std::max<std::size_t>(10, pool.size() / 20)) break;
+    starts.push_back(best_v);
+    std::vector<std::size_t> rest;
+    for (std::size_t j : pool)
+      if (std::abs(rows[j].residual(best_v, g_mean)) >= ransac_gate) rest.push_back(j);
+    pool.swap(rest);
+  }
+  // Refine each on the whole span; merge those that converge to the same motion.
+  for (const Vec3& v0 : starts) {
+    const StartHypothesis h = refine(rows, grid, v0, g_mean, false, p);
+    if (h.inliers < 10 || !h.v_b0.allFinite()) continue;
+    bool merged = false;
+    for (StartHypothesis& o : out.hypotheses) {
+      if ((o.v_b0 - h.v_b0).norm() < 2.0 * p.gate) {
+        if (h.coverage > o.coverage) o = h;
+        merged = true;
+        break;
+      }
+    }
+    if (!merged) out.hypotheses.push_back(h);
+  }
+  std::sort(out.hypotheses.begin(), out.hypotheses.end(),
+            [](const StartHypothesis& a, const StartHypothesis& b) {
+              return a.coverage != b.coverage ? a.coverage > b.coverage : a.inliers > b.inliers;
+            });
+  auto speed = [](const StartHypothesis& h) { return std::to_string(h.v_b0.norm()); };
+  auto percent = [](double x) { return std::to_string(static_cast<int>(std::lround(100 * x))); };
+  const double best_coverage = out.hypotheses.empty() ? 0.0 : out.hypotheses.front().coverage;
+
+  // The IMU at rest: rest (velocity held at zero) wins if enough of the view supports it.
+  if (out.imu_still) {
+    StartHypothesis rest = refine(rows, grid, Vec3::Zero(), g_mean, true, p);
+    rest.rest = true;
+    if (rest.inliers >= 10 && rest.coverage >= p.rest_coverage_ratio * best_coverage) {
+      out.kind = StartDecision::Kind::Rest;
+      out.chosen = rest;
+      return checkConditioning(out, p);
+    }
+    out.kind = StartDecision::Kind::Ambiguous;
+    out.message = out.hypotheses.empty()
+                      ? std::string("the IMU shows rest but few LiDAR returns agree with it")
+                      : "the IMU shows rest but the Doppler of the returns shows motion (" +
+                            speed(out.hypotheses.front()) + " m/s over " +
+                            percent(best_coverage) + " % of the view, rest over " +
+                            percent(rest.coverage) + " %): a moving object may fill the view";
+    return out;
+  }
+  if (out.hypotheses.empty()) {
+    out.message = "no motion is consistent with the LiDAR returns at the start of the window";
+    return out;
+  }
+  const StartHypothesis& best = out.hypotheses.front();
+  if (out.hypotheses.size() > 1) {
+    const StartHypothesis& second = out.hypotheses[1];
+    if (second.coverage >= p.ambiguity_ratio * best.coverage && second.coverage > 0.2) {
+      out.kind = StartDecision::Kind::Ambiguous;
+      out.message = "two motions fit the LiDAR returns about equally well (" + speed(best) +
+                    " and " + speed(second) + " m/s over " + percent(best.coverage) + " and " +
+                    percent(second.coverage) + " % of the view)";
+      return out;
+    }
+  }
+  out.chosen = best;
+  out.kind = best.rest ? StartDecision::Kind::Rest : StartDecision::Kind::Moving;
+  return checkConditioning(out, p);
+}
+
+}  // namespace freeinit
