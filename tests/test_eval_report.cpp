@@ -232,6 +232,12 @@ TEST(EvalSummary, CountsStatusesRatiosNeesAndConfidentWrongAnswers) {
   EXPECT_NE(md.find("| p1 | 4 | m | gravity,b_g,b_a | 4.00, 4.00, 4.00, 4.00 |"), std::string::npos)
       << md;
 
+  // A capped list counts the rest.
+  const std::string capped = boundsMarkdown(ratioRows(20), {}, 2);
+  EXPECT_NE(capped.find("| p1 | 4 | m |"), std::string::npos) << capped;
+  EXPECT_EQ(capped.find("| p0 | 6 | m |"), std::string::npos) << capped;
+  EXPECT_NE(capped.find("| … | | m | 15 more | |"), std::string::npos) << capped;
+
   const std::string path = tempPath("summary.csv");
   writeSummaryCsv(path, all);
   std::ifstream f(path);

@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -390,7 +391,8 @@ std::vector<MethodSummary> summarize(const std::vector<EvalRow>& rows,
   return out;
 }
 
-std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeFloors& floors) {
+std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeFloors& floors,
+                           std::size_t max_listed) {
   const auto summaries = summarize(rows, floors);
   std::ostringstream o;
   o << "Error / Cramér-Rao bound of each ok run (bound: the square root of the trace of the "
@@ -475,9 +477,15 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
   }
   o << "\nConfident wrong answers:";
   bool any = false;
+  std::map<std::string, std::size_t> listed, unlisted;
   for (const EvalRow& r : rows) {
     const std::string wrong = r.confidentlyWrong(floors);
     if (wrong.empty()) continue;
+    if (listed[r.method] >= max_listed) {
+      ++unlisted[r.method];
+      continue;
+    }
+    ++listed[r.method];
     if (!any)
       o << "\n\n| input | seed | method | quantities | err/CRB (v, g, b_g, b_a) |\n"
            "|---|---|---|---|---|\n";
@@ -487,6 +495,7 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
     for (std::size_t i = 0; i < rr.size(); ++i) o << (i ? ", " : "") << shortNumber(rr[i]);
     o << " |\n";
   }
+  for (const auto& [method, n] : unlisted) o << "| … | | " << method << " | " << n << " more | |\n";
   if (!any) o << " none.\n";
   return o.str();
 }

@@ -7,6 +7,7 @@
 
 #include <freeinit/eval/bound_ratio.h>
 
+#include <cstddef>
 #include <limits>
 #include <optional>
 #include <string>
@@ -109,8 +110,9 @@ double quantile(std::vector<double> values, double p);
 
 /// Markdown: error / bound per method (median, 95th percentile), the share of ok runs with a NEES
 /// above the 99.9 % chi-square quantile, the count of every status, the bound itself per input,
-/// and the list of confident wrong answers.
-std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeFloors& floors = {});
+/// and the list of confident wrong answers (at most `max_listed` per method, then a count).
+std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeFloors& floors = {},
+                           std::size_t max_listed = std::numeric_limits<std::size_t>::max());
 
 /// The per-method summaries as CSV (one row per method). Atomic write.
 void writeSummaryCsv(const std::string& path, const std::vector<EvalRow>& rows,
