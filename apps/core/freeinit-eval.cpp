@@ -161,9 +161,9 @@ Options parse(int argc, char** argv) {
     } else if (!a.empty() && a[0] == '-') {
       throw UsageError(a + ": unknown option (--help lists them)");
     } else if (std::find(names.begin(), names.end(), a) == names.end()) {
-      throw UsageError(a +
-                       ": not a preset (--help; the presets are dyna_01..06, stat_01..04, "
-                       "tunnel_handheld, tunnel_wheeled, tunnel_vehicular)");
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      throw UsageError(a + ": not a preset (" + list + ")");
     } else {
       o.presets.push_back(a);
     }
