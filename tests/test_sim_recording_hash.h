@@ -1,11 +1,12 @@
-// A 64-bit FNV-1a digest of everything a simulated recording holds (IMU samples, frames, points,
-// labels, extrinsics, biases), for tests that compare recordings bit for bit.
+// Comparing simulated recordings bit for bit: a 64-bit FNV-1a digest of everything a recording
+// holds (IMU samples, frames, points, labels, extrinsics, biases), and the first difference.
 #pragma once
 
 #include <freeinit/sim/simulator.h>
 
 #include <cstdint>
 #include <cstring>
+#include <string>
 
 namespace freeinit::sim::test {
 
@@ -62,6 +63,37 @@ inline std::uint64_t recordingDigest(const Recording& r) {
   h.add(r.b_g);
   h.add(r.b_a);
   return h.value();
+}
+
+/// "" when a and b hold the same samples, points, labels, calibration and biases bit for bit,
+/// else where they first differ.
+inline std::string firstDifference(const Recording& a, const Recording& b) {
+  if (a.imu.size() != b.imu.size()) return "IMU sample count";
+  for (std::size_t k = 0; k < a.imu.size(); ++k) {
+    if (a.imu[k].t != b.imu[k].t || a.imu[k].gyro != b.imu[k].gyro || a.imu[k].accel != b.imu[k].accel)
+      return "IMU sample " + std::to_string(k);
+  }
+  if (a.frames.size() != b.frames.size()) return "frame count";
+  for (std::size_t f = 0; f < a.frames.size(); ++f) {
+    const auto &fa = a.frames[f], &fb = b.frames[f];
+    if (fa.stamp != fb.stamp || fa.points.size() != fb.points.size() ||
+        a.labels[f] != b.labels[f])
+      return "frame " + std::to_string(f);
+    for (std::size_t i = 0; i < fa.points.size(); ++i) {
+      const DopplerPoint &p = fa.points[i], &q = fb.points[i];
+      if (p.p_l != q.p_l || p.doppler != q.doppler || p.time_offset != q.time_offset ||
+          p.intensity != q.intensity || p.line != q.line)
+        return "frame " + std::to_string(f) + " point " + std::to_string(i);
+    }
+  }
+  if (a.extrinsics.R_bl != b.extrinsics.R_bl || a.extrinsics.p_bl != b.extrinsics.p_bl)
+    return "true extrinsics";
+  if (a.declared_extrinsics.R_bl != b.declared_extrinsics.R_bl ||
+      a.declared_extrinsics.p_bl != b.declared_extrinsics.p_bl)
+    return "declared extrinsics";
+  if (a.lidar_time_offset != b.lidar_time_offset) return "LiDAR time offset";
+  if (a.b_g != b.b_g || a.b_a != b.b_a) return "biases";
+  return "";
 }
 
 }  // namespace freeinit::sim::test
