@@ -49,11 +49,11 @@ void SimApp::run(std::ostream& log) {
   if (params.random && !params.scenario_file.empty())
     throw std::invalid_argument("a random scenario and a scenario file cannot both be given");
   sim::ScenarioConfig sc;
-  std::vector<std::string> drawn;  // what a random scenario drew
+  sim::RandomScenarioInfo info;  // what a random scenario drew
   if (params.random) {
     const sim::RandomScenario r = sim::drawRandomScenario(params.seed);
     sc = r.config;
-    drawn = sim::describe(r.info);
+    info = r.info;
   } else if (!params.scenario_file.empty()) {
     sc = loadScenario(params.scenario_file, params);
   } else {
@@ -65,8 +65,13 @@ void SimApp::run(std::ostream& log) {
       << (sc.name == "random" ? std::to_string(sc.seed) : sc.name) << " (seed " << sc.seed << ", "
       << sc.duration << " s, " << sc.points_per_frame << " points/frame, IMU " << sc.imu_rate
       << " Hz)...\n";
-  for (const auto& line : drawn) log << "  " << line << "\n";
   const sim::Recording rec = sim::simulate(sc);
+  std::vector<std::string> drawn;
+  if (params.random) {
+    sim::measureMovingPoints(info, rec);
+    drawn = sim::describe(info);
+  }
+  for (const auto& line : drawn) log << "  " << line << "\n";
 
   const std::string out = params.output;
   const std::string stem = rawlogStem(out);

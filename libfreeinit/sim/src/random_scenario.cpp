@@ -711,7 +711,7 @@ ScenarioConfig randomScenario(std::uint64_t seed) { return drawRandomScenario(se
 std::vector<std::string> describe(const RandomScenarioInfo& i) {
   char buf[512];
   std::vector<std::string> out;
-  std::snprintf(buf, sizeof buf, "random scenario %llu: %s, %s, %s at %.2f m/s, peak rate %.2f rad/s",
+  std::snprintf(buf, sizeof buf, "random scenario %llu: %s, %s, %s, speed %.2f m/s, peak rate %.2f rad/s within 6 s",
                 static_cast<unsigned long long>(i.seed), platformName(i.platform), i.scene.c_str(),
                 i.motion.c_str(), i.speed, i.peak_angular_rate);
   out.emplace_back(buf);
@@ -728,6 +728,11 @@ std::vector<std::string> describe(const RandomScenarioInfo& i) {
                 i.extrinsic_rotation_deg, i.lever_arm, i.calibration_wrong ? "WRONG" : "right",
                 i.lidar_time_offset, i.rotation_error_deg, i.position_error);
   out.emplace_back(buf);
+  if (i.moving_point_share >= 0) {
+    std::snprintf(buf, sizeof buf, "points on moving objects: %.2f %% (first 0.6 s: %.2f %%)",
+                  100.0 * i.moving_point_share, 100.0 * i.moving_point_share_first_0_6s);
+    out.emplace_back(buf);
+  }
   return out;
 }
 
@@ -743,6 +748,11 @@ double movingPointShare(const Recording& rec, double t_begin, double t_end) {
     }
   }
   return n > 0 ? static_cast<double>(moving) / static_cast<double>(n) : 0.0;
+}
+
+void measureMovingPoints(RandomScenarioInfo& info, const Recording& rec) {
+  info.moving_point_share = movingPointShare(rec);
+  info.moving_point_share_first_0_6s = movingPointShare(rec, rec.config.t0, rec.config.t0 + 0.6);
 }
 
 }  // namespace freeinit::sim
