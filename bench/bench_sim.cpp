@@ -3,10 +3,9 @@
 // - BM_RandomScenarios08s/300: 0.8 s (an initialization window and margin) of each of the random
 //   scenarios 1..300 at their drawn density, drawing included: the cost of one held-out
 //   evaluation set's data (one core).
+#include <benchmark/benchmark.h>
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/simulator.h>
-
-#include <benchmark/benchmark.h>
 
 #include <cstdint>
 #include <string>
@@ -18,7 +17,8 @@ void BM_Simulate5s(benchmark::State& state, const std::string& name) {
   std::int64_t points = 0;
   for (auto _ : state) {
     const freeinit::sim::Recording rec = freeinit::sim::simulate(config);
-    for (const freeinit::LidarFrame& f : rec.frames) points += static_cast<std::int64_t>(f.points.size());
+    for (const freeinit::LidarFrame& f : rec.frames)
+      points += static_cast<std::int64_t>(f.points.size());
     benchmark::DoNotOptimize(rec.frames.data());
   }
   state.SetItemsProcessed(points);
@@ -38,16 +38,22 @@ void BM_RandomScenarios08s(benchmark::State& state) {
     }
   }
   state.SetItemsProcessed(points);
-  state.counters["s_per_run"] = benchmark::Counter(
-      static_cast<double>(runs), benchmark::Counter::kIsIterationInvariantRate |
-                                     benchmark::Counter::kInvert);
+  state.counters["s_per_run"] =
+      benchmark::Counter(static_cast<double>(runs), benchmark::Counter::kIsIterationInvariantRate |
+                                                        benchmark::Counter::kInvert);
 }
 
 }  // namespace
 
-BENCHMARK_CAPTURE(BM_Simulate5s, dyna_05, std::string("dyna_05"))->Unit(benchmark::kSecond)->Iterations(1);
-BENCHMARK_CAPTURE(BM_Simulate5s, dyna_01, std::string("dyna_01"))->Unit(benchmark::kSecond)->Iterations(1);
-BENCHMARK_CAPTURE(BM_Simulate5s, stat_01, std::string("stat_01"))->Unit(benchmark::kSecond)->Iterations(1);
+BENCHMARK_CAPTURE(BM_Simulate5s, dyna_05, std::string("dyna_05"))
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
+BENCHMARK_CAPTURE(BM_Simulate5s, dyna_01, std::string("dyna_01"))
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
+BENCHMARK_CAPTURE(BM_Simulate5s, stat_01, std::string("stat_01"))
+    ->Unit(benchmark::kSecond)
+    ->Iterations(1);
 BENCHMARK(BM_RandomScenarios08s)->Arg(300)->Unit(benchmark::kSecond)->Iterations(1);
 
 BENCHMARK_MAIN();

@@ -1,7 +1,6 @@
 // Integrating the simulated IMU (true biases removed, noise off) from the true initial state must
 // reproduce the ground-truth pose to within the integration error of the scheme.
 #include <freeinit/sim/presets.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>

@@ -3,7 +3,6 @@
 // below were computed with the simulator before that change, on this toolchain (GCC, glibc libm,
 // Release); a different libm may round sin/cos differently and then needs new reference digests.
 #include <freeinit/sim/simulator.h>
-
 #include <gtest/gtest.h>
 
 #include <cstdio>

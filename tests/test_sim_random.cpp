@@ -4,7 +4,6 @@
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/scenario_ini.h>
 #include <freeinit/sim/scene.h>
-
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -161,10 +160,11 @@ TEST(SimRandom, DistributionCoversWhatItClaims) {
     EXPECT_LE(i.rotation_error_deg, 2.0 + 1e-9);
     EXPECT_LE(i.position_error, 0.03 + 1e-12);
   }
-  std::printf("platforms: handheld %ld, wheeled %ld, vehicular %ld; static starts %ld (%ld with "
-              "movers in view); wrong calibration %ld\n",
-              platform["handheld"], platform["wheeled"], platform["vehicular"], static_starts,
-              with_movers, wrong);
+  std::printf(
+      "platforms: handheld %ld, wheeled %ld, vehicular %ld; static starts %ld (%ld with "
+      "movers in view); wrong calibration %ld\n",
+      platform["handheld"], platform["wheeled"], platform["vehicular"], static_starts, with_movers,
+      wrong);
   expectShare(platform["handheld"], kN, 0.4, "handheld");
   expectShare(platform["wheeled"], kN, 0.3, "wheeled");
   expectShare(platform["vehicular"], kN, 0.3, "vehicular");
@@ -270,8 +270,8 @@ TEST(SimRandom, StaticStartsAmongMoversSeeThemMove) {
     long close_moving = 0;
     for (std::size_t f = 0; f < rec.frames.size(); ++f)
       for (std::size_t i = 0; i < rec.frames[f].points.size(); ++i)
-        close_moving += rec.labels[f][i] == PointLabel::Dynamic &&
-                        rec.frames[f].points[i].p_l.norm() < 6.0f;
+        close_moving +=
+            rec.labels[f][i] == PointLabel::Dynamic && rec.frames[f].points[i].p_l.norm() < 6.0f;
     EXPECT_GT(close_moving, 0) << s;
   }
   EXPECT_GT(close_people, 0);
@@ -315,10 +315,11 @@ void checkPointsAgainstTruth(std::uint64_t seed) {
       (label == PointLabel::Dynamic ? moving : stat).add(r);
     }
   }
-  std::printf("seed %llu (clock offset %.4f s): %ld points, %ld moving; static residual std %.5f, "
-              "moving %.5f (sigma %.5f); %ld mismatched\n",
-              static_cast<unsigned long long>(seed), rec.lidar_time_offset, n, moving.n, stat.std(),
-              moving.n > 0 ? moving.std() : 0.0, sigma, mismatched);
+  std::printf(
+      "seed %llu (clock offset %.4f s): %ld points, %ld moving; static residual std %.5f, "
+      "moving %.5f (sigma %.5f); %ld mismatched\n",
+      static_cast<unsigned long long>(seed), rec.lidar_time_offset, n, moving.n, stat.std(),
+      moving.n > 0 ? moving.std() : 0.0, sigma, mismatched);
   ASSERT_GT(stat.n, 10000);
   EXPECT_LT(static_cast<double>(mismatched) / n, 1e-3);
   // Sample std: relative standard error 1/sqrt(2N) < 0.7 %; mean: 5 standard errors.
@@ -353,8 +354,8 @@ TEST(SimRandom, PointsMatchTheTruthRotatingByHand) {
 }
 
 TEST(SimRandom, PointsMatchTheTruthStandingAmongMovers) {
-  const auto seeds = seedsWhere(
-      [](const RandomScenario& r) { return r.info.dynamic_near_standing_sensor; }, 1);
+  const auto seeds =
+      seedsWhere([](const RandomScenario& r) { return r.info.dynamic_near_standing_sensor; }, 1);
   checkPointsAgainstTruth(seeds.at(0));
 }
 
@@ -372,8 +373,8 @@ TEST(SimRandom, DeclaredCalibrationAndClockOffset) {
   const Recording rec = simulate(small(seeds[0], 0.3, 500));
   EXPECT_EQ(rec.lidar_time_offset, r.config.lidar_time_offset);
   for (std::size_t f = 0; f < rec.frames.size(); ++f) {
-    EXPECT_EQ(rec.frames[f].stamp,
-              rec.config.t0 + static_cast<double>(f) / rec.config.frame_rate + rec.lidar_time_offset);
+    EXPECT_EQ(rec.frames[f].stamp, rec.config.t0 + static_cast<double>(f) / rec.config.frame_rate +
+                                       rec.lidar_time_offset);
   }
   const Extrinsics truth = makeExtrinsics(rec.config);
   EXPECT_EQ(rec.extrinsics.R_bl, truth.R_bl);
@@ -437,10 +438,11 @@ TEST(SimRandom, ImuIsExactAtEveryRate) {
         }
         e[k] = test::integrate(rec, 1.0);
       }
-      std::printf("seed %llu at %.0f / %.0f / %.0f Hz: attitude %.2g / %.2g / %.2g rad, velocity "
-                  "%.2g / %.2g / %.2g m/s\n",
-                  static_cast<unsigned long long>(seed), rate, 2 * rate, 4 * rate, e[0].attitude,
-                  e[1].attitude, e[2].attitude, e[0].velocity, e[1].velocity, e[2].velocity);
+      std::printf(
+          "seed %llu at %.0f / %.0f / %.0f Hz: attitude %.2g / %.2g / %.2g rad, velocity "
+          "%.2g / %.2g / %.2g m/s\n",
+          static_cast<unsigned long long>(seed), rate, 2 * rate, 4 * rate, e[0].attitude,
+          e[1].attitude, e[2].attitude, e[0].velocity, e[1].velocity, e[2].velocity);
       EXPECT_LT(e[0].attitude, 1e-3) << seed;
       EXPECT_LT(e[0].velocity, 0.05) << seed;
       EXPECT_LT(e[0].position, 0.05) << seed;
@@ -503,7 +505,8 @@ TEST(SimRandom, ScanPatterns) {
         EXPECT_EQ(p.line, q.line);
         EXPECT_GE(p.time_offset, q.time_offset);
         const bool backwards = dir == LineDirection::Alternating && (i / 100) % 2 == 1;
-        const double az_p = std::atan2(p.p_l.y(), p.p_l.x()), az_q = std::atan2(q.p_l.y(), q.p_l.x());
+        const double az_p = std::atan2(p.p_l.y(), p.p_l.x()),
+                     az_q = std::atan2(q.p_l.y(), q.p_l.x());
         EXPECT_EQ(az_p > az_q, !backwards) << i;
       }
       const std::vector<int> expected =

@@ -70,14 +70,14 @@ inline std::uint64_t recordingDigest(const Recording& r) {
 inline std::string firstDifference(const Recording& a, const Recording& b) {
   if (a.imu.size() != b.imu.size()) return "IMU sample count";
   for (std::size_t k = 0; k < a.imu.size(); ++k) {
-    if (a.imu[k].t != b.imu[k].t || a.imu[k].gyro != b.imu[k].gyro || a.imu[k].accel != b.imu[k].accel)
+    if (a.imu[k].t != b.imu[k].t || a.imu[k].gyro != b.imu[k].gyro ||
+        a.imu[k].accel != b.imu[k].accel)
       return "IMU sample " + std::to_string(k);
   }
   if (a.frames.size() != b.frames.size()) return "frame count";
   for (std::size_t f = 0; f < a.frames.size(); ++f) {
     const auto &fa = a.frames[f], &fb = b.frames[f];
-    if (fa.stamp != fb.stamp || fa.points.size() != fb.points.size() ||
-        a.labels[f] != b.labels[f])
+    if (fa.stamp != fb.stamp || fa.points.size() != fb.points.size() || a.labels[f] != b.labels[f])
       return "frame " + std::to_string(f);
     for (std::size_t i = 0; i < fa.points.size(); ++i) {
       const DopplerPoint &p = fa.points[i], &q = fb.points[i];

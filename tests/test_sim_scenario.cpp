@@ -3,7 +3,6 @@
 // or value is named.
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/scenario_ini.h>
-
 #include <gtest/gtest.h>
 
 #include <set>
@@ -17,7 +16,8 @@ namespace {
 
 /// The config read back from its written INI, over a base that differs from it in every way.
 ScenarioConfig roundTrip(const ScenarioConfig& c) {
-  return scenarioFromKeys(readScenarioIniText(scenarioIni(c)), ScenarioBase{"tunnel_vehicular", 99});
+  return scenarioFromKeys(readScenarioIniText(scenarioIni(c)),
+                          ScenarioBase{"tunnel_vehicular", 99});
 }
 
 void expectSameRecording(const ScenarioConfig& c) {
@@ -50,7 +50,8 @@ TEST(SimScenarioIni, RoundTripIsBitExactForRandomScenarios) {
       seeds.insert(s);
     }
     if (kinds.insert(r.info.scene).second) seeds.insert(s);
-    if (orders.insert(std::to_string(static_cast<int>(r.config.line_order))).second) seeds.insert(s);
+    if (orders.insert(std::to_string(static_cast<int>(r.config.line_order))).second)
+      seeds.insert(s);
   }
   ASSERT_TRUE(offset);
   EXPECT_EQ(kinds.size(), 5u);
@@ -104,7 +105,8 @@ TEST(SimScenarioIni, BadKeysAndValuesAreNamed) {
   EXPECT_EQ(errorOf({{"lines", "2.5"}}), "lines: expected a whole number, got '2.5'");
   EXPECT_EQ(errorOf({{"line_order", "spiral"}}),
             "line_order: expected one of top_down|bottom_up|interleaved, got 'spiral'");
-  EXPECT_EQ(errorOf({{"scene", "moon"}}), "scene: must be one of street|corridor|tunnel|open|parking");
+  EXPECT_EQ(errorOf({{"scene", "moon"}}),
+            "scene: must be one of street|corridor|tunnel|open|parking");
   EXPECT_EQ(errorOf({{"min_range", "5"}, {"max_range", "4"}}), "max_range: must be > min_range");
   EXPECT_EQ(errorOf({{"preset", "nope"}}).rfind("preset: ", 0), 0u);
   EXPECT_EQ(errorOf({{"random_biases", "maybe"}}),

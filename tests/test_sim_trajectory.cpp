@@ -3,7 +3,6 @@
 #include <freeinit/sim/presets.h>
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/truth_io.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -69,7 +68,8 @@ TEST(SimTrajectory, RandomizedDerivativesMatchFiniteDifferences) {
       const Eigen::AngleAxisd d(sm.R_wb.transpose() * sp.R_wb);
       EXPECT_LT((s.v_w - (sp.p_w - sm.p_w) / (2 * h)).norm(), 2e-4) << seed << " tau " << tau;
       EXPECT_LT((s.a_w - (sp.v_w - sm.v_w) / (2 * h)).norm(), 2e-4) << seed << " tau " << tau;
-      EXPECT_LT((s.omega_b - d.angle() * d.axis() / (2 * h)).norm(), 2e-4) << seed << " tau " << tau;
+      EXPECT_LT((s.omega_b - d.angle() * d.axis() / (2 * h)).norm(), 2e-4)
+          << seed << " tau " << tau;
       EXPECT_LT((s.alpha_b - (sp.omega_b - sm.omega_b) / (2 * h)).norm(), 2e-4)
           << seed << " tau " << tau;
       EXPECT_LT((s.R_wb.transpose() * s.R_wb - Mat3::Identity()).norm(), 1e-12);
@@ -93,8 +93,9 @@ TEST(SimTrajectory, RampedStartDoesNotOvershoot) {
   c.motion.blend_duration = 2.0;
   const auto traj = makeTrajectory(c);
   double v_max = 0;
-  for (double tau = 0; tau < 4.0; tau += 0.01) v_max = std::max(v_max, traj->at(c.t0 + tau).v_w.x());
-  EXPECT_NEAR(v_max, 1.5, 1e-9);  // stat_02 cruises at 1.5 m/s
+  for (double tau = 0; tau < 4.0; tau += 0.01)
+    v_max = std::max(v_max, traj->at(c.t0 + tau).v_w.x());
+  EXPECT_NEAR(v_max, 1.5, 1e-9);              // stat_02 cruises at 1.5 m/s
   const double t = c.t0 + 1.1;                // 30 % into the blend (S = 0.163)
   const double x = ((t - c.t0) - 0.5) / 2.0;  // as rounded at UNIX-time magnitude
   EXPECT_NEAR(traj->at(t).v_w.x(), 1.5 * (10 - 15 * x + 6 * x * x) * x * x * x, 1e-12);

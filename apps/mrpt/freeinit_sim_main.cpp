@@ -23,10 +23,11 @@ int main(int argc, char** argv) {
                                 false, 0, "N", cmd);
     TCLAP::ValueArg<std::string> out("o", "out", "output rawlog", false, "dyna_01.rawlog", "FILE",
                                      cmd);
-    TCLAP::ValueArg<std::string> scenario("c", "scenario",
-                                          "INI file with a [scenario] section (a base preset or "
-                                          "random + scenario keys, or a written <out>.scenario.ini)",
-                                          false, "", "FILE", cmd);
+    TCLAP::ValueArg<std::string> scenario(
+        "c", "scenario",
+        "INI file with a [scenario] section (a base preset or "
+        "random + scenario keys, or a written <out>.scenario.ini)",
+        false, "", "FILE", cmd);
     TCLAP::SwitchArg keys("", "scenario-keys", "print the [scenario] keys and exit", cmd);
     TCLAP::SwitchArg in_g("", "accel-in-g", "write accelerations in g", cmd);
     cmd.parse(argc, argv);

@@ -121,19 +121,22 @@ void SimApp::run(std::ostream& log) {
         << t.q_wb.w() << "\n";
   });
   writeExtrinsicsIni(stem + ".extrinsics.ini", rec.declared_extrinsics,
-                     declared_true ? "true extrinsics of " + out +
-                                         " (also in each point cloud's sensorPose)"
-                                   : "declared (not the true) extrinsics of " + out +
-                                         " (also in each point cloud's sensorPose); the truth is "
-                                         "in " + stem + ".truth_extrinsics.ini");
+                     declared_true
+                         ? "true extrinsics of " + out + " (also in each point cloud's sensorPose)"
+                         : "declared (not the true) extrinsics of " + out +
+                               " (also in each point cloud's sensorPose); the truth is "
+                               "in " +
+                               stem + ".truth_extrinsics.ini");
   std::ostringstream clock;
   clock << std::setprecision(17) << rec.lidar_time_offset;
   writeExtrinsicsIni(stem + ".truth_extrinsics.ini", rec.extrinsics,
-                     "true extrinsics of " + out + "; true LiDAR clock offset: LiDAR stamps = IMU "
-                     "time + " + clock.str() + " s");
-  std::vector<std::string> comments = {
-      "scenario of " + out + ", written by freeinit-sim: `freeinit-sim -c " + stem +
-      ".scenario.ini -o X.rawlog` simulates the same recording"};
+                     "true extrinsics of " + out +
+                         "; true LiDAR clock offset: LiDAR stamps = IMU "
+                         "time + " +
+                         clock.str() + " s");
+  std::vector<std::string> comments = {"scenario of " + out +
+                                       ", written by freeinit-sim: `freeinit-sim -c " + stem +
+                                       ".scenario.ini -o X.rawlog` simulates the same recording"};
   comments.insert(comments.end(), drawn.begin(), drawn.end());
   sim::writeScenarioIni(stem + ".scenario.ini", sc, comments);
   log << "Wrote " << out << " (" << records_written << " records: " << rec.imu.size() << " IMU, "

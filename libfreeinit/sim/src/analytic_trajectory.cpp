@@ -73,7 +73,8 @@ AnalyticTrajectory::AnalyticTrajectory(TrajectoryParams params) : params_(std::m
         double binom = 1;  // C(k-1, j)
         for (std::size_t j = 0; j + 1 <= k; ++j) {
           r.rate[j] += static_cast<double>(k) * h.poly[k] * binom *
-                       std::pow(ts, static_cast<double>(k - 1 - j)) * std::pow(T, static_cast<double>(j));
+                       std::pow(ts, static_cast<double>(k - 1 - j)) *
+                       std::pow(T, static_cast<double>(j));
           binom = binom * static_cast<double>(k - 1 - j) / static_cast<double>(j + 1);
         }
       }
@@ -83,7 +84,8 @@ AnalyticTrajectory::AnalyticTrajectory(TrajectoryParams params) : params_(std::m
       for (std::size_t a = 0; a < 6; ++a)
         for (std::size_t b = 0; b < r.rate.size(); ++b) prod[a + b] += S[a] * r.rate[b];
       r.integral.assign(prod.size() + 1, 0.0);
-      for (std::size_t j = 0; j < prod.size(); ++j) r.integral[j + 1] = prod[j] / static_cast<double>(j + 1);
+      for (std::size_t j = 0; j < prod.size(); ++j)
+        r.integral[j + 1] = prod[j] / static_cast<double>(j + 1);
       r.integral_at_end = polyEval(r.integral, 1.0)[0];
       r.poly_at_end = polyEval(h.poly, ts + T)[0];
       r.waves_at_start = wavesEval(h.waves, ts)[0];
@@ -136,8 +138,7 @@ Eigen::Vector3d AnalyticTrajectory::rampedChannel(std::size_t i, double tau, dou
   const double ddS = 60.0 * x * (1.0 - x) * (1.0 - 2.0 * x) / (T * T);
   const Eigen::Vector3d q = polyEval(r.rate, x);  // p'(tau) and its x-derivatives
   const double g = w[0] - r.waves_at_start;
-  return Eigen::Vector3d(T * polyEval(r.integral, x)[0] + S * g,
-                         S * q[0] + dS * g + S * w[1],
+  return Eigen::Vector3d(T * polyEval(r.integral, x)[0] + S * g, S * q[0] + dS * g + S * w[1],
                          dS * q[0] + S * q[1] / T + ddS * g + 2.0 * dS * w[1] + S * w[2]);
 }
 

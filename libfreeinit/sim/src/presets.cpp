@@ -1,9 +1,9 @@
 #include <freeinit/sim/presets.h>
 
-#include "preset_definitions.h"
-
 #include <cmath>
 #include <stdexcept>
+
+#include "preset_definitions.h"
 
 namespace freeinit::sim {
 namespace {
@@ -69,8 +69,8 @@ void addVehicle(MotionConfig& p, double speed) {
 }
 
 /// Large rotational excitation whose component rates peak inside the first 0.5 s.
-void addRotation(MotionConfig& p, double yaw_amp, double yaw_hz, double roll_amp,
-                 double roll_hz, double pitch_amp, double pitch_hz) {
+void addRotation(MotionConfig& p, double yaw_amp, double yaw_hz, double roll_amp, double roll_hz,
+                 double pitch_amp, double pitch_hz) {
   p.rpy[2].waves.push_back(rateWave(yaw_amp, yaw_hz, 0.15));
   p.rpy[0].waves.push_back(rateWave(roll_amp, roll_hz, 0.18));
   p.rpy[1].waves.push_back(rateWave(pitch_amp, pitch_hz, 0.12));

@@ -184,7 +184,8 @@ double startLateral(const PlatformDraw& p, const SceneConfig& s, double u_pm1) {
   const bool on_foot = p.platform != PlatformClass::Vehicular;
   if (p.scene == "street") return on_foot ? -(s.street.half_width - 1.8) : -2.5;
   if (p.scene == "corridor") return 0.1 * u_pm1;
-  if (p.scene == "tunnel") return on_foot ? -(s.tunnel.half_width - 1.0) : -0.5 * s.tunnel.half_width;
+  if (p.scene == "tunnel")
+    return on_foot ? -(s.tunnel.half_width - 1.0) : -0.5 * s.tunnel.half_width;
   if (p.scene == "parking") return on_foot ? u_pm1 : 0.0;
   return 0.0;
 }
@@ -200,8 +201,8 @@ MotionConfig drawMotion(std::uint64_t seed, const PlatformDraw& p, const SceneCo
   Draw d(seed, detail::Stream::DrawMotion);
   MotionConfig m;
   m.start_position = Vec3(0, startLateral(p, scene, d.u(-1.0, 1.0)), p.height);
-  m.start_rpy_deg = Vec3(p.tilt_deg * std::cos(p.tilt_dir), p.tilt_deg * std::sin(p.tilt_dir),
-                         p.yaw_offset_deg);
+  m.start_rpy_deg =
+      Vec3(p.tilt_deg * std::cos(p.tilt_dir), p.tilt_deg * std::sin(p.tilt_dir), p.yaw_offset_deg);
   m.still_until = p.rest;
   m.blend_duration = p.blend;
   m.ramp_poly = true;
@@ -304,9 +305,11 @@ struct Sensors {
   double frame_rate = 10, hfov = 120, vfov = 30;
   LineOrder order = LineOrder::TopDown;
   LineDirection direction = LineDirection::Alternating;
-  double range_sigma = 0.02, doppler_sigma = 0.03, outliers = 0.01, min_range = 0.5, max_range = 150;
+  double range_sigma = 0.02, doppler_sigma = 0.03, outliers = 0.01, min_range = 0.5,
+         max_range = 150;
   double imu_rate = 200, gyro_sigma = 0.002, accel_sigma = 0.02;
-  Vec3 gyro_scale = Vec3::Ones(), accel_scale = Vec3::Ones(), b_g = Vec3::Zero(), b_a = Vec3::Zero();
+  Vec3 gyro_scale = Vec3::Ones(), accel_scale = Vec3::Ones(), b_g = Vec3::Zero(),
+       b_a = Vec3::Zero();
 };
 
 Sensors drawSensors(std::uint64_t seed) {
@@ -354,7 +357,8 @@ Calibration drawCalibration(std::uint64_t seed, PlatformClass platform) {
   const double angle = d.u(10.0, 60.0) * kDeg;
   c.imu_mount_deg = eulerZyxDeg(Eigen::AngleAxisd(angle, axis).toRotationMatrix());
   // R_bl = R_rb^T R_rl, from the angles simulate() turns into rotations.
-  const Mat3 R_bl = rotationZyxDeg(c.imu_mount_deg).transpose() * rotationZyxDeg(c.lidar_on_rig_deg);
+  const Mat3 R_bl =
+      rotationZyxDeg(c.imu_mount_deg).transpose() * rotationZyxDeg(c.lidar_on_rig_deg);
   c.lidar_rpy_deg = eulerZyxDeg(R_bl);
   c.p_bl = d.direction() * d.u(0.02, 0.3);
   c.wrong = d.chance(0.25);
@@ -398,8 +402,12 @@ Primitive primitiveOf(const SceneObject& o) {
 class MoverPlanner {
  public:
   MoverPlanner(const ScenarioConfig& c, const PlatformDraw& p)
-      : c_(c), p_(p), path_(pathConfig(c)), traj_(makeTrajectory(path_)),
-        layout_(makeScene(path_, *traj_)), ext_(makeExtrinsics(c)) {
+      : c_(c),
+        p_(p),
+        path_(pathConfig(c)),
+        traj_(makeTrajectory(path_)),
+        layout_(makeScene(path_, *traj_)),
+        ext_(makeExtrinsics(c)) {
     const TruthState s0 = traj_->at(c.t0);
     lidar0_ = s0.p_w + s0.R_wb * ext_.p_bl;
     Vec3 b = (s0.R_wb * ext_.R_bl).col(0);
@@ -450,11 +458,16 @@ class MoverPlanner {
     o.shape = ObjectShape::Box;
     o.label = label;
     const std::string l = label;
-    if (l == "bus") o.half_size = Vec3(d.u(5.0, 6.25), 1.25, d.u(1.5, 1.75));
-    else if (l == "truck") o.half_size = Vec3(d.u(4.0, 8.0), 1.25, d.u(1.6, 2.0));
-    else if (l == "van") o.half_size = Vec3(d.u(2.4, 3.0), 1.0, d.u(1.0, 1.3));
-    else if (l == "cyclist") o.half_size = Vec3(0.9, 0.3, 0.85);
-    else o.half_size = Vec3(2.25, 0.9, d.u(0.7, 0.9));
+    if (l == "bus")
+      o.half_size = Vec3(d.u(5.0, 6.25), 1.25, d.u(1.5, 1.75));
+    else if (l == "truck")
+      o.half_size = Vec3(d.u(4.0, 8.0), 1.25, d.u(1.6, 2.0));
+    else if (l == "van")
+      o.half_size = Vec3(d.u(2.4, 3.0), 1.0, d.u(1.0, 1.3));
+    else if (l == "cyclist")
+      o.half_size = Vec3(0.9, 0.3, 0.85);
+    else
+      o.half_size = Vec3(2.25, 0.9, d.u(0.7, 0.9));
     o.reflectivity = d.u(0.4, 0.95);
     return o;
   }
@@ -472,9 +485,13 @@ class MoverPlanner {
     const double tau_c = d.u(0.15, 0.5);
     enum Kind { Crossing, Walking, Cyclist, VehicleCrossing, LanePass };
     Kind kind = Walking;
-    if (scene == "street") kind = std::vector<Kind>{Crossing, Walking, LanePass}[d.weighted({0.4, 0.15, 0.45})];
-    else if (scene == "open") kind = std::vector<Kind>{Crossing, Walking, Cyclist, VehicleCrossing}[d.weighted({0.35, 0.15, 0.15, 0.35})];
-    else if (scene == "parking") kind = std::vector<Kind>{Crossing, Walking, LanePass}[d.weighted({0.4, 0.3, 0.3})];
+    if (scene == "street")
+      kind = std::vector<Kind>{Crossing, Walking, LanePass}[d.weighted({0.4, 0.15, 0.45})];
+    else if (scene == "open")
+      kind = std::vector<Kind>{Crossing, Walking, Cyclist,
+                               VehicleCrossing}[d.weighted({0.35, 0.15, 0.15, 0.35})];
+    else if (scene == "parking")
+      kind = std::vector<Kind>{Crossing, Walking, LanePass}[d.weighted({0.4, 0.3, 0.3})];
     else if (scene == "tunnel" && (vehicular || c_.scene.tunnel.half_width >= 4.0))
       kind = d.chance(0.3) ? Walking : LanePass;
     if (kind == Crossing || kind == Walking) {
@@ -698,7 +715,8 @@ RandomScenario drawRandomScenario(std::uint64_t seed) {
   const Extrinsics declared = declaredExtrinsics(c, truth);
   info.calibration_wrong = cal.wrong;
   info.lidar_time_offset = c.lidar_time_offset;
-  info.rotation_error_deg = Eigen::AngleAxisd(truth.R_bl.transpose() * declared.R_bl).angle() / kDeg;
+  info.rotation_error_deg =
+      Eigen::AngleAxisd(truth.R_bl.transpose() * declared.R_bl).angle() / kDeg;
   info.position_error = (declared.p_bl - truth.p_bl).norm();
   info.extrinsic_rotation_deg = Eigen::AngleAxisd(truth.R_bl).angle() / kDeg;
   info.lever_arm = truth.p_bl.norm();
@@ -711,7 +729,8 @@ ScenarioConfig randomScenario(std::uint64_t seed) { return drawRandomScenario(se
 std::vector<std::string> describe(const RandomScenarioInfo& i) {
   char buf[512];
   std::vector<std::string> out;
-  std::snprintf(buf, sizeof buf, "random scenario %llu: %s, %s, %s, speed %.2f m/s, peak rate %.2f rad/s within 6 s",
+  std::snprintf(buf, sizeof buf,
+                "random scenario %llu: %s, %s, %s, speed %.2f m/s, peak rate %.2f rad/s within 6 s",
                 static_cast<unsigned long long>(i.seed), platformName(i.platform), i.scene.c_str(),
                 i.motion.c_str(), i.speed, i.peak_angular_rate);
   out.emplace_back(buf);

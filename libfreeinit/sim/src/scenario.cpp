@@ -102,7 +102,8 @@ std::shared_ptr<const Scene> makeScene(const ScenarioConfig& config, const Traje
   for (const SceneObject& o : sc.objects) scene.add(toPrimitive(o));
   if (config.motion.heading_deg == 0.0) return std::make_shared<Scene>(std::move(scene));
   // Turn the whole layout with the path frame.
-  const Mat3 Rz = Eigen::AngleAxisd(config.motion.heading_deg * kDeg, Vec3::UnitZ()).toRotationMatrix();
+  const Mat3 Rz =
+      Eigen::AngleAxisd(config.motion.heading_deg * kDeg, Vec3::UnitZ()).toRotationMatrix();
   auto turned = std::make_shared<Scene>(scene.kind());
   for (Primitive p : scene.primitives()) {
     p.center_w = Rz * p.center_w;

@@ -68,7 +68,8 @@ std::vector<double> toReals(const Text& s, std::size_t n_exact = 0) {
   std::vector<double> out;
   for (const Text& w : words(s)) out.push_back(toReal(w));
   if (n_exact > 0 && out.size() != n_exact)
-    throw std::invalid_argument("expected " + std::to_string(n_exact) + " numbers, got '" + s + "'");
+    throw std::invalid_argument("expected " + std::to_string(n_exact) + " numbers, got '" + s +
+                                "'");
   return out;
 }
 
@@ -232,7 +233,9 @@ ScenarioKey flag(const char* name, const char* doc, Access<bool> access,
   k.name = name;
   k.range = "true|false";
   k.doc = doc;
-  k.format = [access](const ScenarioConfig& c, int) { return Text(at(c, access) ? "true" : "false"); };
+  k.format = [access](const ScenarioConfig& c, int) {
+    return Text(at(c, access) ? "true" : "false");
+  };
   k.parse = [access](const Text& s, ScenarioConfig& c, int) { access(c) = toBool(s); };
   k.check = [](const ScenarioConfig&, int) { return Text(); };
   k.applies = applies;
@@ -313,7 +316,8 @@ SceneObject toObject(const Text& s) {
   const auto w = words(s);
   if (w.size() != 13)
     throw std::invalid_argument(
-        "expected 'box|cylinder label cx cy cz hx hy hz yaw vx vy vz reflectivity', got '" + s + "'");
+        "expected 'box|cylinder label cx cy cz hx hy hz yaw vx vy vz reflectivity', got '" + s +
+        "'");
   SceneObject o;
   if (w[0] == "box") {
     o.shape = ObjectShape::Box;
@@ -371,7 +375,8 @@ std::vector<ScenarioKey> buildTable() {
   t.push_back(real("duration", "s", positive(), "recording length",
                    [](ScenarioConfig& c) -> double& { return c.duration; }));
   // Motion.
-  t.push_back(vec3("start_position", "m", any(), "rig (IMU origin) in the path frame when motion starts",
+  t.push_back(vec3("start_position", "m", any(),
+                   "rig (IMU origin) in the path frame when motion starts",
                    [](ScenarioConfig& c) -> Vec3& { return c.motion.start_position; }));
   t.push_back(vec3("start_rpy_deg", "deg", any(), "rig roll pitch yaw then (R = Rz Ry Rx)",
                    [](ScenarioConfig& c) -> Vec3& { return c.motion.start_rpy_deg; }));
@@ -380,13 +385,15 @@ std::vector<ScenarioKey> buildTable() {
   t.push_back(real("blend_duration", "s", any(),
                    "smoothstep from rest into motion; <= 0: moving from the first instant",
                    [](ScenarioConfig& c) -> double& { return c.motion.blend_duration; }));
-  t.push_back(flag("ramp_poly",
-                   "the polynomial parts enter through their rates: the speed ramps up, no overshoot",
-                   [](ScenarioConfig& c) -> bool& { return c.motion.ramp_poly; }));
+  t.push_back(
+      flag("ramp_poly",
+           "the polynomial parts enter through their rates: the speed ramps up, no overshoot",
+           [](ScenarioConfig& c) -> bool& { return c.motion.ramp_poly; }));
   for (int ch = 0; ch < 6; ++ch) addChannel(t, ch);
   t.push_back(vec3("imu_mount_rpy_deg", "deg", any(), "IMU (body) on the rig: R_rb",
                    [](ScenarioConfig& c) -> Vec3& { return c.motion.imu_mount_rpy_deg; }));
-  t.push_back(real("heading_deg", "deg", any(), "yaw of the path frame (scene and motion) in the world",
+  t.push_back(real("heading_deg", "deg", any(),
+                   "yaw of the path frame (scene and motion) in the world",
                    [](ScenarioConfig& c) -> double& { return c.motion.heading_deg; }));
   // Scene.
   {
@@ -408,59 +415,73 @@ std::vector<ScenarioKey> buildTable() {
                    "lay the scene out along the stretch covered within the duration",
                    [](ScenarioConfig& c) -> bool& { return c.scene.auto_extent; }));
   auto fixed_extent = [](const ScenarioConfig& c) { return !c.scene.auto_extent; };
-  t.push_back(real("scene_x_min", "m", any(), "start of the stretch laid out (no auto extent)",
-                   [](ScenarioConfig& c) -> double& { return c.scene.x_min; }, fixed_extent));
-  t.push_back(real("scene_x_max", "m", any(), "end of the stretch laid out, > scene_x_min",
-                   [](ScenarioConfig& c) -> double& { return c.scene.x_max; }, fixed_extent));
-  t.push_back(real("scene_horizon", "s", positive(), "time moving objects are placed for",
-                   [](ScenarioConfig& c) -> double& { return c.scene.horizon; }, fixed_extent));
+  t.push_back(real(
+      "scene_x_min", "m", any(), "start of the stretch laid out (no auto extent)",
+      [](ScenarioConfig& c) -> double& { return c.scene.x_min; }, fixed_extent));
+  t.push_back(real(
+      "scene_x_max", "m", any(), "end of the stretch laid out, > scene_x_min",
+      [](ScenarioConfig& c) -> double& { return c.scene.x_max; }, fixed_extent));
+  t.push_back(real(
+      "scene_horizon", "s", positive(), "time moving objects are placed for",
+      [](ScenarioConfig& c) -> double& { return c.scene.horizon; }, fixed_extent));
   auto street = [](const ScenarioConfig& c) { return isKind(c, "street"); };
-  t.push_back(real("street_half_width", "m", closed(6.5, 100), "facade-to-centre distance",
-                   [](ScenarioConfig& c) -> double& { return c.scene.street.half_width; }, street));
-  t.push_back(real("street_cars_per_100m", "-", closed(0, 50), "moving cars per 100 m and lane",
-                   [](ScenarioConfig& c) -> double& { return c.scene.street.cars_per_100m; }, street));
-  t.push_back(real("street_pedestrians_per_100m", "-", closed(0, 100),
-                   "pedestrians per 100 m and sidewalk",
-                   [](ScenarioConfig& c) -> double& { return c.scene.street.pedestrians_per_100m; },
-                   street));
-  t.push_back(real("street_ego_lane_speed", "m/s", nonNegative(),
-                   "> 0: the platform drives in lane y = -2.5, its lane's cars ahead and faster",
-                   [](ScenarioConfig& c) -> double& { return c.scene.street.ego_lane_speed; }, street));
-  t.push_back(flag("street_near_traffic", "the presets' traffic placed near the start",
-                   [](ScenarioConfig& c) -> bool& { return c.scene.street.near_traffic; }, street));
+  t.push_back(real(
+      "street_half_width", "m", closed(6.5, 100), "facade-to-centre distance",
+      [](ScenarioConfig& c) -> double& { return c.scene.street.half_width; }, street));
+  t.push_back(real(
+      "street_cars_per_100m", "-", closed(0, 50), "moving cars per 100 m and lane",
+      [](ScenarioConfig& c) -> double& { return c.scene.street.cars_per_100m; }, street));
+  t.push_back(real(
+      "street_pedestrians_per_100m", "-", closed(0, 100), "pedestrians per 100 m and sidewalk",
+      [](ScenarioConfig& c) -> double& { return c.scene.street.pedestrians_per_100m; }, street));
+  t.push_back(real(
+      "street_ego_lane_speed", "m/s", nonNegative(),
+      "> 0: the platform drives in lane y = -2.5, its lane's cars ahead and faster",
+      [](ScenarioConfig& c) -> double& { return c.scene.street.ego_lane_speed; }, street));
+  t.push_back(flag(
+      "street_near_traffic", "the presets' traffic placed near the start",
+      [](ScenarioConfig& c) -> bool& { return c.scene.street.near_traffic; }, street));
   auto corridor = [](const ScenarioConfig& c) { return isKind(c, "corridor"); };
-  t.push_back(real("corridor_half_width", "m", closed(0.5, 20), "wall-to-centre distance",
-                   [](ScenarioConfig& c) -> double& { return c.scene.corridor.half_width; }, corridor));
-  t.push_back(real("corridor_height", "m", closed(1.5, 20), "floor to ceiling",
-                   [](ScenarioConfig& c) -> double& { return c.scene.corridor.height; }, corridor));
-  t.push_back(integer("corridor_pedestrians", 0, 100, "people walking along the corridor",
-                      [](ScenarioConfig& c) -> int& { return c.scene.corridor.pedestrians; },
-                      corridor));
-  t.push_back(real("corridor_pedestrian_offset", "m", nonNegative(), "|y| of the people's paths",
-                   [](ScenarioConfig& c) -> double& { return c.scene.corridor.pedestrian_offset; },
-                   corridor));
+  t.push_back(real(
+      "corridor_half_width", "m", closed(0.5, 20), "wall-to-centre distance",
+      [](ScenarioConfig& c) -> double& { return c.scene.corridor.half_width; }, corridor));
+  t.push_back(real(
+      "corridor_height", "m", closed(1.5, 20), "floor to ceiling",
+      [](ScenarioConfig& c) -> double& { return c.scene.corridor.height; }, corridor));
+  t.push_back(integer(
+      "corridor_pedestrians", 0, 100, "people walking along the corridor",
+      [](ScenarioConfig& c) -> int& { return c.scene.corridor.pedestrians; }, corridor));
+  t.push_back(real(
+      "corridor_pedestrian_offset", "m", nonNegative(), "|y| of the people's paths",
+      [](ScenarioConfig& c) -> double& { return c.scene.corridor.pedestrian_offset; }, corridor));
   auto tunnel = [](const ScenarioConfig& c) { return isKind(c, "tunnel"); };
-  t.push_back(real("tunnel_half_width", "m", closed(0.5, 50), "wall-to-centre distance",
-                   [](ScenarioConfig& c) -> double& { return c.scene.tunnel.half_width; }, tunnel));
-  t.push_back(real("tunnel_height", "m", closed(1.5, 50), "floor to ceiling",
-                   [](ScenarioConfig& c) -> double& { return c.scene.tunnel.height; }, tunnel));
-  t.push_back(real("tunnel_features_per_100m", "-", closed(0, 200),
-                   "lights, niches and signs per 100 m (0: featureless)",
-                   [](ScenarioConfig& c) -> double& { return c.scene.tunnel.features_per_100m; },
-                   tunnel));
+  t.push_back(real(
+      "tunnel_half_width", "m", closed(0.5, 50), "wall-to-centre distance",
+      [](ScenarioConfig& c) -> double& { return c.scene.tunnel.half_width; }, tunnel));
+  t.push_back(real(
+      "tunnel_height", "m", closed(1.5, 50), "floor to ceiling",
+      [](ScenarioConfig& c) -> double& { return c.scene.tunnel.height; }, tunnel));
+  t.push_back(real(
+      "tunnel_features_per_100m", "-", closed(0, 200),
+      "lights, niches and signs per 100 m (0: featureless)",
+      [](ScenarioConfig& c) -> double& { return c.scene.tunnel.features_per_100m; }, tunnel));
   auto open_area = [](const ScenarioConfig& c) { return isKind(c, "open"); };
-  t.push_back(integer("open_pedestrians", 0, 100, "people walking at |y| 8-14 m",
-                      [](ScenarioConfig& c) -> int& { return c.scene.open.pedestrians; }, open_area));
+  t.push_back(integer(
+      "open_pedestrians", 0, 100, "people walking at |y| 8-14 m",
+      [](ScenarioConfig& c) -> int& { return c.scene.open.pedestrians; }, open_area));
   auto parking = [](const ScenarioConfig& c) { return isKind(c, "parking"); };
-  t.push_back(real("parking_aisle_half_width", "m", closed(1.5, 20), "free half width of the aisle",
-                   [](ScenarioConfig& c) -> double& { return c.scene.parking.aisle_half_width; },
-                   parking));
-  t.push_back(real("parking_occupancy", "-", closed(0, 1), "share of occupied bays",
-                   [](ScenarioConfig& c) -> double& { return c.scene.parking.occupancy; }, parking));
-  t.push_back(integer("parking_pedestrians", 0, 100, "people walking along the aisle",
-                      [](ScenarioConfig& c) -> int& { return c.scene.parking.pedestrians; }, parking));
-  t.push_back(integer("parking_moving_cars", 0, 100, "cars driving in the parallel aisles",
-                      [](ScenarioConfig& c) -> int& { return c.scene.parking.moving_cars; }, parking));
+  t.push_back(real(
+      "parking_aisle_half_width", "m", closed(1.5, 20), "free half width of the aisle",
+      [](ScenarioConfig& c) -> double& { return c.scene.parking.aisle_half_width; }, parking));
+  t.push_back(real(
+      "parking_occupancy", "-", closed(0, 1), "share of occupied bays",
+      [](ScenarioConfig& c) -> double& { return c.scene.parking.occupancy; }, parking));
+  t.push_back(integer(
+      "parking_pedestrians", 0, 100, "people walking along the aisle",
+      [](ScenarioConfig& c) -> int& { return c.scene.parking.pedestrians; }, parking));
+  t.push_back(integer(
+      "parking_moving_cars", 0, 100, "cars driving in the parallel aisles",
+      [](ScenarioConfig& c) -> int& { return c.scene.parking.moving_cars; }, parking));
   {
     ScenarioKey k;
     k.name = "objects";
@@ -495,7 +516,8 @@ std::vector<ScenarioKey> buildTable() {
     k.check = [](const ScenarioConfig& c, int i) {
       const SceneObject& o = c.scene.objects[static_cast<std::size_t>(i - 1)];
       if (!(o.half_size.minCoeff() > 0)) return Text("half sizes must be > 0");
-      if (!(o.reflectivity >= 0 && o.reflectivity <= 1)) return Text("reflectivity must be in [0, 1]");
+      if (!(o.reflectivity >= 0 && o.reflectivity <= 1))
+        return Text("reflectivity must be in [0, 1]");
       if (o.label.empty() || o.label.find_first_not_of("abcdefghijklmnopqrstuvwxyz_") != Text::npos)
         return Text("label must be a word of a-z and _");
       return Text();
@@ -541,7 +563,8 @@ std::vector<ScenarioKey> buildTable() {
   t.push_back(real("accel_sigma", "m/s^2", nonNegative(),
                    "accelerometer white noise per sample (datasheet)",
                    [](ScenarioConfig& c) -> double& { return c.accel_sigma; }));
-  t.push_back(vec3("gyro_sigma_scale", "-", nonNegative(), "this unit's per-axis sigma / gyro_sigma",
+  t.push_back(vec3("gyro_sigma_scale", "-", nonNegative(),
+                   "this unit's per-axis sigma / gyro_sigma",
                    [](ScenarioConfig& c) -> Vec3& { return c.gyro_sigma_scale; }));
   t.push_back(vec3("accel_sigma_scale", "-", nonNegative(),
                    "this unit's per-axis sigma / accel_sigma",
@@ -549,10 +572,12 @@ std::vector<ScenarioKey> buildTable() {
   t.push_back(flag("random_biases", "draw the biases with the seed (the presets' ranges)",
                    [](ScenarioConfig& c) -> bool& { return c.random_biases; }));
   auto fixed_biases = [](const ScenarioConfig& c) { return !c.random_biases; };
-  t.push_back(vec3("b_g", "rad/s", any(), "constant gyro bias (random_biases false)",
-                   [](ScenarioConfig& c) -> Vec3& { return c.b_g; }, fixed_biases));
-  t.push_back(vec3("b_a", "m/s^2", any(), "constant accelerometer bias (random_biases false)",
-                   [](ScenarioConfig& c) -> Vec3& { return c.b_a; }, fixed_biases));
+  t.push_back(vec3(
+      "b_g", "rad/s", any(), "constant gyro bias (random_biases false)",
+      [](ScenarioConfig& c) -> Vec3& { return c.b_g; }, fixed_biases));
+  t.push_back(vec3(
+      "b_a", "m/s^2", any(), "constant accelerometer bias (random_biases false)",
+      [](ScenarioConfig& c) -> Vec3& { return c.b_a; }, fixed_biases));
   // Calibration: the truth, and what is declared.
   t.push_back(vec3("lidar_rpy_deg", "deg", any(), "true R_bl = Rz(yaw) Ry(pitch) Rx(roll)",
                    [](ScenarioConfig& c) -> Vec3& { return c.lidar_rpy_deg; }));
@@ -683,8 +708,8 @@ ScenarioConfig scenarioFromKeys(const ScenarioKeyValues& section, const Scenario
       }
       for (std::size_t i = base_objects + 1; i <= c.scene.objects.size(); ++i)
         if (!objects.count(static_cast<int>(i)))
-          fail("object_" + std::to_string(i), "missing (objects = " +
-                                                  std::to_string(c.scene.objects.size()) + ")");
+          fail("object_" + std::to_string(i),
+               "missing (objects = " + std::to_string(c.scene.objects.size()) + ")");
       continue;
     }
     const auto it = given.find(k.name);
@@ -733,7 +758,8 @@ ScenarioKeyValues readScenarioIniText(const std::string& text) {
     const Text s = trim(line);
     if (s.empty() || s[0] == ';' || s[0] == '#') continue;
     if (s.front() == '[') {
-      if (s.back() != ']') throw std::invalid_argument("line " + std::to_string(n) + ": bad section");
+      if (s.back() != ']')
+        throw std::invalid_argument("line " + std::to_string(n) + ": bad section");
       section = trim(s.substr(1, s.size() - 2));
       continue;
     }

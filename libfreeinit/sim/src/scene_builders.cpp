@@ -189,7 +189,8 @@ Scene makeTunnelScene(const TunnelOptions& opt, std::mt19937_64& rng) {
   if (opt.features_per_100m > 0) {
     // Ceiling lights, wall niches (recesses drawn as dark boxes against the wall) and signs.
     const double mean_gap = 100.0 / opt.features_per_100m;
-    for (double x = xa + uniform(rng, 0, mean_gap); x < xb; x += uniform(rng, 0.5, 1.5) * mean_gap) {
+    for (double x = xa + uniform(rng, 0, mean_gap); x < xb;
+         x += uniform(rng, 0.5, 1.5) * mean_gap) {
       const double kind = uniform(rng, 0, 1);
       const double side = uniform(rng, 0, 1) < 0.5 ? -1.0 : 1.0;
       if (kind < 0.5) {
@@ -241,8 +242,8 @@ Scene makeParkingScene(const ParkingOptions& opt, std::mt19937_64& rng) {
   const double xa = opt.x_min - 30.0;
   const double xb = opt.x_max + 60.0;
   const double a = opt.aisle_half_width;
-  constexpr double kBay = 2.6;       // [m] bay width along x
-  constexpr double kCarHalf = 2.3;   // [m] half length of a bay across the aisle
+  constexpr double kBay = 2.6;      // [m] bay width along x
+  constexpr double kCarHalf = 2.3;  // [m] half length of a bay across the aisle
   const double row_depth = 2.0 * kCarHalf;
   scene.add(ground(xa - 80.0, xb + 80.0, 120.0, 0.2f));
   // Two rows of bays back to back on each side, cars parked across (long axis along y).
@@ -254,23 +255,23 @@ Scene makeParkingScene(const ParkingOptions& opt, std::mt19937_64& rng) {
         const bool van = uniform(rng, 0, 1) < 0.15;
         const double h = van ? uniform(rng, 2.0, 2.6) : uniform(rng, 1.35, 1.8);
         const double half_len = van ? uniform(rng, 2.3, 2.6) : uniform(rng, 2.0, 2.35);
-        scene.add(makeBox(Vec3(x + uniform(rng, -0.15, 0.15), y_c + side * (kCarHalf - half_len - 0.2
-                                                                              - uniform(rng, 0, 0.3)),
-                               0.5 * h),
-                          Vec3(0.9, half_len, 0.5 * h), uniform(rng, -0.04, 0.04),
-                          reflect(rng, 0.3, 0.95)));
+        scene.add(makeBox(
+            Vec3(x + uniform(rng, -0.15, 0.15),
+                 y_c + side * (kCarHalf - half_len - 0.2 - uniform(rng, 0, 0.3)), 0.5 * h),
+            Vec3(0.9, half_len, 0.5 * h), uniform(rng, -0.04, 0.04), reflect(rng, 0.3, 0.95)));
       }
     }
     // Lamp posts between the two rows, a building or a fence behind the far row.
     for (double x = xa + uniform(rng, 0, 10); x < xb; x += uniform(rng, 18.0, 30.0)) {
-      scene.add(makeCylinder(Vec3(x, side * (a + row_depth), 4.0), 0.12, 4.0, reflect(rng, 0.5, 0.9)));
+      scene.add(
+          makeCylinder(Vec3(x, side * (a + row_depth), 4.0), 0.12, 4.0, reflect(rng, 0.5, 0.9)));
     }
     const double y_far = a + 2.0 * row_depth + 2.0 * a + uniform(rng, 0.0, 20.0);
     for (double x = xa - 10.0; x < xb + 10.0;) {
       const double len = uniform(rng, 15.0, 40.0);
       const double h = uniform(rng, 2.0, 20.0);
-      scene.add(makeBox(Vec3(x + 0.5 * len, side * (y_far + 5.0), 0.5 * h), Vec3(0.5 * len, 5.0, 0.5 * h),
-                        0, reflect(rng, 0.3, 0.8)));
+      scene.add(makeBox(Vec3(x + 0.5 * len, side * (y_far + 5.0), 0.5 * h),
+                        Vec3(0.5 * len, 5.0, 0.5 * h), 0, reflect(rng, 0.3, 0.8)));
       x += len;
     }
   }

@@ -80,8 +80,8 @@ class AnalyticTrajectory : public Trajectory {
     double integral_at_end = 0, poly_at_end = 0, waves_at_start = 0;
   };
   std::array<Ramp, 6> ramp_;
-  bool mounted_ = false;                       ///< R_rb is not the identity
-  Mat3 R_heading_ = Mat3::Identity();          ///< Rz(heading), used when heading != 0
+  bool mounted_ = false;               ///< R_rb is not the identity
+  Mat3 R_heading_ = Mat3::Identity();  ///< Rz(heading), used when heading != 0
 };
 
 }  // namespace freeinit::sim

@@ -44,7 +44,8 @@ struct PresetInfo {
 PresetInfo presetInfo(const std::string& name);
 
 /// The body trajectory of a config (as makeTrajectory; kept for the callers of the presets).
-inline std::shared_ptr<const AnalyticTrajectory> makePresetTrajectory(const ScenarioConfig& config) {
+inline std::shared_ptr<const AnalyticTrajectory> makePresetTrajectory(
+    const ScenarioConfig& config) {
   return makeTrajectory(config);
 }
 

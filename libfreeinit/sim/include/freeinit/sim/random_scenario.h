@@ -8,6 +8,7 @@
 // of degrees; the whole layout is turned by a random heading.
 //
 // Distribution. U(a, b) uniform, logU log-uniform, {..} a uniform choice, p probability.
+// clang-format off
 //
 // | aspect | distribution | why |
 // |---|---|---|
@@ -47,6 +48,7 @@
 // | IMU on the rig | rotation U(10, 60) deg about a uniform axis | IMUs mounted in any orientation: R_bl of tens of degrees about any axis |
 // | lever arm p_bl | uniform direction, length U(0.02, 0.3) m | board-level to separate-box rigs |
 // | wrong calibration | p 0.25; then each of: LiDAR time offset U(1, 10) ms either sign, declared rotation off U(0.3, 2) deg about a uniform axis, declared p_bl off U(0.5, 3) cm in a uniform direction, with p 0.6 each (at least one) | what users get wrong and do not declare |
+// clang-format on
 //
 // The scene is laid out for the platform's first 6 s (scene_horizon), so a recording shorter or
 // longer than the default 3 s (up to 6 s) has the same scene.
@@ -69,24 +71,24 @@ const char* platformName(PlatformClass platform);
 struct RandomScenarioInfo {
   std::uint64_t seed = 0;
   PlatformClass platform = PlatformClass::Handheld;
-  std::string scene;            ///< scene kind
-  std::string motion;           ///< rotating, walking, running, rolling or driving
-  std::string start;            ///< moving, starting (within 0.6 s) or static
-  bool static_start = false;    ///< at rest for at least the first 0.6 s
-  double rest_duration = 0;     ///< [s] at rest from the first sample (0 when moving from it)
-  double speed = 0;             ///< [m/s] cruise speed once moving
-  double peak_angular_rate = 0; ///< [rad/s] max |omega_b| over the first 6 s (the scene horizon)
-  double base_tilt_deg = 0;     ///< [deg] rig tilt (roll/pitch) at the start
-  double body_tilt_deg = 0;     ///< [deg] angle of the IMU's z axis from the vertical at the start
-  int movers_in_view = 0;       ///< objects placed to move through the view in the first 0.6 s
+  std::string scene;             ///< scene kind
+  std::string motion;            ///< rotating, walking, running, rolling or driving
+  std::string start;             ///< moving, starting (within 0.6 s) or static
+  bool static_start = false;     ///< at rest for at least the first 0.6 s
+  double rest_duration = 0;      ///< [s] at rest from the first sample (0 when moving from it)
+  double speed = 0;              ///< [m/s] cruise speed once moving
+  double peak_angular_rate = 0;  ///< [rad/s] max |omega_b| over the first 6 s (the scene horizon)
+  double base_tilt_deg = 0;      ///< [deg] rig tilt (roll/pitch) at the start
+  double body_tilt_deg = 0;      ///< [deg] angle of the IMU's z axis from the vertical at the start
+  int movers_in_view = 0;        ///< objects placed to move through the view in the first 0.6 s
   /// A static start with people or vehicles moving in view (movers_in_view > 0).
   bool dynamic_near_standing_sensor = false;
-  bool calibration_wrong = false;    ///< the declared calibration differs from the truth
-  double lidar_time_offset = 0;      ///< [s]
-  double rotation_error_deg = 0;     ///< [deg] declared vs. true R_bl
-  double position_error = 0;         ///< [m] declared vs. true p_bl
-  double extrinsic_rotation_deg = 0; ///< [deg] angle of the true R_bl
-  double lever_arm = 0;              ///< [m] |p_bl|
+  bool calibration_wrong = false;     ///< the declared calibration differs from the truth
+  double lidar_time_offset = 0;       ///< [s]
+  double rotation_error_deg = 0;      ///< [deg] declared vs. true R_bl
+  double position_error = 0;          ///< [m] declared vs. true p_bl
+  double extrinsic_rotation_deg = 0;  ///< [deg] angle of the true R_bl
+  double lever_arm = 0;               ///< [m] |p_bl|
   /// Share of the recording's points on moving objects: -1 until measured on a simulation
   /// (measureMovingPoints()).
   double moving_point_share = -1;

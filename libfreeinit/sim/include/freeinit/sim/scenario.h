@@ -53,12 +53,13 @@ enum class ObjectShape : std::uint8_t { Box = 0, Cylinder = 1 };
 /// An explicitly placed object (a person crossing, a passing bus, ...), constant velocity.
 struct SceneObject {
   ObjectShape shape = ObjectShape::Box;
-  std::string label = "object";       ///< [a-z_] word for people reading the file: person, bus...
-  Vec3 center = Vec3::Zero();         ///< [m] path frame, at t0
-  Vec3 half_size = Vec3::Ones();      ///< [m] box: half extents; cylinder: (radius, radius, half height)
-  double yaw = 0;                     ///< [rad] box orientation about z
-  Vec3 velocity = Vec3::Zero();       ///< [m/s] path frame; nonzero: a moving (Dynamic) object
-  double reflectivity = 0.5;          ///< [-] in [0, 1]
+  std::string label = "object";  ///< [a-z_] word for people reading the file: person, bus...
+  Vec3 center = Vec3::Zero();    ///< [m] path frame, at t0
+  Vec3 half_size =
+      Vec3::Ones();              ///< [m] box: half extents; cylinder: (radius, radius, half height)
+  double yaw = 0;                ///< [rad] box orientation about z
+  Vec3 velocity = Vec3::Zero();  ///< [m/s] path frame; nonzero: a moving (Dynamic) object
+  double reflectivity = 0.5;     ///< [-] in [0, 1]
 };
 
 /// The scene: a kind laid out by its builder (seeded by the scenario seed) plus explicit objects.
@@ -68,9 +69,9 @@ struct SceneConfig {
   /// recording's duration (presets); false: along [x_min, x_max] for `horizon` seconds of moving
   /// objects, whatever the duration, so that a shorter recording has the same scene.
   bool auto_extent = true;
-  double x_min = 0;     ///< [m] used when auto_extent is false
-  double x_max = 50;    ///< [m]
-  double horizon = 5;   ///< [s]
+  double x_min = 0;          ///< [m] used when auto_extent is false
+  double x_max = 50;         ///< [m]
+  double horizon = 5;        ///< [s]
   StreetOptions street;      ///< kind street (x range and duration are filled by the simulator)
   CorridorOptions corridor;  ///< kind corridor
   TunnelOptions tunnel;      ///< kind tunnel
@@ -95,34 +96,36 @@ struct ScenarioConfig {
   // LiDAR (Aeva Aeries II-like non-rotating raster)
   int points_per_frame = 60000;
   int lines = 64;
-  double frame_rate = 10.0;      ///< [Hz]
+  double frame_rate = 10.0;  ///< [Hz]
   double hfov_deg = 120.0;
   double vfov_deg = 30.0;
   LineOrder line_order = LineOrder::TopDown;
   LineDirection line_direction = LineDirection::Alternating;
-  double min_range = 0.5;        ///< [m]
-  double max_range = 150.0;      ///< [m]
-  double range_sigma = 0.02;     ///< [m]
-  double doppler_sigma = 0.03;   ///< [m/s]
-  double outlier_ratio = 0.01;   ///< fraction of points with a gross Doppler error
+  double min_range = 0.5;       ///< [m]
+  double max_range = 150.0;     ///< [m]
+  double range_sigma = 0.02;    ///< [m]
+  double doppler_sigma = 0.03;  ///< [m/s]
+  double outlier_ratio = 0.01;  ///< fraction of points with a gross Doppler error
   // IMU
-  double imu_rate = 200.0;       ///< [Hz]
-  double gyro_sigma = 0.002;     ///< [rad/s] white noise per sample, nominal (datasheet) value
-  double accel_sigma = 0.02;     ///< [m/s^2] white noise per sample, nominal (datasheet) value
+  double imu_rate = 200.0;    ///< [Hz]
+  double gyro_sigma = 0.002;  ///< [rad/s] white noise per sample, nominal (datasheet) value
+  double accel_sigma = 0.02;  ///< [m/s^2] white noise per sample, nominal (datasheet) value
   Vec3 gyro_sigma_scale = Vec3::Ones();   ///< [-] this unit's per-axis sigma / gyro_sigma
   Vec3 accel_sigma_scale = Vec3::Ones();  ///< [-] this unit's per-axis sigma / accel_sigma
-  bool random_biases = true;     ///< draw b_g, b_a from the preset ranges with the seed
-  Vec3 b_g = Vec3::Zero();       ///< [rad/s] used when random_biases is false
-  Vec3 b_a = Vec3::Zero();       ///< [m/s^2] used when random_biases is false
+  bool random_biases = true;              ///< draw b_g, b_a from the preset ranges with the seed
+  Vec3 b_g = Vec3::Zero();                ///< [rad/s] used when random_biases is false
+  Vec3 b_a = Vec3::Zero();                ///< [m/s^2] used when random_biases is false
   // True calibration: R_bl = Rz(yaw) Ry(pitch) Rx(roll), each angle plus a uniform draw in
-  // +-lidar_rpy_jitter_deg, and p_bl = lidar_position plus a uniform draw in +-lidar_position_jitter
-  // per axis (the draws use the seed; presets perturb their nominal extrinsics this way).
-  Vec3 lidar_rpy_deg = Vec3::Zero();       ///< [deg]
-  Vec3 lidar_position = Vec3::Zero();      ///< [m] p_bl
-  double lidar_rpy_jitter_deg = 0;         ///< [deg]
-  double lidar_position_jitter = 0;        ///< [m]
+  // +-lidar_rpy_jitter_deg, and p_bl = lidar_position plus a uniform draw in
+  // +-lidar_position_jitter per axis (the draws use the seed; presets perturb their nominal
+  // extrinsics this way).
+  Vec3 lidar_rpy_deg = Vec3::Zero();   ///< [deg]
+  Vec3 lidar_position = Vec3::Zero();  ///< [m] p_bl
+  double lidar_rpy_jitter_deg = 0;     ///< [deg]
+  double lidar_position_jitter = 0;    ///< [m]
   // What a user declares to the estimator, wrong by these (undeclared) amounts:
-  // R_bl,declared = R_bl Exp(declared_rotation_error_deg), p_bl,declared = p_bl + declared_position_error.
+  // R_bl,declared = R_bl Exp(declared_rotation_error_deg), p_bl,declared = p_bl +
+  // declared_position_error.
   Vec3 declared_rotation_error_deg = Vec3::Zero();  ///< [deg] rotation vector
   Vec3 declared_position_error = Vec3::Zero();      ///< [m]
   /// [s] LiDAR clock minus IMU clock: every LiDAR stamp in the recording is the true (IMU-clock)

@@ -61,7 +61,8 @@ ScenarioConfig scenarioFromKeys(const ScenarioKeyValues& section, const Scenario
 
 /// The complete [scenario] section of a config: every key that applies to it, preceded by the
 /// comment lines (written as "; line").
-std::string scenarioIni(const ScenarioConfig& config, const std::vector<std::string>& comments = {});
+std::string scenarioIni(const ScenarioConfig& config,
+                        const std::vector<std::string>& comments = {});
 
 /// Writes scenarioIni() to path atomically; throws std::runtime_error on I/O failure.
 void writeScenarioIni(const std::string& path, const ScenarioConfig& config,

@@ -1,6 +1,7 @@
 // Builders of the scene kinds. Path frame: z up, ground at z = 0, streets, corridors, tunnels and
-// parking aisles run along +x and are centred on y = 0. Every builder is deterministic given its rng
-// state. x_min, x_max (and duration) are the stretch the platform covers; the simulator fills them.
+// parking aisles run along +x and are centred on y = 0. Every builder is deterministic given its
+// rng state. x_min, x_max (and duration) are the stretch the platform covers; the simulator fills
+// them.
 #pragma once
 
 #include <freeinit/sim/scene.h>
@@ -65,13 +66,13 @@ Scene makeOpenScene(const OpenOptions& opt, std::mt19937_64& rng);
 /// driving in the parallel aisles and people walking along the parked cars at
 /// |y| = aisle_half_width - 0.6.
 struct ParkingOptions {
-  double x_min = 0;              ///< [m]
-  double x_max = 30;             ///< [m]
-  double duration = 5;           ///< [s]
-  double aisle_half_width = 3.5; ///< [m] free half width of the aisle the platform uses
-  double occupancy = 0.7;        ///< share of occupied bays, in [0, 1]
-  int pedestrians = 2;           ///< people walking along the aisle
-  int moving_cars = 1;           ///< cars driving in the parallel aisles
+  double x_min = 0;               ///< [m]
+  double x_max = 30;              ///< [m]
+  double duration = 5;            ///< [s]
+  double aisle_half_width = 3.5;  ///< [m] free half width of the aisle the platform uses
+  double occupancy = 0.7;         ///< share of occupied bays, in [0, 1]
+  int pedestrians = 2;            ///< people walking along the aisle
+  int moving_cars = 1;            ///< cars driving in the parallel aisles
 };
 Scene makeParkingScene(const ParkingOptions& opt, std::mt19937_64& rng);
 
