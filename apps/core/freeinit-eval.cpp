@@ -222,7 +222,7 @@ freeinit::FreeInitConfig configFor(const Options& o, const sim::Recording& rec, 
   if (o.stride > 0) cfg.velocimeter.point_stride = o.stride;
   if (o.window > 0) cfg.window.imu_samples = o.window;
   if (o.passes >= 0) cfg.window.refinement_passes = o.passes;
-  if (o.seed_samples >= 0) cfg.window.seed_imu_samples = o.seed_samples;
+  if (o.seed_samples >= 0) cfg.window.seed_duration = o.seed_samples / sc.imu_rate;
   if (o.tau >= 0) cfg.gravity.velocity_error_correlation_time = o.tau;
   if (o.no_db) cfg.gravity.estimate_gyro_bias = false;
   if (o.gyro_prior > 0) {

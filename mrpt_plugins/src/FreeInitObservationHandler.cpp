@@ -12,8 +12,7 @@ namespace freeinit::mrpt_glue {
 FreeInitObservationHandler::FreeInitObservationHandler(const AppConfig& config) : config_(config) {
   config_.core.validate();
   extrinsics_known_ = !config_.extrinsics.from_sensor_pose;
-  imu_check_samples_ = std::max<std::size_t>(
-      2, std::min(kLiveImuCheckSamples, static_cast<std::size_t>(config_.core.window.imu_samples)));
+  imu_check_samples_ = std::max<std::size_t>(2, kLiveImuCheckSamples);
 }
 
 void FreeInitObservationHandler::checkImu() {

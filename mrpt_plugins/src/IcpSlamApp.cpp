@@ -221,7 +221,7 @@ int IcpSlamApp::run(std::ostream& log) {
     throw std::invalid_argument(params.icp_ini +
                                 ": needs the [MappingApplication] and [ICP] "
                                 "sections of the icp-slam app");
-  const ScanSliceParams slice = loadScanSliceParams(ini, params.icp_ini);
+  const ScanSliceParams slice = loadScanSliceParams(params.icp_ini);
   AppConfig config = loadAppConfig(params.freeinit_ini);
   log << "Reading " << params.rawlog << "\n";
   const auto records = readRawlog(params.rawlog);

@@ -38,7 +38,7 @@ Messages fromRawlog(const StreamAppParams& p) {
   cfg.input.lidar_label = p.lidar_label;
   cfg.input.imu_accel_in_g = p.imu_accel_in_g;
   cfg.input.min_imu_rate = 0;       // the receiver judges the rate
-  cfg.core.window.imu_samples = 0;  // any length can be streamed
+  cfg.core.window.duration = 0;     // any length can be streamed
   const std::vector<RawlogRecord> records = readRawlog(p.rawlog);
   const ValidatedInput in = validateInput(records, cfg, p.rawlog);
   const Extrinsics extrinsics = in.sensor_pose_extrinsics.value_or(Extrinsics{});

@@ -165,15 +165,21 @@ ValidatedInput validateInput(const std::vector<RawlogRecord>& records, const App
   if (const auto problem = accelUnitProblem(in.imu, config.input.imu_accel_in_g))
     throw InputError(at_first_imu + *problem);
 
-  // The window needs imu_samples IMU samples once the LiDAR has started.
+  // The window (from the first IMU sample once the LiDAR has started) must be covered.
   const double t_lidar = in.frames.front().stamp;
-  const auto after = std::count_if(in.imu.begin(), in.imu.end(),
-                                   [&](const ImuSample& s) { return s.t >= t_lidar; });
-  if (after < config.core.window.imu_samples)
-    throw InputError(file + ": recording shorter than the window: " + std::to_string(after) +
-                     " IMU samples after the first point cloud (record " +
-                     std::to_string(first_cloud_record) +
-                     "), [window] imu_samples = " + std::to_string(config.core.window.imu_samples));
+  const auto first =
+      static_cast<std::size_t>(std::find_if(in.imu.begin(), in.imu.end(),
+                                            [&](const ImuSample& s) { return s.t >= t_lidar; }) -
+                               in.imu.begin());
+  const double window = config.core.window.duration;
+  if (window > 0 && !windowLastSample(in.imu, first, window)) {
+    std::ostringstream os;
+    os << file << ": recording shorter than the window: "
+       << (first < in.imu.size() ? in.imu.back().t - in.imu[first].t : 0.0)
+       << " s of IMU samples after the first point cloud (record " << first_cloud_record
+       << "), [window] duration = " << window << " s";
+    throw InputError(os.str());
+  }
   return in;
 }
 

@@ -1,5 +1,5 @@
 // Unit tests of the MRPT glue: the Doppler map's serialization, conversions, the validated rawlog
-// reader (truncation, unregistered classes), input validation and INI loading.
+// reader (truncation, unregistered classes) and input validation (INI loading: tests/config).
 #include <freeinit/mrpt/CPointsMapDoppler.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/conversions.h>
@@ -360,48 +360,6 @@ TEST(InputValidator, RejectsEachKindOfBadInput) {
   }
 }
 
-TEST(AppConfigIni, ExtrinsicsMissingOrNotARotationAndBadKeysAreNamed) {
-  expectThrowsWith([] { loadAppConfigFromText("[window]\nimu_samples = 100\n", "a.ini"); },
-                   "a.ini: [extrinsics] R_bl: extrinsics missing");
-  expectThrowsWith(
-      [] {
-        loadAppConfigFromText("[extrinsics]\nR_bl = 1 0 0 0 1 0 0 0 2\np_bl = 0 0 0\n", "b.ini");
-      },
-      "b.ini: [extrinsics] R_bl: not a rotation matrix");
-  expectThrowsWith(
-      [] {
-        loadAppConfigFromText(
-            "[extrinsics]\nfrom_sensor_pose = true\n[velocimeter]\ndopler_sigma = 0.1\n", "c.ini");
-      },
-      "c.ini: [velocimeter] dopler_sigma: unknown key");
-  expectThrowsWith(
-      [] {
-        loadAppConfigFromText(
-            "[extrinsics]\nfrom_sensor_pose = true\n[window]\nimu_samples = ten\n", "d.ini");
-      },
-      "d.ini: [window] imu_samples: 'ten' is not a number");
-  expectThrowsWith(
-      [] { loadAppConfigFromText("[extrinsics]\nfrom_sensor_pose = maybe\n", "e.ini"); },
-      "[extrinsics] from_sensor_pose: 'maybe' is not a boolean");
-}
-
-TEST(AppConfigIni, RollPitchYawAndEffectiveConfigRoundTrip) {
-  const AppConfig c = loadAppConfigFromText(
-      "[extrinsics]\nroll_deg = 2\npitch_deg = -3\nyaw_deg = 90\np_bl = 0.1 0.2 0.3\n"
-      "[velocimeter]\ndoppler_sigma = 0.05 ; [m/s]\n[input]\nimu_label = xsens\n",
-      "f.ini");
-  EXPECT_DOUBLE_EQ(c.core.velocimeter.doppler_sigma, 0.05);
-  EXPECT_EQ(c.input.imu_label, "xsens");
-  EXPECT_NEAR(c.core.extrinsics.R_bl(1, 0), std::cos(3 * M_PI / 180), 1e-12);  // yaw 90
-  std::ostringstream dump;
-  dumpAppConfig(c, dump);
-  const AppConfig d = loadAppConfigFromText(dump.str(), "dump");
-  EXPECT_LT((d.core.extrinsics.R_bl - c.core.extrinsics.R_bl).norm(), 1e-9);
-  EXPECT_LT((d.core.extrinsics.p_bl - c.core.extrinsics.p_bl).norm(), 1e-12);
-  EXPECT_DOUBLE_EQ(d.core.velocimeter.doppler_sigma, 0.05);
-  EXPECT_EQ(d.input.imu_label, "xsens");
-}
-
 TEST(Writers, InitialStateIniFollowsTheContract) {
   InitialState s;
   s.status = InitStatus::Ok;
@@ -437,49 +395,4 @@ TEST(Writers, AFailedWriteLeavesNoFile) {
                std::runtime_error);
   EXPECT_FALSE(fs::exists(p));
   EXPECT_FALSE(fs::exists(p + ".tmp"));
-}
-
-// ini/freeinit.ini lists every estimator key with its default commented out (";key = value").
-// Those values must be the defaults the code uses, or the documentation lies.
-TEST(AppConfigIni, DocumentedDefaultsMatchTheCode) {
-  std::ostringstream dump;
-  freeinit::mrpt_glue::dumpAppConfig(freeinit::mrpt_glue::AppConfig{}, dump);
-  const auto parse = [](std::istream& in, bool commented) {
-    std::map<std::string, std::string> kv;  // "section.key" -> value
-    std::string line, section;
-    while (std::getline(in, line)) {
-      if (!line.empty() && line[0] == '[') section = line.substr(1, line.find(']') - 1);
-      if (commented) {
-        if (line.size() < 2 || line[0] != ';' || line.find('=') == std::string::npos) continue;
-        line = line.substr(1);
-      }
-      const auto eq = line.find('=');
-      if (eq == std::string::npos || line[0] == ';' || line[0] == '[') continue;
-      auto trim = [](std::string s) {
-        s = s.substr(0, s.find(';'));
-        const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
-        return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
-      };
-      const std::string key = trim(line.substr(0, eq));
-      if (key.find(' ') != std::string::npos) continue;  // prose comment, not a key
-      kv[section + "." + key] = trim(line.substr(eq + 1));
-    }
-    return kv;
-  };
-  std::istringstream dumped(dump.str());
-  const auto defaults = parse(dumped, false);
-  std::ifstream ini(std::string(FREEINIT_SOURCE_DIR) + "/ini/freeinit.ini");
-  ASSERT_TRUE(ini.good());
-  const auto documented = parse(ini, true);
-  std::size_t checked = 0;
-  for (const char* section : {"velocimeter", "bootstrap", "static_detector", "window", "gravity"}) {
-    for (const auto& [k, v] : defaults) {
-      if (k.rfind(std::string(section) + ".", 0) != 0) continue;
-      const auto it = documented.find(k);
-      ASSERT_NE(it, documented.end()) << k << " is not documented in ini/freeinit.ini";
-      EXPECT_EQ(it->second, v) << k;
-      ++checked;
-    }
-  }
-  EXPECT_GT(checked, 40u);
 }

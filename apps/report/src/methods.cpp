@@ -44,7 +44,9 @@ std::vector<MethodRun> runMethods(const FreeInitConfig& config, const std::vecto
     runs.back().track.push_back({v.t, v.v_b});
   if (!options.baselines) return runs;
 
-  const int window = cfg.window.imu_samples;
+  // The IMU samples of the window (more than there are when the IMU does not cover it).
+  const auto last = windowLastSample(imu, 0, cfg.window.duration);
+  const int window = static_cast<int>(last ? *last + 1 : imu.size() + 1);
   runs.push_back(timed("fast-lio2", [&] { return baselines::fastLio2(imu, window); }));
   zeroVelocityTrack(runs.back());
   runs.push_back(timed("dlio", [&] { return baselines::dlio(imu, options.dlio_duration); }));
