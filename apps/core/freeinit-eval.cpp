@@ -52,7 +52,7 @@ const char* const kUsage =
     "                       --no-baselines)\n"
     "  --points P           points per frame (preset: 60000)\n"
     "  --stride K           velocimeter point stride (configuration default)\n"
-    "  --window N           window length in IMU samples (configuration default: 100)\n"
+    "  --window S           window length [s] (configuration default: 0.5)\n"
     "  --no-baselines       Free-Init only\n"
     "  --dlio-duration S    DLIO's static calibration time (3)\n"
     "  --gyro-prior SIGMA   gyro-bias prior: the truth plus noise of this std [rad/s]\n"
@@ -74,7 +74,8 @@ struct Options {
   std::string md, csv, summary_csv, bounds_md, plots;
   report::FailureThresholds thresholds;
   double duration = -1;  // < 0: default by baselines
-  int points = 0, stride = 0, window = 0, passes = -1, seed_samples = -1;
+  int points = 0, stride = 0, passes = -1, seed_samples = -1;
+  double window = 0;
   double tau = -1, gyro_prior = 0;
   bool zero_bg = false, no_db = false, trace = false, quiet = false;
   report::MethodOptions methods;
@@ -138,7 +139,7 @@ Options parse(int argc, char** argv) {
       {"--duration", [&](int& i) { o.duration = positive(i); }},
       {"--points", [&](int& i) { o.points = integer(i, 1, 100000000); }},
       {"--stride", [&](int& i) { o.stride = integer(i, 1, 1000000); }},
-      {"--window", [&](int& i) { o.window = integer(i, 10, 1000000); }},
+      {"--window", [&](int& i) { o.window = positive(i); }},
       {"--dlio-duration", [&](int& i) { o.methods.dlio_duration = positive(i); }},
       {"--gyro-prior", [&](int& i) { o.gyro_prior = number(i, 0, 10); }},
       {"--passes", [&](int& i) { o.passes = integer(i, 0, 1000); }},
@@ -220,9 +221,9 @@ void appendf(std::string& s, const char* fmt, Args... args) {
 freeinit::FreeInitConfig configFor(const Options& o, const sim::Recording& rec, int seed) {
   freeinit::FreeInitConfig cfg;
   if (o.stride > 0) cfg.velocimeter.point_stride = o.stride;
-  if (o.window > 0) cfg.window.imu_samples = o.window;
+  if (o.window > 0) cfg.window.duration = o.window;
   if (o.passes >= 0) cfg.window.refinement_passes = o.passes;
-  if (o.seed_samples >= 0) cfg.window.seed_duration = o.seed_samples / sc.imu_rate;
+  if (o.seed_samples >= 0) cfg.window.seed_duration = o.seed_samples / rec.config.imu_rate;
   if (o.tau >= 0) cfg.gravity.velocity_error_correlation_time = o.tau;
   if (o.no_db) cfg.gravity.estimate_gyro_bias = false;
   if (o.gyro_prior > 0) {
