@@ -1,6 +1,6 @@
 // The only translation unit that includes mrpt/hwdrivers.
+#include <freeinit/atomic_file.h>
 #include <freeinit/mrpt/CDopplerLidarImuUdp.h>
-#include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/register.h>
 #include <mrpt/core/initializer.h>
 
