@@ -195,6 +195,17 @@ int FreeInitApp::run(std::ostream& log) {
     log << "  start at " << input::formatStamp(from) << " (" << from - *first
         << " s after the first record)\n";
 
+  if (multi && fs::is_directory(params.out_dir)) {
+    // Staging folders an interrupted run left behind.
+    for (const auto& e : fs::directory_iterator(params.out_dir)) {
+      const std::string n = e.path().filename().string();
+      const bool ours = n.rfind(".start_", 0) == 0 &&
+                        (n.size() > 4 && (n.compare(n.size() - 4, 4, ".tmp") == 0 ||
+                                          n.compare(n.size() - 4, 4, ".old") == 0));
+      if (e.is_directory() && ours) fs::remove_all(e.path());
+    }
+  }
+
   std::vector<TruthSample> truth;
   const std::string truth_file = truthPathFor(params.rawlog);
   if (fs::is_regular_file(truth_file)) truth = readTruthCsv(truth_file);
@@ -255,9 +266,14 @@ int FreeInitApp::run(std::ostream& log) {
     if (s.failed()) {
       row.status = "input_error";
       for (const auto& e : s.errors()) row.message += (row.message.empty() ? "" : "; ") + e;
-    } else if (!s.ready()) {
+    } else if (!s.ready() || (at_end && s.result().state.status == InitStatus::NotEnoughData)) {
+      // The file ends before the window closes: listed, no outputs.
       row.status = toString(InitStatus::NotEnoughData);
-      row.message = s.endOfDataReason();
+      std::ostringstream why;
+      why << std::setprecision(3) << "the recording ends "
+          << s.lastTime().value_or(slot.start) - slot.start
+          << " s after this start, before a window closes";
+      row.message = why.str();
     } else {
       const InitResult& r = s.result();
       row.state = r.state;
@@ -360,6 +376,12 @@ int FreeInitApp::run(std::ostream& log) {
   }
   for (auto& s : active) finalize(s, !read_error);
   active.clear();
+  if (!multi && plan.peek())
+    throw InputError(params.rawlog + ": no record at or after the start " +
+                     input::formatStamp(*plan.peek()) +
+                     (first ? " (" + std::to_string(*plan.peek() - *first) +
+                                  " s after the first record)"
+                            : std::string()));
   if (multi) {
     // Starts the file does not reach.
     std::size_t k = plan.index();

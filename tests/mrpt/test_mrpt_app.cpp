@@ -306,6 +306,15 @@ TEST(FreeInitAppStart, EqualsTheFileCutAtTheStart) {
         << e.what();
   }
   EXPECT_FALSE(fs::exists(past.params.out_dir));
+  past.params.start = 5.0;  // after the last record
+  try {
+    past.run(log);
+    FAIL() << "a start after the end initialized";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no record at or after the start"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(past.params.out_dir));
 }
 
 namespace {
