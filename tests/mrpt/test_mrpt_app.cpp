@@ -30,8 +30,15 @@ namespace fs = std::filesystem;
 namespace {
 const std::string kSrc = FREEINIT_SOURCE_DIR;
 
+// Each test's own folder: ctest runs the tests of this file in parallel processes.
+fs::path testDir() {
+  const auto* t = ::testing::UnitTest::GetInstance()->current_test_info();
+  return fs::temp_directory_path() / "freeinit_mrpt_app_tests" /
+         (std::string(t->test_suite_name()) + "." + t->name());
+}
+
 std::string outDir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / "freeinit_mrpt_app_tests" / name;
+  const auto d = testDir() / name;
   fs::remove_all(d);
   return d.string();
 }
@@ -54,7 +61,7 @@ std::string readText(const std::string& path) {
 }
 
 std::string tmpFile(const std::string& name) {
-  const auto d = fs::temp_directory_path() / "freeinit_mrpt_app_tests" / "files";
+  const auto d = testDir() / "files";
   fs::create_directories(d);
   return (d / name).string();
 }
@@ -183,9 +190,7 @@ TEST(FreeInitAppEndToEnd, StaticSampleStat01) {
 // A file cut inside the window (the first third of the sample holds it).
 TEST(FreeInitAppEndToEnd, BadInputFailsBeforeAnyOutputIsWritten) {
   const std::string out = outDir("bad");
-  const std::string bad =
-      (fs::temp_directory_path() / "freeinit_mrpt_app_tests" / "cut.rawlog").string();
-  fs::create_directories(fs::path(bad).parent_path());
+  const std::string bad = tmpFile("cut.rawlog");
   fs::copy_file(kSrc + "/rawlogs/dyna_01.rawlog", bad, fs::copy_options::overwrite_existing);
   fs::resize_file(bad, fs::file_size(bad) / 5);
   auto app = makeApp(bad, out);
