@@ -41,7 +41,7 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
   glue::ValidatedInput in;
   {
     const std::lock_guard<std::mutex> lock(mrpt_mutex);
-    in = glue::validateInput(glue::readRawlog(rawlog), config, rawlog);
+    in = glue::readRecording(rawlog, config);
   }
   const freeinit::Extrinsics extrinsics =
       config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics ? *in.sensor_pose_extrinsics

@@ -1,5 +1,6 @@
 #include <freeinit/free_init.h>
 #include <freeinit/gravity_estimator.h>
+#include <freeinit/input_checks.h>
 #include <freeinit/pose_integrator.h>
 #include <freeinit/rotation.h>
 #include <freeinit/velocimeter.h>
@@ -44,6 +45,8 @@ struct FreeInit::Impl {
   };
   std::deque<LidarFrame> owned_frames;  ///< frames handed to addFrame (stable addresses)
   std::vector<FrameRef> frames;         ///< all frames in time order
+  /// Frames shared with the caller (addFrame(shared_ptr)).
+  std::vector<std::shared_ptr<const LidarFrame>> shared_frames;
   bool finished = false;
   Phase phase = Phase::WaitStart;
   InitResult result;
@@ -100,32 +103,18 @@ struct FreeInit::Impl {
     return -std::numeric_limits<double>::infinity();
   }
 
-  /// Throws std::invalid_argument unless f can follow the buffered frames.
+  /// Throws std::invalid_argument unless f can follow the buffered frames (input_checks.h).
   void checkFrame(const LidarFrame& f) const {
-    if (!std::isfinite(f.stamp)) throw std::invalid_argument("LiDAR frame stamp is not finite");
-    if (!frames.empty() && f.stamp <= frames.back().stamp)
-      throw std::invalid_argument(
-          "LiDAR frame stamp does not increase: " + std::to_string(f.stamp) + " after " +
-          std::to_string(frames.back().stamp));
-    for (std::size_t i = 0; i < f.points.size(); ++i) {
-      if (!std::isfinite(f.points[i].time_offset))
-        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) + ": point " +
-                                    std::to_string(i) + " has a non-finite time offset");
-      if (i > 0 && f.points[i].time_offset < f.points[i - 1].time_offset)
-        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
-                                    ": points are not sorted by time (point " + std::to_string(i) +
-                                    ")");
-    }
-    // Points are processed in time order across frames: a frame may not reach back into the
-    // previous one.
-    for (std::size_t k = frames.size(); k-- > 0 && !f.points.empty();) {
+    std::optional<double> previous_stamp, previous_end;
+    if (!frames.empty()) previous_stamp = frames.back().stamp;
+    for (std::size_t k = frames.size(); k-- > 0;) {
       if (frames[k].points.empty()) continue;
-      const double prev_last = frames[k].stamp + frames[k].points.back().time_offset;
-      if (f.stamp + f.points.front().time_offset < prev_last)
-        throw std::invalid_argument("LiDAR frame at " + std::to_string(f.stamp) +
-                                    " overlaps the previous frame in time");
+      previous_end = frames[k].stamp + frames[k].points.back().time_offset;
       break;
     }
+    if (const auto problem = input::frameOrderProblem(f, previous_stamp, previous_end))
+      throw std::invalid_argument("LiDAR frame at " + input::formatStamp(f.stamp) + ": " +
+                                  *problem);
   }
   /// Buffers a checked frame that outlives this object (FreeInit::run), without copying it.
   void addBorrowedFrame(const LidarFrame& f) {
@@ -554,11 +543,9 @@ FreeInit::FreeInit(FreeInit&&) noexcept = default;
 FreeInit& FreeInit::operator=(FreeInit&&) noexcept = default;
 
 void FreeInit::addImu(const ImuSample& s) {
-  if (!s.gyro.allFinite() || !s.accel.allFinite() || !std::isfinite(s.t))
-    throw std::invalid_argument("IMU sample at t=" + std::to_string(s.t) + " is not finite");
-  if (!impl_->imu.empty() && s.t <= impl_->imu.back().t)
-    throw std::invalid_argument("IMU time does not increase: " + std::to_string(s.t) + " after " +
-                                std::to_string(impl_->imu.back().t));
+  if (const auto problem =
+          input::imuSampleProblem(s, impl_->imu.empty() ? nullptr : &impl_->imu.back()))
+    throw std::invalid_argument("IMU sample at " + input::formatStamp(s.t) + ": " + *problem);
   if (impl_->phase == Impl::Phase::Done) return;  // the result is final: nothing more to keep
   impl_->imu.push_back(s);
   impl_->pump();
@@ -571,6 +558,15 @@ void FreeInit::addFrame(LidarFrame&& f) {
   if (impl_->phase == Impl::Phase::Done) return;
   const LidarFrame& kept = impl_->owned_frames.emplace_back(std::move(f));
   impl_->frames.push_back({kept.stamp, kept.points});
+  impl_->pump();
+}
+
+void FreeInit::addFrame(std::shared_ptr<const LidarFrame> f) {
+  if (!f) throw std::invalid_argument("LiDAR frame: null");
+  impl_->checkFrame(*f);
+  if (impl_->phase == Impl::Phase::Done) return;
+  impl_->frames.push_back({f->stamp, f->points});
+  impl_->shared_frames.push_back(std::move(f));
   impl_->pump();
 }
 

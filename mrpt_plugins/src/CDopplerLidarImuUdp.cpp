@@ -1,7 +1,7 @@
 // The only translation unit that includes mrpt/hwdrivers.
+#include <freeinit/atomic_file.h>
 #include <freeinit/config_section.h>
 #include <freeinit/mrpt/CDopplerLidarImuUdp.h>
-#include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/register.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/core/initializer.h>
