@@ -1,29 +1,56 @@
 #!/usr/bin/env bash
 # Re-measures the README's Results: runs freeinit-eval over every preset x 3 seeds (the exact
-# command the README gives), writes gui_snapshots/eval_presets.{md,csv} and the figures, and puts
-# the new summary table into README.md between its results-table markers.
+# command the README gives) and writes
+#   gui_snapshots/eval_presets.{md,csv}  the full report and every run
+#   gui_snapshots/eval_summary.csv       one row per method: statuses, error / bound, NEES
+#   gui_snapshots/results_table.md       the summary table in the paper's layout
+#   gui_snapshots/results_bounds.md      error / Cramer-Rao bound, NEES, statuses, the bound per
+#                                        preset, confident wrong answers
+#   gui_snapshots/*.png                  the figures
+# then copies each results_*.md into README.md between its markers (results-table,
+# results-bounds: "<!-- NAME:begin -->" ... "<!-- NAME:end -->"), for the markers README.md has.
 #
-#   ./scripts/update_results.sh
+#   ./scripts/update_results.sh [--no-readme]   (--no-readme: write the files only)
 #
 # Environment: BUILD_DIR (default build; must hold a Release build of freeinit-eval).
 set -euo pipefail
 cd "$(dirname "$0")/.."
+readme=1
+case "${1:-}" in
+  "") ;;
+  --no-readme) readme=0 ;;
+  *) echo "[results] error: unknown option $1 (usage: $0 [--no-readme])" >&2; exit 2 ;;
+esac
 eval_app=${BUILD_DIR:-build}/apps/freeinit-eval
 [ -x "$eval_app" ] || { echo "[results] error: $eval_app not built" >&2; exit 1; }
+out=gui_snapshots
 
-taskset -c 0 "$eval_app" --jobs 1 --seeds 3 --md gui_snapshots/eval_presets.md \
-  --csv gui_snapshots/eval_presets.csv --plots gui_snapshots > /dev/null
+taskset -c 0 "$eval_app" --jobs 1 --seeds 3 --md $out/eval_presets.md --csv $out/eval_presets.csv \
+  --summary-csv $out/eval_summary.csv --bounds-md $out/results_bounds.md --plots $out > /dev/null
 
-# The summary is the first table of the report; the README holds it between the markers.
-table=$(awk '/^\| metric \| method \|/ {on = 1} on && !/^\|/ {exit} on' gui_snapshots/eval_presets.md)
-[ -n "$table" ] || { echo "[results] error: no summary table in eval_presets.md" >&2; exit 1; }
-grep -q '^<!-- results-table:begin -->$' README.md && grep -q '^<!-- results-table:end -->$' README.md \
-  || { echo "[results] error: README.md lacks the results-table markers" >&2; exit 1; }
-tmp=README.md.tmp
-awk -v table="$table" '
-  /^<!-- results-table:begin -->$/ { print; print table; skip = 1; next }
-  /^<!-- results-table:end -->$/ { skip = 0 }
-  !skip' README.md > "$tmp"
-mv "$tmp" README.md
-echo "[results] README.md table, gui_snapshots/eval_presets.{md,csv} and the figures updated;" \
-  "check the prose around the table against the new numbers"
+# The paper-layout summary is the first table of the report.
+awk '/^\| metric \| method \|/ {on = 1} on && !/^\|/ {exit} on' $out/eval_presets.md \
+  > $out/results_table.md
+for f in results_table results_bounds; do
+  [ -s $out/$f.md ] || { echo "[results] error: $out/$f.md is empty" >&2; exit 1; }
+done
+echo "[results] wrote $out/eval_presets.{md,csv}, $out/eval_summary.csv," \
+  "$out/results_{table,bounds}.md and the figures"
+[ "$readme" -eq 1 ] || exit 0
+
+# Copy each table file into README.md between its markers.
+for name in results-table results-bounds; do
+  file=$out/${name/-/_}.md
+  if ! grep -q "^<!-- $name:begin -->$" README.md || ! grep -q "^<!-- $name:end -->$" README.md; then
+    echo "[results] README.md has no <!-- $name:begin/end --> markers: $file not copied"
+    continue
+  fi
+  tmp=README.md.tmp
+  awk -v file="$file" -v name="$name" '
+    $0 == "<!-- " name ":begin -->" { print; while ((getline line < file) > 0) print line; skip = 1; next }
+    $0 == "<!-- " name ":end -->" { skip = 0 }
+    !skip' README.md > "$tmp"
+  mv "$tmp" README.md
+  echo "[results] README.md: $name updated from $file"
+done
+echo "[results] check the prose around the tables against the new numbers"

@@ -1,5 +1,6 @@
 // The evaluation report: CSV written and read back, failure marking, the paper-layout summary,
 // the displacement error, the job pool, and the PNG writer.
+#include <freeinit/eval/state_errors.h>
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
@@ -13,6 +14,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <stdexcept>
 #include <string>
@@ -39,6 +41,14 @@ std::vector<EvalRow> sampleRows() {
   ok.accel_bias_err = 0.039;
   ok.position_err = 0.004;
   ok.time_ms = 21.5;
+  ok.crb_velocity = 0.002;
+  ok.crb_gravity_deg = 0.14;
+  ok.crb_gyro_bias = 0.0096;
+  ok.crb_accel_bias = std::numeric_limits<double>::infinity();  // unobservable
+  ok.nees_velocity = 2.5;
+  ok.nees_tilt = 14.0;  // above the 2-dof 99.9 % quantile
+  ok.nees_gyro_bias = 0.7;
+  ok.nees_accel_bias = 1.1;
   EvalRow fast = ok;
   fast.method = "fast-lio2";
   fast.velocity_err = 1.22;  // over the 0.2 m/s threshold
@@ -78,7 +88,7 @@ TEST(EvalTable, CsvReadsBackWhatWasWritten) {
   const auto back = readEvalCsv(path);
   ASSERT_EQ(back.size(), rows.size());
   auto same = [](double a, double b) {  // written with 10 significant digits
-    return (std::isnan(a) && std::isnan(b)) || std::abs(a - b) <= 1e-9 * std::abs(a);
+    return (std::isnan(a) && std::isnan(b)) || a == b || std::abs(a - b) <= 1e-9 * std::abs(a);
   };
   for (std::size_t i = 0; i < rows.size(); ++i) {
     SCOPED_TRACE(i);
@@ -90,7 +100,10 @@ TEST(EvalTable, CsvReadsBackWhatWasWritten) {
     EXPECT_EQ(back[i].failure, rows[i].failure);
     for (auto f : {&EvalRow::speed, &EvalRow::velocity_err, &EvalRow::gravity_err_deg,
                    &EvalRow::gravity_bound_deg, &EvalRow::gyro_bias_err, &EvalRow::accel_bias_err,
-                   &EvalRow::position_err, &EvalRow::time_ms})
+                   &EvalRow::position_err, &EvalRow::time_ms, &EvalRow::crb_velocity,
+                   &EvalRow::crb_gravity_deg, &EvalRow::crb_gyro_bias, &EvalRow::crb_accel_bias,
+                   &EvalRow::nees_velocity, &EvalRow::nees_tilt, &EvalRow::nees_gyro_bias,
+                   &EvalRow::nees_accel_bias})
       EXPECT_TRUE(same(back[i].*f, rows[i].*f)) << back[i].*f << " vs " << rows[i].*f;
   }
   std::filesystem::remove(path);
@@ -110,8 +123,16 @@ TEST(EvalTable, BadCsvNamesFileAndLine) {
           << e.what();
     }
   };
-  expectError("dyna_02,1,free-init,ok,abc,,,,,,,,0,", "not a number");
-  expectError("dyna_02,2.7,free-init,ok,,,,,,,,,0,", "seed");  // was truncated to 2
+  // A row of the 27 columns: source, seed, method, status, 20 numbers, confident_wrong, failed,
+  // failure.
+  auto line = [](const std::string& seed, const std::string& first_number) {
+    std::string l = "dyna_02," + seed + ",free-init,ok," + first_number;
+    for (int i = 0; i < 19; ++i) l += ",";
+    return l + ",,0,";
+  };
+  expectError(line("1", "abc"), "not a number");
+  expectError(line("2.7", ""), "seed");  // was truncated to 2
+  expectError("dyna_02,1,free-init,ok,,,,,,,,,0,", "14 fields, expected 27");
   std::filesystem::remove(path);
   EXPECT_THROW(readEvalCsv(path), std::runtime_error);  // missing file
 }
@@ -132,21 +153,119 @@ TEST(EvalTable, SummaryHasThePaperLayoutAndMarksFailures) {
   EXPECT_NE(md.find("| failed runs | free-init | 1/2 |"), std::string::npos) << md;
 }
 
+TEST(EvalSummary, QuantilesInterpolateBetweenOrderStatistics) {
+  EXPECT_DOUBLE_EQ(quantile({3, 1, 2}, 0.5), 2);
+  EXPECT_DOUBLE_EQ(quantile({4, 1, 3, 2}, 0.5), 2.5);
+  EXPECT_DOUBLE_EQ(quantile({0, 10}, 0.95), 9.5);
+  EXPECT_DOUBLE_EQ(quantile({7}, 0.95), 7);
+  EXPECT_TRUE(std::isnan(quantile({}, 0.5)));
+}
+
+/// n ok runs of one method with err/bound = 1..n on every quantity, NEES 1..n.
+std::vector<EvalRow> ratioRows(int n) {
+  std::vector<EvalRow> rows;
+  for (int i = 1; i <= n; ++i) {
+    EvalRow r;
+    r.source = "p" + std::to_string(i % 3);
+    r.seed = i;
+    r.method = "m";
+    r.velocity_err = 0.001 * i;
+    r.crb_velocity = 0.001;
+    r.gravity_err_deg = 0.1 * i;
+    r.crb_gravity_deg = 0.1;
+    r.gyro_bias_err = 0.0005 * i;
+    r.crb_gyro_bias = 0.0005;
+    r.accel_bias_err = 0.02 * i;
+    r.crb_accel_bias = 0.02;
+    r.nees_velocity = r.nees_tilt = r.nees_gyro_bias = r.nees_accel_bias = i;
+    rows.push_back(r);
+  }
+  return rows;
+}
+
+TEST(EvalSummary, CountsStatusesRatiosNeesAndConfidentWrongAnswers) {
+  std::vector<EvalRow> rows = ratioRows(20);
+  EvalRow failed;
+  failed.method = "m";
+  failed.status = "ambiguous_motion";
+  rows.push_back(failed);
+  failed.status = "something_new";
+  rows.push_back(failed);
+  const std::vector<EvalRow> all = rows;
+  const auto s = summarize(rows);
+  ASSERT_EQ(s.size(), 1u);
+  const MethodSummary& m = s[0];
+  EXPECT_EQ(m.runs, 22);
+  const auto& names = statusNames();
+  ASSERT_EQ(names.size(), 7u);
+  EXPECT_EQ(m.status_counts[0], 20);  // ok
+  EXPECT_EQ(m.status_counts[5], 1);   // ambiguous_motion
+  EXPECT_EQ(m.status_counts[7], 1);   // any other status
+  EXPECT_EQ(m.with_bound, 20);
+  for (int q = 0; q < 4; ++q) {
+    EXPECT_NEAR(m.ratio_median[q], 10.5, 1e-9);
+    EXPECT_NEAR(m.ratio_p95[q], 19.05, 1e-9);
+  }
+  // NEES 1..20: above 16.27 (3 dof): 17..20; above 13.82 (2 dof): 14..20.
+  EXPECT_EQ(m.nees_above[0], 4);
+  EXPECT_EQ(m.nees_above[1], 7);
+  EXPECT_EQ(m.with_nees, 20);
+  // More than 3x on some quantity and above its floor (0.02 m/s, 0.2 deg, 0.001 rad/s,
+  // 0.03 m/s^2): gravity from ratio 4 on (0.4 deg), so runs 4..20.
+  EXPECT_EQ(m.confident_wrong, 17);
+  EXPECT_EQ(rows[2].confidentlyWrong(), "");  // ratio 3: not more than 3x
+  EXPECT_EQ(rows[3].confidentlyWrong(), "gravity,b_g,b_a");
+  EXPECT_EQ(rows[19].confidentlyWrong(), "gravity,b_g,b_a");  // velocity 0.02: not above
+  rows[19].velocity_err = 0.021;
+  EXPECT_EQ(rows[19].confidentlyWrong(), "velocity,gravity,b_g,b_a");
+  rows[19].status = "inconsistent_data";  // no state: never a confident wrong answer
+  EXPECT_EQ(rows[19].confidentlyWrong(), "");
+
+  const std::string md = boundsMarkdown(ratioRows(20));
+  EXPECT_NE(md.find("| m | 20 / 20 | 10.5 | 19.1 | 10.5 | 19.1 | 10.5 | 19.1 | 10.5 | 19.1 | 17 |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| m | 4/20 (20.0 %) | 7/20 (35.0 %) | 4/20 (20.0 %) | 4/20 (20.0 %) |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| m | 20 | 0 | 0 | 0 | 0 | 0 | 0 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| p1 | 4 | m | gravity,b_g,b_a | 4.00, 4.00, 4.00, 4.00 |"), std::string::npos)
+      << md;
+
+  // A capped list counts the rest.
+  const std::string capped = boundsMarkdown(ratioRows(20), {}, 2);
+  EXPECT_NE(capped.find("| p1 | 4 | m |"), std::string::npos) << capped;
+  EXPECT_EQ(capped.find("| p0 | 6 | m |"), std::string::npos) << capped;
+  EXPECT_NE(capped.find("| … | | m | 15 more | |"), std::string::npos) << capped;
+
+  const std::string path = tempPath("summary.csv");
+  writeSummaryCsv(path, all);
+  std::ifstream f(path);
+  std::string header, line;
+  std::getline(f, header);
+  std::getline(f, line);
+  EXPECT_EQ(header.rfind("method,runs,ok,not_enough_data,", 0), 0u) << header;
+  EXPECT_EQ(line.rfind("m,22,20,0,0,0,0,1,0,1,20,10.5,19.05,", 0), 0u) << line;
+  std::filesystem::remove(path);
+}
+
 TEST(DisplacementError, IsFreeOfTheWorldFrame) {
   // The truth moves 2 m along its body x axis, yawed 30 deg in its world; the estimate's world
   // has the start yaw at zero. Same body-frame displacement: zero error.
-  const Mat3 R_true = Exp(Vec3(0, 0, 30.0 * M_PI / 180.0));
-  const PoseTruth start{R_true, Vec3(5, 6, 7)};
-  const PoseTruth end{R_true, Vec3(5, 6, 7) + R_true * Vec3(2, 0, 0)};
+  const Quat q_true(Exp(Vec3(0, 0, 30.0 * M_PI / 180.0)));
+  eval::StateTruth start, end;
+  start.q_wb = end.q_wb = q_true;
+  start.p_w = Vec3(5, 6, 7);
+  end.p_w = Vec3(5, 6, 7) + q_true * Vec3(2, 0, 0);
   InitResult r;
   r.state.status = InitStatus::Ok;
   r.trajectory.push_back(PoseSample{});
   r.state.p_w = Vec3(2, 0, 0);
-  EXPECT_NEAR(displacementError(r, start, end), 0.0, 1e-12);
+  EXPECT_NEAR(eval::displacementError(r, start, end), 0.0, 1e-12);
   r.state.p_w = Vec3(2, 0.3, -0.4);
-  EXPECT_NEAR(displacementError(r, start, end), 0.5, 1e-12);
+  EXPECT_NEAR(eval::displacementError(r, start, end), 0.5, 1e-12);
   r.state.status = InitStatus::NotEnoughData;
-  EXPECT_TRUE(std::isnan(displacementError(r, start, end)));
+  EXPECT_TRUE(std::isnan(eval::displacementError(r, start, end)));
 }
 
 TEST(MakeEvalRow, ErrorsAgainstTheTruthAtTheStateTime) {
@@ -154,8 +273,8 @@ TEST(MakeEvalRow, ErrorsAgainstTheTruthAtTheStateTime) {
   // (gauge-free errors must not see it). Errors put in by hand on top of the truth.
   const Mat3 R_true = Exp(Vec3(0.1, 0, 30.0 * M_PI / 180.0));
   auto truth = [&](double t) {
-    StateTruth gt;
-    gt.R_wb = R_true;
+    eval::StateTruth gt;
+    gt.q_wb = Quat(R_true);
     gt.p_w = Vec3(5, 6, 7) + t * (R_true * Vec3(2, 0, 0));
     gt.v_w = R_true * Vec3(2, 0, 0);
     gt.b_g = Vec3(0.01, 0, 0);
@@ -193,10 +312,25 @@ TEST(MakeEvalRow, ErrorsAgainstTheTruthAtTheStateTime) {
   EXPECT_NEAR(row.gyro_bias_err, 0.002, 1e-12);
   EXPECT_NEAR(row.accel_bias_err, 0.05, 1e-12);
   EXPECT_NEAR(row.position_err, 0, 1e-9);
+  EXPECT_TRUE(std::isnan(row.crb_velocity));  // no bound given
+  EXPECT_GE(row.nees_velocity, 0);
+  // With a bound: its sqrt-traces, and the ratios.
+  eval::Bound b;
+  b.ok = true;
+  b.velocity = 0.25;
+  b.gravity_deg = 0.1;
+  b.gyro_bias = 0.001;
+  b.accel_bias = 0.01;
+  const EvalRow bounded = makeEvalRow("dyna_01", 3, m, truth, &b);
+  EXPECT_DOUBLE_EQ(bounded.crb_velocity, 0.25);
+  EXPECT_NEAR(bounded.ratioVelocity(), 2.0, 1e-12);
+  EXPECT_NEAR(bounded.ratioGyroBias(), 2.0, 1e-9);
+  EXPECT_NEAR(bounded.ratioAccelBias(), 5.0, 1e-9);
+  EXPECT_EQ(bounded.confidentlyWrong(), "b_a");  // velocity 2x, gravity 0, b_g 2x
   // No state: status only, every error NaN, the truth not asked.
   s.status = InitStatus::NotEnoughData;
-  const EvalRow none =
-      makeEvalRow("x", 0, m, [](double) -> StateTruth { throw std::runtime_error("truth asked"); });
+  const EvalRow none = makeEvalRow(
+      "x", 0, m, [](double) -> eval::StateTruth { throw std::runtime_error("truth asked"); });
   EXPECT_EQ(none.status, toString(InitStatus::NotEnoughData));
   EXPECT_TRUE(std::isnan(none.velocity_err));
   EXPECT_TRUE(std::isnan(none.gravity_bound_deg));

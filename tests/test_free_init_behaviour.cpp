@@ -65,15 +65,15 @@ TEST(FreeInitBehaviour, RecordingShorterThanTheWindowIsNotEnoughData) {
   EXPECT_FALSE(r.state.message.empty());
 }
 
-// A seed pass longer than the window covers the window: with a 40-sample window the default
-// seed length (60) and 0 (the whole window) are the same configuration and give the same result.
+// A seed pass longer than the window covers the window: with a 0.2 s window the default seed
+// length (0.3 s) and 0 (the whole window) are the same configuration and give the same result.
 TEST(FreeInitBehaviour, SeedLongerThanTheWindowIsTheWholeWindow) {
   const sim::Recording rec = simulatePreset("dyna_01", 0.5, 5000);
   FreeInitConfig cfg = configFor(rec);
-  cfg.window.imu_samples = 40;
-  ASSERT_GT(cfg.window.seed_imu_samples, cfg.window.imu_samples);
+  cfg.window.duration = 0.2;
+  ASSERT_GT(cfg.window.seed_duration, cfg.window.duration);
   const InitResult a = FreeInit::run(cfg, rec.imu, rec.frames);
-  cfg.window.seed_imu_samples = 0;
+  cfg.window.seed_duration = 0;
   const InitResult b = FreeInit::run(cfg, rec.imu, rec.frames);
   ASSERT_TRUE(a.state.ok()) << a.state.message;
   EXPECT_EQ(a.state.v_w, b.state.v_w);

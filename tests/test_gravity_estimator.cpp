@@ -97,8 +97,8 @@ double nees(const GravityEstimate& e, const Window& w) {
   return e5.dot(P5.ldlt().solve(e5));
 }
 
-GravityEstimator::Parameters paramsFor(GravityEstimator::Formulation f, const WindowConfig& c) {
-  GravityEstimator::Parameters p;
+GravityParams paramsFor(GravityEstimator::Formulation f, const WindowConfig& c) {
+  GravityParams p;
   p.formulation = f;
   p.accel_sigma = std::max(c.sigma_a, 1e-4);
   // The white velocity noise of this test is drawn independently for v_b and v_l; only the
@@ -152,7 +152,7 @@ TEST(GravityEstimator, BiasBeyondTheBoxStaysInTheBox) {
   c.sigma_a = 0.02;
   c.b_a = Vec3(0.9, -0.1, 0.05);
   const Window w = makeWindow(c);
-  GravityEstimator::Parameters p;
+  GravityParams p;
   p.accel_bias_bound = 0.5;
   const GravityEstimate e = GravityEstimator(p).estimate(w.samples, w.extrinsics);
   ASSERT_TRUE(e.ok) << e.message;

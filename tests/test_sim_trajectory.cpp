@@ -1,8 +1,8 @@
 // Trajectory derivatives against central finite differences, preset properties, determinism and
 // ground-truth export.
 #include <freeinit/sim/presets.h>
+#include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/truth_io.h>
-
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -49,6 +49,59 @@ TEST(SimTrajectory, AnalyticDerivativesMatchFiniteDifferences) {
       EXPECT_LT((s.R_wb.transpose() * s.R_wb - Mat3::Identity()).norm(), 1e-12);
     }
   }
+}
+
+// The randomized motions add a ramped start (ramp_poly), an IMU mounted at tens of degrees and a
+// heading, and vibration up to 15 Hz: h = 2^-15 s keeps the truncation error h^2/6 x (third
+// derivative) below ~4e-5 (a 3 mm, 15 Hz vibration has a fourth position derivative ~2e5 m/s^4);
+// tolerance 2e-4. The instants cover the rest, the blend into motion and the motion.
+TEST(SimTrajectory, RandomizedDerivativesMatchFiniteDifferences) {
+  const double h = 1.0 / 32768.0;
+  for (std::uint64_t seed = 1; seed <= 12; ++seed) {
+    const ScenarioConfig c = randomScenario(seed);
+    const auto traj = makeTrajectory(c);
+    const double blend_end = c.motion.still_until + std::max(c.motion.blend_duration, 0.0);
+    for (int k = 1; k < 64; ++k) {
+      const double tau = std::round(k / 64.0 * std::max(3.0, blend_end + 0.5) * 1024.0) / 1024.0;
+      const double t = c.t0 + tau;
+      const TruthState s = traj->at(t), sm = traj->at(t - h), sp = traj->at(t + h);
+      const Eigen::AngleAxisd d(sm.R_wb.transpose() * sp.R_wb);
+      EXPECT_LT((s.v_w - (sp.p_w - sm.p_w) / (2 * h)).norm(), 2e-4) << seed << " tau " << tau;
+      EXPECT_LT((s.a_w - (sp.v_w - sm.v_w) / (2 * h)).norm(), 2e-4) << seed << " tau " << tau;
+      EXPECT_LT((s.omega_b - d.angle() * d.axis() / (2 * h)).norm(), 2e-4)
+          << seed << " tau " << tau;
+      EXPECT_LT((s.alpha_b - (sp.omega_b - sm.omega_b) / (2 * h)).norm(), 2e-4)
+          << seed << " tau " << tau;
+      EXPECT_LT((s.R_wb.transpose() * s.R_wb - Mat3::Identity()).norm(), 1e-12);
+    }
+    if (c.motion.blend_duration > 0 && c.motion.still_until > 0.01) {
+      const TruthState rest = traj->at(c.t0 + 0.5 * c.motion.still_until);
+      EXPECT_EQ(rest.v_w, Vec3::Zero()) << seed;
+      EXPECT_EQ(rest.omega_b, Vec3::Zero()) << seed;
+    }
+  }
+}
+
+// A ramped start from rest reaches the cruise speed without overshooting it: the speed is
+// S(x) times the polynomial's rate (here constant), never more.
+TEST(SimTrajectory, RampedStartDoesNotOvershoot) {
+  ScenarioConfig c = preset("stat_02", 1);
+  c.motion.pos[0].waves.clear();
+  c.motion.pos[1].waves.clear();
+  c.motion.ramp_poly = true;
+  c.motion.still_until = 0.5;
+  c.motion.blend_duration = 2.0;
+  const auto traj = makeTrajectory(c);
+  double v_max = 0;
+  for (double tau = 0; tau < 4.0; tau += 0.01)
+    v_max = std::max(v_max, traj->at(c.t0 + tau).v_w.x());
+  EXPECT_NEAR(v_max, 1.5, 1e-9);              // stat_02 cruises at 1.5 m/s
+  const double t = c.t0 + 1.1;                // 30 % into the blend (S = 0.163)
+  const double x = ((t - c.t0) - 0.5) / 2.0;  // as rounded at UNIX-time magnitude
+  EXPECT_NEAR(traj->at(t).v_w.x(), 1.5 * (10 - 15 * x + 6 * x * x) * x * x * x, 1e-12);
+  // The position after the blend: the integral of S is half the blend, so the platform is
+  // 1.5 m/s x (tau - 0.5 - 1.0) along.
+  EXPECT_NEAR(traj->at(c.t0 + 3.5).p_w.x() - traj->at(c.t0).p_w.x(), 1.5 * 2.0, 1e-9);
 }
 
 TEST(SimTrajectory, EveryPresetGenerates) {

@@ -1,30 +1,37 @@
 // freeinit-eval: Free-Init and the baseline initializers (FAST-LIO2 and DLIO static means,
-// per-frame Doppler least squares) on simulated presets x seeds, against the ground truth.
-// Jobs (one per preset and seed) are independent and deterministic and run in parallel; the
+// per-frame Doppler least squares) on simulated scenarios, against the ground truth and against
+// the Cramer-Rao bound of each run (freeinit/eval).
+// What it runs is a list of cases (a scenario config and its name in the tables): today the
+// presets x seeds. Jobs (one per case) are independent and deterministic and run in parallel; the
 // tables are the same whatever --jobs (only the wall times differ).
+#include <freeinit/atomic_file.h>
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/figures.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
+#include <freeinit/report/version.h>
 #include <freeinit/sim/evaluation.h>
 #include <freeinit/sim/presets.h>
 #include <freeinit/sim/simulator.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <ostream>
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <utility>
 #include <vector>
 
 namespace {
 
 using freeinit::Vec3;
+namespace eval = freeinit::eval;
 namespace report = freeinit::report;
 namespace sim = freeinit::sim;
 
@@ -32,8 +39,12 @@ const char* const kUsage =
     "Usage: freeinit-eval [options] [preset ...]   (default: every preset)\n"
     "  --seeds N            seeds 1..N per preset (3)\n"
     "  --jobs N             parallel jobs (0: hardware concurrency, the default)\n"
-    "  --md FILE            Markdown report (paper Table I/II layout plus every run)\n"
-    "  --csv FILE           CSV, one row per preset, seed and method\n"
+    "  --md FILE            Markdown report (paper Table I/II layout, errors against the\n"
+    "                       Cramer-Rao bound, statuses, every run)\n"
+    "  --csv FILE           CSV, one row per case and method\n"
+    "  --summary-csv FILE   CSV, one row per method: statuses, error/bound quantiles, NEES\n"
+    "  --bounds-md FILE     the Markdown tables against the bound alone (at most ten\n"
+    "                       confident wrong answers listed per method)\n"
     "  --plots DIR          velocity_error_dyna.png and tunnel_velocity.png (first seed)\n"
     "  --fail-velocity V    a run fails above this velocity error [m/s] (0.2)\n"
     "  --fail-gravity D     a run fails above this gravity error [deg] (2)\n"
@@ -41,21 +52,30 @@ const char* const kUsage =
     "                       --no-baselines)\n"
     "  --points P           points per frame (preset: 60000)\n"
     "  --stride K           velocimeter point stride (configuration default)\n"
+    "  --window S           window length [s] (configuration default: 0.5)\n"
     "  --no-baselines       Free-Init only\n"
     "  --dlio-duration S    DLIO's static calibration time (3)\n"
     "  --gyro-prior SIGMA   gyro-bias prior: the truth plus noise of this std [rad/s]\n"
     "  --passes N, --seed-samples N, --tau S, --no-gyro-bias-estimate, --zero-gyro-bias:\n"
     "                       estimator variants\n"
     "  --trace              print Free-Init's velocity errors over the window\n"
-    "  -q                   no per-run lines\n";
+    "  -q                   no per-run lines\n"
+    "  -h, --help           this text;  --version: the version\n"
+    "Exit status: 0 done, 1 a run could not be made, 2 a bad option or value.\n";
+
+/// A bad command line: exit status 2, the message names the flag.
+struct UsageError : std::invalid_argument {
+  using std::invalid_argument::invalid_argument;
+};
 
 struct Options {
   int seeds = 3;
   unsigned jobs = 0;
-  std::string md, csv, plots;
+  std::string md, csv, summary_csv, bounds_md, plots;
   report::FailureThresholds thresholds;
   double duration = -1;  // < 0: default by baselines
   int points = 0, stride = 0, passes = -1, seed_samples = -1;
+  double window = 0;
   double tau = -1, gyro_prior = 0;
   bool zero_bg = false, no_db = false, trace = false, quiet = false;
   report::MethodOptions methods;
@@ -68,52 +88,71 @@ Options parse(int argc, char** argv) {
   o.command = "freeinit-eval";
   for (int i = 1; i < argc; ++i) o.command += std::string(" ") + argv[i];
   auto value = [&](int& i) -> std::string {
-    if (i + 1 >= argc) throw std::invalid_argument(std::string(argv[i]) + " needs a value");
-    return argv[++i];
+    const std::string flag = argv[i];
+    if (i + 1 >= argc) throw UsageError(flag + ": needs a value");
+    const std::string v = argv[++i];
+    if (v.empty() || v.rfind("--", 0) == 0)
+      throw UsageError(flag + ": needs a value, not '" + v + "'");
+    return v;
   };
-  auto number = [&](int& i) {
+  auto text = [](double x) {
+    char buf[32];
+    std::snprintf(buf, sizeof(buf), "%g", x);
+    return std::string(buf);
+  };
+  // A finite number in [lo, hi] (checked on the double).
+  auto number = [&](int& i, double lo, double hi) {
     const std::string flag = argv[i], v = value(i);
     const auto x = report::parseDouble(v);
-    if (!x) throw std::invalid_argument(flag + ": not a number: '" + v + "'");
+    if (!x || !std::isfinite(*x)) throw UsageError(flag + ": not a number: '" + v + "'");
+    if (!(*x >= lo && *x <= hi))
+      throw UsageError(flag + ": must be in [" + text(lo) + ", " + text(hi) + "], not '" + v + "'");
     return *x;
+  };
+  // A positive finite number.
+  auto positive = [&](int& i) {
+    const std::string flag = argv[i];
+    const double x = number(i, 0, 1e9);
+    if (!(x > 0)) throw UsageError(flag + ": must be > 0, not '" + argv[i] + "'");
+    return x;
   };
   // A whole number in [lo, hi]: a fraction or an out-of-range value is an error, not rounded
   // (checked on the double, before any conversion).
   auto integer = [&](int& i, int lo, int hi) {
     const std::string flag = argv[i];
-    const double x = number(i);
-    if (!(x >= lo && x <= hi) || x != std::floor(x))
-      throw std::invalid_argument(flag + ": must be a whole number in [" + std::to_string(lo) +
-                                  ", " + std::to_string(hi) + "], not '" + argv[i] + "'");
-    return static_cast<int>(x);
+    const auto x = report::parseDouble(value(i));
+    if (!x || !(*x >= lo && *x <= hi) || *x != std::floor(*x))
+      throw UsageError(flag + ": must be a whole number in [" + std::to_string(lo) + ", " +
+                       std::to_string(hi) + "], not '" + argv[i] + "'");
+    return static_cast<int>(*x);
   };
   const std::map<std::string, std::function<void(int&)>> with_value = {
       {"--seeds", [&](int& i) { o.seeds = integer(i, 1, 100000); }},
       {"--jobs", [&](int& i) { o.jobs = static_cast<unsigned>(integer(i, 0, 1024)); }},
       {"--md", [&](int& i) { o.md = value(i); }},
       {"--csv", [&](int& i) { o.csv = value(i); }},
+      {"--summary-csv", [&](int& i) { o.summary_csv = value(i); }},
+      {"--bounds-md", [&](int& i) { o.bounds_md = value(i); }},
       {"--plots", [&](int& i) { o.plots = value(i); }},
-      {"--fail-velocity", [&](int& i) { o.thresholds.velocity = number(i); }},
-      {"--fail-gravity", [&](int& i) { o.thresholds.gravity_deg = number(i); }},
-      {"--duration", [&](int& i) { o.duration = number(i); }},
+      {"--fail-velocity", [&](int& i) { o.thresholds.velocity = positive(i); }},
+      {"--fail-gravity", [&](int& i) { o.thresholds.gravity_deg = positive(i); }},
+      {"--duration", [&](int& i) { o.duration = positive(i); }},
       {"--points", [&](int& i) { o.points = integer(i, 1, 100000000); }},
       {"--stride", [&](int& i) { o.stride = integer(i, 1, 1000000); }},
-      {"--dlio-duration", [&](int& i) { o.methods.dlio_duration = number(i); }},
-      {"--gyro-prior", [&](int& i) { o.gyro_prior = number(i); }},
+      {"--window", [&](int& i) { o.window = positive(i); }},
+      {"--dlio-duration", [&](int& i) { o.methods.dlio_duration = positive(i); }},
+      {"--gyro-prior", [&](int& i) { o.gyro_prior = number(i, 0, 10); }},
       {"--passes", [&](int& i) { o.passes = integer(i, 0, 1000); }},
       {"--seed-samples", [&](int& i) { o.seed_samples = integer(i, 0, 1000000); }},
-      {"--tau", [&](int& i) { o.tau = number(i); }},
+      {"--tau", [&](int& i) { o.tau = number(i, 0, 1e6); }},
   };
   const std::map<std::string, bool*> switches = {{"--no-gyro-bias-estimate", &o.no_db},
                                                  {"--zero-gyro-bias", &o.zero_bg},
                                                  {"--trace", &o.trace},
                                                  {"-q", &o.quiet}};
+  const auto names = sim::presetNames();
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      std::fputs(kUsage, stdout);
-      std::exit(0);
-    }
     if (const auto f = with_value.find(a); f != with_value.end()) {
       f->second(i);
     } else if (const auto sw = switches.find(a); sw != switches.end()) {
@@ -121,15 +160,49 @@ Options parse(int argc, char** argv) {
     } else if (a == "--no-baselines") {
       o.methods.baselines = false;
     } else if (!a.empty() && a[0] == '-') {
-      throw std::invalid_argument("unknown option " + a);
+      throw UsageError(a + ": unknown option (--help lists them)");
+    } else if (std::find(names.begin(), names.end(), a) == names.end()) {
+      std::string list;
+      for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
+      throw UsageError(a + ": not a preset (" + list + ")");
     } else {
       o.presets.push_back(a);
     }
   }
   if (o.duration < 0) o.duration = o.methods.baselines ? o.methods.dlio_duration + 0.2 : 1.2;
-  if (o.presets.empty()) o.presets = sim::presetNames();
-  for (const auto& p : o.presets) sim::presetInfo(p);  // throws on an unknown name
+  if (o.presets.empty()) o.presets = names;
   return o;
+}
+
+/// One run of the evaluation: a scenario of the simulator and its name in the tables.
+struct EvalCase {
+  std::string source;  ///< the tables' input column
+  int seed = 0;        ///< the tables' seed column
+  sim::ScenarioConfig scenario;
+};
+
+/// The command line's changes to a scenario (duration, points, the zero-gyro-bias variant).
+void applyOverrides(const Options& o, sim::ScenarioConfig& sc) {
+  sc.duration = o.duration;
+  if (o.points > 0) sc.points_per_frame = o.points;
+  if (o.zero_bg) {
+    sc.random_biases = false;
+    sc.b_g.setZero();
+    sc.b_a = Vec3(0.1, -0.08, 0.05);
+  }
+}
+
+/// Every preset of the command line x seeds 1..N. (Randomized scenarios are one more function of
+/// this kind: N seeds from a base, each sim::randomScenario(seed) through applyOverrides.)
+std::vector<EvalCase> presetCases(const Options& o) {
+  std::vector<EvalCase> cases;
+  for (const auto& name : o.presets)
+    for (int seed = 1; seed <= o.seeds; ++seed) {
+      EvalCase c{name, seed, sim::preset(name, static_cast<std::uint64_t>(seed))};
+      applyOverrides(o, c.scenario);
+      cases.push_back(std::move(c));
+    }
+  return cases;
 }
 
 struct JobResult {
@@ -145,20 +218,12 @@ void appendf(std::string& s, const char* fmt, Args... args) {
   s += buf;
 }
 
-JobResult runJob(const Options& o, const std::string& name, int seed) {
-  auto sc = sim::preset(name, static_cast<std::uint64_t>(seed));
-  sc.duration = o.duration;
-  if (o.points > 0) sc.points_per_frame = o.points;
-  if (o.zero_bg) {
-    sc.random_biases = false;
-    sc.b_g.setZero();
-    sc.b_a = Vec3(0.1, -0.08, 0.05);
-  }
-  const auto rec = sim::simulate(sc);
+freeinit::FreeInitConfig configFor(const Options& o, const sim::Recording& rec, int seed) {
   freeinit::FreeInitConfig cfg;
   if (o.stride > 0) cfg.velocimeter.point_stride = o.stride;
+  if (o.window > 0) cfg.window.duration = o.window;
   if (o.passes >= 0) cfg.window.refinement_passes = o.passes;
-  if (o.seed_samples >= 0) cfg.window.seed_imu_samples = o.seed_samples;
+  if (o.seed_samples >= 0) cfg.window.seed_duration = o.seed_samples / rec.config.imu_rate;
   if (o.tau >= 0) cfg.gravity.velocity_error_correlation_time = o.tau;
   if (o.no_db) cfg.gravity.estimate_gyro_bias = false;
   if (o.gyro_prior > 0) {
@@ -168,36 +233,50 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
     cfg.velocimeter.gyro_bias_prior = rec.b_g + o.gyro_prior * Vec3(n01(rng), n01(rng), n01(rng));
     cfg.velocimeter.gyro_bias_sigma0 = o.gyro_prior;
   }
+  return cfg;
+}
+
+JobResult runCase(const Options& o, const EvalCase& c) {
+  const auto rec = sim::simulate(c.scenario);
+  const freeinit::FreeInitConfig cfg = configFor(o, rec, c.seed);
   const auto runs = report::runMethods(cfg, rec.imu, rec.frames, rec.extrinsics, o.methods);
 
-  JobResult out;
-  const report::TruthFn truth = [&](double t) {
-    const auto s = rec.truth(t);
-    report::StateTruth gt;
-    gt.R_wb = s.R_wb;
-    gt.p_w = s.p_w;
-    gt.v_w = s.v_w;
-    gt.g_w = rec.g_w;
-    gt.b_g = rec.b_g;
-    gt.b_a = rec.b_a;
-    return gt;
+  // The bound of each method's window (methods with the same window share it), with the
+  // estimator's priors.
+  const eval::BoundModel model = sim::boundModel(rec, cfg);
+  std::map<std::pair<double, double>, eval::Bound> bounds;
+  auto boundOf = [&](const freeinit::InitResult& r) -> const eval::Bound* {
+    if (!r.state.ok() || r.trajectory.empty()) return nullptr;
+    const std::pair<double, double> window(r.trajectory.front().t, r.state.timestamp);
+    auto it = bounds.find(window);
+    if (it == bounds.end())
+      it = bounds.emplace(window, sim::cramerRaoBound(rec, model, window.first, window.second))
+               .first;
+    return &it->second;
   };
+
+  JobResult out;
+  const report::TruthFn truth = [&](double t) { return sim::stateTruth(rec, t); };
   for (const auto& m : runs) {
-    const report::EvalRow row = report::makeEvalRow(name, seed, m, truth);
+    const report::EvalRow row = report::makeEvalRow(c.source, c.seed, m, truth, boundOf(m.result));
     out.rows.push_back(row);
     char head[96];
-    std::snprintf(head, sizeof(head), "%-10s %-16s %2d  ", m.method.c_str(), name.c_str(), seed);
+    std::snprintf(head, sizeof(head), "%-10s %-16s %2d  ", m.method.c_str(), c.source.c_str(),
+                  c.seed);
     out.log += head;
     if (!m.result.state.ok()) {
       out.log += "no state: " + row.status + " (" + m.result.state.message + ")\n";
       continue;
     }
-    const auto e = sim::evaluate(m.result.state, rec);  // the NEES of the reported covariance
     appendf(out.log, "|v|=%6.2f dv=%7.4f dg=%6.3f deg dbg=%7.5f dba=%6.3f dp=%6.3f m", row.speed,
             row.velocity_err, row.gravity_err_deg, row.gyro_bias_err, row.accel_bias_err,
             row.position_err);
-    appendf(out.log, "  nees v=%6.2f tilt=%6.2f bg=%6.2f ba=%6.2f  %7.2f ms\n", e.nees_vel_b,
-            e.nees_tilt, e.nees_gyro_bias, e.nees_accel_bias, m.time_ms);
+    appendf(out.log, "  err/crb v=%5.2f g=%5.2f bg=%5.2f ba=%5.2f", row.ratioVelocity(),
+            row.ratioGravity(), row.ratioGyroBias(), row.ratioAccelBias());
+    appendf(out.log, "  nees v=%6.2f tilt=%6.2f bg=%6.2f ba=%6.2f  %7.2f ms", row.nees_velocity,
+            row.nees_tilt, row.nees_gyro_bias, row.nees_accel_bias, m.time_ms);
+    const std::string wrong = row.confidentlyWrong();
+    out.log += wrong.empty() ? "\n" : "  CONFIDENT WRONG: " + wrong + "\n";
   }
   out.tracks =
       report::velocityTracks(runs, rec.config.t0, [&](double t) -> Vec3 { return truth(t).v_b(); });
@@ -212,16 +291,19 @@ JobResult runJob(const Options& o, const std::string& name, int seed) {
   return out;
 }
 
-/// One figure of panels for the presets whose name starts with `prefix` (first seed).
+/// One figure of panels for the inputs whose name starts with `prefix` (the first case of each).
 template <typename Panel>
-void writeFigure(const Options& o, const std::vector<std::string>& names,
+void writeFigure(const Options& o, const std::vector<EvalCase>& cases,
                  const std::vector<JobResult>& results, const std::string& prefix,
                  const std::string& file, Panel&& panel) {
   std::vector<cv::Mat> panels;
-  for (std::size_t p = 0; p < names.size(); ++p) {
-    if (names[p].rfind(prefix, 0) != 0) continue;
-    const auto& job = results[p * static_cast<std::size_t>(o.seeds)];
-    panels.push_back(panel(names[p] + " (seed 1)", job.tracks));
+  std::vector<std::string> done;
+  for (std::size_t i = 0; i < cases.size(); ++i) {
+    const EvalCase& c = cases[i];
+    if (c.source.rfind(prefix, 0) != 0) continue;
+    if (std::find(done.begin(), done.end(), c.source) != done.end()) continue;
+    done.push_back(c.source);
+    panels.push_back(panel(c.source + " (seed " + std::to_string(c.seed) + ")", results[i].tracks));
   }
   if (panels.empty()) return;
   const std::string path = (std::filesystem::path(o.plots) / file).string();
@@ -229,41 +311,68 @@ void writeFigure(const Options& o, const std::vector<std::string>& names,
   std::printf("wrote %s\n", path.c_str());
 }
 
+int run(const Options& o) {
+  const std::vector<EvalCase> cases = presetCases(o);
+  std::vector<JobResult> results(cases.size());
+  report::parallelFor(cases.size(), o.jobs, [&](std::size_t i) {
+    results[i] = runCase(o, cases[i]);
+    std::fprintf(stderr, "done %s seed %d\n", cases[i].source.c_str(), cases[i].seed);
+  });
+
+  std::vector<report::EvalRow> rows;
+  for (const auto& r : results) {
+    if (!o.quiet) std::fputs(r.log.c_str(), stdout);
+    rows.insert(rows.end(), r.rows.begin(), r.rows.end());
+  }
+  report::markFailures(rows, o.thresholds);
+  std::printf("\n%s\n%s", report::markdownSummary(rows, o.thresholds).c_str(),
+              report::boundsMarkdown(rows).c_str());
+  if (!o.csv.empty()) report::writeEvalCsv(o.csv, rows);
+  if (!o.summary_csv.empty()) report::writeSummaryCsv(o.summary_csv, rows);
+  if (!o.md.empty()) report::writeEvalMarkdown(o.md, rows, o.thresholds, o.command);
+  if (!o.bounds_md.empty()) {
+    // For a README: ten confident wrong answers per method at most (the report lists all).
+    const std::string md = report::boundsMarkdown(rows, {}, 10);
+    freeinit::writeFileAtomically(o.bounds_md, [&](std::ostream& f) { f << md; });
+  }
+  if (!o.plots.empty()) {
+    std::filesystem::create_directories(o.plots);
+    writeFigure(o, cases, results, "dyna", "velocity_error_dyna.png",
+                [](const std::string& title, const auto& tracks) {
+                  return report::velocityErrorPanel(title, tracks, 640, 400);
+                });
+    writeFigure(o, cases, results, "tunnel", "tunnel_velocity.png",
+                [](const std::string& title, const auto& tracks) {
+                  return report::velocityComponentsPanel(title, tracks, 640, 400);
+                });
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
+  // --help and --version print and exit whatever else is on the line.
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    if (a == "--version") {
+      std::printf("freeinit-eval %s\n", report::version());
+      return 0;
+    }
+  }
+  Options o;
   try {
-    const Options o = parse(argc, argv);
-    const std::size_t n_jobs = o.presets.size() * static_cast<std::size_t>(o.seeds);
-    std::vector<JobResult> results(n_jobs);
-    report::parallelFor(n_jobs, o.jobs, [&](std::size_t i) {
-      const auto& name = o.presets[i / static_cast<std::size_t>(o.seeds)];
-      const int seed = 1 + static_cast<int>(i % static_cast<std::size_t>(o.seeds));
-      results[i] = runJob(o, name, seed);
-      std::fprintf(stderr, "done %s seed %d\n", name.c_str(), seed);
-    });
-
-    std::vector<report::EvalRow> rows;
-    for (const auto& r : results) {
-      if (!o.quiet) std::fputs(r.log.c_str(), stdout);
-      rows.insert(rows.end(), r.rows.begin(), r.rows.end());
-    }
-    report::markFailures(rows, o.thresholds);
-    std::printf("\n%s", report::markdownSummary(rows, o.thresholds).c_str());
-    if (!o.csv.empty()) report::writeEvalCsv(o.csv, rows);
-    if (!o.md.empty()) report::writeEvalMarkdown(o.md, rows, o.thresholds, o.command);
-    if (!o.plots.empty()) {
-      std::filesystem::create_directories(o.plots);
-      writeFigure(o, o.presets, results, "dyna", "velocity_error_dyna.png",
-                  [](const std::string& title, const auto& tracks) {
-                    return report::velocityErrorPanel(title, tracks, 640, 400);
-                  });
-      writeFigure(o, o.presets, results, "tunnel", "tunnel_velocity.png",
-                  [](const std::string& title, const auto& tracks) {
-                    return report::velocityComponentsPanel(title, tracks, 640, 400);
-                  });
-    }
-    return 0;
+    o = parse(argc, argv);
+  } catch (const UsageError& e) {
+    std::fprintf(stderr, "freeinit-eval: %s\n", e.what());
+    return 2;
+  }
+  try {
+    return run(o);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "freeinit-eval: %s\n", e.what());
     return 1;

@@ -41,24 +41,18 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
   glue::ValidatedInput in;
   {
     const std::lock_guard<std::mutex> lock(mrpt_mutex);
-    in = glue::validateInput(glue::readRawlog(rawlog), config, rawlog);
+    in = glue::readRecording(rawlog, config);
   }
   const freeinit::Extrinsics extrinsics =
       config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics ? *in.sensor_pose_extrinsics
                                                                       : config.core.extrinsics;
   const auto runs = report::runMethods(config.core, in.imu, in.frames, extrinsics, options);
 
+  // No point labels in a rawlog: the rows have the errors and the NEES, no bound.
   const report::TruthFn at = [&](double t) {
     const auto s = glue::truthAt(truth, t);
     if (!s) throw std::runtime_error(truth_file + ": does not cover t = " + std::to_string(t));
-    report::StateTruth gt;
-    gt.R_wb = s->q_wb.toRotationMatrix();
-    gt.p_w = s->p_w;
-    gt.v_w = s->v_w;
-    gt.g_w = s->g_w;
-    gt.b_g = s->b_g;
-    gt.b_a = s->b_a;
-    return gt;
+    return *s;
   };
   JobResult out;
   for (const auto& m : runs) out.rows.push_back(report::makeEvalRow(rawlog, 0, m, at));

@@ -1,34 +1,28 @@
 // freeinit-import-bag <bag> -c <config.ini> [-o out.rawlog]: a ROS1 bag to a typed rawlog.
+#include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/ros1/BagImportApp.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <unistd.h>
 
 #include <iostream>
 
 int main(int argc, char** argv) {
-  try {
-    TCLAP::CmdLine cmd(
-        "freeinit-import-bag: a ROS1 bag (sensor_msgs/Imu + sensor_msgs/PointCloud2 with "
-        "per-point Doppler and time) to a rawlog for freeinit",
-        ' ', "0.1");
-    TCLAP::UnlabeledValueArg<std::string> bag("bag", "input ROS1 bag", true, "", "input.bag", cmd);
-    TCLAP::ValueArg<std::string> config("c", "config",
-                                        "INI with [bag_import] and [extrinsics] "
-                                        "(see ini/import_bag.ini)",
-                                        true, "", "FILE", cmd);
-    TCLAP::ValueArg<std::string> out("o", "out", "output rawlog (default: <bag>.rawlog)", false, "",
-                                     "FILE", cmd);
-    TCLAP::SwitchArg quiet("q", "quiet", "no progress bar", cmd);
-    cmd.parse(argc, argv);
-    freeinit::mrpt_glue::BagImportApp app;
-    app.params.bag = bag.getValue();
-    app.params.config_file = config.getValue();
-    app.params.output = out.getValue();
-    app.params.progress = !quiet.getValue();
+  namespace glue = freeinit::mrpt_glue;
+  glue::CommandLine cli("freeinit-import-bag",
+                        "a ROS1 bag (sensor_msgs/Imu + sensor_msgs/PointCloud2 with per-point "
+                        "Doppler and time) to a rawlog for freeinit");
+  const auto& bag = cli.positional("input.bag", "input ROS1 bag");
+  const auto& config = cli.requiredText(
+      "c", "config", "INI with [bag_import] and [extrinsics] (see ini/import_bag.ini)", "FILE");
+  const auto& out = cli.text("o", "out", "output rawlog", "", "FILE", "<bag>.rawlog");
+  const auto& quiet = cli.flag("q", "quiet", "no progress bar");
+  if (const auto code = cli.parse(argc, argv)) return *code;
+  return glue::runMain(cli.program(), [&] {
+    glue::BagImportApp app;
+    app.params.bag = bag.value;
+    app.params.config_file = config.value;
+    app.params.output = out.value;
+    app.params.progress = !quiet.value;
     app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
     return app.run(std::cout);
-  } catch (const std::exception& e) {
-    std::cerr << "freeinit-import-bag: error: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }

@@ -1,33 +1,53 @@
-// freeinit <config.ini> <input.rawlog> [--out DIR]: Free-Init on an MRPT rawlog.
+// freeinit <config.ini> <input.rawlog> [--out DIR] [--start T | --every S | --starts FILE]
+// [--check-all] [--no-index]: Free-Init on an MRPT rawlog.
+#include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/mrpt/FreeInitApp.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 #include <unistd.h>
 
 #include <iostream>
 
 int main(int argc, char** argv) {
-  try {
-    TCLAP::CmdLine cmd(
-        "freeinit: initial state (attitude, velocity, biases, gravity, static map) "
-        "from the first instants of a Doppler LiDAR + IMU rawlog",
-        ' ', "0.1");
-    TCLAP::UnlabeledValueArg<std::string> ini("config", "INI configuration file", true, "",
-                                              "config.ini", cmd);
-    TCLAP::UnlabeledValueArg<std::string> rawlog("input", "input rawlog", true, "", "input.rawlog",
-                                                 cmd);
-    TCLAP::ValueArg<std::string> out("o", "out", "output folder", false, "freeinit_out", "DIR",
-                                     cmd);
-    TCLAP::SwitchArg quiet("q", "quiet", "no progress bar", cmd);
-    cmd.parse(argc, argv);
-    freeinit::mrpt_glue::FreeInitApp app;
-    app.params.config_file = ini.getValue();
-    app.params.rawlog = rawlog.getValue();
-    app.params.out_dir = out.getValue();
-    app.params.progress = !quiet.getValue();
+  namespace glue = freeinit::mrpt_glue;
+  namespace config = freeinit::config;
+  glue::CommandLine cli("freeinit",
+                        "initial state (attitude, velocity, biases, gravity, static map) from the "
+                        "first instants of a Doppler LiDAR + IMU rawlog");
+  const auto& ini = cli.positional("config.ini", "INI configuration file (ini/freeinit.ini)");
+  const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
+  const auto& out = cli.text("o", "out", "output folder", "freeinit_out", "DIR");
+  const auto& quiet = cli.flag("q", "quiet", "no progress bar");
+  const auto& start = cli.number("", "start",
+                                 "initialize with the records from T on: seconds after the first "
+                                 "record, or a UNIX stamp if T > 1e8",
+                                 0, config::atLeast(0), "T", "the first record");
+  const auto& every = cli.number("", "every",
+                                 "initialize every S seconds along the recording (from --start), "
+                                 "each start in its own folder, with starts.csv/.md/.png",
+                                 0, config::atLeast(0), "S", "off");
+  const auto& starts = cli.text("", "starts",
+                                "initialize at each start in FILE (one per line, as --start), "
+                                "as --every does",
+                                "", "FILE", "none");
+  const auto& check_all = cli.flag("", "check-all",
+                                   "read and check the whole file (by default reading stops once "
+                                   "the state is ready)");
+  const auto& no_index =
+      cli.flag("", "no-index", "neither use nor write the seek index <input>.freeinit.idx");
+  if (const auto code = cli.parse(argc, argv)) return *code;
+  return glue::runMain(cli.program(), [&] {
+    glue::FreeInitApp app;
+    app.params.config_file = ini.value;
+    app.params.rawlog = rawlog.value;
+    app.params.out_dir = out.value;
+    app.params.progress = !quiet.value;
     app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
+    if (start.given) app.params.start = start.value;
+    app.params.every = every.value;
+    app.params.starts_file = starts.value;
+    app.params.check_all = check_all.value;
+    app.params.index.use = !no_index.value;
+    app.params.command = "freeinit";
+    for (int i = 1; i < argc; ++i) app.params.command += std::string(" ") + argv[i];
     return app.run(std::cout);
-  } catch (const std::exception& e) {
-    std::cerr << "freeinit: error: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }

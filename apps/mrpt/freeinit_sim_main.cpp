@@ -1,40 +1,56 @@
-// freeinit-sim: writes a simulated preset as a rawlog plus its ground truth.
+// freeinit-sim: writes a simulated preset or random scenario as a rawlog plus its ground truth.
+#include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/mrpt/SimApp.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
+#include <freeinit/sim/simulator.h>
 
+#include <cstdint>
 #include <iostream>
+#include <stdexcept>
 
 int main(int argc, char** argv) {
-  try {
-    TCLAP::CmdLine cmd("freeinit-sim: Doppler LiDAR + IMU recording with ground truth, as a rawlog",
-                       ' ', "0.1");
-    TCLAP::ValueArg<std::string> preset("p", "preset", "preset (dyna_01..06, stat_01..04, ...)",
-                                        false, "dyna_01", "NAME", cmd);
-    TCLAP::ValueArg<unsigned> seed("s", "seed", "random seed", false, 1, "N", cmd);
-    TCLAP::ValueArg<double> duration("d", "duration", "seconds (0: the preset's)", false, 0, "S",
-                                     cmd);
-    TCLAP::ValueArg<int> points("n", "points-per-frame", "points per frame (0: the preset's)",
-                                false, 0, "N", cmd);
-    TCLAP::ValueArg<std::string> out("o", "out", "output rawlog", false, "dyna_01.rawlog", "FILE",
-                                     cmd);
-    TCLAP::ValueArg<std::string> scenario("c", "scenario",
-                                          "INI file with a [scenario] section (base preset + "
-                                          "ScenarioConfig fields); see SimApp.h",
-                                          false, "", "FILE", cmd);
-    TCLAP::SwitchArg in_g("", "accel-in-g", "write accelerations in g", cmd);
-    cmd.parse(argc, argv);
-    freeinit::mrpt_glue::SimApp app;
-    app.params.preset = preset.getValue();
-    app.params.seed = seed.getValue();
-    app.params.duration = duration.getValue();
-    app.params.points_per_frame = points.getValue();
-    app.params.output = out.getValue();
-    app.params.accel_in_g = in_g.getValue();
-    app.params.scenario_file = scenario.getValue();
+  namespace glue = freeinit::mrpt_glue;
+  namespace config = freeinit::config;
+  glue::CommandLine cli("freeinit-sim",
+                        "Doppler LiDAR + IMU recording with ground truth, as a rawlog");
+  const auto& preset =
+      cli.choice("p", "preset", "simulator preset", "dyna_01", freeinit::sim::presetNames());
+  const auto& seed = cli.integer("s", "seed", "random seed", 1, 0, 4294967295LL, "N");
+  const auto& random = cli.integer("", "random",
+                                   "simulate the randomized scenario drawn with this seed "
+                                   "(instead of a preset)",
+                                   0, 0, 4294967295LL, "SEED");
+  const auto& duration =
+      cli.number("d", "duration", "seconds (0: the preset's)", 0, config::between(0, 3600), "S");
+  const auto& points = cli.integer("n", "points-per-frame", "points per frame (0: the preset's)", 0,
+                                   0, 10000000, "N");
+  const auto& out = cli.text("o", "out", "output rawlog; truth files go beside it", "", "FILE",
+                             "<preset>.rawlog");
+  const auto& scenario = cli.text("c", "scenario",
+                                  "INI file with a [scenario] section (a base preset or random "
+                                  "+ scenario keys, or a written <out>.scenario.ini)",
+                                  "", "FILE", "none");
+  const auto& keys = cli.flag("", "scenario-keys", "print the [scenario] keys and exit");
+  const auto& in_g = cli.flag("", "accel-in-g", "write accelerations in g");
+  if (const auto code = cli.parse(argc, argv)) return *code;
+  return glue::runMain(cli.program(), [&] {
+    if (keys.value) {
+      std::cout << glue::SimApp::scenarioKeys();
+      return 0;
+    }
+    if (random.given && (seed.given || preset.given || scenario.given))
+      throw std::invalid_argument("--random: not with --seed, --preset or --scenario");
+    glue::SimApp app;
+    app.params.preset = preset.value;
+    app.params.seed = static_cast<std::uint64_t>(random.given ? random.value : seed.value);
+    app.params.random = random.given;
+    app.params.duration = duration.value;
+    app.params.points_per_frame = static_cast<int>(points.value);
+    const std::string base = random.given ? "random_" + std::to_string(random.value)
+                                          : preset.value;
+    app.params.output = out.given ? out.value : base + ".rawlog";
+    app.params.accel_in_g = in_g.value;
+    app.params.scenario_file = scenario.value;
     app.run(std::cout);
     return 0;
-  } catch (const std::exception& e) {
-    std::cerr << "freeinit-sim: error: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }

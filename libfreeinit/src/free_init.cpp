@@ -62,6 +62,14 @@ void FreeInit::addFrame(LidarFrame&& f) {
   impl_->pump();
 }
 
+void FreeInit::addFrame(std::shared_ptr<const LidarFrame> f) {
+  if (!f) throw std::invalid_argument("LiDAR frame: null");
+  impl_->seq.checkFrame(*f);
+  if (impl_->done) return;
+  impl_->seq.addSharedFrame(std::move(f));
+  impl_->pump();
+}
+
 void FreeInit::finish() {
   impl_->seq.finish();
   impl_->pump();

@@ -317,7 +317,7 @@ GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& s
                                            const Extrinsics& extrinsics,
                                            const Mat3& gyro_bias_cov,
                                            const GravityEstimate* start) const {
-  const Parameters& P = params_;
+  const GravityParams& P = params_;
   if (!P.use_body_equation && !P.use_lidar_equation)
     throw std::invalid_argument(
         "GravityEstimator: use_body_equation and use_lidar_equation are both false");

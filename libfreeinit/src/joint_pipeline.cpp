@@ -114,9 +114,11 @@ class JointPipeline final : public Pipeline {
     if (phase_ == Phase::Running) run(r);
     if (phase_ != Phase::Done) r.diag.time_velocimeter += wallSeconds() - t0;
     if (phase_ == Phase::Running && seq_.finished()) {
+      std::ostringstream window;
+      window << cfg_.window.duration;
       fail(r, InitStatus::NotEnoughData,
-           "the recording ends before the initialization window (" +
-               std::to_string(cfg_.window.imu_samples) + " IMU samples) is covered");
+           "the recording ends before the initialization window (" + window.str() +
+               " s) is covered");
     }
     if (phase_ == Phase::WaitStart && seq_.finished())
       fail(r, InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
@@ -164,13 +166,13 @@ class JointPipeline final : public Pipeline {
     if (k + 1 >= imu.size()) return;
     const double t_ref = imu[k].t;
     // The start decision's span: bootstrap_duration, within the window.
-    const std::size_t n_window = static_cast<std::size_t>(cfg_.window.imu_samples);
+    const double span = std::min(cfg_.estimator.bootstrap_duration, cfg_.window.duration);
     std::size_t k1 = k;
-    while (k1 + 1 < imu.size() && k1 + 1 < k + n_window &&
-           imu[k1].t < t_ref + cfg_.estimator.bootstrap_duration)
+    while (k1 + 1 < imu.size() && imu[k1].t < t_ref + span &&
+           imu[k1 + 1].t - t_ref < cfg_.window.duration)
       ++k1;
-    const bool span_complete =
-        imu[k1].t >= t_ref + cfg_.estimator.bootstrap_duration || k1 + 1 >= k + n_window;
+    const bool span_complete = imu[k1].t >= t_ref + span ||
+                               (k1 + 1 < imu.size() && imu[k1 + 1].t - t_ref >= cfg_.window.duration);
     if ((!span_complete || !seq_.lidarPassed(imu[k1].t)) && !seq_.finished()) return;
     if (k1 < k + 2) return;  // wait for a few samples at least (finished: not enough data)
 
@@ -214,7 +216,6 @@ class JointPipeline final : public Pipeline {
       case StartDecision::Kind::Rest: break;
     }
     k0_ = k;
-    k_end_ = k0_ + n_window - 1;
     t_ref_ = t_ref;
     stride_ = vp.point_stride > 0 ? vp.point_stride : automaticPointStride(frameList(), vp.max_point_rate);
     startFilter(d);
@@ -289,12 +290,21 @@ class JointPipeline final : public Pipeline {
     const VelocimeterParams& vp = cfg_.velocimeter;
     while (true) {
       const std::size_t k = k0_ + filter_->nodes() - 1;
-      const bool last = k == k_end_;
       if (!node_open_) {
-        if (!last && k + 1 >= imu.size()) return;  // the node's interval needs the next sample
-        filter_->beginNode(last ? nullptr : &imu[k + 1]);
+        // The window rule (config.h): this sample closes the window, or the next one is beyond.
+        const double duration = cfg_.window.duration;
+        last_ = k > k0_ && windowSample(imu[k0_].t, imu[k - 1].t, imu[k].t, duration) ==
+                               WindowSample::Last;
+        if (!last_) {
+          if (k + 1 >= imu.size()) return;  // the node's interval needs the next sample
+          last_ = windowSample(imu[k0_].t, imu[k].t, imu[k + 1].t, duration) ==
+                  WindowSample::Outside;
+        }
+        if (last_) k_end_ = k;
+        filter_->beginNode(last_ ? nullptr : &imu[k + 1]);
         node_open_ = true;
       }
+      const bool last = last_;
       const double t_k = imu[k].t;
       const double lo = t_k - filter_->intervalBefore();
       const double hi = t_k + filter_->intervalAfter();
@@ -465,6 +475,7 @@ class JointPipeline final : public Pipeline {
   std::size_t stride_counter_ = 0;
   MeasurementSequencer::Cursor cursor_;
   bool node_open_ = false;
+  bool last_ = false;  ///< the open node is the window's last
   std::optional<DopplerInertialFilter> filter_;
   RestTracker rest_;
   std::vector<bool> node_rest_;

@@ -11,6 +11,7 @@
 
 #include <deque>
 #include <limits>
+#include <memory>
 #include <vector>
 
 namespace freeinit::detail {
@@ -35,9 +36,10 @@ class MeasurementSequencer {
   void addFrame(LidarFrame&& f);
   /// As addFrame, without copying: the caller keeps `f` alive as long as the sequencer.
   void addBorrowedFrame(const LidarFrame& f);
-  /// Throws std::invalid_argument unless `f` can follow the buffered frames: a finite stamp
-  /// that increases, finite time offsets sorted in time, and no point before the last point of
-  /// the previous frame.
+  /// As addFrame, sharing the frame (it must not change while shared).
+  void addSharedFrame(std::shared_ptr<const LidarFrame> f);
+  /// Throws std::invalid_argument unless `f` can follow the buffered frames
+  /// (input::frameOrderProblem).
   void checkFrame(const LidarFrame& f) const;
 
   void finish() { finished_ = true; }
@@ -69,6 +71,7 @@ class MeasurementSequencer {
  private:
   std::vector<ImuSample> imu_;
   std::deque<LidarFrame> owned_;  ///< frames handed to addFrame (stable addresses)
+  std::vector<std::shared_ptr<const LidarFrame>> shared_;  ///< frames shared with the caller
   std::vector<FrameRef> frames_;  ///< all frames in time order
   bool finished_ = false;
 };

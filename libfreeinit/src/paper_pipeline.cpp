@@ -3,8 +3,8 @@
 //
 // Processing is incremental: every pump() processes, in time order, all gyro samples and points
 // that the data received so far allow (a point needs the IMU sample after it; a gyro sample needs
-// the LiDAR stream to have passed it). A seed pass covers the first `seed_imu_samples` of the
-// window; its gravity solve starts the accelerometer-aided last pass, which catches up on the
+// the LiDAR stream to have passed it). A seed pass covers the first `seed_duration` seconds of
+// the window; its gravity solve starts the accelerometer-aided last pass, which catches up on the
 // buffered data and then follows the stream. When the last IMU sample of the window has been
 // processed the last solve makes the result final.
 #include <freeinit/gravity_estimator.h>
@@ -17,6 +17,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <sstream>
 #include <string>
 
 #include "pipeline.h"
@@ -43,8 +44,10 @@ class PaperPipeline final : public Pipeline {
   // Window and cursors.
   double t_ref = 0;                  ///< UNIX time of the window start; internal times are relative
   std::size_t k0 = 0;                ///< first IMU sample of the window
-  std::size_t k_end = 0;             ///< last IMU sample of the window
-  std::size_t k_stop = 0;            ///< last IMU sample of the current pass
+  std::size_t k_end = 0;             ///< last IMU sample of the window (once known)
+  std::size_t k_stop = 0;            ///< last IMU sample of the current pass (once closed)
+  double pass_duration = 0;          ///< [s] length of the current pass (window rule, config.h)
+  bool pass_closed = false;          ///< the last IMU sample of the current pass is processed
   std::size_t k_next = 0;            ///< next IMU sample to process
   std::size_t f_cur = 0, p_cur = 0;  ///< next point to process
   int point_stride = 1;              ///< the configured stride, or the automatic one
@@ -118,9 +121,10 @@ class PaperPipeline final : public Pipeline {
     if (phase == Phase::Running) run();
     res->diag.time_velocimeter += wallSeconds() - t0 - (res->diag.time_solver - solver0);
     if (phase == Phase::Running && seq.finished()) {
+      std::ostringstream window;
+      window << cfg.window.duration;
       fail(InitStatus::NotEnoughData, "the recording ends before the initialization window (" +
-                                          std::to_string(cfg.window.imu_samples) +
-                                          " IMU samples) is covered");
+                                          window.str() + " s) is covered");
     }
     if (phase == Phase::WaitStart && seq.finished())
       fail(InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
@@ -166,7 +170,6 @@ class PaperPipeline final : public Pipeline {
       return;
     }
     k0 = k;
-    k_end = k0 + static_cast<std::size_t>(cfg.window.imu_samples) - 1;
     point_stride = vp.point_stride > 0 ? vp.point_stride
                                        : automaticPointStride(frameList(), vp.max_point_rate);
     boot_fit = fit;
@@ -182,10 +185,10 @@ class PaperPipeline final : public Pipeline {
   /// (Re)starts the velocimeter at the window start; all window data are buffered for pass > 0.
   void startPass() {
     k_next = k0 + 1;
-    const int seed_n = cfg.window.seed_imu_samples;
-    k_stop = finalPass() || seed_n <= 0
-                 ? k_end
-                 : k0 + static_cast<std::size_t>(std::min(seed_n, cfg.window.imu_samples)) - 1;
+    const double seed = cfg.window.seed_duration;
+    pass_duration =
+        finalPass() || seed <= 0 ? cfg.window.duration : std::min(seed, cfg.window.duration);
+    pass_closed = false;
     f_cur = 0;
     p_cur = 0;
     stride_counter = 0;
@@ -226,8 +229,14 @@ class PaperPipeline final : public Pipeline {
     while (true) {
       const bool have_point = normalizeCursor(f_cur, p_cur);
       const double tp = have_point ? pointTime(f_cur, p_cur) : 0.0;
-      if (k_next <= k_stop) {
+      if (!pass_closed) {
         if (k_next >= imu.size()) return;  // wait for IMU
+        const WindowSample w =
+            windowSample(imu[k0].t, imu[k_next - 1].t, imu[k_next].t, pass_duration);
+        if (w == WindowSample::Outside) {  // after a gap: the pass ended with the sample before
+          closePass(k_next - 1);
+          continue;
+        }
         const double tg = imu[k_next].t - t_ref;
         if (have_point && tp <= tg) {
           processPoint(tp);
@@ -235,8 +244,10 @@ class PaperPipeline final : public Pipeline {
         }
         // All points before tg are processed if the LiDAR stream has passed tg.
         if (!have_point && !seq.finished() && lidarCoveredUntil() < tg) return;
-        if (k_next < k_stop && k_next + 1 >= imu.size() && !seq.finished()) return;  // need the slope
+        const bool last = w == WindowSample::Last;
+        if (!last && k_next + 1 >= imu.size() && !seq.finished()) return;  // need the slope
         processGyro(k_next);
+        if (last) closePass(k_next);
         ++k_next;
         continue;
       }
@@ -245,10 +256,16 @@ class PaperPipeline final : public Pipeline {
     }
   }
 
+  void closePass(std::size_t k_last) {
+    pass_closed = true;
+    k_stop = k_last;
+    if (finalPass()) k_end = k_last;
+  }
+
   /// Solves b_a and gravity; starts the next pass and returns true if there is one.
   bool endOfPass() {
     const double t0 = wallSeconds();
-    GravityEstimator::Parameters gp = cfg.gravity;
+    GravityParams gp = cfg.gravity;
     gp.compute_covariance = finalPass();  // earlier passes only need the estimate
     // Each solve starts from the previous pass's estimate (same window start, same frame w0).
     const GravityEstimate previous = gravity;
@@ -467,7 +484,7 @@ void PaperPipeline::finalize() {
   A_th.block<3, 3>(0, 0) = -skew(g_b) * R_w0b.transpose() / g2;
   A_th.block<3, 3>(0, 6) = skew(g_b) * R_w0b.transpose() * skew(ge.g_w) * M_end / g2 -
                            up_b * up_b.transpose() * R_w0b.transpose() * M_end;
-  const double dt_imu = T / std::max(1, cfg.window.imu_samples - 1);
+  const double dt_imu = T / static_cast<double>(std::max<std::size_t>(1, k_end - k0));
   const double var_gyro_walk = cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma * dt_imu * T;
   // P = G S G^T over independent error sources, so it is a covariance by construction:
   //   [dg_w0, db_a, db_g] (solver, 9), dv_b (velocimeter, 3), gyro white noise integrated into

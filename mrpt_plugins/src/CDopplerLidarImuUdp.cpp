@@ -1,7 +1,9 @@
 // The only translation unit that includes mrpt/hwdrivers.
+#include <freeinit/atomic_file.h>
+#include <freeinit/config_section.h>
 #include <freeinit/mrpt/CDopplerLidarImuUdp.h>
-#include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/register.h>
+#include <mrpt/config/CConfigFile.h>
 #include <mrpt/core/initializer.h>
 
 #include <iostream>
@@ -22,38 +24,89 @@ CDopplerLidarImuUdp::~CDopplerLidarImuUdp() {
   }
 }
 
+const config::Section<UdpDriverParams>& udpDriverSection() {
+  using config::between;
+  using P = UdpDriverParams;
+  static const auto s =
+      config::Section<P>("DOPPLER_LIDAR_IMU",
+                         "a Doppler LiDAR + IMU streaming the Free-Init wire format over UDP "
+                         "(driver = CDopplerLidarImuUdp; the section name is the sensor's)")
+          .text(
+              "listen_address", [](auto& x) -> auto& { return x.source.address; },
+              "local IPv4 address to listen on (0.0.0.0: every interface)", true)
+          .number(
+              "port", [](auto& x) -> auto& { return x.source.port; }, "-", between(0, 65535),
+              "UDP port (0: any free port)")
+          .text(
+              "imu_label", [](auto& x) -> auto& { return x.labels.imu; },
+              "sensorLabel of the CObservationIMU", true)
+          .text(
+              "lidar_label", [](auto& x) -> auto& { return x.labels.lidar; },
+              "sensorLabel of the CObservationPointCloud", true)
+          .number(
+              "receive_buffer_bytes", [](auto& x) -> auto& { return x.source.receive_buffer; },
+              "bytes", between(1024, 1 << 30), "socket receive buffer asked for")
+          .number(
+              "max_queued_imu", [](auto& x) -> auto& { return x.source.max_queued_imu; }, "-",
+              between(1, 1e7), "IMU samples queued towards the grabber (drops are counted)")
+          .number(
+              "max_queued_frames", [](auto& x) -> auto& { return x.source.max_queued_frames; }, "-",
+              between(1, 1e5), "frames queued towards the grabber (drops are counted)")
+          .number(
+              "reorder_window", [](auto& x) -> auto& { return x.source.receiver.reorder_window; },
+              "datagrams", between(1, 1e6), "held while waiting for a missing one")
+          .scaled(
+              "reorder_timeout_ms",
+              [](auto& x) -> auto& { return x.source.receiver.reorder_timeout; }, "ms", 1000,
+              between(0, 60000), "longest wait for a missing datagram")
+          .scaled(
+              "frame_timeout_ms", [](auto& x) -> auto& { return x.source.receiver.frame_timeout; },
+              "ms", 1000, config::aboveUpTo(0, 60000),
+              "an incomplete frame is dropped (and counted) after this long without a chunk")
+          .number("stats_period_s", &P::stats_period, "s", between(0, 86400),
+                  "statistics on stdout every this long (0: only at the end)")
+          .text("stats_file", &P::stats_file,
+                "write the final statistics to this INI file (empty: none)")
+          .foreign({"driver", "process_rate", "max_queue_len", "grab_decimation", "sensorLabel",
+                    "pose_x", "pose_y", "pose_z", "pose_yaw", "pose_pitch", "pose_roll",
+                    "external_images_format", "external_images_jpeg_quality"});
+  return s;
+}
+
 void CDopplerLidarImuUdp::loadConfig_sensorSpecific(const mrpt::config::CConfigFileBase& cfg,
                                                     const std::string& section) {
-  auto fail = [&](const std::string& key, const std::string& why) {
-    throw std::invalid_argument("[" + section + "] " + key + ": " + why);
-  };
-  params_.address = cfg.read_string(section, "listen_address", params_.address);
-  const int port = cfg.read_int(section, "port", params_.port);
-  if (port < 0 || port > 65535) fail("port", "must be in 0..65535");
-  params_.port = static_cast<std::uint16_t>(port);
-  labels_.imu = cfg.read_string(section, "imu_label", labels_.imu);
-  labels_.lidar = cfg.read_string(section, "lidar_label", labels_.lidar);
-  params_.receive_buffer = cfg.read_int(section, "receive_buffer_bytes", params_.receive_buffer);
-  const int q_imu =
-      cfg.read_int(section, "max_queued_imu", static_cast<int>(params_.max_queued_imu));
-  const int q_frames =
-      cfg.read_int(section, "max_queued_frames", static_cast<int>(params_.max_queued_frames));
-  const int window =
-      cfg.read_int(section, "reorder_window", static_cast<int>(params_.receiver.reorder_window));
-  if (q_imu < 1) fail("max_queued_imu", "must be >= 1");
-  if (q_frames < 1) fail("max_queued_frames", "must be >= 1");
-  if (window < 1) fail("reorder_window", "must be >= 1");
-  params_.max_queued_imu = static_cast<std::size_t>(q_imu);
-  params_.max_queued_frames = static_cast<std::size_t>(q_frames);
-  params_.receiver.reorder_window = static_cast<std::size_t>(window);
-  params_.receiver.reorder_timeout =
-      1e-3 * cfg.read_double(section, "reorder_timeout_ms", 1e3 * params_.receiver.reorder_timeout);
-  params_.receiver.frame_timeout =
-      1e-3 * cfg.read_double(section, "frame_timeout_ms", 1e3 * params_.receiver.frame_timeout);
-  if (!(params_.receiver.reorder_timeout >= 0)) fail("reorder_timeout_ms", "must be >= 0");
-  if (!(params_.receiver.frame_timeout > 0)) fail("frame_timeout_ms", "must be > 0");
-  stats_period_ = cfg.read_double(section, "stats_period_s", stats_period_);
-  stats_file_ = cfg.read_string(section, "stats_file", stats_file_);
+  // The section through the project's strict loader: from the file itself when rawlog-grabber
+  // read one (lines and duplicated keys are then known), else from MRPT's parsed keys.
+  config::IniFile ini;
+  const auto* file = dynamic_cast<const mrpt::config::CConfigFile*>(&cfg);
+  if (file && !file->getAssociatedFile().empty()) {
+    ini = config::IniFile::load(file->getAssociatedFile(), {{section}});
+  } else {
+    ini = config::IniFile("rawlog-grabber configuration");
+    config::IniSection sec;
+    sec.name = section;
+    std::vector<std::string> keys;
+    cfg.getAllKeys(section, keys);
+    for (const auto& k : keys) sec.entries.push_back({k, cfg.read_string(section, k, ""), 0});
+    ini.add(std::move(sec));
+  }
+  UdpDriverParams p;
+  p.source = params_;
+  p.labels = labels_;
+  p.stats_period = stats_period_;
+  p.stats_file = stats_file_;
+  try {
+    udpDriverSection().load(ini, section, p);  // the sensor's section, whatever its name
+  } catch (const config::ConfigError& e) {
+    // rawlog-grabber rethrows this as an MRPT exception, which splits the message at its
+    // brackets: the user sees the one line here too.
+    std::cerr << "CDopplerLidarImuUdp: " << e.what() << "\n";
+    throw;
+  }
+  params_ = p.source;
+  labels_ = p.labels;
+  stats_period_ = p.stats_period;
+  stats_file_ = p.stats_file;
 }
 
 void CDopplerLidarImuUdp::initialize() {

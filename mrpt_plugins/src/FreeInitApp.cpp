@@ -1,20 +1,28 @@
+#include <freeinit/input_checks.h>
 #include <freeinit/mrpt/FreeInitApp.h>
-#include <freeinit/mrpt/FreeInitObservationHandler.h>
 #include <freeinit/mrpt/ProgressBar.h>
-#include <freeinit/mrpt/input_validator.h>
+#include <freeinit/mrpt/ingest.h>
+#include <freeinit/mrpt/ingest_sources.h>
 #include <freeinit/mrpt/map_export.h>
 #include <freeinit/mrpt/output_writers.h>
-#include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/snapshots.h>
 
 #include <chrono>
+#include <cmath>
+#include <deque>
 #include <filesystem>
+#include <fstream>
 #include <iomanip>
+#include <limits>
+#include <memory>
 #include <ostream>
+#include <set>
 #include <sstream>
 
 namespace freeinit::mrpt_glue {
 namespace {
+
+namespace fs = std::filesystem;
 
 std::string v3(const Vec3& v) {
   std::ostringstream os;
@@ -28,8 +36,98 @@ constexpr const char* kTrajectoryFile = "trajectory_tum.txt";
 constexpr const char* kVelocityCsvFile = "velocimeter.csv";
 constexpr const char* kMapPngFile = "static_map.png";
 constexpr const char* kVelocityPngFile = "velocity.png";
+constexpr const char* kStateFile = "initial_state.ini";
+constexpr const char* kErrorsFile = "errors_wrt_gt.ini";
+constexpr const char* kConfigFile = "effective_config.ini";
+
+/// The starts of a run, in increasing order: one (possibly -inf: from the first record), a
+/// list, or `first + k * every` without end.
+class StartPlan {
+ public:
+  static StartPlan single(double t) { return StartPlan({t}, 0); }
+  static StartPlan list(std::vector<double> t) { return StartPlan(std::move(t), 0); }
+  static StartPlan every(double t0, double step) { return StartPlan({t0}, step); }
+
+  std::optional<double> peek() const {
+    if (step_ > 0) return list_.front() + static_cast<double>(next_) * step_;
+    if (next_ < list_.size()) return list_[next_];
+    return std::nullopt;
+  }
+  std::size_t index() const { return next_; }
+  void pop() { ++next_; }
+  /// The explicit starts not reached (none for `every`).
+  std::vector<double> rest() const {
+    if (step_ > 0) return {};
+    return {list_.begin() + static_cast<std::ptrdiff_t>(next_), list_.end()};
+  }
+
+ private:
+  StartPlan(std::vector<double> t, double step) : list_(std::move(t)), step_(step) {}
+  std::vector<double> list_;
+  double step_;
+  std::size_t next_ = 0;
+};
+
+struct Slot {
+  std::size_t index = 0;
+  double start = 0;
+  std::unique_ptr<InitSession> session;
+};
+
+/// Writes one start's outputs into `dir` (created).
+void writeStateSet(const std::string& dir, const AppConfig& config, const InitResult& result,
+                   const std::optional<TruthErrors>& errors, const std::vector<TruthSample>& truth,
+                   const std::string* effective) {
+  fs::create_directories(dir);
+  auto file = [&](const char* name) { return (fs::path(dir) / name).string(); };
+  if (effective != nullptr)
+    writeFileAtomically(file(kConfigFile), [&](std::ostream& o) { o << *effective; });
+  writeInitialStateIni(file(kStateFile), result.state);
+  if (errors) writeTruthErrors(file(kErrorsFile), *errors);
+  writeResultFiles(dir, config.output, result, truth);
+}
+
+/// Replaces `target` (a folder) by `staging` as a whole.
+void swapInto(const fs::path& staging, const fs::path& target) {
+  const fs::path old = target.parent_path() / ("." + target.filename().string() + ".old");
+  fs::remove_all(old);
+  if (fs::exists(target)) fs::rename(target, old);
+  fs::rename(staging, target);
+  fs::remove_all(old);
+}
 
 }  // namespace
+
+double startTime(double value, double first) {
+  return value > kUnixStampThreshold ? value : first + value;
+}
+
+std::vector<double> readStartsFile(const std::string& path) {
+  std::ifstream f(path);
+  if (!f) throw InputError(path + ": cannot open the starts file");
+  std::vector<double> out;
+  std::string line;
+  for (int n = 1; std::getline(f, line); ++n) {
+    const auto hash = line.find('#');
+    if (hash != std::string::npos) line.erase(hash);
+    std::istringstream is(line);
+    double v = 0;
+    if (!(is >> v)) {
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+      throw InputError(path + ": line " + std::to_string(n) + ": '" + line + "' is not a number");
+    }
+    std::string rest;
+    if (is >> rest) throw InputError(path + ": line " + std::to_string(n) + ": one start per line");
+    if (!std::isfinite(v) || v < 0)
+      throw InputError(path + ": line " + std::to_string(n) + ": a start must be >= 0");
+    if (!out.empty() && !(v > out.back()))
+      throw InputError(path + ": line " + std::to_string(n) + ": starts must increase (after " +
+                       input::formatStamp(out.back()) + ")");
+    out.push_back(v);
+  }
+  if (out.empty()) throw InputError(path + ": no start in the file");
+  return out;
+}
 
 std::vector<std::string> resultFileNames() {
   return {kSimplemapFile,   kPlyFile,    kTrajectoryFile,
@@ -38,7 +136,7 @@ std::vector<std::string> resultFileNames() {
 
 void writeResultFiles(const std::string& out_dir, const OutputParams& output,
                       const InitResult& result, const std::vector<TruthSample>& truth) {
-  const std::filesystem::path out(out_dir);
+  const fs::path out(out_dir);
   auto file = [&](const char* name) { return (out / name).string(); };
   if (output.simplemap) writeStaticSimplemap(file(kSimplemapFile), result);
   if (output.ply) writePly(file(kPlyFile), result.static_map);
@@ -56,6 +154,16 @@ void writeResultFiles(const std::string& out_dir, const OutputParams& output,
 int FreeInitApp::run(std::ostream& log) {
   using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
+  const bool multi = params.every > 0 || !params.starts_file.empty();
+  if (params.every < 0 || !std::isfinite(params.every))
+    throw std::invalid_argument("--every must be > 0");
+  if (params.every > 0 && !params.starts_file.empty())
+    throw std::invalid_argument("--every and --starts exclude each other");
+  if (params.start && !(*params.start >= 0)) throw std::invalid_argument("--start must be >= 0");
+  rows.clear();
+  warnings.clear();
+  result = InitResult{};
+  errors_wrt_gt.reset();
 
   // 1. Configuration, echoed.
   config = loadAppConfig(params.config_file);
@@ -63,57 +171,280 @@ int FreeInitApp::run(std::ostream& log) {
   dumpAppConfig(config, effective);
   log << "Effective configuration (" << params.config_file << "):\n" << effective.str() << "\n";
 
-  // 2. Input: read everything, then validate. Any problem throws before an output exists.
+  // 2. The starts.
   log << "Reading " << params.rawlog << "\n";
-  std::vector<RawlogRecord> records;
-  if (params.progress) {
-    ProgressBar inflate(log, "  inflating", "MB", params.progress_terminal, 1e6);
-    ProgressBar parse(log, "  parsing", "MB", params.progress_terminal, 1e6);
-    RawlogReadProgress cb;
-    cb.inflate = [&](std::size_t d, std::size_t t) { inflate.update(d, t); };
-    cb.parse = [&](std::size_t d, std::size_t t) {
-      inflate.finish();
-      parse.update(d, t);
-    };
-    records = readRawlog(params.rawlog, cb);
-    parse.finish(std::to_string(records.size()) + " observations");
-  } else {
-    records = readRawlog(params.rawlog);
+  RawlogReader reader(params.rawlog, params.index);
+  index_used = reader.indexLoaded();
+  if (index_used) log << "  seek index found (" << reader.index().records.size() << " records)\n";
+  std::optional<double> first;
+  if (params.start || multi) {
+    first = reader.firstTime();
+    if (!first) throw InputError(params.rawlog + ": no record has a timestamp");
   }
-  const ValidatedInput in = validateInput(records, config, params.rawlog);
-  for (const auto& w : in.warnings) log << "Warning: " << w << "\n";
-  if (in.invalid_points_dropped > 0)
-    log << "Warning: dropped " << in.invalid_points_dropped << " NaN/inf points\n";
-  log << "Input: " << records.size() << " observations, " << in.imu.size() << " IMU samples ("
-      << std::fixed << std::setprecision(3) << in.imu.front().t << " .. " << in.imu.back().t
-      << "), " << in.frames.size() << " point clouds\n"
-      << std::defaultfloat;
-  if (config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics)
-    log << "Extrinsics from sensorPose: p_bl = " << v3(in.sensor_pose_extrinsics->p_bl) << " m\n";
+  const double from =
+      params.start ? startTime(*params.start, *first) : -std::numeric_limits<double>::infinity();
+  StartPlan plan = StartPlan::single(from);
+  if (params.every > 0) {
+    plan = StartPlan::every(params.start ? from : *first, params.every);
+  } else if (!params.starts_file.empty()) {
+    std::vector<double> t = readStartsFile(params.starts_file);
+    for (double& x : t) x = startTime(x, *first);
+    plan = StartPlan::list(std::move(t));
+  }
+  if (params.start)
+    log << "  start at " << input::formatStamp(from) << " (" << from - *first
+        << " s after the first record)\n";
 
-  // 3. Run the estimator over the observations in file order.
-  FreeInitObservationHandler handler(config);
-  const std::size_t total = records.size();
-  std::size_t done = 0;
-  log << "Estimating\n";
-  ProgressBar bar(log, "  running", "observations", params.progress_terminal);
-  for (const auto& r : records) {
-    try {
-      handler.process(r.obs);
-    } catch (const std::exception& e) {
-      throw InputError(params.rawlog + ": record " + std::to_string(r.index) + ": " + e.what());
+  if (multi && fs::is_directory(params.out_dir)) {
+    // Staging folders an interrupted run left behind.
+    for (const auto& e : fs::directory_iterator(params.out_dir)) {
+      const std::string n = e.path().filename().string();
+      const bool ours = n.rfind(".start_", 0) == 0 &&
+                        (n.size() > 4 && (n.compare(n.size() - 4, 4, ".tmp") == 0 ||
+                                          n.compare(n.size() - 4, 4, ".old") == 0));
+      if (e.is_directory() && ours) fs::remove_all(e.path());
     }
-    ++done;
-    if (params.progress) bar.update(done, total);
-    if (handler.ready()) break;
   }
-  const bool early = handler.ready() && done < total;
-  if (!handler.ready()) handler.finish();
-  if (params.progress)
-    bar.finish(early ? "(state ready: the rest of the input is not needed)" : "");
-  result = handler.result();
-  const InitialState& s = result.state;
 
+  std::vector<TruthSample> truth;
+  const std::string truth_file = truthPathFor(params.rawlog);
+  if (fs::is_regular_file(truth_file)) truth = readTruthCsv(truth_file);
+
+  // 3. One pass: records -> items -> checks -> the sessions whose start has come.
+  ObservationDecoder decoder(config.input);
+  RecordChecker checker(config);
+  std::deque<Slot> active;
+  std::vector<std::string> outside;  // bad records no session took
+  std::optional<std::string> read_error;
+  std::vector<IngestItem> items;
+  std::vector<CheckedItem> checked;
+  ProgressBar bar(log, "  reading", "MB", params.progress_terminal, 1e6);
+  const fs::path out(params.out_dir);
+  int exit_code = 0;
+
+  auto dispatch = [&](const CheckedItem& c) {
+    bool taken = false;
+    for (auto& s : active) {
+      if (s.session->done() || !(c.item.t >= s.start)) continue;
+      s.session->push(c);
+      taken = true;
+    }
+    if (!taken && !c.ok())
+      outside.push_back(params.rawlog + ": record " + std::to_string(c.item.record) + ": " +
+                        c.problem + " (not used: outside every initialization window)");
+  };
+
+  // One start's end: its log lines, outputs and table row. `at_end`: the file ended before its
+  // window closed (listed, but not a failure to initialize).
+  auto finalize = [&](Slot& slot, bool at_end) {
+    InitSession& s = *slot.session;
+    for (const auto& w : s.warnings()) {
+      log << "Warning: " << w << "\n";
+      warnings.push_back(w);
+    }
+    if (!multi) {
+      if (s.failed()) {
+        for (const auto& e : s.errors()) log << "Error: " << e << "\n";
+        const auto n = s.errors().size();
+        throw InputError(s.errors().front() +
+                         (n > 1 ? " (and " + std::to_string(n - 1) + " more, listed above)" : ""));
+      }
+      // The file ended before the window closed.
+      if (!s.ready() || s.result().state.status == InitStatus::NotEnoughData)
+        throw InputError(s.endOfDataReason());
+      result = s.result();
+      log << "Input: " << s.imuCount() << " IMU samples and " << s.frameCount()
+          << " point clouds from " << input::formatStamp(s.firstTime().value_or(0)) << " to "
+          << input::formatStamp(s.lastTime().value_or(0)) << "\n";
+      return;
+    }
+    StartRow row;
+    row.index = slot.index;
+    row.start = slot.start;
+    row.start_offset = slot.start - *first;
+    const std::string name = startFolderName(row.start_offset);
+    if (s.failed()) {
+      row.status = "input_error";
+      for (const auto& e : s.errors()) row.message += (row.message.empty() ? "" : "; ") + e;
+    } else if (!s.ready() || (at_end && s.result().state.status == InitStatus::NotEnoughData)) {
+      // The file ends before the window closes: listed, no outputs.
+      row.status = toString(InitStatus::NotEnoughData);
+      std::ostringstream why;
+      why << std::setprecision(3) << "the recording ends "
+          << s.lastTime().value_or(slot.start) - slot.start
+          << " s after this start, before a window closes";
+      row.message = why.str();
+    } else {
+      const InitResult& r = s.result();
+      row.state = r.state;
+      row.status = toString(r.state.status);
+      row.message = r.state.message;
+      std::optional<TruthErrors> errs;
+      if (r.state.ok()) {
+        row.window_begin = r.trajectory.front().t;
+        if (!truth.empty() && truthAt(truth, r.state.timestamp)) {
+          row.truth = stateNees(r.state, truth);
+          errs = row.truth->errors;
+        }
+      }
+      // The start's set appears whole: written into a staging folder, renamed into place.
+      const fs::path staging = out / ("." + name + ".tmp");
+      fs::remove_all(staging);
+      writeStateSet(staging.string(), config, r, errs, truth, nullptr);
+      swapInto(staging, out / name);
+      row.folder = name;
+    }
+    log << "Start " << row.index << " at " << std::fixed << std::setprecision(3) << row.start_offset
+        << " s: " << row.status << std::defaultfloat
+        << (row.message.empty() ? "" : " (" + row.message + ")");
+    if (row.state && row.state->ok())
+      log << ", |v_b| " << std::setprecision(4) << row.state->v_b().norm() << " m/s"
+          << std::defaultfloat;
+    if (row.truth)
+      log << ", errors: velocity " << row.truth->errors.velocity << " m/s, gravity "
+          << row.truth->errors.gravity_deg << " deg";
+    log << (row.folder.empty() ? "" : " -> " + (out / row.folder).string()) << "\n";
+    const bool cut_by_end = at_end && row.status == toString(InitStatus::NotEnoughData);
+    if (row.status != toString(InitStatus::Ok) && !cut_by_end) exit_code = 3;
+    rows.push_back(std::move(row));
+  };
+
+  auto finalizeDone = [&] {
+    for (auto it = active.begin(); it != active.end();) {
+      if (!it->session->done()) {
+        ++it;
+        continue;
+      }
+      finalize(*it, false);
+      it = active.erase(it);
+    }
+  };
+
+  bool stopped_early = false;
+  for (;;) {
+    if (active.empty() && !params.check_all) {
+      const auto next = plan.peek();
+      if (!next) {
+        stopped_early = !reader.atEnd();
+        break;
+      }
+    }
+    RawlogObject rec;
+    try {
+      // Idle: straight to the next start (no record at or after it: the end).
+      if (active.empty() && !params.check_all && !reader.seekToTime(*plan.peek())) break;
+      if (!reader.next(rec)) break;
+    } catch (const InputError& e) {
+      read_error = e.what();
+      break;
+    }
+    if (params.progress) bar.update(reader.bytesRead(), reader.fileBytes());
+    items.clear();
+    decoder.decode(rec.index, rec.object, items);
+    rec.object.reset();
+    for (auto& item : items) {
+      while (std::isfinite(item.t)) {
+        const auto next = plan.peek();
+        if (!next || item.t < *next) break;
+        active.push_back(
+            {plan.index(), *next, std::make_unique<InitSession>(config, params.rawlog)});
+        plan.pop();
+      }
+      if (active.empty() && !params.check_all) continue;  // before the next start: not needed
+      checked.clear();
+      checker.push(std::move(item), checked);
+      for (const auto& c : checked) dispatch(c);
+    }
+    finalizeDone();
+  }
+  const std::size_t last_record = reader.nextRecord();
+  records_read = reader.recordsDeserialized();
+  read_to_end = reader.atEnd();
+
+  if (read_error) {
+    // Unreadable from here on: the open windows fail; what comes after is not checked.
+    for (auto& s : active) s.session->fail(*read_error);
+    if (!multi && active.empty() && plan.peek()) throw InputError(*read_error);  // not reached
+    if (active.empty() && !plan.peek())
+      outside.push_back(*read_error + "; the rest of the file was not checked");
+  } else if (!stopped_early) {
+    // The end of the file: windows still open close with what is there.
+    checked.clear();
+    checker.finish(checked);
+    for (const auto& c : checked) dispatch(c);
+    for (auto& s : active) s.session->finish();
+  }
+  for (auto& s : active) finalize(s, !read_error);
+  active.clear();
+  if (!multi && plan.peek())
+    throw InputError(params.rawlog + ": no record at or after the start " +
+                     input::formatStamp(*plan.peek()) +
+                     (first ? " (" + std::to_string(*plan.peek() - *first) +
+                                  " s after the first record)"
+                            : std::string()));
+  if (multi) {
+    // Starts the file does not reach.
+    std::size_t k = plan.index();
+    for (double t : plan.rest()) {
+      StartRow row;
+      row.index = k++;
+      row.start = t;
+      row.start_offset = t - *first;
+      row.status = read_error ? "unreadable" : toString(InitStatus::NotEnoughData);
+      row.message = read_error ? *read_error : "no record at or after this start";
+      rows.push_back(row);
+      if (read_error) exit_code = 3;
+    }
+    if (read_error && params.every > 0)
+      log << "Warning: no start from " << std::fixed << std::setprecision(3)
+          << *plan.peek() - *first << std::defaultfloat << " s on: " << *read_error << "\n";
+  }
+  if (params.progress)
+    bar.finish(stopped_early ? "(state ready: the rest of the input is not needed)" : "");
+  for (const auto& w : outside) {
+    log << "Warning: " << w << "\n";
+    warnings.push_back(w);
+  }
+  if (stopped_early)
+    log << "Read up to record " << (last_record == 0 ? 0 : last_record - 1)
+        << "; the rest was not checked (use --check-all)\n";
+  std::string why;
+  index_written = reader.saveIndex(&why);
+  if (!index_written.empty()) log << "Seek index written to " << index_written << "\n";
+  if (!why.empty()) log << "Warning: the seek index could not be written: " << why << "\n";
+
+  if (multi) {
+    fs::create_directories(out);
+    writeFileAtomically((out / kConfigFile).string(),
+                        [&](std::ostream& o) { o << effective.str(); });
+    std::sort(rows.begin(), rows.end(),
+              [](const StartRow& a, const StartRow& b) { return a.index < b.index; });
+    // The table names the set; it is written last. Start folders of an earlier run that this
+    // one did not write would pass for its own: they go.
+    std::set<std::string> ours;
+    for (const auto& r : rows) ours.insert(r.folder);
+    for (const auto& e : fs::directory_iterator(out)) {
+      const std::string n = e.path().filename().string();
+      if (e.is_directory() && n.rfind("start_", 0) == 0 && !ours.count(n) &&
+          fs::exists(e.path() / kStateFile))
+        fs::remove_all(e.path());
+    }
+    if (std::any_of(rows.begin(), rows.end(),
+                    [](const StartRow& r) { return r.state && r.state->ok(); }))
+      renderStartPlot((out / "starts.png").string(), rows, config.output.snapshot_width,
+                      config.output.snapshot_height);
+    writeStartTableCsv((out / "starts.csv").string(), rows);
+    writeStartTableMarkdown((out / "starts.md").string(), rows, params.rawlog,
+                            params.command.empty() ? "freeinit" : params.command);
+    const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
+    std::size_t ok = 0;
+    for (const auto& r : rows) ok += r.status == toString(InitStatus::Ok) ? 1 : 0;
+    log << rows.size() << " start(s), " << ok << " initialized; table in "
+        << (out / "starts.md").string() << " (" << std::setprecision(3) << secs << " s total)\n";
+    return rows.empty() ? 3 : exit_code;
+  }
+
+  const InitialState& s = result.state;
   log << "Initialization: " << toString(s.status)
       << (s.message.empty() ? "" : " (" + s.message + ")") << "\n";
   log << std::fixed << std::setprecision(6) << "  timestamp " << s.timestamp << "\n"
@@ -122,31 +453,23 @@ int FreeInitApp::run(std::ostream& log) {
       << std::defaultfloat << "  points: " << result.diag.points_used << " used, "
       << result.diag.points_rejected << " rejected, " << result.diag.points_skipped
       << " skipped; static start: " << (result.diag.static_start ? "yes" : "no") << "\n";
+  if (config.extrinsics.from_sensor_pose && decoder.firstCloudExtrinsics())
+    log << "Extrinsics from sensorPose: p_bl = " << v3(decoder.firstCloudExtrinsics()->p_bl)
+        << " m\n";
 
   // 4. Ground truth, when it sits beside the rawlog.
-  errors_wrt_gt.reset();
-  std::vector<TruthSample> truth;
-  const std::string truth_file = truthPathFor(params.rawlog);
-  if (std::filesystem::is_regular_file(truth_file)) {
-    truth = readTruthCsv(truth_file);
-    if (s.ok()) {
-      errors_wrt_gt = compareWithTruth(s, truth);
-      log << "Errors w.r.t. ground truth (" << truth_file << "):\n"
-          << "  velocity    " << errors_wrt_gt->velocity << " m/s\n"
-          << "  gravity     " << errors_wrt_gt->gravity_deg << " deg\n"
-          << "  gyro bias   " << errors_wrt_gt->gyro_bias << " rad/s\n"
-          << "  accel bias  " << errors_wrt_gt->accel_bias << " m/s^2\n";
-    }
+  if (!truth.empty() && s.ok()) {
+    errors_wrt_gt = compareWithTruth(s, truth);
+    log << "Errors w.r.t. ground truth (" << truth_file << "):\n"
+        << "  velocity    " << errors_wrt_gt->velocity << " m/s\n"
+        << "  gravity     " << errors_wrt_gt->gravity_deg << " deg\n"
+        << "  gyro bias   " << errors_wrt_gt->gyro_bias << " rad/s\n"
+        << "  accel bias  " << errors_wrt_gt->accel_bias << " m/s^2\n";
   }
 
   // 5. Outputs, each written atomically.
-  const std::filesystem::path out(params.out_dir);
-  std::filesystem::create_directories(out);
-  auto file = [&](const char* name) { return (out / name).string(); };
-  writeFileAtomically(file("effective_config.ini"), [&](std::ostream& o) { o << effective.str(); });
-  writeInitialStateIni(file("initial_state.ini"), s);
-  if (errors_wrt_gt) writeTruthErrors(file("errors_wrt_gt.ini"), *errors_wrt_gt);
-  writeResultFiles(params.out_dir, config.output, result, truth);
+  const std::string effective_text = effective.str();
+  writeStateSet(params.out_dir, config, result, errors_wrt_gt, truth, &effective_text);
   const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
   log << "Outputs in " << out.string() << " (" << std::setprecision(3) << secs << " s total)\n";
   return s.ok() ? 0 : 3;

@@ -1,7 +1,9 @@
 #include <freeinit/mrpt/FreeInitApp.h>
-#include <freeinit/mrpt/FreeInitObservationHandler.h>
 #include <freeinit/mrpt/FreeInitOnlineApp.h>
 #include <freeinit/mrpt/RawlogWriter.h>
+#include <freeinit/mrpt/conversions.h>
+#include <freeinit/mrpt/ingest.h>
+#include <freeinit/mrpt/ingest_sources.h>
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/register.h>
@@ -27,10 +29,18 @@ double secondsBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
 }
 
-// Serializes and compresses the recording (a RawlogWriter) in its own thread, so that writing a
-// large frame does not delay the estimator. The queue is bounded: when the disk cannot keep up,
-// push() waits, and the source's bounded queue then drops (and counts) instead. Destroyed without
-// commit() (an error on the way), it leaves no file behind.
+// What the recorder writes: an item as it was received (its exact stamp, a frame's points shared
+// with the estimator, never changed) and how to label it.
+struct Recorded {
+  IngestItem item;
+  std::string label;
+  Extrinsics extrinsics;  ///< a frame's, as the stream declared it
+};
+
+// Converts the received items to MRPT observations and serializes and compresses them (a
+// RawlogWriter) in its own thread, off the estimator's path. The queue is bounded: when the disk
+// cannot keep up, push() waits, and the source's bounded queue then drops (and counts) instead.
+// Destroyed without commit() (an error on the way), it leaves no file behind.
 class RecordWriter {
  public:
   RecordWriter(const std::string& path, std::size_t max_queued)
@@ -39,11 +49,11 @@ class RecordWriter {
   }
   ~RecordWriter() { stop(); }
 
-  void push(mrpt::obs::CObservation::Ptr obs) {
+  void push(Recorded r) {
     std::unique_lock<std::mutex> lock(mutex_);
     room_.wait(lock, [&] { return queue_.size() < max_queued_ || !error_.empty(); });
     if (!error_.empty()) throw std::runtime_error(error_);
-    queue_.push_back(std::move(obs));
+    queue_.push_back(std::move(r));
     ready_.notify_one();
   }
   /// Writes what is queued, closes the file and renames it onto its path; throws if writing
@@ -64,19 +74,32 @@ class RecordWriter {
     ready_.notify_one();
     if (thread_.joinable()) thread_.join();
   }
+  /// The observation freeinit-sim would have written: stamps on MRPT's clock from the exact
+  /// nanoseconds, the cloud's sensorPose from the declared extrinsics (IMU at the origin).
+  static mrpt::obs::CObservation::Ptr toObservation(const Recorded& r) {
+    const IngestItem& it = r.item;
+    if (it.kind == IngestItem::Kind::Imu) {
+      auto obs = imuToObservation(it.imu, r.label);
+      obs->timestamp = fromUnixNs(*it.stamp_ns);
+      return obs;
+    }
+    auto obs = frameToObservation(0.0, it.frame->points, r.extrinsics, r.label);
+    obs->timestamp = fromUnixNs(*it.stamp_ns);
+    return obs;
+  }
   void loop() {
     for (;;) {
-      mrpt::obs::CObservation::Ptr obs;
+      Recorded r;
       {
         std::unique_lock<std::mutex> lock(mutex_);
         ready_.wait(lock, [&] { return !queue_.empty() || closing_; });
         if (queue_.empty()) return;
-        obs = std::move(queue_.front());
+        r = std::move(queue_.front());
         queue_.pop_front();
       }
       room_.notify_one();
       try {
-        writer_.write(*obs);
+        writer_.write(*toObservation(r));
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex_);
         error_ = std::string("recording: ") + e.what();
@@ -90,7 +113,7 @@ class RecordWriter {
   std::size_t max_queued_;
   std::mutex mutex_;
   std::condition_variable ready_, room_;
-  std::deque<mrpt::obs::CObservation::Ptr> queue_;
+  std::deque<Recorded> queue_;
   bool closing_ = false;
   std::string error_;
   std::thread thread_;
@@ -136,15 +159,50 @@ int FreeInitOnlineApp::run(std::ostream& log) {
     if (on_listening) on_listening(udp->port());
   }
 
-  FreeInitObservationHandler handler(config);
+  // The ingest path, as offline: wire items -> record checks -> one session.
+  const std::string source_name = "live stream";
+  RecordChecker checker(config);
+  InitSession session(config, source_name);
+  const double accel_scale = config.input.imu_accel_in_g ? kGravity : 1.0;
+  std::vector<CheckedItem> checked;
   ready_live = false;
   stats_at_ready = {};
   recorded = 0;
   std::string input_error;
-  bool data_seen = false, end = false;
+  bool data_seen = false, end = false, stopped = false;
   int sessions = 0;
   auto last_data = Clock::now();
   std::vector<net::StreamEvent> events;
+  // The moment the session is done while the stream runs: the state is written, or the input
+  // error stops the run.
+  auto onDone = [&](const net::StreamEvent& e, Clock::time_point t_fed) {
+    if (session.failed()) {
+      input_error = session.errors().front();
+      for (const auto& err : session.errors()) log << "Error: " << err << "\n";
+      return;
+    }
+    const auto t_processed = Clock::now();
+    writeInitialStateIni(state_file, session.result().state);
+    const auto t_written = Clock::now();
+    latency.queue = secondsBetween(e.received, t_fed);
+    latency.estimator = secondsBetween(t_fed, t_processed);
+    latency.write = secondsBetween(t_processed, t_written);
+    latency.total = secondsBetween(e.received, t_written);
+    ready_live = true;
+    stats_at_ready = src->stats();
+    log << std::fixed << std::setprecision(3) << "State written to " << state_file << ": latency "
+        << 1e3 * latency.total << " ms from the receipt of the last needed "
+        << "measurement (queue and conversion " << 1e3 * latency.queue << ", estimator "
+        << 1e3 * latency.estimator << ", write " << 1e3 * latency.write << ")\n"
+        << std::defaultfloat;
+    log << (stats_at_ready.anomalies() > 0 ? "Warning: " : "")
+        << "anomalies_before_ready = " << stats_at_ready.anomalies() << " ("
+        << stats_at_ready.receiver.lost << " datagrams lost, " << stats_at_ready.queue_dropped_imu
+        << " IMU samples and " << stats_at_ready.queue_dropped_frames << " frames dropped, "
+        << stats_at_ready.receiver.frames_incomplete + stats_at_ready.receiver.frames_inconsistent
+        << " frames incomplete or inconsistent)\n";
+    if (params.stop_when_ready) end = true;
+  };
   while (!end) {
     events.clear();
     src->poll(events, 0.05);
@@ -165,7 +223,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
       log << "Maximum duration reached\n";
       break;
     }
-    for (const auto& e : events) {
+    for (auto& e : events) {
       using Kind = net::StreamEvent::Kind;
       if (e.kind == Kind::SessionStart) {
         log << "Sender session " << std::hex << e.session << std::dec
@@ -180,43 +238,31 @@ int FreeInitOnlineApp::run(std::ostream& log) {
         }
         continue;
       }
-      const auto obs = toObservation(e, labels);
-      if (input_error.empty() && !handler.ready()) {
-        const auto t_fed = Clock::now();
-        try {
-          handler.process(obs);
-        } catch (const std::exception& ex) {
-          input_error = "live stream, observation " + std::to_string(recorded) + ": " + ex.what();
-          log << "Error: " << input_error << "\n";
-        }
-        if (handler.ready()) {
-          const auto t_processed = Clock::now();
-          writeInitialStateIni(state_file, handler.result().state);
-          const auto t_written = Clock::now();
-          latency.queue = secondsBetween(e.received, t_fed);
-          latency.estimator = secondsBetween(t_fed, t_processed);
-          latency.write = secondsBetween(t_processed, t_written);
-          latency.total = secondsBetween(e.received, t_written);
-          ready_live = true;
-          stats_at_ready = src->stats();
-          log << std::fixed << std::setprecision(3) << "State written to " << state_file
-              << ": latency " << 1e3 * latency.total << " ms from the receipt of the last needed "
-              << "measurement (queue and conversion " << 1e3 * latency.queue << ", estimator "
-              << 1e3 * latency.estimator << ", write " << 1e3 * latency.write << ")\n"
-              << std::defaultfloat;
-          log << (stats_at_ready.anomalies() > 0 ? "Warning: " : "")
-              << "anomalies_before_ready = " << stats_at_ready.anomalies() << " ("
-              << stats_at_ready.receiver.lost << " datagrams lost, "
-              << stats_at_ready.queue_dropped_imu << " IMU samples and "
-              << stats_at_ready.queue_dropped_frames << " frames dropped, "
-              << stats_at_ready.receiver.frames_incomplete +
-                     stats_at_ready.receiver.frames_inconsistent
-              << " frames incomplete or inconsistent)\n";
-          if (params.stop_when_ready) end = true;
-        }
+      const auto t_fed = Clock::now();
+      const Extrinsics declared = e.frame.extrinsics;
+      auto item = itemFromStream(std::move(e), recorded, accel_scale);
+      if (!item) continue;
+      if (rec) {
+        const bool imu = item->kind == IngestItem::Kind::Imu;
+        Recorded r;
+        r.item.kind = item->kind;
+        r.item.stamp_ns = item->stamp_ns;
+        r.item.imu = item->imu;
+        r.item.imu.accel = e.imu.accel;  // as received (the rawlog decoder applies the unit)
+        r.item.frame = item->frame;
+        r.label = imu ? labels.imu : labels.lidar;
+        r.extrinsics = declared;
+        rec->push(std::move(r));
       }
-      if (rec) rec->push(obs);
       ++recorded;
+      if (stopped || session.done()) continue;
+      checked.clear();
+      checker.push(std::move(*item), checked);
+      for (const auto& c : checked) session.push(c);
+      if (session.done()) {
+        onDone(e, t_fed);
+        if (!input_error.empty()) stopped = true;
+      }
       if (end) break;
     }
     if (!input_error.empty()) break;
@@ -249,15 +295,20 @@ int FreeInitOnlineApp::run(std::ostream& log) {
         << " datagrams or items lost, dropped or rejected (see stream_stats.ini)\n";
   if (!input_error.empty()) throw InputError(input_error);
 
-  if (!handler.ready()) {
-    try {
-      handler.finish();
-    } catch (const std::invalid_argument& ex) {
-      throw InputError(std::string("live stream: ") + ex.what());
+  if (!session.done()) {
+    checked.clear();
+    checker.finish(checked);
+    for (const auto& c : checked) session.push(c);
+    session.finish();
+    if (session.failed()) {
+      for (const auto& err : session.errors()) log << "Error: " << err << "\n";
+      throw InputError(session.errors().front());
     }
-    writeInitialStateIni(state_file, handler.result().state);
+    if (!session.ready()) throw InputError(session.endOfDataReason());
+    writeInitialStateIni(state_file, session.result().state);
   }
-  result = handler.result();
+  for (const auto& w : session.warnings()) log << "Warning: " << w << "\n";
+  result = session.result();
   writeResultFiles(params.out_dir, config.output, result, {});
   log << "Initialization: " << toString(result.state.status)
       << (result.state.message.empty() ? "" : " (" + result.state.message + ")") << "\n";

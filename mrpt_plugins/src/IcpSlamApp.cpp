@@ -221,11 +221,10 @@ int IcpSlamApp::run(std::ostream& log) {
     throw std::invalid_argument(params.icp_ini +
                                 ": needs the [MappingApplication] and [ICP] "
                                 "sections of the icp-slam app");
-  const ScanSliceParams slice = loadScanSliceParams(ini, params.icp_ini);
+  const ScanSliceParams slice = loadScanSliceParams(params.icp_ini);
   AppConfig config = loadAppConfig(params.freeinit_ini);
   log << "Reading " << params.rawlog << "\n";
-  const auto records = readRawlog(params.rawlog);
-  const ValidatedInput in = validateInput(records, config, params.rawlog);
+  const ValidatedInput in = readRecording(params.rawlog, config);
   for (const auto& w : in.warnings) log << "Warning: " << w << "\n";
   if (config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics)
     config.core.extrinsics = *in.sensor_pose_extrinsics;

@@ -1,6 +1,6 @@
+#include <freeinit/atomic_file.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/register.h>
 #include <mrpt/io/CStream.h>
 #include <mrpt/obs/CObservation.h>

@@ -3,107 +3,84 @@
 #include <freeinit/mrpt/ground_truth.h>
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/register.h>
+#include <freeinit/sim/random_scenario.h>
+#include <freeinit/sim/scenario_ini.h>
 #include <freeinit/sim/simulator.h>
 #include <mrpt/config/CConfigFile.h>
 
-#include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <iomanip>
 #include <ostream>
-#include <set>
 #include <sstream>
 #include <stdexcept>
 
 namespace freeinit::mrpt_glue {
 namespace {
 
-// The [scenario] section of `file` over its base preset; every unknown key is an error.
+// The [scenario] section of `file` over its base (sim/scenario_ini.h); every unknown key is an
+// error.
 sim::ScenarioConfig loadScenario(const std::string& file, const SimAppParams& p) {
   if (!std::filesystem::is_regular_file(file))
     throw std::invalid_argument(file + ": scenario file not found");
   mrpt::config::CConfigFile cfg(file);
   const std::string sec = "scenario";
   if (!cfg.sectionExists(sec)) throw std::invalid_argument(file + ": no [scenario] section");
-  auto fail = [&](const std::string& key, const std::string& why) {
-    throw std::invalid_argument(file + ": [" + sec + "] " + key + ": " + why);
-  };
-  const std::string base = cfg.read_string(sec, "preset", p.preset);
-  const auto seed = static_cast<std::uint64_t>(cfg.read_uint64_t(sec, "seed", p.seed));
-  sim::ScenarioConfig sc;
-  try {
-    sc = sim::preset(base, seed);
-  } catch (const std::exception& e) {
-    fail("preset", e.what());
-  }
-  std::set<std::string> known = {"preset", "seed"};
-  auto num = [&](const char* key, double& x, double min_exclusive) {
-    known.insert(key);
-    if (!cfg.keyExists(sec, key)) return;
-    x = cfg.read_double(sec, key, x);
-    if (!std::isfinite(x) || !(x > min_exclusive))
-      fail(key, "must be a number > " + std::to_string(min_exclusive));
-  };
-  auto integer = [&](const char* key, int& x) {
-    known.insert(key);
-    if (!cfg.keyExists(sec, key)) return;
-    x = cfg.read_int(sec, key, x);
-    if (x <= 0) fail(key, "must be > 0");
-  };
-  auto vec = [&](const char* key, Vec3& v) {
-    known.insert(key);
-    if (!cfg.keyExists(sec, key)) return false;
-    std::istringstream is(cfg.read_string(sec, key, ""));
-    std::string rest;
-    if (!(is >> v.x() >> v.y() >> v.z()) || (is >> rest) || !v.allFinite())
-      fail(key, "expected three numbers \"x y z\"");
-    return true;
-  };
-  num("t0", sc.t0, 0);
-  num("duration", sc.duration, 0);
-  integer("points_per_frame", sc.points_per_frame);
-  integer("lines", sc.lines);
-  num("frame_rate", sc.frame_rate, 0);
-  num("hfov_deg", sc.hfov_deg, 0);
-  num("vfov_deg", sc.vfov_deg, 0);
-  num("min_range", sc.min_range, 0);
-  num("max_range", sc.max_range, sc.min_range);
-  num("range_sigma", sc.range_sigma, -1e-300);
-  num("doppler_sigma", sc.doppler_sigma, -1e-300);
-  num("outlier_ratio", sc.outlier_ratio, -1e-300);
-  if (sc.outlier_ratio > 1) fail("outlier_ratio", "must be in [0, 1]");
-  num("imu_rate", sc.imu_rate, 0);
-  num("gyro_sigma", sc.gyro_sigma, -1e-300);
-  num("accel_sigma", sc.accel_sigma, -1e-300);
-  const bool biases_given = vec("b_g", sc.b_g) | vec("b_a", sc.b_a);
-  known.insert("random_biases");
-  sc.random_biases = cfg.read_bool(sec, "random_biases", !biases_given);
   std::vector<std::string> keys;
   cfg.getAllKeys(sec, keys);
-  for (const auto& k : keys)
-    if (!known.count(k)) fail(k, "unknown key");
-  return sc;
+  sim::ScenarioKeyValues section;
+  for (const auto& k : keys) section.emplace_back(k, cfg.read_string(sec, k, ""));
+  try {
+    return sim::scenarioFromKeys(section, {p.preset, p.seed});
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(file + ": [" + sec + "] " + e.what());
+  }
+}
+
+bool sameExtrinsics(const Extrinsics& a, const Extrinsics& b) {
+  return a.R_bl == b.R_bl && a.p_bl == b.p_bl;
 }
 
 }  // namespace
 
+std::string SimApp::scenarioKeys() { return sim::scenarioKeysHelp(); }
+
 void SimApp::run(std::ostream& log) {
   registerClasses();
-  sim::ScenarioConfig sc = params.scenario_file.empty()
-                               ? sim::preset(params.preset, params.seed)
-                               : loadScenario(params.scenario_file, params);
+  if (params.random && !params.scenario_file.empty())
+    throw std::invalid_argument("a random scenario and a scenario file cannot both be given");
+  sim::ScenarioConfig sc;
+  sim::RandomScenarioInfo info;  // what a random scenario drew
+  if (params.random) {
+    const sim::RandomScenario r = sim::drawRandomScenario(params.seed);
+    sc = r.config;
+    info = r.info;
+  } else if (!params.scenario_file.empty()) {
+    sc = loadScenario(params.scenario_file, params);
+  } else {
+    sc = sim::preset(params.preset, params.seed);
+  }
   if (params.duration > 0) sc.duration = params.duration;
   if (params.points_per_frame > 0) sc.points_per_frame = params.points_per_frame;
-  log << "Simulating preset " << sc.name << " (seed " << sc.seed << ", " << sc.duration << " s, "
-      << sc.points_per_frame << " points/frame, IMU " << sc.imu_rate << " Hz)...\n";
+  log << "Simulating " << (sc.name == "random" ? "random scenario " : "preset ")
+      << (sc.name == "random" ? std::to_string(sc.seed) : sc.name) << " (seed " << sc.seed << ", "
+      << sc.duration << " s, " << sc.points_per_frame << " points/frame, IMU " << sc.imu_rate
+      << " Hz)...\n";
   const sim::Recording rec = sim::simulate(sc);
+  std::vector<std::string> drawn;
+  if (params.random) {
+    sim::measureMovingPoints(info, rec);
+    drawn = sim::describe(info);
+  }
+  for (const auto& line : drawn) log << "  " << line << "\n";
 
   const std::string out = params.output;
   const std::string stem = rawlogStem(out);
+  const bool declared_true = sameExtrinsics(rec.declared_extrinsics, rec.extrinsics);
 
   // The rawlog: observations only, merged by timestamp (IMU first on ties).
   const double g_scale = params.accel_in_g ? 1.0 / kGravity : 1.0;
-  RawlogWriter rawlog(out, rec.extrinsics, params.imu_label, params.lidar_label);
+  // It carries what a user would declare (possibly wrong), and the LiDAR stamps on their clock.
+  RawlogWriter rawlog(out, rec.declared_extrinsics, params.imu_label, params.lidar_label);
   std::size_t i = 0, k = 0;
   while (i < rec.imu.size() || k < rec.frames.size()) {
     const bool take_imu =
@@ -143,11 +120,32 @@ void SimApp::run(std::ostream& log) {
         << t.p_w.z() << " " << t.q_wb.x() << " " << t.q_wb.y() << " " << t.q_wb.z() << " "
         << t.q_wb.w() << "\n";
   });
-  writeExtrinsicsIni(stem + ".extrinsics.ini", rec.extrinsics,
-                     "true extrinsics of " + out + " (also in each point cloud's sensorPose)");
+  writeExtrinsicsIni(stem + ".extrinsics.ini", rec.declared_extrinsics,
+                     declared_true
+                         ? "true extrinsics of " + out + " (also in each point cloud's sensorPose)"
+                         : "declared (not the true) extrinsics of " + out +
+                               " (also in each point cloud's sensorPose); the truth is "
+                               "in " +
+                               stem + ".truth_extrinsics.ini");
+  std::ostringstream clock;
+  clock << std::setprecision(17) << rec.lidar_time_offset;
+  writeExtrinsicsIni(stem + ".truth_extrinsics.ini", rec.extrinsics,
+                     "true extrinsics of " + out +
+                         "; true LiDAR clock offset: LiDAR stamps = IMU "
+                         "time + " +
+                         clock.str() + " s");
+  std::vector<std::string> comments = {"scenario of " + out +
+                                       ", written by freeinit-sim: `freeinit-sim -c " + stem +
+                                       ".scenario.ini -o X.rawlog` simulates the same recording"};
+  comments.insert(comments.end(), drawn.begin(), drawn.end());
+  sim::writeScenarioIni(stem + ".scenario.ini", sc, comments);
   log << "Wrote " << out << " (" << records_written << " records: " << rec.imu.size() << " IMU, "
       << rec.frames.size() << " point clouds), " << stem << ".truth.csv, " << stem
-      << ".truth_tum.txt, " << stem << ".extrinsics.ini\n";
+      << ".truth_tum.txt, " << stem << ".extrinsics.ini, " << stem << ".truth_extrinsics.ini, "
+      << stem << ".scenario.ini\n";
+  if (!declared_true || rec.lidar_time_offset != 0)
+    log << "The declared calibration is wrong on purpose (the truth: " << stem
+        << ".truth_extrinsics.ini)\n";
   log << std::setprecision(6) << "True biases: b_g = " << rec.b_g.transpose()
       << " rad/s, b_a = " << rec.b_a.transpose() << " m/s^2\n";
 }

@@ -1,7 +1,6 @@
 #include <freeinit/mrpt/StreamApp.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/input_validator.h>
-#include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/stream_conversions.h>
 #include <freeinit/net/udp_socket.h>
 #include <freeinit/sim/simulator.h>
@@ -29,34 +28,35 @@ struct Slot {
   std::size_t chunk = 0;
 };
 
-// The rawlog through the offline app's validator (the same labels, extrinsics from sensorPose,
-// unit and Doppler checks); the messages are built from the observations themselves so that the
-// stamps stay exact (the validator's are seconds in a double).
+// The rawlog through the ingest path (the same labels, extrinsics from sensorPose, unit and
+// Doppler checks as freeinit), with the exact stamps of the observations.
 Messages fromRawlog(const StreamAppParams& p) {
   AppConfig cfg;
   cfg.input.imu_label = p.imu_label;
   cfg.input.lidar_label = p.lidar_label;
   cfg.input.imu_accel_in_g = p.imu_accel_in_g;
   cfg.input.min_imu_rate = 0;       // the receiver judges the rate
-  cfg.core.window.imu_samples = 0;  // any length can be streamed
-  const std::vector<RawlogRecord> records = readRawlog(p.rawlog);
-  const ValidatedInput in = validateInput(records, cfg, p.rawlog);
+  cfg.core.window.duration = 0;     // any length can be streamed
+  ValidatedInput in = readRecording(p.rawlog, cfg);
+  if (in.imu_stamp_ns.size() != in.imu.size() || in.frame_stamp_ns.size() != in.frames.size())
+    throw InputError(p.rawlog + ": timestamps outside the stream's range 1970 .. 2116");
   const Extrinsics extrinsics = in.sensor_pose_extrinsics.value_or(Extrinsics{});
-  const double accel_scale = p.imu_accel_in_g ? kGravity : 1.0;
   Messages m;
-  for (const auto& r : records) {
-    try {
-      if (auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(r.obs)) {
-        if (!p.imu_label.empty() && imu->sensorLabel != p.imu_label) continue;
-        m.imu.push_back(imuMessage(*imu));
-        m.imu.back().accel *= accel_scale;  // the wire carries m/s^2
-      } else if (auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(r.obs)) {
-        if (!p.lidar_label.empty() && pc->sensorLabel != p.lidar_label) continue;
-        m.frames.push_back(frameMessage(*pc, extrinsics));
-      }
-    } catch (const std::exception& e) {
-      throw InputError(p.rawlog + ": record " + std::to_string(r.index) + ": " + e.what());
-    }
+  m.imu.reserve(in.imu.size());
+  for (std::size_t i = 0; i < in.imu.size(); ++i) {
+    net::ImuMessage msg;
+    msg.stamp_ns = in.imu_stamp_ns[i];
+    msg.gyro = in.imu[i].gyro;
+    msg.accel = in.imu[i].accel;  // in m/s^2 (the reader applied the declared unit)
+    m.imu.push_back(msg);
+  }
+  m.frames.reserve(in.frames.size());
+  for (std::size_t i = 0; i < in.frames.size(); ++i) {
+    net::FrameMessage msg;
+    msg.stamp_ns = in.frame_stamp_ns[i];
+    msg.extrinsics = extrinsics;
+    msg.points = std::move(in.frames[i].points);
+    m.frames.push_back(std::move(msg));
   }
   return m;
 }

@@ -1,3 +1,4 @@
+#include <freeinit/input_checks.h>
 #include <freeinit/mrpt/CPointsMapDoppler.h>
 #include <freeinit/mrpt/conversions.h>
 #include <mrpt/math/CMatrixFixed.h>
@@ -61,7 +62,6 @@ LidarFrame frameFromObservation(const CObservationPointCloud& obs) {
   const auto& xs = map->getPointsBufferRef_x();
   const auto& ys = map->getPointsBufferRef_y();
   const auto& zs = map->getPointsBufferRef_z();
-  bool sorted = true;
   for (std::size_t i = 0; i < n; ++i) {
     DopplerPoint& p = f.points[i];
     p.p_l = Eigen::Vector3f(xs[i], ys[i], zs[i]);
@@ -69,13 +69,8 @@ LidarFrame frameFromObservation(const CObservationPointCloud& obs) {
     p.time_offset = map->timeOffset(i);
     p.intensity = map->intensity(i);
     p.line = map->line(i);
-    if (i > 0 && p.time_offset < f.points[i - 1].time_offset) sorted = false;
   }
-  if (!sorted) {
-    std::stable_sort(
-        f.points.begin(), f.points.end(),
-        [](const DopplerPoint& a, const DopplerPoint& b) { return a.time_offset < b.time_offset; });
-  }
+  input::sortByTime(f);
   return f;
 }
 

@@ -1,6 +1,6 @@
+#include <freeinit/config_section.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/icp_slam_bridge.h>
-#include <mrpt/config/CConfigFileBase.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CObservationPointCloud.h>
@@ -20,30 +20,34 @@ double yawOf(const Mat3& R) { return std::atan2(R(1, 0), R(0, 0)); }
 
 }  // namespace
 
-ScanSliceParams loadScanSliceParams(const mrpt::config::CConfigFileBase& ini,
-                                    const std::string& file) {
-  const std::string sec = "freeinit_scan";
-  std::vector<std::string> keys;
-  ini.getAllKeys(sec, keys);
-  for (const auto& key : keys) {
-    if (key != "z_min" && key != "z_max" && key != "bins" && key != "max_range" &&
-        key != "min_range" && key != "deskew_with_odometry")
-      throw std::invalid_argument(file + ": [" + sec + "] unknown key '" + key + "'");
-  }
+const config::Section<ScanSliceParams>& scanSliceSection() {
+  using P = ScanSliceParams;
+  using config::between;
+  static const auto s =
+      config::Section<P>("freeinit_scan",
+                         "the horizontal slice each LiDAR frame is reduced to for icp-slam")
+          .number("z_min", &P::z_min, "m", between(-100, 100),
+                  "slice bottom, above the body (IMU) origin in the levelled frame")
+          .number("z_max", &P::z_max, "m", between(-100, 100), "slice top")
+          .number("bins", &P::bins, "-", between(3, 100000), "bearing bins over 180 deg")
+          .number("max_range", &P::max_range, "m", config::aboveUpTo(0, 1e4),
+                  "farther points are dropped")
+          .number("min_range", &P::min_range, "m", between(0, 1e3), "closer points are dropped")
+          .flag("deskew_with_odometry", &P::deskew_with_odometry,
+                "odometry mode: move every point to the frame's mean time through the "
+                "Doppler-inertial odometry")
+          .check([](const P& p, const config::Checker& c) {
+            if (!(p.z_max > p.z_min)) c.fail("z_max", "must be greater than z_min");
+            if (!(p.max_range > p.min_range)) c.fail("max_range", "must be greater than min_range");
+          });
+  return s;
+}
+
+ScanSliceParams loadScanSliceParams(const std::string& file) {
+  const std::string section = scanSliceSection().name();
+  const auto ini = config::IniFile::load(file, {{section}});
   ScanSliceParams p;
-  p.z_min = ini.read_double(sec, "z_min", p.z_min);
-  p.z_max = ini.read_double(sec, "z_max", p.z_max);
-  p.bins = ini.read_int(sec, "bins", p.bins);
-  p.max_range = ini.read_double(sec, "max_range", p.max_range);
-  p.min_range = ini.read_double(sec, "min_range", p.min_range);
-  p.deskew_with_odometry = ini.read_bool(sec, "deskew_with_odometry", p.deskew_with_odometry);
-  auto bad = [&](const char* key, const std::string& why) {
-    throw std::invalid_argument(file + ": [" + sec + "] " + key + ": " + why);
-  };
-  if (!(p.z_max > p.z_min)) bad("z_max", "must be greater than z_min");
-  if (p.bins < 3 || p.bins > 100000) bad("bins", "must be in [3, 100000]");
-  if (!(p.min_range >= 0)) bad("min_range", "must be >= 0");
-  if (!(p.max_range > p.min_range)) bad("max_range", "must be greater than min_range");
+  scanSliceSection().load(ini, p);
   return p;
 }
 

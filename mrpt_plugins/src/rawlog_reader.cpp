@@ -1,83 +1,315 @@
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/register.h>
-#include <mrpt/io/CFileGZInputStream.h>
-#include <mrpt/io/CMemoryStream.h>
+#include <mrpt/core/Clock.h>
 #include <mrpt/obs/CActionCollection.h>
+#include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
+#include "gz_input.h"
+
 namespace freeinit::mrpt_glue {
+namespace {
 
-std::vector<RawlogRecord> readRawlog(const std::string& path, const RawlogReadProgress& progress) {
-  registerClasses();
-  if (!std::filesystem::is_regular_file(path)) throw InputError(path + ": file not found");
+constexpr std::int64_t kNoTime = std::numeric_limits<std::int64_t>::min();
 
-  // Decompress everything (gzip or plain) so that "end of data" is known exactly.
-  std::vector<unsigned char> data;
-  {
-    mrpt::io::CFileGZInputStream f;
-    std::string err;
-    if (!f.open(path, err)) throw InputError(path + ": cannot open: " + err);
-    const auto file_bytes = static_cast<std::size_t>(f.getTotalBytesCount());
-    std::vector<unsigned char> chunk(1 << 20);
-    for (;;) {
-      const std::size_t n = f.Read(chunk.data(), chunk.size());
-      if (n == 0) break;
-      data.insert(data.end(), chunk.begin(), chunk.begin() + static_cast<std::ptrdiff_t>(n));
-      if (progress.inflate)
-        progress.inflate(std::min(static_cast<std::size_t>(f.getPosition()), file_bytes),
-                         file_bytes);
-    }
-    if (progress.inflate) progress.inflate(file_bytes, file_bytes);
+double ticksToUnix(std::int64_t ticks) {
+  return mrpt::Clock::toDouble(mrpt::Clock::time_point(mrpt::Clock::duration(ticks)));
+}
+
+std::int64_t ticksOf(const mrpt::obs::CObservation& o) {
+  if (o.timestamp == INVALID_TIMESTAMP) return kNoTime;
+  return static_cast<std::int64_t>(o.timestamp.time_since_epoch().count());
+}
+
+/// The index entry of a deserialized record (offset set by the caller).
+IndexedRecord describe(const mrpt::serialization::CSerializable& obj) {
+  IndexedRecord r;
+  r.ticks = kNoTime;
+  if (const auto* o = dynamic_cast<const mrpt::obs::CObservation*>(&obj)) {
+    r.ticks = ticksOf(*o);
+    r.kind = dynamic_cast<const mrpt::obs::CObservationIMU*>(o) != nullptr ? IndexedRecord::kImu
+             : dynamic_cast<const mrpt::obs::CObservationPointCloud*>(o) != nullptr
+                 ? IndexedRecord::kPointCloud
+                 : IndexedRecord::kObservation;
+  } else if (const auto* sf = dynamic_cast<const mrpt::obs::CSensoryFrame*>(&obj)) {
+    r.kind = IndexedRecord::kSensoryFrame;
+    for (const auto& so : *sf)
+      if (so) r.ticks = std::max(r.ticks, ticksOf(*so));
+  } else if (dynamic_cast<const mrpt::obs::CActionCollection*>(&obj) != nullptr) {
+    r.kind = IndexedRecord::kAction;
   }
-  if (data.empty()) throw InputError(path + ": empty file (no rawlog records)");
+  return r;
+}
 
-  mrpt::io::CMemoryStream mem;
-  mem.assignMemoryNotOwn(data.data(), data.size());
-  auto arch = mrpt::serialization::archiveFrom(mem);
+/// MRPT exceptions carry nested messages and a backtrace: keep the "Message:" lines.
+std::string mrptCause(const std::exception& e) {
+  std::string cause;
+  std::istringstream lines(e.what());
+  for (std::string l; std::getline(lines, l);) {
+    if (l.rfind("Message:", 0) != 0) continue;
+    l.erase(0, l.find_first_not_of(' ', 8));
+    cause += (cause.empty() ? "" : " <- ") + l;
+  }
+  return cause.empty() ? std::string(e.what()) : cause;
+}
 
-  std::vector<RawlogRecord> out;
-  for (std::size_t index = 0; mem.getPosition() < data.size(); ++index) {
-    const auto start = mem.getPosition();
+}  // namespace
+
+struct RawlogReader::Impl {
+  std::string path;
+  RawlogIndexPolicy policy;
+  detail::GzInput in;
+  std::unique_ptr<mrpt::serialization::CArchive> archive;
+  RawlogIndex index;
+  bool index_loaded = false;
+  std::string index_from;  ///< where the index was loaded from ("" if built here)
+  std::size_t initial_records = 0, initial_points = 0;
+  bool initial_complete = false;
+  std::size_t next = 0;                 ///< number of the record at the stream position
+  std::optional<RawlogObject> pending;  ///< read ahead by seekToTime / firstTime
+  std::size_t deserialized = 0;
+  bool at_end = false;
+
+  std::string at(std::size_t record) const {
+    return path + ": record " + std::to_string(record) + ": ";
+  }
+
+  bool readOne(RawlogObject& out) {
+    if (in.atEnd()) {
+      if (!in.error().empty()) throw InputError(at(next) + "cannot be read: " + in.error());
+      if (in.truncated())
+        throw InputError(at(next) +
+                         "the file ends inside the gzip stream (truncated file; records 0.." +
+                         std::to_string(next == 0 ? 0 : next - 1) + " are whole)");
+      if (next == 0) throw InputError(path + ": empty file (no rawlog records)");
+      if (next == index.records.size()) index.complete = true;
+      at_end = true;
+      return false;
+    }
+    const std::uint64_t start = in.getPosition();
     mrpt::serialization::CSerializable::Ptr obj;
     try {
-      obj = arch.ReadObject();
+      obj = archive->ReadObject();
     } catch (const std::exception& e) {
-      // MRPT exceptions carry nested messages and a backtrace: keep the "Message:" lines.
-      std::string cause;
-      std::istringstream lines(e.what());
-      for (std::string l; std::getline(lines, l);) {
-        if (l.rfind("Message:", 0) != 0) continue;
-        l.erase(0, l.find_first_not_of(' ', 8));
-        cause += (cause.empty() ? "" : " <- ") + l;
-      }
-      if (cause.empty()) cause = e.what();
-      const bool at_end = mem.getPosition() >= data.size();
-      throw InputError(
-          path + ": record " + std::to_string(index) + " (byte " + std::to_string(start) + " of " +
-          std::to_string(data.size()) + " decompressed) cannot be read: " +
-          (at_end ? "the file ends inside this record (truncated file)"
-                  : "corrupted data or a class that is not registered (rawlogs with Doppler "
-                    "clouds need the freeinit_mrpt plugin)") +
-          ". MRPT: " + cause);
+      const bool ended = in.atEnd();
+      std::string why;
+      if (!in.error().empty())
+        why = in.error();
+      else if (ended)
+        why = "the file ends inside this record (truncated file)";
+      else
+        why =
+            "corrupted data or a class that is not registered (rawlogs with Doppler clouds need "
+            "the freeinit_mrpt plugin)";
+      throw InputError(at(next) + "(byte " + std::to_string(start) +
+                       " of the decompressed stream) cannot be read: " + why +
+                       ". MRPT: " + mrptCause(e));
     }
-    if (progress.parse) progress.parse(static_cast<std::size_t>(mem.getPosition()), data.size());
-    if (!obj) {
-      throw InputError(path + ": record " + std::to_string(index) + ": null object");
+    if (!obj) throw InputError(at(next) + "null object");
+    IndexedRecord entry = describe(*obj);
+    entry.offset = start;
+    if (next == index.records.size()) {
+      index.records.push_back(entry);
+      index.covered = in.getPosition();
     }
-    if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(obj)) {
-      out.push_back({index, o});
-    } else if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(obj)) {
-      for (const auto& so : *sf) out.push_back({index, so});
-    } else if (std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(obj)) {
-      continue;  // odometry actions are not used
+    out.index = next++;
+    out.object = std::move(obj);
+    out.t.reset();
+    if (entry.ticks != kNoTime) out.t = ticksToUnix(entry.ticks);
+    ++deserialized;
+    return true;
+  }
+
+  /// Moves the stream to `offset` of the decompressed data, where record `record` starts.
+  void seekTo(std::uint64_t offset, std::size_t record) {
+    pending.reset();
+    at_end = false;
+    const std::uint64_t pos = in.getPosition();
+    bool ok;
+    if (!in.gzip()) {
+      AccessPoint p;
+      p.out = offset;
+      in.resume(p);
+      ok = true;
+    } else if (offset >= pos && offset - pos <= index.spacing) {
+      ok = in.discard(offset - pos);
+    } else if (const AccessPoint* p = index.pointBefore(offset);
+               p != nullptr && (p->out > pos || offset < pos)) {
+      in.resume(*p);
+      ok = in.discard(offset - p->out);
+    } else if (offset < pos) {
+      in.rewind();
+      ok = in.discard(offset);
     } else {
-      throw InputError(path + ": record " + std::to_string(index) + ": unexpected class " +
-                       obj->GetRuntimeClass()->className + " in a rawlog");
+      ok = in.discard(offset - pos);
+    }
+    if (!ok)
+      throw InputError(path + ": the data end before record " + std::to_string(record) +
+                       " that its index lists (a stale index: delete it)");
+    next = record;
+  }
+};
+
+RawlogReader::RawlogReader(std::string path, RawlogIndexPolicy policy)
+    : impl_(std::make_unique<Impl>()) {
+  registerClasses();
+  auto& m = *impl_;
+  m.path = std::move(path);
+  m.policy = std::move(policy);
+  if (!std::filesystem::is_regular_file(m.path)) throw InputError(m.path + ": file not found");
+  try {
+    m.in.open(m.path);
+  } catch (const std::exception& e) {
+    throw InputError(m.path + ": cannot open: " + e.what());
+  }
+  if (m.in.fileBytes() == 0) throw InputError(m.path + ": empty file (no rawlog records)");
+  if (m.policy.use) {
+    try {
+      const RawlogIdentity id = rawlogIdentity(m.path);
+      for (const auto& candidate :
+           {indexPathBeside(m.path), indexPathInCache(m.path, m.policy.cache_dir)}) {
+        if (loadRawlogIndex(candidate, id, m.index) && m.index.gzip == m.in.gzip()) {
+          m.index_loaded = true;
+          m.index_from = candidate;
+          break;
+        }
+      }
+      if (!m.index_loaded) {
+        m.index = RawlogIndex{};
+        m.index.identity = id;
+        m.index.gzip = m.in.gzip();
+        m.index.spacing = std::max<std::uint64_t>(m.policy.spacing, 2 * detail::GzInput::kWindow);
+      }
+    } catch (const std::exception&) {
+      m.policy.use = false;  // the index is an optimization: without it the reader still works
+    }
+  }
+  m.initial_records = m.index.records.size();
+  m.initial_points = m.index.points.size();
+  m.initial_complete = m.index.complete;
+  if (m.in.gzip() && m.policy.use) m.in.recordAccessPoints(&m.index.points, m.index.spacing);
+  m.archive = mrpt::serialization::archiveUniquePtrFrom(m.in);
+}
+
+RawlogReader::~RawlogReader() = default;
+
+const std::string& RawlogReader::path() const { return impl_->path; }
+
+bool RawlogReader::next(RawlogObject& out) {
+  auto& m = *impl_;
+  if (m.pending) {
+    out = std::move(*m.pending);
+    m.pending.reset();
+    return true;
+  }
+  if (m.at_end) return false;
+  return m.readOne(out);
+}
+
+bool RawlogReader::seekToTime(double t) {
+  auto& m = *impl_;
+  if (m.pending) {
+    if (m.pending->t && *m.pending->t >= t) return true;
+    m.pending.reset();
+  }
+  if (m.at_end) return false;
+  // Within the index: jump.
+  for (std::size_t r = m.next; r < m.index.records.size(); ++r) {
+    const auto& e = m.index.records[r];
+    if (e.ticks == kNoTime || !(ticksToUnix(e.ticks) >= t)) continue;
+    if (r != m.next) m.seekTo(e.offset, r);
+    return true;
+  }
+  if (m.index.complete) {
+    m.at_end = true;
+    return false;
+  }
+  // Beyond it: from its end, record by record.
+  if (m.next < m.index.records.size()) m.seekTo(m.index.covered, m.index.records.size());
+  RawlogObject rec;
+  while (m.readOne(rec)) {
+    if (rec.t && *rec.t >= t) {
+      m.pending = std::move(rec);
+      return true;
+    }
+  }
+  return false;
+}
+
+std::optional<double> RawlogReader::firstTime() {
+  auto& m = *impl_;
+  for (const auto& e : m.index.records)
+    if (e.ticks != kNoTime) return ticksToUnix(e.ticks);
+  if (m.pending && m.pending->t) return m.pending->t;
+  if (m.next != 0 || m.pending) return std::nullopt;  // only asked before reading anything
+  RawlogObject rec;
+  while (m.readOne(rec)) {
+    if (rec.t) {
+      const double t = *rec.t;
+      m.pending = std::move(rec);
+      return t;
+    }
+  }
+  return std::nullopt;
+}
+
+std::uint64_t RawlogReader::fileBytes() const { return impl_->in.fileBytes(); }
+std::uint64_t RawlogReader::bytesRead() const { return impl_->in.compressedPosition(); }
+std::size_t RawlogReader::recordsDeserialized() const { return impl_->deserialized; }
+std::size_t RawlogReader::nextRecord() const {
+  return impl_->pending ? impl_->pending->index : impl_->next;
+}
+bool RawlogReader::atEnd() const { return impl_->at_end && !impl_->pending; }
+bool RawlogReader::indexLoaded() const { return impl_->index_loaded; }
+const RawlogIndex& RawlogReader::index() const { return impl_->index; }
+
+std::string RawlogReader::saveIndex(std::string* why) {
+  auto& m = *impl_;
+  if (!m.policy.use || m.in.fileBytes() < m.policy.min_file_bytes) return "";
+  const bool grew = m.index.records.size() > m.initial_records ||
+                    m.index.points.size() > m.initial_points ||
+                    m.index.complete != m.initial_complete;
+  if (!grew) return "";
+  std::vector<std::string> places = {indexPathBeside(m.path),
+                                     indexPathInCache(m.path, m.policy.cache_dir)};
+  if (!m.index_from.empty() && m.index_from != places.front()) places = {m.index_from};
+  std::string errors;
+  for (const auto& p : places) {
+    try {
+      saveRawlogIndex(p, m.index);
+      m.initial_records = m.index.records.size();
+      m.initial_points = m.index.points.size();
+      m.initial_complete = m.index.complete;
+      return p;
+    } catch (const std::exception& e) {
+      errors += (errors.empty() ? "" : "; ") + std::string(e.what());
+    }
+  }
+  if (why != nullptr) *why = errors;
+  return "";
+}
+
+std::vector<RawlogRecord> readRawlog(const std::string& path) {
+  RawlogIndexPolicy no_index;
+  no_index.use = false;
+  RawlogReader reader(path, no_index);
+  std::vector<RawlogRecord> out;
+  RawlogObject rec;
+  while (reader.next(rec)) {
+    if (auto o = std::dynamic_pointer_cast<mrpt::obs::CObservation>(rec.object)) {
+      out.push_back({rec.index, o});
+    } else if (auto sf = std::dynamic_pointer_cast<mrpt::obs::CSensoryFrame>(rec.object)) {
+      for (const auto& so : *sf) out.push_back({rec.index, so});
+    } else if (!std::dynamic_pointer_cast<mrpt::obs::CActionCollection>(rec.object)) {
+      throw InputError(path + ": record " + std::to_string(rec.index) + ": unexpected class " +
+                       rec.object->GetRuntimeClass()->className + " in a rawlog");
     }
   }
   return out;

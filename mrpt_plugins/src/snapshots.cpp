@@ -163,7 +163,10 @@ void buildScene(mrpt::opengl::COpenGLScene& scene, const InitResult& result, con
 
   // At the state: the body axes (arrows) and gravity.
   const auto& s = result.state;
-  auto axes = stock_objects::CornerXYZ(marker);
+  // MRPT 2.5.8's CornerXYZ(scale) makes the arrow head ratio 0.25 * scale, asserted <= 1: above
+  // a scale of 4 (a window longer than ~27 m) the axes are drawn at 4 and scaled up.
+  auto axes = stock_objects::CornerXYZ(std::min(marker, 4.0f));
+  if (marker > 4.0f) axes->setScale(marker / 4.0f);
   axes->setPose(toPose(s.q_wb, s.p_w));
   scene.insert(axes);
   const Vec3 tip = s.p_w + 3.0 * marker * s.g_w.normalized();

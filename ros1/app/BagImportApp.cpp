@@ -1,9 +1,8 @@
-#include <freeinit/mrpt/IniLoader.h>
+#include <freeinit/config_section.h>
 #include <freeinit/mrpt/ProgressBar.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/ros1/BagImportApp.h>
-#include <mrpt/config/CConfigFile.h>
 
 #include <filesystem>
 #include <iomanip>
@@ -17,15 +16,29 @@ namespace {
 
 constexpr const char* kSection = "bag_import";
 
-// "<key>" names the field ("" = not read), "<key>_type" its datatype.
-void readField(IniLoader& L, const std::string& key, ros1::FieldSpec& f) {
-  L(kSection, key, f.name);
-  if (!L.has(kSection, key + "_type")) return;
+std::string parseFieldType(std::string_view text, ros1::FieldType& t) {
   try {
-    f.type = ros1::fieldTypeFromName(L.raw(kSection, key + "_type"));
+    t = ros1::fieldTypeFromName(std::string(text));
   } catch (const std::exception& e) {
-    L.fail(kSection, key + "_type", e.what());
+    return e.what();
   }
+  return "";
+}
+
+// "<key>" names a PointCloud2 field ("" = not read, optional fields only), "<key>_type" its
+// datatype.
+template <class Field>
+void addField(config::Section<BagImportSettings>& s, const std::string& key, Field field,
+              const std::string& doc) {
+  s.text(
+       key, [field](auto& x) -> auto& { return field(x).name; }, doc)
+      .custom(
+          key + "_type", [field](auto& x) -> auto& { return field(x).type; }, "-",
+          "int8 | uint8 | int16 | uint16 | int32 | uint32 | float32 | float64",
+          std::function<std::string(std::string_view, ros1::FieldType&)>(parseFieldType),
+          std::function<std::string(const ros1::FieldType&)>(
+              [](const ros1::FieldType& t) { return ros1::fieldTypeName(t); }),
+          "datatype of " + key + " in the bag (another type is an error, not a conversion)");
 }
 
 std::string fixed(double x, int precision) {
@@ -36,51 +49,105 @@ std::string fixed(double x, int precision) {
 
 }  // namespace
 
-BagImportSettings loadBagImportSettings(const std::string& ini_file) {
-  if (!std::filesystem::is_regular_file(ini_file))
-    throw std::invalid_argument(ini_file + ": configuration file not found");
-  BagImportSettings s;
-  // [extrinsics] with the main app's loader: the same keys, checks and messages.
-  const AppConfig app = loadAppConfig(ini_file);
-  if (app.extrinsics.from_sensor_pose)
-    throw std::invalid_argument(ini_file +
-                                ": [extrinsics] from_sensor_pose: a bag has no sensor poses: give "
-                                "R_bl (or roll_deg, pitch_deg, yaw_deg) and p_bl");
-  s.extrinsics = app.core.extrinsics;
+const config::Section<BagImportSettings>& bagImportSection() {
+  using config::between;
+  using S = BagImportSettings;
+  static const auto s = [] {
+    config::Section<S> sec(kSection,
+                           "how to read a ROS1 bag (defaults: the Free-Init / FMCW-LIO release)");
+    sec.text(
+           "imu_topic", [](auto& x) -> auto& { return x.bag.imu_topic; }, "sensor_msgs/Imu topic",
+           true)
+        .text(
+            "lidar_topic", [](auto& x) -> auto& { return x.bag.lidar_topic; },
+            "sensor_msgs/PointCloud2 topic", true);
+    addField(
+        sec, "x_field", [](auto& x) -> auto& { return x.bag.cloud.x; }, "[m] LiDAR frame x");
+    addField(
+        sec, "y_field", [](auto& x) -> auto& { return x.bag.cloud.y; }, "[m] LiDAR frame y");
+    addField(
+        sec, "z_field", [](auto& x) -> auto& { return x.bag.cloud.z; }, "[m] LiDAR frame z");
+    addField(
+        sec, "doppler_field", [](auto& x) -> auto& { return x.bag.cloud.doppler; },
+        "[m/s] per-point Doppler velocity");
+    sec.choice(
+           "doppler_sign", [](auto& x) -> auto& { return x.bag.cloud.doppler_sign; },
+           {{"1", 1.0}, {"-1", -1.0}},
+           "1: the field is the range rate (negative approaching); -1: approach is positive")
+        .choice(
+            "doppler_mode", [](auto& x) -> auto& { return x.bag.doppler_mode; },
+            {{"relative", ros1::DopplerMode::kRelative},
+             {"ego_compensated", ros1::DopplerMode::kEgoCompensated}},
+            "relative (raw range rate) or ego_compensated (refused: Free-Init needs raw "
+            "Doppler)");
+    addField(
+        sec, "time_field", [](auto& x) -> auto& { return x.bag.cloud.time.field; },
+        "per-point time");
+    sec.number(
+           "time_scale", [](auto& x) -> auto& { return x.bag.cloud.time.scale; }, "s per unit",
+           config::aboveUpTo(0, 1e3), "1e-9: ns, 1e-6: us, 1: s")
+        .flag(
+            "time_relative", [](auto& x) -> auto& { return x.bag.cloud.time.relative; },
+            "true: offset after the header stamp; false: absolute UNIX time (float64)");
+    addField(
+        sec, "intensity_field", [](auto& x) -> auto& { return x.bag.cloud.intensity; },
+        "optional intensity");
+    addField(
+        sec, "line_field", [](auto& x) -> auto& { return x.bag.cloud.line; },
+        "optional scan line index");
+    sec.choice(
+           "imu_accel_unit", [](auto& x) -> auto& { return x.bag.imu_accel_in_g; },
+           {{"m/s^2", false}, {"g", true}},
+           "unit of linear_acceleration (checked against the data: mean |a| ~ 9.81 or ~ 1)")
+        .number(
+            "lidar_time_offset", [](auto& x) -> auto& { return x.bag.lidar_time_offset; }, "s",
+            between(-3600, 3600), "added to LiDAR times to put them on the IMU clock")
+        .number(
+            "reorder_window", [](auto& x) -> auto& { return x.bag.reorder_window; }, "s",
+            between(0, 3600),
+            "how late (in stamp time) a message may be recorded and still be put in order")
+        .flag(
+            "drop_invalid_points", [](auto& x) -> auto& { return x.bag.drop_invalid_points; },
+            "drop NaN/inf points (counted); false: error")
+        .number(
+            "gap_factor", [](auto& x) -> auto& { return x.bag.gap_factor; }, "-",
+            config::aboveUpTo(1, 1e6), "report intervals > gap_factor x the median as gaps")
+        .number(
+            "unit_check_samples", [](auto& x) -> auto& { return x.bag.unit_check_samples; }, "-",
+            between(1, 1e6), "first IMU samples whose mean specific force checks imu_accel_unit")
+        .text("imu_label", &S::imu_label, "sensorLabel written on the IMU observations", true)
+        .text("lidar_label", &S::lidar_label, "sensorLabel written on the point clouds", true)
+        .check([](const S& x, const config::Checker& c) {
+          if (x.imu_label == x.lidar_label) c.fail("lidar_label", "must differ from imu_label");
+          try {
+            ros1::validate(x.bag);
+          } catch (const std::invalid_argument& e) {  // "key: why"
+            const std::string what = e.what();
+            const auto colon = what.find(": ");
+            c.fail(what.substr(0, colon),
+                   colon == std::string::npos ? what : what.substr(colon + 2));
+          }
+        });
+    return sec;
+  }();
+  return s;
+}
 
-  mrpt::config::CConfigFile cfg(ini_file);
-  IniLoader L(cfg, ini_file);
-  ros1::BagImportConfig& b = s.bag;
-  L(kSection, "imu_topic", b.imu_topic);
-  L(kSection, "lidar_topic", b.lidar_topic);
-  readField(L, "x_field", b.cloud.x);
-  readField(L, "y_field", b.cloud.y);
-  readField(L, "z_field", b.cloud.z);
-  readField(L, "doppler_field", b.cloud.doppler);
-  L(kSection, "doppler_sign", b.cloud.doppler_sign);
-  b.doppler_mode = L.choice(kSection, "doppler_mode", {"relative", "ego_compensated"}, 0) == 0
-                       ? ros1::DopplerMode::kRelative
-                       : ros1::DopplerMode::kEgoCompensated;
-  readField(L, "time_field", b.cloud.time.field);
-  L(kSection, "time_scale", b.cloud.time.scale);
-  L(kSection, "time_relative", b.cloud.time.relative);
-  readField(L, "intensity_field", b.cloud.intensity);
-  readField(L, "line_field", b.cloud.line);
-  b.imu_accel_in_g = L.choice(kSection, "imu_accel_unit", {"m/s^2", "g"}, 0) == 1;
-  L(kSection, "lidar_time_offset", b.lidar_time_offset);
-  L(kSection, "reorder_window", b.reorder_window);
-  L(kSection, "drop_invalid_points", b.drop_invalid_points);
-  L(kSection, "gap_factor", b.gap_factor);
-  L(kSection, "imu_label", s.imu_label);
-  L(kSection, "lidar_label", s.lidar_label);
-  L.checkUnknownKeys();
-  try {
-    ros1::validate(b);
-  } catch (const std::exception& e) {
-    throw std::invalid_argument(ini_file + ": [bag_import] " + e.what());
-  }
-  if (s.imu_label.empty() || s.lidar_label.empty() || s.imu_label == s.lidar_label)
-    L.fail(kSection, "lidar_label", "imu_label and lidar_label must be non-empty and differ");
+BagImportSettings loadBagImportSettings(const std::string& ini_file) {
+  const config::IniFile ini = config::IniFile::load(ini_file);
+  ini.requireKnownSections({kSection, "extrinsics"});
+  BagImportSettings s;
+  bagImportSection().load(ini, s);
+  // [extrinsics]: the pose keys of the main app's section, required (a bag has no sensor poses;
+  // the importer writes them as each cloud's sensorPose).
+  LidarPoseParams pose;
+  extrinsicsPoseSection().load(ini, pose);
+  const config::Checker keys(&ini, "extrinsics");
+  if (firstPoseKey(keys).empty())
+    keys.fail("R_bl",
+              "extrinsics missing: give R_bl (or roll_deg, pitch_deg, yaw_deg) and p_bl; the "
+              "importer writes them as each point cloud's sensorPose");
+  s.extrinsics = extrinsicsOf(pose, keys);
   return s;
 }
 

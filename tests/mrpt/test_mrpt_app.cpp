@@ -1,16 +1,26 @@
 // End-to-end tests of the apps: freeinit-sim writes a rawlog our reader accepts, and the main app
-// runs on the committed samples with ini/freeinit.ini and meets the ground-truth tolerances.
+// runs on the committed samples with ini/freeinit.ini and meets the ground-truth tolerances; it
+// reads only what the window needs, initializes anywhere (--start, --every, --starts) with the
+// seek index, and tells bad records inside the window (errors) from those outside (warnings).
+#include <freeinit/free_init.h>
 #include <freeinit/mrpt/FreeInitApp.h>
+#include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/SimApp.h>
+#include <freeinit/mrpt/conversions.h>
+#include <freeinit/mrpt/input_validator.h>
+#include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <gtest/gtest.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CSensoryFrame.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <limits>
 #include <sstream>
 
 using namespace freeinit;
@@ -20,19 +30,114 @@ namespace fs = std::filesystem;
 namespace {
 const std::string kSrc = FREEINIT_SOURCE_DIR;
 
+// Each test's own folder: ctest runs the tests of this file in parallel processes.
+fs::path testDir() {
+  const auto* t = ::testing::UnitTest::GetInstance()->current_test_info();
+  return fs::temp_directory_path() / "freeinit_mrpt_app_tests" /
+         (std::string(t->test_suite_name()) + "." + t->name());
+}
+
 std::string outDir(const std::string& name) {
-  const auto d = fs::temp_directory_path() / "freeinit_mrpt_app_tests" / name;
+  const auto d = testDir() / name;
   fs::remove_all(d);
   return d.string();
 }
 
-FreeInitApp makeApp(const std::string& rawlog, const std::string& out) {
+FreeInitApp makeApp(const std::string& rawlog, const std::string& out,
+                    const std::string& ini = kSrc + "/ini/freeinit.ini") {
   FreeInitApp app;
-  app.params.config_file = kSrc + "/ini/freeinit.ini";
+  app.params.config_file = ini;
   app.params.rawlog = rawlog;
   app.params.out_dir = out;
   app.params.progress = false;
   return app;
+}
+
+std::string readText(const std::string& path) {
+  std::ifstream f(path);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+
+std::string tmpFile(const std::string& name) {
+  const auto d = testDir() / "files";
+  fs::create_directories(d);
+  return (d / name).string();
+}
+
+// ini/freeinit.ini without the PNG snapshots: these tests check states and files, not pictures.
+std::string quickIni() {
+  std::string text = readText(kSrc + "/ini/freeinit.ini");
+  // The shipped file documents `snapshots` (commented out, or set): replace that line.
+  const auto pos = text.find("snapshots ");
+  EXPECT_NE(pos, std::string::npos);
+  const auto line = text.rfind('\n', pos) + 1;
+  if (pos != std::string::npos)
+    text.replace(line, text.find('\n', pos) - line, "snapshots = false");
+  const std::string path = tmpFile("quick.ini");
+  std::ofstream(path) << text;
+  return path;
+}
+
+const std::string kDyna = kSrc + "/rawlogs/dyna_01.rawlog";
+const std::string kStat = kSrc + "/rawlogs/stat_01.rawlog";
+
+// The observations of a sample, each edited by `edit` (false drops it), as a new rawlog.
+std::string editedSample(const std::string& sample, const std::string& name,
+                         const std::function<bool(mrpt::obs::CObservation::Ptr&)>& edit) {
+  const std::string path = tmpFile(name);
+  RawlogWriter w(path);
+  for (auto& r : readRawlog(sample))
+    if (edit(r.obs)) w.write(*r.obs);
+  w.commit();
+  return path;
+}
+
+double firstStamp(const std::string& rawlog) {
+  return toUnix(readRawlog(rawlog).front().obs->timestamp);
+}
+
+// The state file of one run (empty if it did not write one).
+std::string stateOf(FreeInitApp& app, int expected_exit = 0) {
+  std::ostringstream log;
+  EXPECT_EQ(app.run(log), expected_exit) << log.str();
+  return readText(app.params.out_dir + "/initial_state.ini");
+}
+
+/// Sets NaN on one point of the cloud nearest to `t` [s after the first record]; its record.
+std::size_t nanCloudNear(std::vector<RawlogRecord>& records, double t) {
+  const double t0 = toUnix(records.front().obs->timestamp);
+  std::size_t best = 0;
+  double best_dt = 1e9;
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    if (!IS_CLASS(*records[i].obs, mrpt::obs::CObservationPointCloud)) continue;
+    const double dt = std::abs(toUnix(records[i].obs->timestamp) - t0 - t);
+    if (dt < best_dt) {
+      best_dt = dt;
+      best = i;
+    }
+  }
+  auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(records[best].obs);
+  pc->pointcloud->setPoint(7, std::numeric_limits<float>::quiet_NaN(), 0, 0);
+  return records[best].index;
+}
+
+std::string writeRecords(const std::vector<RawlogRecord>& records, const std::string& name) {
+  const std::string path = tmpFile(name);
+  RawlogWriter w(path);
+  for (const auto& r : records) w.write(*r.obs);
+  w.commit();
+  return path;
+}
+
+bool contains(const std::vector<std::string>& v, const std::vector<std::string>& needles) {
+  for (const auto& s : v) {
+    bool all = true;
+    for (const auto& n : needles) all = all && s.find(n) != std::string::npos;
+    if (all) return true;
+  }
+  return false;
 }
 }  // namespace
 
@@ -84,13 +189,12 @@ TEST(FreeInitAppEndToEnd, StaticSampleStat01) {
   EXPECT_LE(app.errors_wrt_gt->gravity_deg, bound) << log.str();
 }
 
+// A file cut inside the window (the first third of the sample holds it).
 TEST(FreeInitAppEndToEnd, BadInputFailsBeforeAnyOutputIsWritten) {
   const std::string out = outDir("bad");
-  const std::string bad =
-      (fs::temp_directory_path() / "freeinit_mrpt_app_tests" / "cut.rawlog").string();
-  fs::create_directories(fs::path(bad).parent_path());
+  const std::string bad = tmpFile("cut.rawlog");
   fs::copy_file(kSrc + "/rawlogs/dyna_01.rawlog", bad, fs::copy_options::overwrite_existing);
-  fs::resize_file(bad, fs::file_size(bad) / 2);
+  fs::resize_file(bad, fs::file_size(bad) / 5);
   auto app = makeApp(bad, out);
   std::ostringstream log;
   EXPECT_THROW(app.run(log), InputError);
@@ -158,4 +262,298 @@ TEST(SimApp, CustomScenarioFromIni) {
     f << "[scenario]\npreset = no_such_preset\n";
   }
   EXPECT_THROW(sim.run(log), std::invalid_argument);
+}
+
+// Reading stops once the state is ready, and the state is the one the estimator gives on the
+// whole recording read, checked and converted by the same path (FreeInit::run on every sample):
+// nothing after the window matters, nothing in it is lost.
+TEST(FreeInitAppStreaming, StopsAtTheWindowWithTheStateOfTheWholeRecording) {
+  for (const std::string& sample : {kDyna, kStat}) {
+    SCOPED_TRACE(sample);
+    auto app = makeApp(sample, outDir("streaming"), quickIni());
+    const std::string state = stateOf(app);
+    EXPECT_FALSE(app.read_to_end);
+    EXPECT_LT(app.records_read, readRawlog(sample).size() / 2);
+
+    AppConfig config = loadAppConfig(kSrc + "/ini/freeinit.ini");
+    const ValidatedInput in = readRecording(sample, config);
+    if (config.extrinsics.from_sensor_pose) config.core.extrinsics = *in.sensor_pose_extrinsics;
+    const InitResult whole = FreeInit::run(config.core, in.imu, in.frames);
+    const std::string path = tmpFile("whole_initial_state.ini");
+    writeInitialStateIni(path, whole.state);
+    EXPECT_EQ(state, readText(path));
+  }
+}
+
+// --start T uses the records from T on: the same state as the file cut at T (as `rawlog-edit
+// --cut --from-time` does), whether T is given after the first record or as a UNIX stamp.
+TEST(FreeInitAppStart, EqualsTheFileCutAtTheStart) {
+  const double t0 = firstStamp(kDyna), T = t0 + 0.6;
+  const std::string cut =
+      editedSample(kDyna, "cut_at_0.6.rawlog", [&](auto& o) { return toUnix(o->timestamp) >= T; });
+  auto on_cut = makeApp(cut, outDir("start_cut"), quickIni());
+  const std::string expected = stateOf(on_cut);
+  ASSERT_FALSE(expected.empty());
+  EXPECT_GE(on_cut.result.trajectory.front().t, T);
+  for (const double start : {0.6, T}) {
+    auto app = makeApp(kDyna, outDir("start"), quickIni());
+    app.params.start = start;
+    EXPECT_EQ(stateOf(app), expected) << start;
+    ASSERT_TRUE(app.errors_wrt_gt);  // the sample's truth covers the later window too
+    EXPECT_LE(app.errors_wrt_gt->velocity, 0.05);
+  }
+  auto past = makeApp(kDyna, outDir("start_past"), quickIni());
+  past.params.start = 1.3;  // 0.2 s before the end: shorter than the window
+  std::ostringstream log;
+  try {
+    past.run(log);
+    FAIL() << "a start too close to the end initialized";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("recording shorter than the window"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(past.params.out_dir));
+  past.params.start = 5.0;  // after the last record
+  try {
+    past.run(log);
+    FAIL() << "a start after the end initialized";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no record at or after the start"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(past.params.out_dir));
+}
+
+namespace {
+
+// A 3 s simulated recording with ground truth: a wheeled platform in a tunnel (3000 points per
+// frame), moving at every start.
+const std::string& simulatedRecording() {
+  static const std::string path = [] {
+    const std::string p = tmpFile("sim_tunnel_wheeled_3s.rawlog");
+    SimApp sim;
+    sim.params.preset = "tunnel_wheeled";
+    sim.params.duration = 3.0;
+    sim.params.points_per_frame = 3000;
+    sim.params.output = p;
+    std::ostringstream log;
+    sim.run(log);
+    return p;
+  }();
+  return path;
+}
+
+std::string singleStartState(const std::string& rawlog, double start) {
+  auto app = makeApp(rawlog, outDir("single_start"), quickIni());
+  app.params.start = start;
+  return stateOf(app);
+}
+
+}  // namespace
+
+// --every along a simulated recording: every start initializes, each state is within its own
+// covariance of the truth (NEES below the 99.9 % chi-square quantile of its degrees of freedom:
+// 16.27 for 3, 13.82 for 2; 16 checks, so a consistent estimator fails one with < 2 %
+// probability, and the seed is fixed), each start's folder holds what a single --start run
+// writes, and the table lists every start.
+TEST(FreeInitAppStart, EveryAlongASimulatedRecordingIsConsistentWithTheTruth) {
+  const std::string rawlog = simulatedRecording();
+  const std::string out = outDir("every");
+  auto app = makeApp(rawlog, out, quickIni());
+  app.params.every = 0.8;
+  std::ostringstream log;
+  ASSERT_EQ(app.run(log), 0) << log.str();
+  ASSERT_EQ(app.rows.size(), 4u) << log.str();  // 0, 0.8, 1.6, 2.4 (3.2 is after the end)
+  for (const auto& r : app.rows) {
+    SCOPED_TRACE(r.folder);
+    ASSERT_EQ(r.status, "ok") << r.message;
+    ASSERT_TRUE(r.truth);
+    EXPECT_LT(r.truth->vel_b, 16.27);
+    EXPECT_LT(r.truth->tilt, 13.82);
+    EXPECT_LT(r.truth->gyro_bias, 16.27);
+    EXPECT_LT(r.truth->accel_bias, 16.27);
+    EXPECT_GE(r.window_begin, r.start);
+    EXPECT_LT(r.window_begin, r.start + 0.11);  // the first frame from the start on
+    EXPECT_TRUE(fs::is_regular_file(fs::path(out) / r.folder / "errors_wrt_gt.ini"));
+  }
+  for (const std::size_t k : {1u, 3u})
+    EXPECT_EQ(readText(out + "/" + app.rows[k].folder + "/initial_state.ini"),
+              singleStartState(rawlog, app.rows[k].start_offset))
+        << app.rows[k].folder;
+  std::ifstream csv(out + "/starts.csv");
+  std::string line;
+  int lines = 0;
+  while (std::getline(csv, line)) ++lines;
+  EXPECT_EQ(lines, 5);
+  EXPECT_TRUE(fs::is_regular_file(out + "/starts.md"));
+  EXPECT_TRUE(fs::is_regular_file(out + "/starts.png"));
+  for (const auto& e : fs::directory_iterator(out))
+    EXPECT_EQ(e.path().filename().string().find(".tmp"), std::string::npos) << e.path();
+}
+
+// Overlapping windows (--starts 0.2, 0.5, 0.6 with a 0.5 s window): several estimators side by
+// side in one pass, each giving what it gives alone.
+TEST(FreeInitAppStart, OverlappingStartsFromAFile) {
+  const std::string rawlog = simulatedRecording();
+  const std::string starts = tmpFile("starts.txt");
+  std::ofstream(starts) << "# seconds after the first record\n0.2\n\n0.5\n0.6  # overlapping\n";
+  const std::string out = outDir("starts_file");
+  auto app = makeApp(rawlog, out, quickIni());
+  app.params.starts_file = starts;
+  std::ostringstream log;
+  ASSERT_EQ(app.run(log), 0) << log.str();
+  ASSERT_EQ(app.rows.size(), 3u);
+  for (const auto& r : app.rows)
+    EXPECT_EQ(readText(out + "/" + r.folder + "/initial_state.ini"),
+              singleStartState(rawlog, r.start_offset))
+        << r.folder;
+
+  std::ofstream(starts) << "0.5\n0.4\n";
+  auto bad = makeApp(rawlog, outDir("starts_bad"), quickIni());
+  bad.params.starts_file = starts;
+  try {
+    bad.run(log);
+    FAIL() << "starts out of order were accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(starts + ": line 2: starts must increase"),
+              std::string::npos)
+        << e.what();
+  }
+}
+
+// The seek index: written by the first --start run, used by the next (which deserializes only
+// the window's records), ignored and rewritten once the rawlog changes.
+TEST(FreeInitAppStart, SeekIndexCreatedReusedAndInvalidated) {
+  const std::string rawlog = tmpFile("indexed_sim.rawlog");
+  fs::copy_file(simulatedRecording(), rawlog, fs::copy_options::overwrite_existing);
+  fs::remove(indexPathBeside(rawlog));
+  auto run = [&](FreeInitApp& app) {
+    app.params.start = 2.0;
+    app.params.index.min_file_bytes = 0;
+    app.params.index.spacing = 256 * 1024;
+    return stateOf(app);
+  };
+  auto first = makeApp(rawlog, outDir("index_1"), quickIni());
+  const std::string state = run(first);
+  EXPECT_FALSE(first.index_used);
+  EXPECT_EQ(first.index_written, indexPathBeside(rawlog));
+  const std::size_t records_to_window = first.records_read;  // 2 s + the window: ~520
+
+  auto second = makeApp(rawlog, outDir("index_2"), quickIni());
+  EXPECT_EQ(run(second), state);
+  EXPECT_TRUE(second.index_used);
+  EXPECT_LT(second.records_read, records_to_window / 3);  // the window's ~120 records
+
+  fs::last_write_time(rawlog, fs::last_write_time(rawlog) + std::chrono::seconds(3));
+  auto third = makeApp(rawlog, outDir("index_3"), quickIni());
+  EXPECT_EQ(run(third), state);
+  EXPECT_FALSE(third.index_used);
+  EXPECT_EQ(third.index_written, indexPathBeside(rawlog));
+}
+
+// A bad record after the window is not read (and the log says the rest was not checked), or
+// with --check-all a warning naming it; inside the window it stops the run with no output.
+TEST(FreeInitAppChecks, BadRecordOutsideTheWindowIsAWarningInsideAnError) {
+  auto clean_app = makeApp(kDyna, outDir("clean"), quickIni());
+  const std::string clean = stateOf(clean_app);
+  auto records = readRawlog(kDyna);
+  const std::size_t late = nanCloudNear(records, 1.2);
+  const std::string after = writeRecords(records, "nan_after.rawlog");
+
+  auto quick = makeApp(after, outDir("nan_after"), quickIni());
+  std::ostringstream log;
+  ASSERT_EQ(quick.run(log), 0) << log.str();
+  EXPECT_NE(log.str().find("the rest was not checked (use --check-all)"), std::string::npos);
+  EXPECT_EQ(readText(quick.params.out_dir + "/initial_state.ini"), clean);
+
+  auto all = makeApp(after, outDir("nan_after_all"), quickIni());
+  all.params.check_all = true;
+  EXPECT_EQ(stateOf(all), clean);
+  EXPECT_TRUE(all.read_to_end);
+  EXPECT_TRUE(contains(all.warnings, {after + ": record " + std::to_string(late) + ": 1 of ", "NaN",
+                                      "outside every initialization window"}))
+      << ::testing::PrintToString(all.warnings);
+
+  // The same record before a later start: outside that window too.
+  auto records2 = readRawlog(kDyna);
+  const std::size_t early = nanCloudNear(records2, 0.2);
+  const std::string inside = writeRecords(records2, "nan_inside.rawlog");
+  auto later = makeApp(inside, outDir("nan_before_start"), quickIni());
+  later.params.start = 0.6;
+  later.params.check_all = true;
+  EXPECT_FALSE(stateOf(later).empty());
+  EXPECT_TRUE(contains(later.warnings, {"record " + std::to_string(early) + ": ", "outside"}));
+
+  auto in_window = makeApp(inside, outDir("nan_inside"), quickIni());
+  try {
+    in_window.run(log);
+    FAIL() << "a bad record inside the window was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(inside + ": record " + std::to_string(early) + ": 1 of"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(in_window.params.out_dir));
+}
+
+// A file cut after the window: not noticed without --check-all (and said so), a warning with it.
+TEST(FreeInitAppChecks, TruncationAfterTheWindowIsAWarningWithCheckAll) {
+  const std::string cut = tmpFile("cut_late.rawlog");
+  fs::copy_file(kDyna, cut, fs::copy_options::overwrite_existing);
+  fs::resize_file(cut, fs::file_size(cut) * 4 / 5);
+  auto quick = makeApp(cut, outDir("cut_late"), quickIni());
+  std::ostringstream log;
+  ASSERT_EQ(quick.run(log), 0) << log.str();
+  EXPECT_NE(log.str().find("the rest was not checked (use --check-all)"), std::string::npos);
+  auto all = makeApp(cut, outDir("cut_late_all"), quickIni());
+  all.params.check_all = true;
+  ASSERT_EQ(all.run(log), 0);
+  EXPECT_TRUE(contains(
+      all.warnings, {cut + ": record ", "truncated file", "the rest of the file was not checked"}))
+      << ::testing::PrintToString(all.warnings);
+}
+
+// Doppler exactly zero on every point: a static start for a sensor with quantized Doppler (the
+// IMU at rest), refused as ego-motion-compensated data when the IMU shows motion.
+TEST(FreeInitAppChecks, ZeroDopplerAtRestInitializesInMotionIsRefused) {
+  auto zero = [](mrpt::obs::CObservation::Ptr& o) {
+    if (auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(o)) {
+      LidarFrame f = frameFromObservation(*pc);
+      for (auto& p : f.points) p.doppler = 0;
+      auto z = frameToObservation(f, extrinsicsFromPose(pc->sensorPose), pc->sensorLabel);
+      z->timestamp = pc->timestamp;
+      o = z;
+    }
+    return true;
+  };
+  const std::string at_rest = editedSample(kStat, "stat_zero_doppler.rawlog", zero);
+  fs::copy_file(kSrc + "/rawlogs/stat_01.truth.csv", tmpFile("stat_zero_doppler.truth.csv"),
+                fs::copy_options::overwrite_existing);
+  auto app = makeApp(at_rest, outDir("zero_rest"), quickIni());
+  std::ostringstream log;
+  ASSERT_EQ(app.run(log), 0) << log.str();
+  EXPECT_TRUE(app.result.diag.static_start);
+  ASSERT_TRUE(app.errors_wrt_gt);
+  EXPECT_LE(app.errors_wrt_gt->velocity, 0.05);
+  EXPECT_LE(app.errors_wrt_gt->gyro_bias, 0.002);
+
+  const std::string moving = editedSample(kDyna, "dyna_zero_doppler.rawlog", zero);
+  std::size_t first_cloud = 0;
+  for (const auto& r : readRawlog(moving))
+    if (IS_CLASS(*r.obs, mrpt::obs::CObservationPointCloud)) {
+      first_cloud = r.index;
+      break;
+    }
+  auto refused = makeApp(moving, outDir("zero_moving"), quickIni());
+  try {
+    refused.run(log);
+    FAIL() << "zero Doppler while the IMU moves was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find(moving + ": record " + std::to_string(first_cloud) +
+                                         ": the Doppler field is zero for every point while the "
+                                         "IMU shows motion"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_FALSE(fs::exists(refused.params.out_dir));
 }

@@ -1,6 +1,8 @@
-// Unit tests of the MRPT glue: the Doppler map's serialization, conversions, the validated rawlog
-// reader (truncation, unregistered classes), input validation and INI loading.
+// Unit tests of the MRPT glue: the Doppler map's serialization, conversions, the streaming rawlog
+// reader (truncation, unregistered classes) and its seek index, and the record checks of the
+// ingest path on whole recordings (INI loading: tests/config).
 #include <freeinit/mrpt/CPointsMapDoppler.h>
+#include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/input_validator.h>
@@ -14,13 +16,14 @@
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <chrono>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <limits>
 #include <map>
-#include <sstream>
 #include <random>
+#include <sstream>
 
 using namespace freeinit;
 using namespace freeinit::mrpt_glue;
@@ -94,6 +97,28 @@ void writeRawlogPlain(const std::string& path, const std::vector<RawlogRecord>& 
   mrpt::io::CFileOutputStream f(path);
   auto a = mrpt::serialization::archiveFrom(f);
   for (const auto& r : records) a << *r.obs;
+}
+
+void writeRawlogGz(const std::string& path, const std::vector<RawlogRecord>& records) {
+  RawlogWriter w(path);
+  for (const auto& r : records) w.write(*r.obs);
+  w.commit();
+}
+
+// The records as a rawlog file, read back by the ingest path (readRecording).
+ValidatedInput validate(const std::vector<RawlogRecord>& records, const AppConfig& config,
+                        const std::string& name = "bad.rawlog") {
+  const std::string p = tmpPath(name);
+  writeRawlogPlain(p, records);
+  return readRecording(p, config);
+}
+
+// The IMU of goodRecords turning: a gyro that varies by 0.5 rad/s.
+void makeImuTurn(std::vector<RawlogRecord>& r) {
+  int k = 0;
+  for (auto& x : r)
+    if (auto imu = std::dynamic_pointer_cast<mrpt::obs::CObservationIMU>(x.obs))
+      imu->set(mrpt::obs::IMU_WZ, 0.5 * std::sin(0.2 * k++));
 }
 
 }  // namespace
@@ -247,7 +272,7 @@ TEST(RawlogReader, UnregisteredClassFailsInsteadOfTruncatingSilently) {
 }
 
 TEST(InputValidator, AcceptsAConsistentRecording) {
-  const auto in = validateInput(goodRecords(), sensorPoseConfig(), "x.rawlog");
+  const auto in = validate(goodRecords(), sensorPoseConfig(), "x.rawlog");
   EXPECT_EQ(in.imu.size(), 201u);
   EXPECT_EQ(in.frames.size(), 11u);
   ASSERT_TRUE(in.sensor_pose_extrinsics);
@@ -257,7 +282,7 @@ TEST(InputValidator, AcceptsAConsistentRecording) {
 TEST(InputValidator, RejectsEachKindOfBadInput) {
   const AppConfig cfg = sensorPoseConfig();
   auto check = [&](std::vector<RawlogRecord> recs, const std::string& needle, const AppConfig& c) {
-    expectThrowsWith([&] { validateInput(recs, c, "bad.rawlog"); }, needle);
+    expectThrowsWith([&] { validate(recs, c); }, needle);
   };
   auto imuAt = [](std::vector<RawlogRecord>& r, std::size_t k) {
     for (std::size_t i = k; i < r.size(); ++i)
@@ -319,7 +344,7 @@ TEST(InputValidator, RejectsEachKindOfBadInput) {
     check(r, "2 of 200 points have NaN or infinite", cfg);
     AppConfig drop = cfg;
     drop.input.drop_invalid_points = true;
-    EXPECT_EQ(validateInput(r, drop, "x").invalid_points_dropped, 2u);
+    EXPECT_EQ(validate(r, drop).invalid_points_dropped, 2u);
   }
   {  // empty cloud
     auto r = goodRecords();
@@ -328,13 +353,17 @@ TEST(InputValidator, RejectsEachKindOfBadInput) {
         frameToObservation(LidarFrame{toUnix(r[k].obs->timestamp), {}}, someExtrinsics(), "LIDAR");
     check(r, "empty point cloud", cfg);
   }
-  {  // Doppler zero everywhere
+  {  // Doppler zero everywhere while the IMU turns (at rest it is legitimate: see below)
     auto r = goodRecords();
+    makeImuTurn(r);
     const auto k = cloudAt(r, 3);
     LidarFrame f = randomFrame(toUnix(r[k].obs->timestamp), 100, 1);
     for (auto& p : f.points) p.doppler = 0;
     r[k].obs = frameToObservation(f, someExtrinsics(), "LIDAR");
-    check(r, "Doppler field is zero for every point", cfg);
+    check(r,
+          "record " + std::to_string(k) +
+              ": the Doppler field is zero for every point while the IMU shows motion",
+          cfg);
   }
   {  // IMU too slow: keep one sample in 10 (20 Hz)
     auto r = goodRecords(6.0);
@@ -352,54 +381,12 @@ TEST(InputValidator, RejectsEachKindOfBadInput) {
     check(r, "set [input] imu_accel_in_g = true", cfg);
     AppConfig in_g = cfg;
     in_g.input.imu_accel_in_g = true;
-    EXPECT_NO_THROW(validateInput(r, in_g, "x"));
+    EXPECT_NO_THROW(validate(r, in_g));
     check(goodRecords(), "already in m/s^2", in_g);
   }
   {  // shorter than the window
     check(goodRecords(0.3), "recording shorter than the window", cfg);
   }
-}
-
-TEST(AppConfigIni, ExtrinsicsMissingOrNotARotationAndBadKeysAreNamed) {
-  expectThrowsWith([] { loadAppConfigFromText("[window]\nimu_samples = 100\n", "a.ini"); },
-                   "a.ini: [extrinsics] R_bl: extrinsics missing");
-  expectThrowsWith(
-      [] {
-        loadAppConfigFromText("[extrinsics]\nR_bl = 1 0 0 0 1 0 0 0 2\np_bl = 0 0 0\n", "b.ini");
-      },
-      "b.ini: [extrinsics] R_bl: not a rotation matrix");
-  expectThrowsWith(
-      [] {
-        loadAppConfigFromText(
-            "[extrinsics]\nfrom_sensor_pose = true\n[velocimeter]\ndopler_sigma = 0.1\n", "c.ini");
-      },
-      "c.ini: [velocimeter] dopler_sigma: unknown key");
-  expectThrowsWith(
-      [] {
-        loadAppConfigFromText(
-            "[extrinsics]\nfrom_sensor_pose = true\n[window]\nimu_samples = ten\n", "d.ini");
-      },
-      "d.ini: [window] imu_samples: 'ten' is not a number");
-  expectThrowsWith(
-      [] { loadAppConfigFromText("[extrinsics]\nfrom_sensor_pose = maybe\n", "e.ini"); },
-      "[extrinsics] from_sensor_pose: 'maybe' is not a boolean");
-}
-
-TEST(AppConfigIni, RollPitchYawAndEffectiveConfigRoundTrip) {
-  const AppConfig c = loadAppConfigFromText(
-      "[extrinsics]\nroll_deg = 2\npitch_deg = -3\nyaw_deg = 90\np_bl = 0.1 0.2 0.3\n"
-      "[velocimeter]\ndoppler_sigma = 0.05 ; [m/s]\n[input]\nimu_label = xsens\n",
-      "f.ini");
-  EXPECT_DOUBLE_EQ(c.core.velocimeter.doppler_sigma, 0.05);
-  EXPECT_EQ(c.input.imu_label, "xsens");
-  EXPECT_NEAR(c.core.extrinsics.R_bl(1, 0), std::cos(3 * M_PI / 180), 1e-12);  // yaw 90
-  std::ostringstream dump;
-  dumpAppConfig(c, dump);
-  const AppConfig d = loadAppConfigFromText(dump.str(), "dump");
-  EXPECT_LT((d.core.extrinsics.R_bl - c.core.extrinsics.R_bl).norm(), 1e-9);
-  EXPECT_LT((d.core.extrinsics.p_bl - c.core.extrinsics.p_bl).norm(), 1e-12);
-  EXPECT_DOUBLE_EQ(d.core.velocimeter.doppler_sigma, 0.05);
-  EXPECT_EQ(d.input.imu_label, "xsens");
 }
 
 TEST(Writers, InitialStateIniFollowsTheContract) {
@@ -439,47 +426,198 @@ TEST(Writers, AFailedWriteLeavesNoFile) {
   EXPECT_FALSE(fs::exists(p + ".tmp"));
 }
 
-// ini/freeinit.ini lists every estimator key with its default commented out (";key = value").
-// Those values must be the defaults the code uses, or the documentation lies.
-TEST(AppConfigIni, DocumentedDefaultsMatchTheCode) {
-  std::ostringstream dump;
-  freeinit::mrpt_glue::dumpAppConfig(freeinit::mrpt_glue::AppConfig{}, dump);
-  const auto parse = [](std::istream& in, bool commented) {
-    std::map<std::string, std::string> kv;  // "section.key" -> value
-    std::string line, section;
-    while (std::getline(in, line)) {
-      if (!line.empty() && line[0] == '[') section = line.substr(1, line.find(']') - 1);
-      if (commented) {
-        if (line.size() < 2 || line[0] != ';' || line.find('=') == std::string::npos) continue;
-        line = line.substr(1);
+// A sensor with quantized Doppler reads exactly zero at rest: frames with zero Doppler everywhere
+// are accepted when the IMU around them shows rest, refused when it shows motion.
+TEST(InputValidator, ZeroDopplerIsAcceptedAtRestOnly) {
+  auto zeroed = [](std::vector<RawlogRecord> r) {
+    for (auto& x : r)
+      if (auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(x.obs)) {
+        LidarFrame f = frameFromObservation(*pc);
+        for (auto& p : f.points) p.doppler = 0;
+        x.obs = frameToObservation(f, someExtrinsics(), "LIDAR");
+        x.obs->timestamp = pc->timestamp;
       }
-      const auto eq = line.find('=');
-      if (eq == std::string::npos || line[0] == ';' || line[0] == '[') continue;
-      auto trim = [](std::string s) {
-        s = s.substr(0, s.find(';'));
-        const auto b = s.find_first_not_of(" \t"), e = s.find_last_not_of(" \t");
-        return b == std::string::npos ? std::string() : s.substr(b, e - b + 1);
-      };
-      const std::string key = trim(line.substr(0, eq));
-      if (key.find(' ') != std::string::npos) continue;  // prose comment, not a key
-      kv[section + "." + key] = trim(line.substr(eq + 1));
-    }
-    return kv;
+    return r;
   };
-  std::istringstream dumped(dump.str());
-  const auto defaults = parse(dumped, false);
-  std::ifstream ini(std::string(FREEINIT_SOURCE_DIR) + "/ini/freeinit.ini");
-  ASSERT_TRUE(ini.good());
-  const auto documented = parse(ini, true);
-  std::size_t checked = 0;
-  for (const char* section : {"velocimeter", "bootstrap", "static_detector", "window", "gravity"}) {
-    for (const auto& [k, v] : defaults) {
-      if (k.rfind(std::string(section) + ".", 0) != 0) continue;
-      const auto it = documented.find(k);
-      ASSERT_NE(it, documented.end()) << k << " is not documented in ini/freeinit.ini";
-      EXPECT_EQ(it->second, v) << k;
-      ++checked;
-    }
+  const auto at_rest = validate(zeroed(goodRecords()), sensorPoseConfig(), "zero_rest.rawlog");
+  EXPECT_EQ(at_rest.frames.size(), 11u);
+  auto turning = goodRecords();
+  makeImuTurn(turning);
+  expectThrowsWith([&] { validate(zeroed(turning), sensorPoseConfig(), "zero_moving.rawlog"); },
+                   "record 0: the Doppler field is zero for every point while the IMU shows "
+                   "motion: the gyro varies by");
+}
+
+TEST(RawlogReader, GzipAndPlainReadTheSame) {
+  const auto recs = goodRecords();
+  const std::string gz = tmpPath("same.rawlog"), plain = tmpPath("same_plain.rawlog");
+  writeRawlogGz(gz, recs);
+  writeRawlogPlain(plain, recs);
+  const auto a = readRawlog(gz), b = readRawlog(plain);
+  ASSERT_EQ(a.size(), recs.size());
+  ASSERT_EQ(b.size(), recs.size());
+  for (std::size_t i = 0; i < recs.size(); ++i) {
+    EXPECT_EQ(a[i].obs->timestamp, recs[i].obs->timestamp);
+    EXPECT_EQ(b[i].obs->timestamp, recs[i].obs->timestamp);
   }
-  EXPECT_GT(checked, 40u);
+}
+
+// A gzip file cut anywhere is an error naming the record, never a shorter valid file, even when
+// the cut falls between two records.
+TEST(RawlogReader, TruncatedGzipFailsNamingTheRecord) {
+  const std::string p = tmpPath("cut.rawlog");
+  for (const double fraction : {0.9, 0.5, 0.1}) {
+    writeRawlogGz(p, goodRecords());
+    fs::resize_file(p,
+                    static_cast<std::uintmax_t>(static_cast<double>(fs::file_size(p)) * fraction));
+    expectThrowsWith([&] { readRawlog(p); }, "truncated file");
+    expectThrowsWith([&] { readRawlog(p); }, p + ": record ");
+  }
+  // A flipped byte inside the compressed data.
+  writeRawlogGz(p, goodRecords());
+  {
+    std::fstream f(p, std::ios::in | std::ios::out | std::ios::binary);
+    f.seekp(static_cast<std::streamoff>(fs::file_size(p) / 2));
+    f.put('\x5a');
+    f.seekp(static_cast<std::streamoff>(fs::file_size(p) / 2 + 1));
+    f.put('\xa5');
+  }
+  EXPECT_THROW(readRawlog(p), InputError);
+}
+
+namespace {
+
+// A gzip rawlog of about 1.5 MB decompressed (3 s, 2000 points per cloud) and its records as a
+// sequential read sees them.
+struct IndexedFixture {
+  std::string path;
+  std::vector<std::pair<std::size_t, double>> records;  // (record, time)
+  RawlogIndexPolicy policy;
+
+  explicit IndexedFixture(const std::string& name) : path(tmpPath(name)) {
+    std::vector<RawlogRecord> r;
+    std::size_t idx = 0;
+    for (int i = 0; i <= 600; ++i) {
+      const double t = 1700000000.0 + i * 0.005;
+      if (i % 20 == 0)
+        r.push_back({idx++, frameToObservation(randomFrame(t, 2000, static_cast<unsigned>(i)),
+                                               someExtrinsics(), "LIDAR")});
+      ImuSample s;
+      s.t = t;
+      s.accel = Vec3(0, 0, kGravity);
+      r.push_back({idx++, imuToObservation(s, "IMU")});
+    }
+    writeRawlogGz(path, r);
+    for (const auto& x : r) records.emplace_back(x.index, toUnix(x.obs->timestamp));
+    policy.min_file_bytes = 0;
+    policy.spacing = 64 * 1024;
+    fs::remove(indexPathBeside(path));
+  }
+  /// The first record at or after t, as a sequential read finds it.
+  std::size_t firstAtOrAfter(double t) const {
+    for (const auto& [i, ti] : records)
+      if (ti >= t) return i;
+    return records.size();
+  }
+};
+
+}  // namespace
+
+// The index is written beside the rawlog, covers what was read, is extended by later reads and
+// lets a reader jump to any record without deserializing anything before it.
+TEST(RawlogIndex, CreatedReusedExtendedAndStale) {
+  IndexedFixture fx("indexed.rawlog");
+  const double t0 = fx.records.front().second;
+  {
+    RawlogReader reader(fx.path, fx.policy);
+    EXPECT_FALSE(reader.indexLoaded());
+    RawlogObject rec;
+    for (int i = 0; i < 100; ++i) ASSERT_TRUE(reader.next(rec));
+    EXPECT_EQ(reader.saveIndex(), indexPathBeside(fx.path));
+  }
+  ASSERT_TRUE(fs::is_regular_file(indexPathBeside(fx.path)));
+  {  // Partial: the first 100 records, then extended to the end by a jump beyond them.
+    RawlogReader reader(fx.path, fx.policy);
+    ASSERT_TRUE(reader.indexLoaded());
+    EXPECT_EQ(reader.index().records.size(), 100u);
+    EXPECT_FALSE(reader.index().complete);
+    ASSERT_TRUE(reader.seekToTime(t0 + 2.0));
+    RawlogObject rec;
+    ASSERT_TRUE(reader.next(rec));
+    EXPECT_EQ(rec.index, fx.firstAtOrAfter(t0 + 2.0));
+    while (reader.next(rec)) {
+    }
+    EXPECT_TRUE(reader.index().complete);
+    EXPECT_FALSE(reader.saveIndex().empty());
+  }
+  {  // Complete: every jump lands on the record a sequential read finds, deserializing only it.
+    for (const double dt : {0.0, 0.37, 1.0, 1.8, 2.64, 2.999}) {
+      RawlogReader reader(fx.path, fx.policy);
+      ASSERT_TRUE(reader.indexLoaded());
+      EXPECT_TRUE(reader.index().complete);
+      EXPECT_GT(reader.index().points.size(), 10u);  // ~1.5 MB at 64 KiB spacing
+      ASSERT_TRUE(reader.seekToTime(t0 + dt)) << dt;
+      RawlogObject rec;
+      ASSERT_TRUE(reader.next(rec));
+      EXPECT_EQ(rec.index, fx.firstAtOrAfter(t0 + dt)) << dt;
+      ASSERT_TRUE(rec.t);
+      EXPECT_EQ(*rec.t, fx.records[rec.index].second);
+      EXPECT_EQ(reader.recordsDeserialized(), 1u) << dt;
+      std::size_t n = 1;
+      while (reader.next(rec)) ++n;
+      EXPECT_EQ(rec.index + 1, fx.records.size());
+      EXPECT_EQ(n, fx.records.size() - fx.firstAtOrAfter(t0 + dt));
+      EXPECT_EQ(reader.saveIndex(), "");  // nothing new
+    }
+    RawlogReader reader(fx.path, fx.policy);
+    EXPECT_FALSE(reader.seekToTime(t0 + 10.0));  // after the last record
+  }
+  {  // The rawlog changes: the index is stale, ignored and rebuilt.
+    const auto before = fs::last_write_time(fx.path);
+    {
+      std::ofstream f(fx.path, std::ios::app | std::ios::binary);
+      f << "x";
+    }
+    fs::resize_file(fx.path, fs::file_size(fx.path) - 1);  // same bytes, newer time
+    fs::last_write_time(fx.path, before + std::chrono::seconds(5));
+    RawlogReader reader(fx.path, fx.policy);
+    EXPECT_FALSE(reader.indexLoaded());
+    ASSERT_TRUE(reader.seekToTime(t0 + 1.0));
+    RawlogObject rec;
+    ASSERT_TRUE(reader.next(rec));
+    EXPECT_EQ(rec.index, fx.firstAtOrAfter(t0 + 1.0));
+    EXPECT_FALSE(reader.saveIndex().empty());
+  }
+  RawlogReader again(fx.path, fx.policy);
+  EXPECT_TRUE(again.indexLoaded());
+}
+
+// Plain (uncompressed) rawlogs seek by file offset; no index for small files by default.
+TEST(RawlogIndex, PlainFilesAndTheSizeThreshold) {
+  IndexedFixture fx("plain_indexed.rawlog");
+  {
+    std::vector<RawlogRecord> all = readRawlog(fx.path);
+    writeRawlogPlain(fx.path, all);
+  }
+  {
+    RawlogReader reader(fx.path, fx.policy);
+    RawlogObject rec;
+    while (reader.next(rec)) {
+    }
+    EXPECT_FALSE(reader.saveIndex().empty());
+  }
+  RawlogReader reader(fx.path, fx.policy);
+  ASSERT_TRUE(reader.indexLoaded());
+  ASSERT_TRUE(reader.seekToTime(fx.records.front().second + 1.5));
+  RawlogObject rec;
+  ASSERT_TRUE(reader.next(rec));
+  EXPECT_EQ(rec.index, fx.firstAtOrAfter(fx.records.front().second + 1.5));
+  EXPECT_EQ(reader.recordsDeserialized(), 1u);
+
+  fs::remove(indexPathBeside(fx.path));
+  RawlogReader small(fx.path);  // default policy: no index below 64 MB
+  while (small.next(rec)) {
+  }
+  EXPECT_EQ(small.saveIndex(), "");
+  EXPECT_FALSE(fs::exists(indexPathBeside(fx.path)));
 }

@@ -1,10 +1,13 @@
 #include <freeinit/atomic_file.h>
+#include <freeinit/eval/state_errors.h>
+#include <freeinit/initial_state.h>
 #include <freeinit/report/eval_table.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <map>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -12,16 +15,29 @@
 namespace freeinit::report {
 namespace {
 
-// Column order of the CSV; readEvalCsv requires exactly this header.
+// Column order of the CSV; readEvalCsv requires exactly this header. The ratio columns and
+// confident_wrong are derived from the others.
 const char* const kHeader =
     "source,seed,method,status,speed_mps,velocity_err_mps,gravity_err_deg,gravity_bound_deg,"
-    "gyro_bias_err_radps,accel_bias_err_mps2,position_err_m,time_ms,failed,failure";
-constexpr std::size_t kColumns = 14;
+    "gyro_bias_err_radps,accel_bias_err_mps2,position_err_m,time_ms,crb_velocity_mps,"
+    "crb_gravity_deg,crb_gyro_bias_radps,crb_accel_bias_mps2,nees_velocity,nees_tilt,"
+    "nees_gyro_bias,nees_accel_bias,ratio_velocity,ratio_gravity,ratio_gyro_bias,"
+    "ratio_accel_bias,confident_wrong,failed,failure";
+constexpr std::size_t kColumns = 27;
+constexpr std::size_t kFirstRatioColumn = 20;
+constexpr std::size_t kConfidentWrongColumn = 24;
 
-/// The numeric fields of a row, in CSV order after "status".
+/// The stored numeric fields of a row, in CSV order after "status".
 std::vector<double*> numbers(EvalRow& r) {
-  return {&r.speed,         &r.velocity_err,   &r.gravity_err_deg, &r.gravity_bound_deg,
-          &r.gyro_bias_err, &r.accel_bias_err, &r.position_err,    &r.time_ms};
+  return {&r.speed,         &r.velocity_err,    &r.gravity_err_deg, &r.gravity_bound_deg,
+          &r.gyro_bias_err, &r.accel_bias_err,  &r.position_err,    &r.time_ms,
+          &r.crb_velocity,  &r.crb_gravity_deg, &r.crb_gyro_bias,   &r.crb_accel_bias,
+          &r.nees_velocity, &r.nees_tilt,       &r.nees_gyro_bias,  &r.nees_accel_bias};
+}
+
+/// The derived ratios of a row, in CSV order.
+std::vector<double> ratios(const EvalRow& r) {
+  return {r.ratioVelocity(), r.ratioGravity(), r.ratioGyroBias(), r.ratioAccelBias()};
 }
 
 std::string quoted(const std::string& s) {
@@ -31,9 +47,10 @@ std::string quoted(const std::string& s) {
   return q + "\"";
 }
 
-/// %.10g (round trip to 1e-10 relative), empty for NaN.
+/// %.10g (round trip to 1e-10 relative), empty for NaN, "inf" for an infinite value.
 std::string number(double x) {
   if (std::isnan(x)) return "";
+  if (std::isinf(x)) return x > 0 ? "inf" : "-inf";
   char buf[32];
   std::snprintf(buf, sizeof(buf), "%.10g", x);
   return buf;
@@ -76,6 +93,7 @@ double parseNumber(const std::string& s, const std::string& where) {
 /// Compact number for tables: 3 significant digits, no exponent for the ranges seen here.
 std::string shortNumber(double x) {
   if (std::isnan(x)) return "–";
+  if (std::isinf(x)) return x > 0 ? "∞" : "-∞";
   char buf[32];
   const double a = std::abs(x);
   if (a == 0) return "0";
@@ -138,7 +156,9 @@ void writeEvalCsv(const std::string& path, const std::vector<EvalRow>& rows) {
     for (EvalRow r : rows) {
       o << quoted(r.source) << "," << r.seed << "," << quoted(r.method) << "," << quoted(r.status);
       for (const double* x : numbers(r)) o << "," << number(*x);
-      o << "," << (r.failed ? 1 : 0) << "," << quoted(r.failure) << "\n";
+      for (const double x : ratios(r)) o << "," << number(x);
+      o << "," << quoted(r.confidentlyWrong()) << "," << (r.failed ? 1 : 0) << ","
+        << quoted(r.failure) << "\n";
     }
   });
 }
@@ -167,9 +187,10 @@ std::vector<EvalRow> readEvalCsv(const std::string& path) {
     r.status = c[3];
     std::size_t i = 4;
     for (double* x : numbers(r)) *x = parseNumber(c[i++], where);
-    if (c[12] != "0" && c[12] != "1") throw std::runtime_error(where + ": failed must be 0 or 1");
-    r.failed = c[12] == "1";
-    r.failure = c[13];
+    for (i = kFirstRatioColumn; i < kConfidentWrongColumn; ++i) parseNumber(c[i], where);
+    if (c[25] != "0" && c[25] != "1") throw std::runtime_error(where + ": failed must be 0 or 1");
+    r.failed = c[25] == "1";
+    r.failure = c[26];
     rows.push_back(r);
   }
   return rows;
@@ -259,18 +280,248 @@ void writeEvalMarkdown(const std::string& path, const std::vector<EvalRow>& rows
          "(`×` alone) or its velocity error exceeds "
       << th.velocity << " m/s or its gravity error " << th.gravity_deg
       << "° (`×` after the value; `×k/n`: k of n seeds).\n\n"
-      << markdownSummary(rows, th) << "\n## Every run\n\n"
+      << markdownSummary(rows, th) << "\n## Against the physical limit\n\n"
+      << boundsMarkdown(rows) << "\n## Every run\n\n"
+      << "Gravity in brackets: the tilt an unobservable horizontal accelerometer bias implies, "
+         "atan(|b_a,h| / g) + "
+      << kGravityBoundMarginDeg
+      << "°. err/CRB and NEES in the order "
+         "velocity, gravity (tilt), b_g, b_a.\n\n"
       << "| input | seed | method | status | speed [m/s] | velocity err [m/s] | gravity err "
-         "[deg] (bound) | b_g err [rad/s] | b_a err [m/s²] | position err [m] | time [ms] | "
-         "failure |\n|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+         "[deg] [b_a limit] | b_g err [rad/s] | b_a err [m/s²] | position err [m] | err/CRB | "
+         "NEES | time [ms] | failure "
+         "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+    auto list = [](const std::vector<double>& xs) {
+      std::string out;
+      for (const double x : xs) out += (out.empty() ? "" : ", ") + shortNumber(x);
+      return out;
+    };
     for (const auto& r : rows) {
       o << "| " << r.source << " | " << r.seed << " | " << r.method << " | " << r.status << " | "
         << shortNumber(r.speed) << " | " << shortNumber(r.velocity_err) << " | "
         << shortNumber(r.gravity_err_deg);
-      if (!std::isnan(r.gravity_bound_deg)) o << " (" << shortNumber(r.gravity_bound_deg) << ")";
+      if (!std::isnan(r.gravity_bound_deg)) o << " [" << shortNumber(r.gravity_bound_deg) << "]";
       o << " | " << shortNumber(r.gyro_bias_err) << " | " << shortNumber(r.accel_bias_err) << " | "
-        << shortNumber(r.position_err) << " | " << shortNumber(r.time_ms) << " | "
-        << (r.failed ? r.failure : std::string()) << " |\n";
+        << shortNumber(r.position_err) << " | "
+        << (std::isnan(r.ratioVelocity()) ? std::string() : list(ratios(r))) << " | "
+        << (std::isnan(r.nees_velocity)
+                ? std::string()
+                : list({r.nees_velocity, r.nees_tilt, r.nees_gyro_bias, r.nees_accel_bias}))
+        << " | " << shortNumber(r.time_ms) << " | " << (r.failed ? r.failure : std::string())
+        << " |\n";
+    }
+  });
+}
+
+std::string EvalRow::confidentlyWrong(const eval::NoticeFloors& floors) const {
+  if (status != "ok") return {};
+  std::string out;
+  auto check = [&](const char* name, double err, double bound, double floor) {
+    if (eval::confidentlyWrong(err, bound, floor))
+      out += (out.empty() ? "" : ",") + std::string(name);
+  };
+  check("velocity", velocity_err, crb_velocity, floors.velocity);
+  check("gravity", gravity_err_deg, crb_gravity_deg, floors.gravity_deg);
+  check("b_g", gyro_bias_err, crb_gyro_bias, floors.gyro_bias);
+  check("b_a", accel_bias_err, crb_accel_bias, floors.accel_bias);
+  return out;
+}
+
+const std::vector<std::string>& statusNames() {
+  static const std::vector<std::string> kNames = [] {
+    std::vector<std::string> n;
+    for (const InitStatus s : {InitStatus::Ok, InitStatus::NotEnoughData, InitStatus::NoDoppler,
+                               InitStatus::DegenerateGeometry, InitStatus::SolverFailed,
+                               InitStatus::AmbiguousMotion, InitStatus::InconsistentData})
+      n.emplace_back(toString(s));
+    return n;
+  }();
+  return kNames;
+}
+
+double quantile(std::vector<double> values, double p) {
+  if (values.empty()) return kNoValue;
+  std::sort(values.begin(), values.end());
+  const double pos = std::clamp(p, 0.0, 1.0) * static_cast<double>(values.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(pos));
+  const std::size_t hi = std::min(lo + 1, values.size() - 1);
+  const double u = pos - static_cast<double>(lo);
+  if (u == 0) return values[lo];
+  return (1 - u) * values[lo] + u * values[hi];
+}
+
+std::vector<MethodSummary> summarize(const std::vector<EvalRow>& rows,
+                                     const eval::NoticeFloors& floors) {
+  std::vector<MethodSummary> out;
+  const auto& names = statusNames();
+  const double chi2[4] = {eval::kChi2Quantile999Dof3, eval::kChi2Quantile999Dof2,
+                          eval::kChi2Quantile999Dof3, eval::kChi2Quantile999Dof3};
+  for (const auto& method : ordered(rows, [](const EvalRow& r) { return r.method; })) {
+    MethodSummary m;
+    m.method = method;
+    m.status_counts.assign(names.size() + 1, 0);
+    std::vector<double> ratio[4];
+    for (const EvalRow& r : rows) {
+      if (r.method != method) continue;
+      ++m.runs;
+      const auto it = std::find(names.begin(), names.end(), r.status);
+      ++m.status_counts[static_cast<std::size_t>(it - names.begin())];
+      if (r.status != "ok") continue;
+      const std::vector<double> rr = ratios(r);
+      if (!std::isnan(rr[0])) {
+        ++m.with_bound;
+        for (int q = 0; q < 4; ++q)
+          if (!std::isnan(rr[static_cast<std::size_t>(q)]))
+            ratio[q].push_back(rr[static_cast<std::size_t>(q)]);
+      }
+      const double nees[4] = {r.nees_velocity, r.nees_tilt, r.nees_gyro_bias, r.nees_accel_bias};
+      if (!std::isnan(nees[0])) {
+        ++m.with_nees;
+        for (int q = 0; q < 4; ++q)
+          if (nees[q] > chi2[q]) ++m.nees_above[q];
+      }
+      if (!r.confidentlyWrong(floors).empty()) ++m.confident_wrong;
+    }
+    for (int q = 0; q < 4; ++q) {
+      m.ratio_median[q] = quantile(ratio[q], 0.5);
+      m.ratio_p95[q] = quantile(ratio[q], 0.95);
+    }
+    out.push_back(m);
+  }
+  return out;
+}
+
+std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeFloors& floors,
+                           std::size_t max_listed) {
+  const auto summaries = summarize(rows, floors);
+  std::ostringstream o;
+  o << "Error / Cramér-Rao bound of each ok run (bound: the square root of the trace of the "
+       "posterior CRB covariance of body velocity, gravity direction (2 dof), b_g and b_a at the "
+       "run's state time, for that run's window, data and the estimator's bias priors; an "
+       "efficient estimator has a median near 0.9 and a 95th percentile near 1.6), median and "
+       "95th percentile over the ok runs with a bound. Confident wrong: ok runs more than "
+    << eval::kConfidentWrongRatio << "× their bound on a quantity whose error is also above "
+    << shortNumber(floors.velocity) << " m/s, " << shortNumber(floors.gravity_deg) << "°, "
+    << shortNumber(floors.gyro_bias) << " rad/s or " << shortNumber(floors.accel_bias)
+    << " m/s².\n\n";
+  o << "| method | ok / runs | velocity median | p95 | gravity median | p95 | b_g median | p95 | "
+       "b_a median | p95 | confident wrong |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
+  for (const auto& m : summaries) {
+    o << "| " << m.method << " | " << m.status_counts[0] << " / " << m.runs << " |";
+    for (int q = 0; q < 4; ++q)
+      o << " " << shortNumber(m.ratio_median[q]) << " | " << shortNumber(m.ratio_p95[q]) << " |";
+    o << " " << m.confident_wrong << " |\n";
+  }
+  o << "\nShare of the ok runs with a NEES of the state's own covariance above the 99.9 % "
+       "chi-square quantile (velocity, b_g, b_a: 3 dof, "
+    << eval::kChi2Quantile999Dof3 << "; tilt: 2 dof, " << eval::kChi2Quantile999Dof2
+    << "; a consistent estimator: 0.1 %).\n\n"
+    << "| method | velocity | tilt | b_g | b_a |\n|---|---|---|---|---|\n";
+  for (const auto& m : summaries) {
+    o << "| " << m.method << " |";
+    for (int q = 0; q < 4; ++q) {
+      char buf[64];
+      if (m.with_nees == 0)
+        std::snprintf(buf, sizeof(buf), "–");
+      else
+        std::snprintf(buf, sizeof(buf), "%d/%d (%.1f %%)", m.nees_above[q], m.with_nees,
+                      100.0 * m.nees_above[q] / m.with_nees);
+      o << " " << buf << " |";
+    }
+    o << "\n";
+  }
+  const auto& names = statusNames();
+  o << "\nStatus of every run.\n\n| method |";
+  for (const auto& n : names) o << " " << n << " |";
+  const bool other = std::any_of(summaries.begin(), summaries.end(), [&](const MethodSummary& m) {
+    return m.status_counts.back() > 0;
+  });
+  if (other) o << " other |";
+  o << "\n|---|";
+  for (std::size_t i = 0; i < names.size() + (other ? 1 : 0); ++i) o << "---|";
+  o << "\n";
+  for (const auto& m : summaries) {
+    o << "| " << m.method << " |";
+    for (std::size_t i = 0; i < names.size() + (other ? 1 : 0); ++i)
+      o << " " << m.status_counts[i] << " |";
+    o << "\n";
+  }
+  // The bound itself per input (median over the seeds), for the first method's windows.
+  if (!rows.empty()) {
+    const std::string& first = rows.front().method;
+    const auto sources = ordered(rows, [](const EvalRow& r) { return r.source; });
+    const struct {
+      const char* label;
+      double EvalRow::*field;
+    } kBounds[] = {{"velocity [m/s]", &EvalRow::crb_velocity},
+                   {"gravity [deg]", &EvalRow::crb_gravity_deg},
+                   {"b_g [rad/s]", &EvalRow::crb_gyro_bias},
+                   {"b_a [m/s²]", &EvalRow::crb_accel_bias}};
+    o << "\nThe bound per input (median over the seeds, " << first << "'s windows):\n\n"
+      << "| CRB |";
+    for (const auto& s : sources) o << " " << s << " |";
+    o << "\n|---|";
+    for (std::size_t i = 0; i < sources.size(); ++i) o << "---|";
+    o << "\n";
+    for (const auto& b : kBounds) {
+      o << "| " << b.label << " |";
+      for (const auto& s : sources) {
+        std::vector<double> v;
+        for (const EvalRow& r : rows)
+          if (r.method == first && r.source == s && !std::isnan(r.*b.field))
+            v.push_back(r.*b.field);
+        o << " " << shortNumber(quantile(v, 0.5)) << " |";
+      }
+      o << "\n";
+    }
+  }
+  o << "\nConfident wrong answers:";
+  bool any = false;
+  std::map<std::string, std::size_t> listed, unlisted;
+  for (const EvalRow& r : rows) {
+    const std::string wrong = r.confidentlyWrong(floors);
+    if (wrong.empty()) continue;
+    if (listed[r.method] >= max_listed) {
+      ++unlisted[r.method];
+      continue;
+    }
+    ++listed[r.method];
+    if (!any)
+      o << "\n\n| input | seed | method | quantities | err/CRB (v, g, b_g, b_a) |\n"
+           "|---|---|---|---|---|\n";
+    any = true;
+    o << "| " << r.source << " | " << r.seed << " | " << r.method << " | " << wrong << " | ";
+    const auto rr = ratios(r);
+    for (std::size_t i = 0; i < rr.size(); ++i) o << (i ? ", " : "") << shortNumber(rr[i]);
+    o << " |\n";
+  }
+  for (const auto& [method, n] : unlisted) o << "| … | | " << method << " | " << n << " more | |\n";
+  if (!any) o << " none.\n";
+  return o.str();
+}
+
+void writeSummaryCsv(const std::string& path, const std::vector<EvalRow>& rows,
+                     const eval::NoticeFloors& floors) {
+  const auto summaries = summarize(rows, floors);
+  writeFileAtomically(path, [&](std::ostream& o) {
+    o << "method,runs";
+    for (const auto& n : statusNames()) o << "," << n;
+    o << ",other_status,runs_with_bound";
+    for (const char* q : {"velocity", "gravity", "gyro_bias", "accel_bias"})
+      o << ",ratio_" << q << "_median,ratio_" << q << "_p95";
+    o << ",runs_with_nees";
+    for (const char* q : {"velocity", "tilt", "gyro_bias", "accel_bias"})
+      o << ",nees_" << q << "_above_chi2_999";
+    o << ",confident_wrong\n";
+    for (const auto& m : summaries) {
+      o << quoted(m.method) << "," << m.runs;
+      for (const int c : m.status_counts) o << "," << c;
+      o << "," << m.with_bound;
+      for (int q = 0; q < 4; ++q)
+        o << "," << number(m.ratio_median[q]) << "," << number(m.ratio_p95[q]);
+      o << "," << m.with_nees;
+      for (const int c : m.nees_above) o << "," << c;
+      o << "," << m.confident_wrong << "\n";
     }
   });
 }

@@ -1,8 +1,7 @@
 #include <freeinit/baselines.h>
+#include <freeinit/eval/state_errors.h>
 #include <freeinit/free_init.h>
 #include <freeinit/report/methods.h>
-#include <freeinit/rotation.h>
-#include <freeinit/sim/evaluation.h>
 
 #include <algorithm>
 #include <atomic>
@@ -45,7 +44,9 @@ std::vector<MethodRun> runMethods(const FreeInitConfig& config, const std::vecto
     runs.back().track.push_back({v.t, v.v_b});
   if (!options.baselines) return runs;
 
-  const int window = cfg.window.imu_samples;
+  // The IMU samples of the window (more than there are when the IMU does not cover it).
+  const auto last = windowLastSample(imu, 0, cfg.window.duration);
+  const int window = static_cast<int>(last ? *last + 1 : imu.size() + 1);
   runs.push_back(timed("fast-lio2", [&] { return baselines::fastLio2(imu, window); }));
   zeroVelocityTrack(runs.back());
   runs.push_back(timed("dlio", [&] { return baselines::dlio(imu, options.dlio_duration); }));
@@ -67,16 +68,8 @@ std::vector<MethodRun> runMethods(const FreeInitConfig& config, const std::vecto
   return runs;
 }
 
-double displacementError(const InitResult& r, const PoseTruth& at_start, const PoseTruth& at_end) {
-  if (!r.state.ok() || r.trajectory.empty()) return kNoValue;
-  const PoseSample& p0 = r.trajectory.front();
-  const Vec3 d_est = p0.q_wb.conjugate() * (r.state.p_w - p0.p_w);
-  const Vec3 d_true = at_start.R_wb.transpose() * (at_end.p_w - at_start.p_w);
-  return (d_est - d_true).norm();
-}
-
-EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run,
-                    const TruthFn& truth) {
+EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, const TruthFn& truth,
+                    const eval::Bound* bound) {
   const InitResult& r = run.result;
   EvalRow row;
   row.source = source;
@@ -85,16 +78,27 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run,
   row.status = toString(r.state.status);
   row.time_ms = run.time_ms;
   if (!r.state.ok()) return row;
-  const StateTruth gt = truth(r.state.timestamp);
-  const Vec3 v_b_true = gt.v_b(), g_b_true = gt.g_b();
-  row.speed = v_b_true.norm();
-  row.velocity_err = (r.state.v_b() - v_b_true).norm();
-  row.gravity_err_deg = angleBetween(r.state.g_b(), g_b_true) * 180.0 / M_PI;
-  row.gravity_bound_deg = sim::gravityErrorFromBiasDeg(gt.b_a, g_b_true) + kGravityBoundMarginDeg;
-  row.gyro_bias_err = (r.state.b_g - gt.b_g).norm();
-  row.accel_bias_err = (r.state.b_a - gt.b_a).norm();
+  const eval::StateTruth gt = truth(r.state.timestamp);
+  const eval::StateErrors e = eval::stateErrors(r.state, gt);
+  row.speed = e.speed;
+  row.velocity_err = e.velocity;
+  row.gravity_err_deg = e.gravity_deg;
+  row.gravity_bound_deg = e.gravity_deg_from_bias + kGravityBoundMarginDeg;
+  row.gyro_bias_err = e.gyro_bias;
+  row.accel_bias_err = e.accel_bias;
   if (!r.trajectory.empty())
-    row.position_err = displacementError(r, truth(r.trajectory.front().t), gt);
+    row.position_err = eval::displacementError(r, truth(r.trajectory.front().t), gt);
+  const eval::Nees n = eval::stateNees(r.state, gt);
+  row.nees_velocity = n.velocity;
+  row.nees_tilt = n.tilt;
+  row.nees_gyro_bias = n.gyro_bias;
+  row.nees_accel_bias = n.accel_bias;
+  if (bound && bound->ok) {
+    row.crb_velocity = bound->velocity;
+    row.crb_gravity_deg = bound->gravity_deg;
+    row.crb_gyro_bias = bound->gyro_bias;
+    row.crb_accel_bias = bound->accel_bias;
+  }
   return row;
 }
 

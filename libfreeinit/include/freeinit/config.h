@@ -1,13 +1,31 @@
 // All tunable parameters of Free-Init, grouped one struct per concern (one INI section each).
 // Defaults are the values the accuracy tests and benchmarks use; units in brackets.
+//
+// Parameter structs, here and everywhere in the project, are free structs named `<Concept>Params`
+// (plain aggregates with their defaults in the body), declared in the header of the component
+// they configure, one INI section each. Each has one INI declaration (config_section.h: key
+// names, units, accepted ranges, one-line docs; defaults are the struct's own), a function
+// `<section>Section()` beside its loader, which drives loading, validation, the effective-
+// configuration echo and the checks that the shipped ini/*.ini files document every key.
 #pragma once
 
 #include <freeinit/gravity_estimator.h>
 #include <freeinit/types.h>
 
+#include <cstddef>
+#include <iosfwd>
+#include <optional>
 #include <string>
+#include <vector>
 
 namespace freeinit {
+namespace config {
+class IniFile;
+class Checker;
+class SectionBase;
+template <class S>
+class Section;
+}  // namespace config
 
 /// The Doppler-inertial velocimeter (paper Sec. III-B). INI section [velocimeter].
 struct VelocimeterParams {
@@ -61,7 +79,10 @@ struct StaticParams {
 
 /// The initialization window. INI section [window].
 struct WindowParams {
-  int imu_samples = 100;              ///< window length in IMU samples (paper: ~100)
+  /// [s] window length (paper: ~100 IMU samples at 200 Hz). The window holds the IMU samples
+  /// from its first one, t_0, up to t_0 + duration (exclusive; see windowSample()): 0.5 s is 100
+  /// samples at 200 Hz and 500 at 1 kHz, whatever the IMU's rate.
+  double duration = 0.5;
   /// Accelerometer-aided refinement passes over the window after the paper's pass: each reruns
   /// the velocimeter with the body acceleration from the accelerometer, the last b_a and
   /// gravity, then solves b_a and gravity again (0: the paper's single pass).
@@ -69,14 +90,14 @@ struct WindowParams {
   /// Extra decimation of the passes that only seed a refinement (their velocities serve the
   /// first gravity estimate; the last pass uses `point_stride`).
   int seed_pass_stride = 3;
-  /// Length of the passes that only seed a refinement, in IMU samples from the window start
-  /// (0 or more than imu_samples: the whole window; 60 is 0.3 s at 200 Hz). Shorter than the
-  /// window, the last pass starts while the window is still being received, so an online user
-  /// waits only for the last frame and the last solve instead of one more pass over the window.
-  /// Seeding from 0.3 s instead of 0.5 s changed the mean gravity error over 13 presets x 3
-  /// seeds from 0.641 to 0.639 deg (`freeinit-eval --seeds 3 --no-baselines --duration 0.7`
-  /// with `--seed-samples 0` and without).
-  int seed_imu_samples = 60;
+  /// [s] length of the passes that only seed a refinement, from the window start (0 or more
+  /// than `duration`: the whole window). Shorter than the window, the last pass starts while
+  /// the window is still being received, so an online user waits only for the last frame and
+  /// the last solve instead of one more pass over the window. Seeding from 0.3 s instead of
+  /// 0.5 s changed the mean gravity error over 13 presets x 3 seeds from 0.641 to 0.639 deg
+  /// (`freeinit-eval --seeds 3 --no-baselines --duration 0.7` with `--seed-samples 0` and
+  /// without; 60 samples are 0.3 s at the presets' 200 Hz).
+  double seed_duration = 0.3;
 };
 
 /// Which estimator solves the window, and the settings of the joint one. INI section
@@ -106,6 +127,21 @@ struct EstimatorParams {
   double accel_bias_random_walk = 1e-3;  ///< [m/s^2/sqrt(s)]
 };
 
+/// Where an IMU sample stands in a span of `duration` seconds that starts at the sample at
+/// t_first (the window, or a seed pass). The span holds the samples with t - t_first < duration;
+/// a sample closes it (Last) when the next one is due at or after its end, t + (t - t_prev) >=
+/// t_first + duration, so that a live stream need not wait for the first sample beyond the
+/// window; times within 1 % of a sample interval of the end count as at the end (rounding of
+/// stamps). A sample that comes after a gap beyond the end is Outside: the span closed with the
+/// one before it. The span's first sample is always Inside.
+enum class WindowSample { Inside, Last, Outside };
+/// `t_prev`: the sample before `t` (t_prev < t; for the first sample pass t_prev = t).
+WindowSample windowSample(double t_first, double t_prev, double t, double duration);
+/// The index of the last sample of the span that starts at imu[first], or nullopt if the samples
+/// end before it closes.
+std::optional<std::size_t> windowLastSample(const std::vector<ImuSample>& imu, std::size_t first,
+                                            double duration);
+
 /// Everything. The INI file has one section per member.
 struct FreeInitConfig {
   EstimatorParams estimator;
@@ -113,10 +149,28 @@ struct FreeInitConfig {
   BootstrapParams bootstrap;
   StaticParams static_detector;
   WindowParams window;
-  GravityEstimator::Parameters gravity;
+  GravityParams gravity;
   Extrinsics extrinsics;
-  /// Throws std::invalid_argument naming the offending key if a value is out of range.
+  /// Throws config::ConfigError (a std::invalid_argument) naming the offending key
+  /// ("configuration key velocimeter.doppler_sigma: ...") if a value is out of its accepted
+  /// range or the keys contradict each other.
   void validate() const;
+  /// Loads the estimator's sections ([estimator] [velocimeter] [bootstrap] [static_detector]
+  /// [window] [gravity]) of `ini` over the current values; other sections are the caller's. Throws
+  /// config::ConfigError naming the file, the line, the section and the key.
+  void load(const config::IniFile& ini);
+  /// Writes those sections as a documented INI that loads back to the same values.
+  void dump(std::ostream& out) const;
+  /// The names of those sections.
+  static std::vector<std::string> sectionNames();
 };
+
+/// The INI declarations of the estimator's sections (the one place their keys are written).
+const config::Section<EstimatorParams>& estimatorSection();
+const config::Section<VelocimeterParams>& velocimeterSection();
+const config::Section<BootstrapParams>& bootstrapSection();
+const config::Section<StaticParams>& staticDetectorSection();
+const config::Section<WindowParams>& windowSection();
+const config::Section<GravityParams>& gravitySection();
 
 }  // namespace freeinit

@@ -26,6 +26,9 @@ class FreeInit {
   void addFrame(const LidarFrame& f);
   /// As above, taking the frame's points without copying them.
   void addFrame(LidarFrame&& f);
+  /// As above, sharing the frame without copying it (several estimators, or a recorder, may
+  /// hold the same frame); it must not change while shared.
+  void addFrame(std::shared_ptr<const LidarFrame> f);
   /// Declares the end of the input: a window still open is closed with what is there.
   void finish();
 

@@ -40,41 +40,46 @@ struct GravityEstimate {
   int iterations = 0;
 };
 
+/// How the accelerometer bias and gravity are solved for.
+enum class GravityFormulation {
+  Integrated,      ///< velocity differences vs integrated specific force (default)
+  Differentiated,  ///< the paper's form: numerically differentiated, low-pass filtered velocities
+};
+
+/// Parameters of GravityEstimator. INI section [gravity] (keys declared in config.cpp).
+struct GravityParams {
+  GravityFormulation formulation = GravityFormulation::Integrated;
+  bool use_body_equation = true;        ///< residuals of the body kinematics
+  bool use_lidar_equation = true;       ///< residuals of the LiDAR kinematics (lever arm terms)
+  double accel_sigma = 0.02;            ///< [m/s^2] accelerometer white noise per sample
+  double accel_bias_bound = 0.5;        ///< [m/s^2] |b_a| per axis is kept below this
+  double accel_bias_prior_sigma = 0.1;  ///< [m/s^2] zero-mean prior (typical MEMS, ~10 mg)
+  double lowpass_cutoff_hz = 10.0;      ///< [Hz] for the differentiated formulation (<= 0: off)
+  /// [s] correlation time of the velocimeter's velocity error, modelled as first-order
+  /// Gauss-Markov (AR(1)) with the samples' covariance as its stationary covariance; the
+  /// integrated residuals are then whitened in time (quasi-differenced). 0: white errors.
+  double velocity_error_correlation_time = 0.0;
+  /// The body and LiDAR velocities come from the same points (as in the velocimeter): when both
+  /// equations are used each gets half the information, so that together they count it once
+  /// (integrated formulation; the differentiated one weighs both fully, as the paper).
+  bool equations_share_errors = true;
+  double loss_scale = 3.0;  ///< Cauchy loss scale on whitened residuals [sigma]
+  int max_iterations = 50;
+  /// Estimate a correction of the gyro bias with the integrated formulation (needs the gyro
+  /// bias covariance, see estimate()).
+  bool estimate_gyro_bias = true;
+  /// Compute the covariance (`cov`, `cov_full`); off, they are left at their defaults.
+  bool compute_covariance = true;
+};
+
 /// Solves for b_a and g_w given the window's kinematic samples.
 class GravityEstimator {
  public:
-  enum class Formulation {
-    Integrated,      ///< velocity differences vs integrated specific force (default)
-    Differentiated,  ///< the paper's form: numerically differentiated, low-pass filtered velocities
-  };
-  struct Parameters {
-    Formulation formulation = Formulation::Integrated;
-    bool use_body_equation = true;     ///< residuals of the body kinematics
-    bool use_lidar_equation = true;    ///< residuals of the LiDAR kinematics (lever arm terms)
-    double accel_sigma = 0.02;         ///< [m/s^2] accelerometer white noise per sample
-    double accel_bias_bound = 0.5;     ///< [m/s^2] |b_a| per axis is kept below this
-    double accel_bias_prior_sigma = 0.1;  ///< [m/s^2] zero-mean prior (typical MEMS, ~10 mg)
-    double lowpass_cutoff_hz = 10.0;   ///< [Hz] for the differentiated formulation (<= 0: off)
-    /// [s] correlation time of the velocimeter's velocity error, modelled as first-order
-    /// Gauss-Markov (AR(1)) with the samples' covariance as its stationary covariance; the
-    /// integrated residuals are then whitened in time (quasi-differenced). 0: white errors.
-    double velocity_error_correlation_time = 0.0;
-    /// The body and LiDAR velocities come from the same points (as in the velocimeter): when both
-    /// equations are used each gets half the information, so that together they count it once
-    /// (integrated formulation; the differentiated one weighs both fully, as the paper).
-    bool equations_share_errors = true;
-    double loss_scale = 3.0;           ///< Cauchy loss scale on whitened residuals [sigma]
-    int max_iterations = 50;
-    /// Estimate a correction of the gyro bias with the integrated formulation (needs the gyro
-    /// bias covariance, see estimate()).
-    bool estimate_gyro_bias = true;
-    /// Compute the covariance (`cov`, `cov_full`); off, they are left at their defaults.
-    bool compute_covariance = true;
-  };
+  using Formulation = GravityFormulation;
 
   GravityEstimator() = default;
-  explicit GravityEstimator(const Parameters& p) : params_(p) {}
-  const Parameters& params() const { return params_; }
+  explicit GravityEstimator(const GravityParams& p) : params_(p) {}
+  const GravityParams& params() const { return params_; }
 
   /// Solves the problem. Requires >= 10 samples, sorted by time.
   /// `gyro_bias_cov`, when positive definite, is the covariance [(rad/s)^2] of the gyro bias used
@@ -87,7 +92,7 @@ class GravityEstimator {
                            const GravityEstimate* start = nullptr) const;
 
  private:
-  Parameters params_;
+  GravityParams params_;
 };
 
 }  // namespace freeinit

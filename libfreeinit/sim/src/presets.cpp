@@ -1,17 +1,12 @@
 #include <freeinit/sim/presets.h>
-#include <freeinit/sim/scene_builders.h>
 
-#include "random_stream.h"
-
-#include <algorithm>
 #include <cmath>
-#include <random>
 #include <stdexcept>
+
+#include "preset_definitions.h"
 
 namespace freeinit::sim {
 namespace {
-
-constexpr double kDeg = M_PI / 180.0;
 
 const std::vector<PresetInfo>& table() {
   // A function-local constant table (immutable, no mutable static state).
@@ -43,7 +38,7 @@ Sinusoid rateWave(double amplitude, double freq_hz, double tau_peak) {
 }
 
 /// Walking with hand shake: bobbing, swaying and small attitude jitter.
-void addHandheldWalk(TrajectoryParams& p, double speed) {
+void addHandheldWalk(MotionConfig& p, double speed) {
   p.pos[0].poly = {0.0, speed};
   p.pos[0].waves = {wave(0.015, 1.8, 0.3)};
   p.pos[1].waves = {wave(0.05, 0.9, 1.1), wave(0.01, 2.9)};
@@ -53,7 +48,7 @@ void addHandheldWalk(TrajectoryParams& p, double speed) {
   p.rpy[2].waves = {wave(0.04, 0.45, 0.7), wave(0.01, 2.3, 1.3)};
 }
 
-void addWheeled(TrajectoryParams& p, double speed) {
+void addWheeled(MotionConfig& p, double speed) {
   p.pos[0].poly = {0.0, speed};
   p.pos[1].waves = {wave(0.08, 0.25, 0.5)};
   p.pos[2].waves = {wave(0.004, 6.0), wave(0.002, 11.0, 0.3)};
@@ -62,7 +57,7 @@ void addWheeled(TrajectoryParams& p, double speed) {
   p.rpy[2].waves = {wave(0.03, 0.25, 2.0)};
 }
 
-void addVehicle(TrajectoryParams& p, double speed) {
+void addVehicle(MotionConfig& p, double speed) {
   // Cruise speed at tau = 0 exactly (the speed wave has zero rate there), slight acceleration.
   p.pos[0].poly = {0.0, speed, 0.1};
   p.pos[0].waves = {wave(0.3, 0.2, 0.5 * M_PI)};
@@ -74,8 +69,8 @@ void addVehicle(TrajectoryParams& p, double speed) {
 }
 
 /// Large rotational excitation whose component rates peak inside the first 0.5 s.
-void addRotation(TrajectoryParams& p, double yaw_amp, double yaw_hz, double roll_amp,
-                 double roll_hz, double pitch_amp, double pitch_hz) {
+void addRotation(MotionConfig& p, double yaw_amp, double yaw_hz, double roll_amp, double roll_hz,
+                 double pitch_amp, double pitch_hz) {
   p.rpy[2].waves.push_back(rateWave(yaw_amp, yaw_hz, 0.15));
   p.rpy[0].waves.push_back(rateWave(roll_amp, roll_hz, 0.18));
   p.rpy[1].waves.push_back(rateWave(pitch_amp, pitch_hz, 0.12));
@@ -101,29 +96,31 @@ ScenarioConfig preset(const std::string& name, std::uint64_t seed) {
   ScenarioConfig c;
   c.name = name;
   c.seed = seed;
+  detail::definePreset(name, c);
   return c;
 }
 
-std::shared_ptr<const AnalyticTrajectory> makePresetTrajectory(const ScenarioConfig& config) {
-  const PresetInfo info = presetInfo(config.name);
-  const std::string& n = config.name;
-  TrajectoryParams p;
-  p.t0 = config.t0;
-  // Start attitude: a few degrees of roll and pitch, heading along the street (+x).
-  p.rpy_start = Vec3(3.0 * kDeg, -4.0 * kDeg, 2.0 * kDeg);
+namespace detail {
+
+void definePreset(const std::string& name, ScenarioConfig& c) {
+  const PresetInfo info = presetInfo(name);
+  const std::string& n = name;
+  // Motion: start attitude a few degrees of roll and pitch, heading along the street (+x).
+  MotionConfig p;
+  p.start_rpy_deg = Vec3(3.0, -4.0, 2.0);
   if (info.platform == "handheld") {
     // Street: right sidewalk; corridor / tunnel: near the centre.
-    p.p_start_w = Vec3(0, info.scene == "street" ? -8.2 : (info.scene == "tunnel" ? -0.6 : 0.0),
-                       1.4);
+    p.start_position =
+        Vec3(0, info.scene == "street" ? -8.2 : (info.scene == "tunnel" ? -0.6 : 0.0), 1.4);
     addHandheldWalk(p, info.nominal_speed);
   } else if (info.platform == "wheeled") {
-    p.p_start_w = Vec3(0, info.scene == "street" ? -8.2 : (info.scene == "tunnel" ? -1.5 : 0.0),
-                       0.6);
-    p.rpy_start = Vec3(2.0 * kDeg, 3.0 * kDeg, -1.5 * kDeg);
+    p.start_position =
+        Vec3(0, info.scene == "street" ? -8.2 : (info.scene == "tunnel" ? -1.5 : 0.0), 0.6);
+    p.start_rpy_deg = Vec3(2.0, 3.0, -1.5);
     addWheeled(p, info.nominal_speed);
   } else {
-    p.p_start_w = Vec3(0, info.scene == "tunnel" ? -2.0 : -2.5, 1.9);
-    p.rpy_start = Vec3(-2.0 * kDeg, 3.5 * kDeg, 0.5 * kDeg);
+    p.start_position = Vec3(0, info.scene == "tunnel" ? -2.0 : -2.5, 1.9);
+    p.start_rpy_deg = Vec3(-2.0, 3.5, 0.5);
     addVehicle(p, info.nominal_speed);
   }
   if (n == "dyna_01") addRotation(p, 0.45, 1.6, 0.15, 2.0, 0.10, 1.4);
@@ -140,74 +137,42 @@ std::shared_ptr<const AnalyticTrajectory> makePresetTrajectory(const ScenarioCon
     p.still_until = info.still_duration;
     p.blend_duration = 1.0;
   }
-  return std::make_shared<AnalyticTrajectory>(std::move(p));
+  c.motion = p;
+
+  // Scene, sized at simulation time by the stretch the platform covers.
+  SceneConfig s;
+  s.kind = info.scene;
+  s.auto_extent = true;
+  if (info.scene == "street" && info.platform == "vehicular") {
+    s.street.ego_lane_speed = info.nominal_speed;
+    s.street.cars_per_100m = n == "dyna_06" ? 7.0 : 5.0;
+    s.street.pedestrians_per_100m = 3.0;
+  }
+  s.corridor.pedestrians = n == "dyna_02" ? 2 : 1;
+  if (info.platform == "handheld") {
+    s.tunnel.half_width = 2.0;
+    s.tunnel.height = 3.0;
+  } else if (info.platform == "wheeled") {
+    s.tunnel.half_width = 3.5;
+    s.tunnel.height = 5.0;
+  } else {
+    s.tunnel.half_width = 5.0;
+    s.tunnel.height = 6.5;
+  }
+  c.scene = s;
+
+  // Extrinsics: R_bl = Rz(5 deg) Ry(-3 deg) Rx(2 deg), p_bl = (0.08, -0.05, 0.12) m, perturbed
+  // per seed; declared exactly, on one clock.
+  c.lidar_rpy_deg = Vec3(2.0, -3.0, 5.0);
+  c.lidar_position = Vec3(0.08, -0.05, 0.12);
+  c.lidar_rpy_jitter_deg = 0.5;
+  c.lidar_position_jitter = 0.01;
+  c.declared_rotation_error_deg.setZero();
+  c.declared_position_error.setZero();
+  c.lidar_time_offset = 0;
+  c.random_biases = true;
 }
 
-std::shared_ptr<const Scene> makePresetScene(const ScenarioConfig& config,
-                                             const Trajectory& trajectory) {
-  const PresetInfo info = presetInfo(config.name);
-  double x_min = 1e300, x_max = -1e300;
-  const int n = std::max(2, static_cast<int>(std::ceil(config.duration * 20.0)) + 1);
-  for (int i = 0; i < n; ++i) {
-    const double x = trajectory.at(config.t0 + config.duration * i / (n - 1)).p_w.x();
-    x_min = std::min(x_min, x);
-    x_max = std::max(x_max, x);
-  }
-  std::mt19937_64 rng = detail::randomStream(config.seed, detail::Stream::Scene);
-  if (info.scene == "street") {
-    StreetOptions o;
-    o.x_min = x_min;
-    o.x_max = x_max;
-    o.duration = config.duration;
-    if (info.platform == "vehicular") {
-      o.ego_lane_speed = info.nominal_speed;
-      o.cars_per_100m = config.name == "dyna_06" ? 7.0 : 5.0;
-      o.pedestrians_per_100m = 3.0;
-    }
-    return std::make_shared<Scene>(makeStreetScene(o, rng));
-  }
-  if (info.scene == "corridor") {
-    CorridorOptions o;
-    o.x_min = x_min;
-    o.x_max = x_max;
-    o.pedestrians = config.name == "dyna_02" ? 2 : 1;
-    return std::make_shared<Scene>(makeCorridorScene(o, rng));
-  }
-  if (info.scene == "tunnel") {
-    TunnelOptions o;
-    o.x_min = x_min;
-    o.x_max = x_max;
-    if (info.platform == "handheld") {
-      o.half_width = 2.0;
-      o.height = 3.0;
-    } else if (info.platform == "wheeled") {
-      o.half_width = 3.5;
-      o.height = 5.0;
-    } else {
-      o.half_width = 5.0;
-      o.height = 6.5;
-    }
-    return std::make_shared<Scene>(makeTunnelScene(o));
-  }
-  OpenOptions o;
-  o.x_min = x_min;
-  o.x_max = x_max;
-  return std::make_shared<Scene>(makeOpenScene(o, rng));
-}
-
-Extrinsics makePresetExtrinsics(const ScenarioConfig& config) {
-  std::mt19937_64 rng = detail::randomStream(config.seed, detail::Stream::Extrinsics);
-  std::uniform_real_distribution<double> ang(-0.5 * kDeg, 0.5 * kDeg);
-  std::uniform_real_distribution<double> lev(-0.01, 0.01);
-  const double roll = 2.0 * kDeg + ang(rng);
-  const double pitch = -3.0 * kDeg + ang(rng);
-  const double yaw = 5.0 * kDeg + ang(rng);
-  Extrinsics e;
-  e.R_bl = (Eigen::AngleAxisd(yaw, Vec3::UnitZ()) * Eigen::AngleAxisd(pitch, Vec3::UnitY()) *
-            Eigen::AngleAxisd(roll, Vec3::UnitX()))
-               .toRotationMatrix();
-  e.p_bl = Vec3(0.08 + lev(rng), -0.05 + lev(rng), 0.12 + lev(rng));
-  return e;
-}
+}  // namespace detail
 
 }  // namespace freeinit::sim

@@ -8,7 +8,21 @@
 namespace freeinit::sim::detail {
 
 /// Purposes of the random streams.
-enum class Stream : std::uint32_t { Biases = 1, Extrinsics = 2, Scene = 3, Imu = 4, Lidar = 5 };
+enum class Stream : std::uint32_t {
+  Biases = 1,
+  Extrinsics = 2,
+  Scene = 3,
+  Imu = 4,
+  Lidar = 5,
+  // randomScenario(seed): one stream per aspect, so that changing one part of the distribution
+  // leaves the draws of the others as they were.
+  DrawPlatform = 16,
+  DrawMotion = 17,
+  DrawScene = 18,
+  DrawMovers = 19,
+  DrawSensors = 20,
+  DrawCalibration = 21,
+};
 
 inline std::mt19937_64 randomStream(std::uint64_t seed, Stream purpose) {
   std::seed_seq seq{static_cast<std::uint32_t>(seed), static_cast<std::uint32_t>(seed >> 32),

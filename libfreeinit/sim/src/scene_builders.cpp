@@ -97,7 +97,7 @@ Scene makeStreetScene(const StreetOptions& opt, std::mt19937_64& rng) {
   }
   // Moving objects placed relative to the platform so that every street recording sees traffic
   // from the first frame on (not left to chance).
-  if (opt.ego_lane_speed > 0) {
+  if (opt.near_traffic && opt.ego_lane_speed > 0) {
     for (double ahead : {18.0, 45.0}) {
       scene.add(makeBox(Vec3(opt.x_min + ahead, -2.5, 0.8), Vec3(2.25, 0.9, 0.8), 0,
                         reflect(rng, 0.5, 0.95), Vec3(opt.ego_lane_speed + ahead / 15.0, 0, 0)));
@@ -106,7 +106,7 @@ Scene makeStreetScene(const StreetOptions& opt, std::mt19937_64& rng) {
       scene.add(makeBox(Vec3(opt.x_min + ahead, 2.5, 0.75), Vec3(2.25, 0.9, 0.75), 0,
                         reflect(rng, 0.5, 0.95), Vec3(-uniform(rng, 10.0, 15.0), 0, 0)));
     }
-  } else {
+  } else if (opt.near_traffic) {
     // The platform walks / rolls on the right sidewalk (y = -(half_width - 1.8)).
     for (double ahead : {5.0, 11.0}) {
       scene.add(pedestrian(Vec3(opt.x_min + ahead, -(hw - 0.6), 0), 1.7, rng));
@@ -172,20 +172,38 @@ Scene makeCorridorScene(const CorridorOptions& opt, std::mt19937_64& rng) {
     scene.add(makeBox(Vec3(x, 0, H - 0.05), Vec3(0.6, 0.15, 0.06), 0, 0.95f));
   }
   for (int i = 0; i < opt.pedestrians; ++i) {
-    const double y = (i % 2 == 0 ? 0.75 : -0.75);
+    const double y = (i % 2 == 0 ? opt.pedestrian_offset : -opt.pedestrian_offset);
     const double vx = (i % 2 == 0 ? -1.0 : 1.0) * uniform(rng, 0.9, 1.4);
     scene.add(pedestrian(Vec3(opt.x_min + uniform(rng, 4.0, 15.0), y, 0), vx, rng));
   }
   return scene;
 }
 
-Scene makeTunnelScene(const TunnelOptions& opt) {
+Scene makeTunnelScene(const TunnelOptions& opt, std::mt19937_64& rng) {
   Scene scene("tunnel");
   const double xa = opt.x_min - 60.0;
   const double xb = opt.x_max + 400.0;
   const double hw = opt.half_width;
   const double H = opt.height;
   addTube(scene, xa, xb, hw, H, 0.25f, 0.5f, 0.6f);
+  if (opt.features_per_100m > 0) {
+    // Ceiling lights, wall niches (recesses drawn as dark boxes against the wall) and signs.
+    const double mean_gap = 100.0 / opt.features_per_100m;
+    for (double x = xa + uniform(rng, 0, mean_gap); x < xb;
+         x += uniform(rng, 0.5, 1.5) * mean_gap) {
+      const double kind = uniform(rng, 0, 1);
+      const double side = uniform(rng, 0, 1) < 0.5 ? -1.0 : 1.0;
+      if (kind < 0.5) {
+        scene.add(makeBox(Vec3(x, side * 0.3 * hw, H - 0.08), Vec3(0.6, 0.15, 0.08), 0, 0.95f));
+      } else if (kind < 0.8) {
+        scene.add(makeBox(Vec3(x, side * (hw - 0.1), 1.2), Vec3(uniform(rng, 0.5, 1.5), 0.1, 1.2),
+                          0, reflect(rng, 0.1, 0.3)));
+      } else {
+        scene.add(makeBox(Vec3(x, side * (hw - 0.06), uniform(rng, 2.0, 0.8 * H)),
+                          Vec3(0.6, 0.05, 0.35), 0, reflect(rng, 0.8, 1.0)));
+      }
+    }
+  }
   return scene;
 }
 
@@ -215,6 +233,66 @@ Scene makeOpenScene(const OpenOptions& opt, std::mt19937_64& rng) {
     const double y = (i % 2 == 0 ? 1.0 : -1.0) * uniform(rng, 8.0, 14.0);
     const double vx = (i % 2 == 0 ? -1.0 : 1.0) * uniform(rng, 0.9, 1.5);
     scene.add(pedestrian(Vec3(opt.x_min + uniform(rng, 5.0, 25.0), y, 0), vx, rng));
+  }
+  return scene;
+}
+
+Scene makeParkingScene(const ParkingOptions& opt, std::mt19937_64& rng) {
+  Scene scene("parking");
+  const double xa = opt.x_min - 30.0;
+  const double xb = opt.x_max + 60.0;
+  const double a = opt.aisle_half_width;
+  constexpr double kBay = 2.6;      // [m] bay width along x
+  constexpr double kCarHalf = 2.3;  // [m] half length of a bay across the aisle
+  const double row_depth = 2.0 * kCarHalf;
+  scene.add(ground(xa - 80.0, xb + 80.0, 120.0, 0.2f));
+  // Two rows of bays back to back on each side, cars parked across (long axis along y).
+  for (double side : {-1.0, 1.0}) {
+    for (int row = 0; row < 2; ++row) {
+      const double y_c = side * (a + kCarHalf + row * row_depth);
+      for (double x = xa; x < xb; x += kBay) {
+        if (uniform(rng, 0, 1) >= opt.occupancy) continue;
+        const bool van = uniform(rng, 0, 1) < 0.15;
+        const double h = van ? uniform(rng, 2.0, 2.6) : uniform(rng, 1.35, 1.8);
+        const double half_len = van ? uniform(rng, 2.3, 2.6) : uniform(rng, 2.0, 2.35);
+        scene.add(makeBox(
+            Vec3(x + uniform(rng, -0.15, 0.15),
+                 y_c + side * (kCarHalf - half_len - 0.2 - uniform(rng, 0, 0.3)), 0.5 * h),
+            Vec3(0.9, half_len, 0.5 * h), uniform(rng, -0.04, 0.04), reflect(rng, 0.3, 0.95)));
+      }
+    }
+    // Lamp posts between the two rows, a building or a fence behind the far row.
+    for (double x = xa + uniform(rng, 0, 10); x < xb; x += uniform(rng, 18.0, 30.0)) {
+      scene.add(
+          makeCylinder(Vec3(x, side * (a + row_depth), 4.0), 0.12, 4.0, reflect(rng, 0.5, 0.9)));
+    }
+    const double y_far = a + 2.0 * row_depth + 2.0 * a + uniform(rng, 0.0, 20.0);
+    for (double x = xa - 10.0; x < xb + 10.0;) {
+      const double len = uniform(rng, 15.0, 40.0);
+      const double h = uniform(rng, 2.0, 20.0);
+      scene.add(makeBox(Vec3(x + 0.5 * len, side * (y_far + 5.0), 0.5 * h),
+                        Vec3(0.5 * len, 5.0, 0.5 * h), 0, reflect(rng, 0.3, 0.8)));
+      x += len;
+    }
+  }
+  for (double xe : {xa - 8.0, xb + 8.0}) {
+    scene.add(makeBox(Vec3(xe, 0, 6.0), Vec3(5.0, 40.0, 6.0), 0, reflect(rng, 0.4, 0.7)));
+  }
+  // Cars driving in the parallel aisles (beyond the back-to-back rows), either way.
+  const double y_aisle = a + 2.0 * row_depth + a;
+  for (int i = 0; i < opt.moving_cars; ++i) {
+    const double side = i % 2 == 0 ? 1.0 : -1.0;
+    const double v = (uniform(rng, 0, 1) < 0.5 ? -1.0 : 1.0) * uniform(rng, 2.0, 6.0);
+    const double h = uniform(rng, 1.4, 1.8);
+    scene.add(makeBox(Vec3(opt.x_min + uniform(rng, -15.0, 40.0) - v * 0.5 * opt.duration,
+                           side * y_aisle, 0.5 * h),
+                      Vec3(2.25, 0.9, 0.5 * h), 0, reflect(rng, 0.4, 0.95), Vec3(v, 0, 0)));
+  }
+  // People walking along the parked cars of the platform's aisle.
+  for (int i = 0; i < opt.pedestrians; ++i) {
+    const double y = (i % 2 == 0 ? -1.0 : 1.0) * (a - 0.6);
+    const double vx = (uniform(rng, 0, 1) < 0.5 ? -1.0 : 1.0) * uniform(rng, 0.8, 1.6);
+    scene.add(pedestrian(Vec3(opt.x_min + uniform(rng, -10.0, 35.0), y, 0), vx, rng));
   }
   return scene;
 }

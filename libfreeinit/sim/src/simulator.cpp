@@ -2,12 +2,13 @@
 //
 // LiDAR raster (Aeva Aeries II-like, non-rotating): N = points_per_frame points per frame are
 // measured one after the other at uniform spacing over the frame period T = 1/frame_rate,
-// point i (0..N-1) at time_offset = i T / N. Line k (0 = top) holds points
-// floor(k N / L) .. floor((k+1) N / L) - 1, at elevation vfov/2 - (k + 0.5) vfov / L; within a line
-// the azimuth sweeps uniformly from -hfov/2 to +hfov/2 (bin centres) on even lines and back on odd
-// lines. LiDAR frame: x forward, y left, z up; direction (cos e cos a, cos e sin a, sin e).
-// Rays with no hit in [min_range, max_range] are dropped, so frames hold fewer than N points.
-#include <freeinit/sim/presets.h>
+// point i (0..N-1) at time_offset = i T / N. Scan slot s (0..L-1, in time order) holds points
+// floor(s N / L) .. floor((s+1) N / L) - 1 and measures line k = line_order(s) (0 = top) at
+// elevation vfov/2 - (k + 0.5) vfov / L; within a slot the azimuth sweeps uniformly from -hfov/2
+// to +hfov/2 (bin centres), on odd slots back again when line_direction is Alternating. LiDAR
+// frame: x forward, y left, z up; direction (cos e cos a, cos e sin a, sin e). Rays with no hit in
+// [min_range, max_range] are dropped, so frames hold fewer than N points. The recorded stamp of a
+// frame is its true start plus lidar_time_offset (the LiDAR clock's offset).
 #include <freeinit/sim/scene.h>
 #include <freeinit/sim/simulator.h>
 
@@ -41,23 +42,6 @@ double rotationAngle(const Mat3& R) {
   return std::acos(std::clamp(0.5 * (R.trace() - 1.0), -1.0, 1.0));
 }
 
-void validate(const ScenarioConfig& c) {
-  auto require = [](bool ok, const char* what) {
-    if (!ok) throw std::invalid_argument(std::string("freeinit::sim::simulate: ") + what);
-  };
-  require(c.duration > 0, "duration must be > 0");
-  require(c.points_per_frame >= 0, "points_per_frame must be >= 0");
-  require(c.lines > 0, "lines must be > 0");
-  require(c.frame_rate > 0, "frame_rate must be > 0");
-  require(c.imu_rate > 0, "imu_rate must be > 0");
-  require(c.hfov_deg > 0 && c.hfov_deg < 180 && c.vfov_deg > 0 && c.vfov_deg < 180,
-          "fields of view must be in (0, 180) deg");
-  require(c.min_range >= 0 && c.max_range > c.min_range, "need 0 <= min_range < max_range");
-  require(c.range_sigma >= 0 && c.doppler_sigma >= 0 && c.gyro_sigma >= 0 && c.accel_sigma >= 0,
-          "noise sigmas must be >= 0");
-  require(c.outlier_ratio >= 0 && c.outlier_ratio <= 1, "outlier_ratio must be in [0, 1]");
-}
-
 void drawBiases(const ScenarioConfig& c, Recording& rec) {
   if (!c.random_biases) {
     rec.b_g = c.b_g;
@@ -79,6 +63,7 @@ void drawBiases(const ScenarioConfig& c, Recording& rec) {
 void simulateImu(const ScenarioConfig& c, Recording& rec) {
   std::mt19937_64 rng = detail::randomStream(c.seed, detail::Stream::Imu);
   std::normal_distribution<double> n01(0.0, 1.0);
+  const Vec3 gyro_sigma = c.gyroSigmaPerAxis(), accel_sigma = c.accelSigmaPerAxis();
   const long n = static_cast<long>(std::floor(c.duration * c.imu_rate + 1e-9)) + 1;
   rec.imu.reserve(static_cast<std::size_t>(n));
   for (long k = 0; k < n; ++k) {
@@ -88,8 +73,8 @@ void simulateImu(const ScenarioConfig& c, Recording& rec) {
     m.t = t;
     m.gyro = s.omega_b + rec.b_g;
     m.accel = s.R_wb.transpose() * (s.a_w - rec.g_w) + rec.b_a;
-    for (int i = 0; i < 3; ++i) m.gyro[i] += c.gyro_sigma * n01(rng);
-    for (int i = 0; i < 3; ++i) m.accel[i] += c.accel_sigma * n01(rng);
+    for (int i = 0; i < 3; ++i) m.gyro[i] += gyro_sigma[i] * n01(rng);
+    for (int i = 0; i < 3; ++i) m.accel[i] += accel_sigma[i] * n01(rng);
     rec.imu.push_back(m);
   }
 }
@@ -135,6 +120,21 @@ void lineCandidates(const Scene& scene, const std::vector<int>& frame_cands, con
   }
 }
 
+/// The line measured in scan slot s of L.
+int lineOfSlot(LineOrder order, int s, int L) {
+  switch (order) {
+    case LineOrder::TopDown:
+      return s;
+    case LineOrder::BottomUp:
+      return L - 1 - s;
+    case LineOrder::Interleaved: {
+      const int n_even = (L + 1) / 2;
+      return s < n_even ? 2 * s : 2 * (s - n_even) + 1;
+    }
+  }
+  return s;
+}
+
 void simulateLidar(const ScenarioConfig& c, Recording& rec) {
   std::mt19937_64 rng = detail::randomStream(c.seed, detail::Stream::Lidar);
   std::normal_distribution<double> n01(0.0, 1.0);
@@ -166,9 +166,11 @@ void simulateLidar(const ScenarioConfig& c, Recording& rec) {
         std::max((l0.p_wl - lm.p_wl).norm(), (l1.p_wl - lm.p_wl).norm()) + 0.5;
     const std::vector<int> frame_cands =
         frameCandidates(scene, c, lm, path_radius, tau_f + 0.5 * T, 0.5 * T);
-    for (int k = 0; k < L; ++k) {
-      const long i_begin = static_cast<long>(k) * N / L;
-      const long i_end = static_cast<long>(k + 1) * N / L;
+    for (int slot = 0; slot < L; ++slot) {
+      const int k = lineOfSlot(c.line_order, slot, L);
+      const bool backwards = c.line_direction == LineDirection::Alternating && slot % 2 == 1;
+      const long i_begin = static_cast<long>(slot) * N / L;
+      const long i_end = static_cast<long>(slot + 1) * N / L;
       const long n_line = i_end - i_begin;
       if (n_line <= 0) continue;
       const double elevation = 0.5 * vfov - (k + 0.5) * vfov / L;
@@ -191,7 +193,7 @@ void simulateLidar(const ScenarioConfig& c, Recording& rec) {
         const float time_offset = static_cast<float>(static_cast<double>(i) * dt);
         const double t = frame.stamp + static_cast<double>(time_offset);
         const double s = (static_cast<double>(j) + 0.5) / static_cast<double>(n_line);
-        const double az = (k % 2 == 0 ? -0.5 + s : 0.5 - s) * hfov;
+        const double az = (backwards ? 0.5 - s : -0.5 + s) * hfov;
         const Vec3 d_l(ce * std::cos(az), ce * std::sin(az), se);
         const TruthState st = traj.at(t);
         const LidarState ls = lidarState(st, ext);
@@ -219,6 +221,7 @@ void simulateLidar(const ScenarioConfig& c, Recording& rec) {
         labels.push_back(label);
       }
     }
+    frame.stamp += c.lidar_time_offset;
     rec.frames.push_back(std::move(frame));
     rec.labels.push_back(std::move(labels));
   }
@@ -227,14 +230,20 @@ void simulateLidar(const ScenarioConfig& c, Recording& rec) {
 }  // namespace
 
 Recording simulate(const ScenarioConfig& config) {
-  validate(config);
+  try {
+    validateScenario(config);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("freeinit::sim::simulate: ") + e.what());
+  }
   Recording rec;
   rec.config = config;
   rec.g_w = Vec3(0, 0, -kGravity);
-  const auto traj = makePresetTrajectory(config);  // throws on an unknown name
+  const auto traj = makeTrajectory(config);
   rec.trajectory = traj;
-  rec.scene = makePresetScene(config, *traj);
-  rec.extrinsics = makePresetExtrinsics(config);
+  rec.scene = makeScene(config, *traj);
+  rec.extrinsics = makeExtrinsics(config);
+  rec.declared_extrinsics = declaredExtrinsics(config, rec.extrinsics);
+  rec.lidar_time_offset = config.lidar_time_offset;
   drawBiases(config, rec);
   simulateImu(config, rec);
   simulateLidar(config, rec);

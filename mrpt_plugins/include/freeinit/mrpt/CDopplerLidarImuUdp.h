@@ -2,11 +2,12 @@
 // UDP (docs/wire_format.md). Emits CObservationIMU and CObservationPointCloud (holding a
 // CPointsMapDoppler), the observations `freeinit` reads. Load it with
 //   rawlog-grabber -p build/mrpt_plugins/libfreeinit_mrpt.so ini/rawlog_grabber_doppler_udp.ini
-// INI section keys (besides rawlog-grabber's driver, process_rate, max_queue_len):
-//   listen_address (127.0.0.1), port (47800), imu_label (IMU), lidar_label (LIDAR),
-//   receive_buffer_bytes (16777216), max_queued_imu (4000), max_queued_frames (16),
-//   reorder_window (1024 datagrams), reorder_timeout_ms (50), frame_timeout_ms (500),
-//   stats_period_s (5; 0 = only at the end), stats_file ("" = none; written at the end).
+// INI section keys (udpDriverSection(); besides rawlog-grabber's own driver, process_rate,
+// max_queue_len, grab_decimation, sensorLabel, pose_*): listen_address (127.0.0.1), port (47800),
+// imu_label (IMU), lidar_label (LIDAR), receive_buffer_bytes (16777216), max_queued_imu (4000),
+// max_queued_frames (16), reorder_window (1024 datagrams), reorder_timeout_ms (50),
+// frame_timeout_ms (500), stats_period_s (5; 0 = only at the end), stats_file ("" = none;
+// written at the end). Any other key is an error.
 // The data source sits behind net::StreamSource: a vendor SDK can replace the UDP receiver.
 #pragma once
 
@@ -18,7 +19,21 @@
 #include <memory>
 #include <string>
 
+namespace freeinit::config {
+template <class S>
+class Section;
+}  // namespace freeinit::config
+
 namespace freeinit::mrpt_glue {
+
+/// The driver's keys of its rawlog-grabber INI section.
+struct UdpDriverParams {
+  net::UdpSourceParams source;
+  StreamLabels labels;
+  double stats_period = 5;  ///< [s] statistics on stdout every this long (0: only at the end)
+  std::string stats_file;   ///< final statistics written to this INI file ("" = none)
+};
+const config::Section<UdpDriverParams>& udpDriverSection();
 
 class CDopplerLidarImuUdp : public mrpt::hwdrivers::CGenericSensor {
   DEFINE_GENERIC_SENSOR(CDopplerLidarImuUdp)

@@ -1,11 +1,21 @@
-// The main application: `freeinit <config.ini> <input.rawlog> [--out DIR]`. Reads and validates the
-// rawlog, runs the observation handler, writes the outputs (each complete or absent) and compares
-// with the ground truth when "<input>.truth.csv" sits beside the rawlog.
+// The main application: `freeinit <config.ini> <input.rawlog> [--out DIR]`. Streams the rawlog
+// through the ingest path (ingest.h) into the estimator and stops reading once the state is
+// ready; writes the outputs (each complete or absent) and compares with the ground truth when
+// "<input>.truth.csv" sits beside the rawlog.
+//
+// Anywhere in a recording: `--start T` initializes with the records from T on (T in seconds after
+// the first record, or a UNIX stamp when T > 1e8), seeking with the rawlog's index (rawlog_index.h)
+// instead of reading what comes before. `--every S` / `--starts FILE` initialize at many starts in
+// one pass, several estimators side by side when windows overlap: each start's outputs go to its
+// own folder (written as a whole: a staging folder renamed into place), then one table of all
+// starts (starts.csv, starts.md) and a plot (starts.png), written last.
 #pragma once
 
 #include <freeinit/initial_state.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/ground_truth.h>
+#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt/start_table.h>
 
 #include <iosfwd>
 #include <optional>
@@ -14,12 +24,27 @@
 
 namespace freeinit::mrpt_glue {
 
+/// Start values above this are UNIX stamps [s], others seconds after the first record (1e8 s is
+/// in 1973: no recording is that long, no real stamp is that early).
+inline constexpr double kUnixStampThreshold = 1e8;
+/// [UNIX s] of a start value given `first` [UNIX s], the first record's stamp.
+double startTime(double value, double first);
+/// Start values from a file, one per line ('#' comments and blank lines ignored), in increasing
+/// order. Throws InputError naming the file and line.
+std::vector<double> readStartsFile(const std::string& path);
+
 struct FreeInitAppParams {
   std::string config_file;
   std::string rawlog;
   std::string out_dir = "freeinit_out";
   bool progress = true;            ///< progress bars on the log stream
   bool progress_terminal = false;  ///< the log is a terminal: redraw the bars in place
+  std::optional<double> start;     ///< --start (see kUnixStampThreshold)
+  double every = 0;                ///< --every [s] (> 0: repeated starts from `start` or 0)
+  std::string starts_file;         ///< --starts FILE
+  bool check_all = false;          ///< --check-all: read and check the whole file
+  RawlogIndexPolicy index;         ///< --no-index: use = false
+  std::string command;             ///< the command line, for the table's header
 };
 
 /// Names of every file writeResultFiles may write (whatever [output] enables).
@@ -36,13 +61,21 @@ class FreeInitApp {
 
   /// Runs the whole job. Bad input or configuration throws (InputError / std::invalid_argument)
   /// before any output is written. Returns the process exit code: 0 initialized, 3 not
-  /// initialized (the reason is in initial_state.ini).
+  /// initialized (the reason is in initial_state.ini); with several starts 0 if every start
+  /// whose window the recording covers initialized, else 3 (the table says why; starts the
+  /// recording ends too early for are listed as not_enough_data).
   int run(std::ostream& log);
 
   // Filled by run(), for callers and tests.
   AppConfig config;
-  InitResult result;
+  InitResult result;  ///< one start
   std::optional<TruthErrors> errors_wrt_gt;
+  std::vector<StartRow> rows;         ///< several starts
+  std::vector<std::string> warnings;  ///< as logged
+  std::size_t records_read = 0;       ///< records deserialized
+  bool read_to_end = false;           ///< the whole file was read (and checked)
+  bool index_used = false;            ///< the rawlog's index was found and used
+  std::string index_written;          ///< where the index was written ("" if not)
 };
 
 }  // namespace freeinit::mrpt_glue

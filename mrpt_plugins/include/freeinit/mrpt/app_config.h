@@ -1,11 +1,14 @@
-// The whole configuration of the Free-Init MRPT application, loaded from an MRPT-style INI file:
-// one [section] per core config struct plus [input], [extrinsics] and [output].
+// The whole configuration of the Free-Init MRPT application, loaded from an INI file: one
+// [section] per core parameter struct plus [input], [extrinsics] and [output]. Every section is
+// declared once (freeinit/config_section.h); the file is read by the project's strict parser
+// (freeinit/ini_file.h), not by MRPT's.
 #pragma once
 
 #include <freeinit/config.h>
 
 #include <iosfwd>
 #include <string>
+#include <vector>
 
 namespace freeinit::mrpt_glue {
 
@@ -20,10 +23,11 @@ struct InputParams {
 
 /// Where the LiDAR-IMU extrinsics come from. INI section [extrinsics] (with R_bl, p_bl).
 struct ExtrinsicsParams {
-  /// Take R_bl, p_bl from the observations' sensorPose (LiDAR pose relative to the IMU pose)
-  /// instead of the INI keys.
-  bool from_sensor_pose = false;
-  bool given_in_ini = false;  ///< set by the loader: the INI gave R_bl or roll/pitch/yaw
+  /// Take R_bl, p_bl from the observations' sensorPose (the LiDAR pose relative to the IMU
+  /// pose, as freeinit-sim and freeinit-import-bag write it), the default; false: from the INI
+  /// keys R_bl (or roll_deg, pitch_deg, yaw_deg) and p_bl, which are refused otherwise.
+  bool from_sensor_pose = true;
+  bool given_in_ini = false;  ///< set by the loader: the INI gave R_bl, roll/pitch/yaw or p_bl
 };
 
 /// What the app writes to its output folder. INI section [output].
@@ -44,9 +48,41 @@ struct AppConfig {
   OutputParams output;
 };
 
-/// Loads and validates an INI file. Missing keys keep their defaults; unknown keys in known
-/// sections, malformed or out-of-range values throw std::invalid_argument naming file and key.
+/// The LiDAR pose in the body frame as an [extrinsics] section writes it: R_bl (row-major) or
+/// roll_deg, pitch_deg, yaw_deg (R_bl = Rz(yaw) Ry(pitch) Rx(roll), as mrpt::poses::CPose3D),
+/// and p_bl. Shared by the app and the bag importer.
+struct LidarPoseParams {
+  Mat3 R_bl = Mat3::Identity();  ///< [-]
+  double roll_deg = 0, pitch_deg = 0, yaw_deg = 0;
+  Vec3 p_bl = Vec3::Zero();  ///< [m]
+};
+/// [extrinsics] as the app reads it: from_sensor_pose, or the pose keys.
+struct ExtrinsicsIniParams {
+  bool from_sensor_pose = ExtrinsicsParams{}.from_sensor_pose;
+  LidarPoseParams pose;
+};
+
+/// The sections' declarations.
+const config::Section<InputParams>& inputSection();
+const config::Section<OutputParams>& outputSection();
+const config::Section<ExtrinsicsIniParams>& extrinsicsSection();
+/// [extrinsics] as the bag importer reads it: the pose keys only (a bag has no sensor poses).
+const config::Section<LidarPoseParams>& extrinsicsPoseSection();
+/// Every section of the app's INI file, in the order of the echo.
+std::vector<const config::SectionBase*> appSections();
+
+/// The extrinsics an [extrinsics] section's pose keys give: R_bl, or the rotation of the angles
+/// when one of them is given (`keys` tells which were), and p_bl. Throws config::ConfigError
+/// when both R_bl and an angle are given.
+Extrinsics extrinsicsOf(const LidarPoseParams& pose, const config::Checker& keys);
+/// The first pose key given (R_bl, roll_deg, pitch_deg, yaw_deg, p_bl), or "".
+std::string firstPoseKey(const config::Checker& keys);
+
+/// Loads and validates an INI file. Missing keys keep their defaults; unknown sections, unknown
+/// and duplicated keys, malformed or out-of-range values throw config::ConfigError (a
+/// std::invalid_argument) naming the file, the line, the section and the key.
 AppConfig loadAppConfig(const std::string& ini_file);
+AppConfig loadAppConfig(const config::IniFile& ini);
 /// Same from INI text (tests); `source` names it in messages.
 AppConfig loadAppConfigFromText(const std::string& ini_text, const std::string& source);
 /// Writes the effective configuration as a documented INI (units in comments) that loads back.

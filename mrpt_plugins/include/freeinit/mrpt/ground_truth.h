@@ -1,8 +1,10 @@
 // Ground truth beside a rawlog ("<name>.truth.csv", written by freeinit-sim) and the comparison
-// of an initial state against it. Only frame-independent quantities are compared: the body-frame
-// velocity, the gravity direction in the body frame and the biases.
+// of an initial state against it, through the evaluation module (freeinit/eval): only
+// frame-independent quantities are compared (the body-frame velocity, the gravity direction in the
+// body frame and the biases), with the NEES of the state's covariance.
 #pragma once
 
+#include <freeinit/eval/state_truth.h>
 #include <freeinit/initial_state.h>
 
 #include <optional>
@@ -11,25 +13,19 @@
 
 namespace freeinit::mrpt_glue {
 
-struct TruthSample {
-  double t = 0;  ///< [s] UNIX
-  Quat q_wb = Quat::Identity();
-  Vec3 p_w = Vec3::Zero();      ///< [m]
-  Vec3 v_w = Vec3::Zero();      ///< [m/s]
-  Vec3 omega_b = Vec3::Zero();  ///< [rad/s]
-  Vec3 b_g = Vec3::Zero();      ///< [rad/s]
-  Vec3 b_a = Vec3::Zero();      ///< [m/s^2]
-  Vec3 g_w = Vec3(0, 0, -kGravity);
-};
+/// The evaluation's truth type (one sample of the truth file).
+using TruthSample = eval::StateTruth;
 
 /// "<dir>/<stem>.truth.csv" for "<dir>/<stem>.rawlog".
 std::string truthPathFor(const std::string& rawlog_path);
+/// eval::writeTruthCsv.
 void writeTruthCsv(const std::string& path, const std::vector<TruthSample>& truth);
-/// Throws std::runtime_error naming the file and line on a malformed file.
+/// eval::readTruthCsv: throws std::runtime_error naming the file and line on a malformed file.
 std::vector<TruthSample> readTruthCsv(const std::string& path);
-/// Linear interpolation (slerp for the attitude); nullopt outside the covered time span.
+/// eval::interpolateTruth: nullopt outside the covered time span.
 std::optional<TruthSample> truthAt(const std::vector<TruthSample>& truth, double t);
 
+/// The record of errors_wrt_gt.ini.
 struct TruthErrors {
   double t = 0;            ///< [s] instant compared (the state timestamp)
   double velocity = 0;     ///< [m/s] |v_b - v_b_true|
@@ -37,6 +33,11 @@ struct TruthErrors {
   double gyro_bias = 0;    ///< [rad/s] |b_g - b_g_true|
   double accel_bias = 0;   ///< [m/s^2] |b_a - b_a_true|
   Vec3 v_b_true = Vec3::Zero();
+  // NEES of the state's covariance (eval::stateNees): 3, 2, 3 and 3 dof.
+  double nees_velocity = 0;
+  double nees_tilt = 0;
+  double nees_gyro_bias = 0;
+  double nees_accel_bias = 0;
 };
 
 /// Throws std::runtime_error if the state time is not covered by the truth.

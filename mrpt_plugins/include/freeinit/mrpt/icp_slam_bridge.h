@@ -30,9 +30,10 @@
 #include <string>
 #include <vector>
 
-namespace mrpt::config {
-class CConfigFileBase;
-}
+namespace freeinit::config {
+template <class S>
+class Section;
+}  // namespace freeinit::config
 
 namespace freeinit::mrpt_glue {
 
@@ -46,9 +47,11 @@ struct ScanSliceParams {
   /// Odometry mode: deskew every frame with the Doppler-inertial odometry before slicing it.
   bool deskew_with_odometry = true;
 };
-/// Missing keys keep their defaults; bad values throw std::invalid_argument naming file and key.
-ScanSliceParams loadScanSliceParams(const mrpt::config::CConfigFileBase& ini,
-                                    const std::string& file);
+/// The [freeinit_scan] section of an icp-slam INI file (whose other sections, MRPT's, are not
+/// read here). Missing keys keep their defaults; unknown and duplicated keys and bad values
+/// throw config::ConfigError naming the file, the line and the key.
+ScanSliceParams loadScanSliceParams(const std::string& file);
+const config::Section<ScanSliceParams>& scanSliceSection();
 
 /// The three ways icp-slam starts.
 enum class IcpSeedMode {

@@ -1,13 +1,21 @@
-// Reading rawlogs without MRPT's silent truncation: stock tools stop quietly at the first object
-// whose class is not registered (or at a cut-off file) and still succeed. This reader decompresses
-// the whole file, deserializes object after object and requires the last one to end exactly at
-// the end of the data; anything else is an error naming the file and the record index.
+// Reading rawlogs record by record without MRPT's silent truncation: stock tools stop quietly at
+// the first object whose class is not registered (or at a cut-off file) and still succeed. This
+// reader streams the file (gzip or plain), deserializes one top-level record at a time and
+// requires the data to end exactly at the end of a record and of the gzip stream; anything else
+// is an error naming the file and the record index. Memory is that of one record.
+//
+// Seeking: rawlog_index.h. A reader loads the rawlog's index when there is one, extends it as it
+// reads past what it covers, and saveIndex() writes it for rawlogs large enough to need it.
 #pragma once
 
+#include <freeinit/mrpt/rawlog_index.h>
 #include <mrpt/obs/CObservation.h>
+#include <mrpt/serialization/CSerializable.h>
 
 #include <cstddef>
-#include <functional>
+#include <cstdint>
+#include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -20,22 +28,73 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-/// One observation and the index of the top-level rawlog record (object) it came from.
+/// Where a reader keeps a rawlog's seek index and when it writes one.
+struct RawlogIndexPolicy {
+  bool use = true;                           ///< read an index, write a new or longer one
+  std::uint64_t min_file_bytes = 64u << 20;  ///< [bytes] only for rawlogs at least this large
+  std::string cache_dir;  ///< when the rawlog's folder is not writable ("" = the user's cache)
+  std::uint64_t spacing = RawlogIndex::kDefaultSpacing;  ///< [bytes] of a new index
+};
+
+/// One top-level record of a rawlog.
+struct RawlogObject {
+  std::size_t index = 0;    ///< record number, from 0
+  std::optional<double> t;  ///< [UNIX s] its timestamp (a sensory frame: its latest), if any
+  mrpt::serialization::CSerializable::Ptr object;
+};
+
+class RawlogReader {
+ public:
+  /// Opens the rawlog (registering the classes first) and loads its index if it has a valid one.
+  /// Throws InputError if the file is missing, empty or cannot be opened.
+  explicit RawlogReader(std::string path, RawlogIndexPolicy policy = {});
+  ~RawlogReader();
+  RawlogReader(const RawlogReader&) = delete;
+  RawlogReader& operator=(const RawlogReader&) = delete;
+
+  const std::string& path() const;
+
+  /// The next record; false at the end of the data, which must be the end of a record and of
+  /// the gzip stream. Throws InputError naming the file and the record on a truncated file,
+  /// corrupt data or a class that is not registered.
+  bool next(RawlogObject& out);
+
+  /// Positions the reader so that next() returns the first record from the current one on whose
+  /// timestamp is >= t [UNIX s]. Records the index covers are skipped without decompressing more
+  /// than the index's spacing or deserializing anything; beyond it they are read and dropped.
+  /// False if no later record has such a timestamp (the reader is then at the end).
+  bool seekToTime(double t);
+
+  /// Timestamp of the first record that has one (read if the index does not know it).
+  std::optional<double> firstTime();
+
+  std::uint64_t fileBytes() const;
+  std::uint64_t bytesRead() const;  ///< [bytes] of the file consumed so far (progress)
+  std::size_t recordsDeserialized() const;
+  std::size_t nextRecord() const;  ///< number of the record next() returns
+  bool atEnd() const;              ///< next() returned false: the whole file was read
+  bool indexLoaded() const;        ///< a valid index was found when opening
+  const RawlogIndex& index() const;
+
+  /// Writes the index if it grew and the policy allows it, beside the rawlog or else in the
+  /// cache folder. Returns the path written, or "" (with the reason in `why` if it failed).
+  std::string saveIndex(std::string* why = nullptr);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// One observation and the index of the top-level rawlog record it came from.
 struct RawlogRecord {
   std::size_t index = 0;
   mrpt::obs::CObservation::Ptr obs;
 };
 
-/// Progress callbacks of readRawlog, each called with (done, total) bytes; either may be empty.
-struct RawlogReadProgress {
-  std::function<void(std::size_t, std::size_t)> inflate;  ///< file bytes read and decompressed
-  std::function<void(std::size_t, std::size_t)> parse;    ///< decompressed bytes deserialized
-};
-
-/// Reads a rawlog in either format (observations only, or CSensoryFrame / CActionCollection:
-/// sensory frames are flattened, actions skipped). Registers the classes first.
-/// Throws InputError on a missing, empty, truncated or corrupted file, or an unregistered class.
-std::vector<RawlogRecord> readRawlog(const std::string& path,
-                                     const RawlogReadProgress& progress = {});
+/// Every observation of a rawlog in either format (observations only, or CSensoryFrame /
+/// CActionCollection: sensory frames are flattened, actions skipped), through RawlogReader.
+/// For tools and tests; the apps read through the ingest path (ingest.h). Throws InputError as
+/// RawlogReader does, and for a record of a class that is neither.
+std::vector<RawlogRecord> readRawlog(const std::string& path);
 
 }  // namespace freeinit::mrpt_glue

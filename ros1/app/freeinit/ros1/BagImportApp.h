@@ -15,6 +15,11 @@
 #include <iosfwd>
 #include <string>
 
+namespace freeinit::config {
+template <class S>
+class Section;
+}  // namespace freeinit::config
+
 namespace freeinit::mrpt_glue {
 
 struct BagImportAppParams {
@@ -33,9 +38,12 @@ struct BagImportSettings {
   std::string lidar_label = "LIDAR";  ///< sensorLabel written on the point clouds
 };
 
-/// Loads and validates; unknown keys, malformed values and missing extrinsics throw
-/// std::invalid_argument naming the file, section and key.
+/// Loads and validates; unknown sections and keys, duplicated keys, malformed or out-of-range
+/// values and missing extrinsics throw config::ConfigError (a std::invalid_argument) naming the
+/// file, the line, the section and the key.
 BagImportSettings loadBagImportSettings(const std::string& ini_file);
+/// The declaration of [bag_import] (its [extrinsics] is extrinsicsPoseSection(), app_config.h).
+const config::Section<BagImportSettings>& bagImportSection();
 
 class BagImportApp {
  public:

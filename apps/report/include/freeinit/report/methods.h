@@ -3,6 +3,8 @@
 #pragma once
 
 #include <freeinit/config.h>
+#include <freeinit/eval/cramer_rao_bound.h>
+#include <freeinit/eval/state_truth.h>
 #include <freeinit/initial_state.h>
 #include <freeinit/report/eval_table.h>
 
@@ -43,36 +45,17 @@ std::vector<MethodRun> runMethods(const FreeInitConfig& config, const std::vecto
                                   const std::vector<LidarFrame>& frames,
                                   const Extrinsics& extrinsics, const MethodOptions& options);
 
-/// A true body pose.
-struct PoseTruth {
-  Mat3 R_wb = Mat3::Identity();
-  Vec3 p_w = Vec3::Zero();  ///< [m]
-};
-
-/// The true state at one instant, as the simulator and a truth file beside a rawlog give it.
-struct StateTruth : PoseTruth {
-  Vec3 v_w = Vec3::Zero();  ///< [m/s] body velocity in w
-  Vec3 g_w = Vec3(0, 0, -kGravity);
-  Vec3 b_g = Vec3::Zero();  ///< [rad/s]
-  Vec3 b_a = Vec3::Zero();  ///< [m/s^2]
-  Vec3 v_b() const { return R_wb.transpose() * v_w; }
-  Vec3 g_b() const { return R_wb.transpose() * g_w; }
-};
-
 /// The truth at a UNIX time [s]; may throw when the time is not covered.
-using TruthFn = std::function<StateTruth(double)>;
+using TruthFn = std::function<eval::StateTruth(double)>;
 
 /// The evaluation row of one method's run on `source` (seed 0 for a rawlog): its status and wall
-/// time and, when it gave a state, its errors against `truth` at the state time (velocity,
-/// gravity direction and biases in the body frame, the gravity bound of the true horizontal
-/// accelerometer bias plus kGravityBoundMarginDeg) and its displacement error over the window.
-EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run,
-                    const TruthFn& truth);
-
-/// Error [m] of the displacement over the initialization window expressed in the body frame at
-/// its start, R_wb(t0)^T (p_w(t1) - p_w(t0)), t0 the first pose of r.trajectory and t1 the state
-/// time: free of the world-frame choice. NaN without a state or a trajectory.
-double displacementError(const InitResult& r, const PoseTruth& at_start, const PoseTruth& at_end);
+/// time and, when it gave a state, its errors against `truth` at the state time (eval::stateErrors:
+/// velocity, gravity direction and biases in the body frame; the gravity bound of the true
+/// horizontal accelerometer bias plus kGravityBoundMarginDeg), the NEES of its covariance
+/// (eval::stateNees), its displacement error over the window and, when `bound` is given and ok,
+/// the Cramer-Rao bound of its window.
+EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, const TruthFn& truth,
+                    const eval::Bound* bound = nullptr);
 
 /// Runs `job(i)` for i in [0, count) on `threads` threads (0: hardware concurrency). Each index
 /// runs exactly once, in no particular order; after all threads end, the exception of the lowest

@@ -1,6 +1,7 @@
-// Presets mirroring Table I of the Free-Init paper plus tunnel variants. A preset fixes the scene,
-// the motion and the extrinsics; noise, biases, extrinsic perturbation and object placement
-// depend on the seed.
+// Presets mirroring Table I of the Free-Init paper plus tunnel variants. A preset fills the whole
+// ScenarioConfig from its name: the scene, the motion and the nominal extrinsics; noise, biases
+// (random_biases), the extrinsic perturbation (+-0.5 deg, +-1 cm) and the object placement depend
+// on the seed.
 //
 // | name             | platform  | scene    | motion                                          |
 // |------------------|-----------|----------|-------------------------------------------------|
@@ -42,15 +43,24 @@ struct PresetInfo {
 /// Description of a preset; throws std::invalid_argument on an unknown name.
 PresetInfo presetInfo(const std::string& name);
 
-/// The body trajectory of config.name starting at config.t0; throws std::invalid_argument.
-std::shared_ptr<const AnalyticTrajectory> makePresetTrajectory(const ScenarioConfig& config);
+/// The body trajectory of a config (as makeTrajectory; kept for the callers of the presets).
+inline std::shared_ptr<const AnalyticTrajectory> makePresetTrajectory(
+    const ScenarioConfig& config) {
+  return makeTrajectory(config);
+}
 
-/// The scene of config.name, sized so that the platform stays inside it for config.duration.
-std::shared_ptr<const Scene> makePresetScene(const ScenarioConfig& config,
-                                             const Trajectory& trajectory);
+/// The scene of a config (as makeScene): for a preset, sized so that the platform stays inside it
+/// for config.duration.
+inline std::shared_ptr<const Scene> makePresetScene(const ScenarioConfig& config,
+                                                    const Trajectory& trajectory) {
+  return makeScene(config, trajectory);
+}
 
-/// The true LiDAR-IMU extrinsics: R_bl = Rz(5 deg) Ry(-3 deg) Rx(2 deg) and p_bl = (0.08, -0.05,
-/// 0.12) m, each perturbed per seed (up to +-0.5 deg per angle, +-1 cm per axis).
-Extrinsics makePresetExtrinsics(const ScenarioConfig& config);
+/// The true LiDAR-IMU extrinsics of a config (as makeExtrinsics). Presets: R_bl = Rz(5 deg)
+/// Ry(-3 deg) Rx(2 deg) and p_bl = (0.08, -0.05, 0.12) m, each perturbed per seed (up to +-0.5 deg
+/// per angle, +-1 cm per axis).
+inline Extrinsics makePresetExtrinsics(const ScenarioConfig& config) {
+  return makeExtrinsics(config);
+}
 
 }  // namespace freeinit::sim

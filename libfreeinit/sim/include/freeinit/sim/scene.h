@@ -24,7 +24,7 @@ class Scene {
   /// Adds a primitive; returns its index.
   int add(const Primitive& p);
   const std::vector<Primitive>& primitives() const { return primitives_; }
-  /// "street", "corridor", "tunnel" or "open".
+  /// "street", "corridor", "tunnel", "open" or "parking".
   const std::string& kind() const { return kind_; }
 
   /// Nearest hit of o_w + s d_w (d_w unit), 0 < s < max_range, at relative time tau [s]

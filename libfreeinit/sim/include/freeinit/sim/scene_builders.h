@@ -1,5 +1,7 @@
-// Builders of the four scene kinds. World frame: z up, ground at z = 0, streets/corridors/tunnels
-// run along +x and are centred on y = 0. Every builder is deterministic given its rng state.
+// Builders of the scene kinds. Path frame: z up, ground at z = 0, streets, corridors, tunnels and
+// parking aisles run along +x and are centred on y = 0. Every builder is deterministic given its
+// rng state. x_min, x_max (and duration) are the stretch the platform covers; the simulator fills
+// them.
 #pragma once
 
 #include <freeinit/sim/scene.h>
@@ -22,6 +24,8 @@ struct StreetOptions {
   double ego_lane_speed = 0;        ///< [m/s] > 0: the platform drives in lane y = -2.5 at this
                                     ///< speed starting at x_min; cars in that lane start ahead and
                                     ///< are faster, so they never collide with it
+  bool near_traffic = true;         ///< add the presets' traffic placed relative to x_min (cars
+                                    ///< and pedestrians seen from the first frame on)
 };
 Scene makeStreetScene(const StreetOptions& opt, std::mt19937_64& rng);
 
@@ -33,17 +37,20 @@ struct CorridorOptions {
   double half_width = 1.3;   ///< [m]
   double height = 3.0;       ///< [m]
   int pedestrians = 0;       ///< moving people
+  double pedestrian_offset = 0.75;  ///< [m] |y| of the people's paths
 };
 Scene makeCorridorScene(const CorridorOptions& opt, std::mt19937_64& rng);
 
-/// Tunnel: floor, ceiling and two walls, long and featureless along x (the degenerate case).
+/// Tunnel: floor, ceiling and two walls, long and featureless along x (the degenerate case), with
+/// optional features: ceiling lights, wall niches and signs.
 struct TunnelOptions {
   double x_min = 0;          ///< [m]
   double x_max = 100;        ///< [m]
   double half_width = 5;     ///< [m]
   double height = 6;         ///< [m]
+  double features_per_100m = 0;  ///< lights / niches / signs per 100 m (0: featureless)
 };
-Scene makeTunnelScene(const TunnelOptions& opt);
+Scene makeTunnelScene(const TunnelOptions& opt, std::mt19937_64& rng);
 
 /// Open field: a large ground plane and a few far objects (buildings, silos, trees), plus a few
 /// pedestrians at |y| >= 8.
@@ -53,5 +60,20 @@ struct OpenOptions {
   int pedestrians = 2;
 };
 Scene makeOpenScene(const OpenOptions& opt, std::mt19937_64& rng);
+
+/// Parking lot: ground, rows of cars parked across the bays on both sides of an aisle along x
+/// (|y| >= aisle_half_width), a second row back to back, lamp posts, buildings around, cars
+/// driving in the parallel aisles and people walking along the parked cars at
+/// |y| = aisle_half_width - 0.6.
+struct ParkingOptions {
+  double x_min = 0;               ///< [m]
+  double x_max = 30;              ///< [m]
+  double duration = 5;            ///< [s]
+  double aisle_half_width = 3.5;  ///< [m] free half width of the aisle the platform uses
+  double occupancy = 0.7;         ///< share of occupied bays, in [0, 1]
+  int pedestrians = 2;            ///< people walking along the aisle
+  int moving_cars = 1;            ///< cars driving in the parallel aisles
+};
+Scene makeParkingScene(const ParkingOptions& opt, std::mt19937_64& rng);
 
 }  // namespace freeinit::sim

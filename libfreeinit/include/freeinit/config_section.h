@@ -1,0 +1,438 @@
+// One declaration per parameter struct drives its whole INI life: loading, validation, the echo of
+// the effective configuration and the documentation checks. A struct's section declares each key
+// once, with its name, unit, accepted values and a one-line doc; the default is the struct's own
+// (a default-constructed struct), so it is never written twice. For example:
+//
+//   const config::Section<WindowParams>& windowSection() {
+//     static const auto s = config::Section<WindowParams>("window")
+//         .number("duration", &WindowParams::duration, "s", config::between(0.05, 60),
+//                 "window length from its first IMU sample");
+//     return s;
+//   }
+//
+//   windowSection().load(ini, cfg.window);   // [window] of an IniFile, over cfg.window's values
+//   windowSection().validate(cfg.window);    // the same checks on a struct filled in code
+//   windowSection().dump(cfg.window, out);   // "[window]\nduration = 0.5 ; [s] ... (accepted ...)"
+//
+// Members are given as pointers to members or, for nested fields, as accessors
+// `[](auto& s) -> auto& { return s.cloud.x.name; }`. Numbers in another unit than their member
+// (a key in ms for a member in s) are declared with scaled(), so that the conversion is written
+// once. Errors are ConfigError, one line naming the file, the line, the section and the key.
+#pragma once
+
+#include <freeinit/ini_file.h>
+#include <freeinit/types.h>
+
+#include <functional>
+#include <iosfwd>
+#include <limits>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+namespace freeinit::config {
+
+/// The accepted values of a number, in the unit of its key: an interval, either end open or
+/// unbounded. Values must be finite in any case.
+struct Range {
+  double lo = -std::numeric_limits<double>::infinity();
+  double hi = std::numeric_limits<double>::infinity();
+  bool lo_open = false;
+  bool hi_open = false;
+  bool contains(double x) const;
+  /// "[0.0001, 1]", "(0, 10]", ">= 0", "> 0", "any".
+  std::string text() const;
+};
+Range any();
+Range atLeast(double lo);               ///< [lo, inf)
+Range above(double lo);                 ///< (lo, inf)
+Range between(double lo, double hi);    ///< [lo, hi]
+Range aboveUpTo(double lo, double hi);  ///< (lo, hi]
+
+/// What the documentation knows of a key.
+struct KeyInfo {
+  std::string name;
+  std::string unit;           ///< "m/s", "s", "-" (a pure number), "bool", "text", ...
+  std::string doc;            ///< one line
+  std::string default_value;  ///< the struct's own default, as an INI value
+  std::string accepted;       ///< "[0.0001, 1]", "true | false", "a | b", "" (any text)
+};
+
+// Value parsing and formatting shared by the key types (exposed for other loaders and tests).
+/// Parses a finite decimal number (no hex, inf or nan); returns an error or "".
+std::string parseNumber(std::string_view text, double& x);
+/// Parses a whole number in [lo, hi]; returns an error or "".
+std::string parseInteger(std::string_view text, long double lo, long double hi, long double& x);
+/// Exactly `n` numbers separated by blanks; returns an error or "".
+std::string parseNumbers(std::string_view text, std::size_t n, std::vector<double>& out);
+/// true/false (also 1/0, yes/no, on/off), case-insensitive; returns an error or "".
+std::string parseBool(std::string_view text, bool& x);
+/// The shortest text that reads back as exactly x.
+std::string formatNumber(double x);
+
+/// Where a check reports a problem: in a file (with the key's line) or in a struct filled in
+/// code ("configuration key section.key").
+class Checker {
+ public:
+  Checker(const IniFile* file, std::string section) : file_(file), section_(std::move(section)) {}
+  /// Whether the key is given in the file (always false for a struct filled in code).
+  bool has(const std::string& key) const;
+  /// Throws ConfigError naming the key.
+  [[noreturn]] void fail(const std::string& key, const std::string& what) const;
+  const IniFile* file() const { return file_; }
+
+ private:
+  const IniFile* file_;
+  std::string section_;
+};
+
+/// A section's declaration without its struct type: what documentation checks and section lists
+/// need.
+class SectionBase {
+ public:
+  virtual ~SectionBase() = default;
+  const std::string& name() const { return name_; }
+  const std::string& doc() const { return doc_; }
+  /// The declared keys, with the defaults of a default-constructed struct.
+  virtual std::vector<KeyInfo> keys() const = 0;
+  /// `text` read as the value of `key` and written back as the dump writes it (so that "1e-9"
+  /// and "1e-09" compare equal); sets `error` (and returns "") when it is not a valid value.
+  virtual std::string canonical(const std::string& key, const std::string& text,
+                                std::string& error) const = 0;
+  /// Keys of the section that another program reads (e.g. rawlog-grabber's `driver`): accepted,
+  /// not loaded.
+  const std::vector<std::string>& foreignKeys() const { return foreign_; }
+
+ protected:
+  SectionBase(std::string name, std::string doc) : name_(std::move(name)), doc_(std::move(doc)) {}
+  std::string name_, doc_;
+  std::vector<std::string> foreign_;
+  std::vector<std::pair<std::string, std::string>> refused_;  ///< key, message
+};
+
+namespace detail {
+
+template <class S, class M>
+auto accessor(M m) {
+  if constexpr (std::is_member_object_pointer_v<M>) {
+    return [m](auto& s) -> auto& { return s.*m; };
+  } else {
+    return m;
+  }
+}
+template <class S, class M>
+using MemberType = std::remove_cv_t<
+    std::remove_reference_t<decltype(accessor<S>(std::declval<M>())(std::declval<S&>()))>>;
+
+/// One line of a dump: "key = value ; [unit] doc (accepted: ...)".
+/// `commented`: the line starts with ';' (a value shown, not set).
+void dumpLine(std::ostream& out, const KeyInfo& k, const std::string& value,
+              bool commented = false);
+std::string outOfRange(const std::string& value, const Range& r, const std::string& unit);
+[[noreturn]] void unknownKey(const IniFile& ini, const std::string& section, const std::string& key,
+                             const std::vector<std::string>& known);
+
+}  // namespace detail
+
+/// The declaration of struct S's INI section (see the top of this file).
+template <class S>
+class Section : public SectionBase {
+ public:
+  explicit Section(std::string name, std::string doc = "")
+      : SectionBase(std::move(name), std::move(doc)) {}
+
+  /// A number: a double or integer member, in `unit`, within `range`.
+  template <class M>
+  Section& number(std::string key, M member, std::string unit, Range range, std::string doc) {
+    return scaled(std::move(key), member, std::move(unit), 1.0, range, std::move(doc));
+  }
+  /// A number whose key has another unit than its member: member = value / per_unit (a key in
+  /// ms for a member in s: per_unit = 1000). `range` is in the key's unit.
+  template <class M>
+  Section& scaled(std::string key, M member, std::string unit, double per_unit, Range range,
+                  std::string doc) {
+    using T = detail::MemberType<S, M>;
+    static_assert(std::is_arithmetic_v<T> && !std::is_same_v<T, bool>, "number(): a number");
+    auto acc = detail::accessor<S>(member);
+    Key k{{std::move(key), std::move(unit), std::move(doc), "", range.text()}, {}, {}, {}};
+    k.set = [acc, per_unit, range, unit = k.info.unit](std::string_view text, S& s) {
+      std::string err;
+      if constexpr (std::is_integral_v<T>) {
+        long double x = 0;
+        err = parseInteger(text, -1e30L, 1e30L, x);
+        if (err.empty() && !range.contains(static_cast<double>(x)))
+          err = detail::outOfRange(std::string(text), range, unit);
+        if (err.empty() && (x < static_cast<long double>(std::numeric_limits<T>::lowest()) ||
+                            x > static_cast<long double>(std::numeric_limits<T>::max())))
+          err = quote(text) + " is out of range for this key";
+        if (err.empty()) acc(s) = static_cast<T>(x);
+      } else {
+        double x = 0;
+        err = parseNumber(text, x);
+        if (err.empty() && !range.contains(x))
+          err = detail::outOfRange(std::string(text), range, unit);
+        if (err.empty()) acc(s) = static_cast<T>(x / per_unit);
+      }
+      return err;
+    };
+    k.get = [acc, per_unit](const S& s) {
+      if constexpr (std::is_integral_v<T>) {
+        return std::to_string(acc(s));
+      } else {
+        return formatNumber(static_cast<double>(acc(s)) * per_unit);
+      }
+    };
+    k.check = [acc, per_unit, range, unit = k.info.unit](const S& s) -> std::string {
+      const double x = static_cast<double>(acc(s)) * per_unit;
+      return range.contains(x) ? "" : detail::outOfRange(formatNumber(x), range, unit);
+    };
+    keys_.push_back(std::move(k));
+    return *this;
+  }
+
+  /// A boolean (true/false).
+  template <class M>
+  Section& flag(std::string key, M member, std::string doc) {
+    auto acc = detail::accessor<S>(member);
+    Key k{{std::move(key), "bool", std::move(doc), "", "true | false"}, {}, {}, {}};
+    k.set = [acc](std::string_view text, S& s) {
+      bool x = false;
+      std::string err = parseBool(text, x);
+      if (err.empty()) acc(s) = x;
+      return err;
+    };
+    k.get = [acc](const S& s) { return std::string(acc(s) ? "true" : "false"); };
+    keys_.push_back(std::move(k));
+    return *this;
+  }
+
+  /// A text value (the rest of the line; "" for empty). `non_empty`: an empty value is refused.
+  template <class M>
+  Section& text(std::string key, M member, std::string doc, bool non_empty = false) {
+    auto acc = detail::accessor<S>(member);
+    Key k{{std::move(key), "text", std::move(doc), "", non_empty ? "non-empty text" : ""},
+          {},
+          {},
+          {}};
+    k.set = [acc, non_empty](std::string_view text, S& s) -> std::string {
+      if (non_empty && text.empty()) return "must not be empty";
+      acc(s) = std::string(text);
+      return "";
+    };
+    k.get = [acc](const S& s) { return acc(s); };
+    k.check = [acc, non_empty](const S& s) -> std::string {
+      return non_empty && acc(s).empty() ? "must not be empty" : "";
+    };
+    keys_.push_back(std::move(k));
+    return *this;
+  }
+
+  /// Three numbers "x y z" (Vec3), each within `range`.
+  template <class M>
+  Section& vector3(std::string key, M member, std::string unit, Range range, std::string doc) {
+    auto acc = detail::accessor<S>(member);
+    Key k{{std::move(key), std::move(unit), std::move(doc), "", "x y z, each " + range.text()},
+          {},
+          {},
+          {}};
+    k.set = [acc, range, unit = k.info.unit](std::string_view text, S& s) {
+      std::vector<double> v;
+      std::string err = parseNumbers(text, 3, v);
+      for (std::size_t i = 0; err.empty() && i < 3; ++i)
+        if (!range.contains(v[i])) err = detail::outOfRange(formatNumber(v[i]), range, unit);
+      if (err.empty()) acc(s) = Vec3(v[0], v[1], v[2]);
+      return err;
+    };
+    k.get = [acc](const S& s) {
+      const Vec3& v = acc(s);
+      return formatNumber(v.x()) + " " + formatNumber(v.y()) + " " + formatNumber(v.z());
+    };
+    k.check = [acc, range, unit = k.info.unit](const S& s) -> std::string {
+      const Vec3& v = acc(s);
+      for (int i = 0; i < 3; ++i)
+        if (!range.contains(v[i])) return detail::outOfRange(formatNumber(v[i]), range, unit);
+      return "";
+    };
+    keys_.push_back(std::move(k));
+    return *this;
+  }
+
+  /// One of a list of names, each standing for a value of the member.
+  template <class M, class T = detail::MemberType<S, M>>
+  Section& choice(std::string key, M member, std::vector<std::pair<std::string, T>> choices,
+                  std::string doc) {
+    auto acc = detail::accessor<S>(member);
+    std::string accepted;
+    for (const auto& c : choices) accepted += (accepted.empty() ? "" : " | ") + c.first;
+    Key k{{std::move(key), "-", std::move(doc), "", accepted}, {}, {}, {}};
+    k.set = [acc, choices](std::string_view text, S& s) -> std::string {
+      for (const auto& [name, value] : choices)
+        if (sameName(name, text)) {
+          acc(s) = value;
+          return "";
+        }
+      std::string all;
+      for (const auto& c : choices) all += (all.empty() ? "'" : ", '") + c.first + "'";
+      return quote(text) + " is not one of " + all;
+    };
+    k.get = [acc, choices](const S& s) -> std::string {
+      for (const auto& [name, value] : choices)
+        if (acc(s) == value) return name;
+      return "?";
+    };
+    k.check = [acc, choices](const S& s) -> std::string {
+      for (const auto& c : choices)
+        if (acc(s) == c.second) return "";
+      return "is not one of the accepted values";
+    };
+    keys_.push_back(std::move(k));
+    return *this;
+  }
+
+  /// A value of any other type, with its own parse (returns an error or "") and format.
+  template <class M, class T = detail::MemberType<S, M>>
+  Section& custom(std::string key, M member, std::string unit, std::string accepted,
+                  std::function<std::string(std::string_view, T&)> parse,
+                  std::function<std::string(const T&)> format, std::string doc) {
+    auto acc = detail::accessor<S>(member);
+    Key k{{std::move(key), std::move(unit), std::move(doc), "", std::move(accepted)}, {}, {}, {}};
+    k.set = [acc, parse](std::string_view text, S& s) {
+      T x = acc(s);
+      std::string err = parse(text, x);
+      if (err.empty()) acc(s) = std::move(x);
+      return err;
+    };
+    k.get = [acc, format](const S& s) { return format(acc(s)); };
+    keys_.push_back(std::move(k));
+    return *this;
+  }
+
+  /// A key that is refused with its own message (e.g. a key renamed in an earlier version:
+  /// "no longer a key: ..." saying what replaces it).
+  Section& refused(std::string key, std::string message) {
+    refused_.emplace_back(std::move(key), std::move(message));
+    return *this;
+  }
+  /// Keys another program reads from this section: accepted and ignored.
+  Section& foreign(std::vector<std::string> keys) {
+    foreign_.insert(foreign_.end(), keys.begin(), keys.end());
+    return *this;
+  }
+  /// A check across keys, run after loading and by validate(); reports with Checker::fail.
+  Section& check(std::function<void(const S&, const Checker&)> f) {
+    checks_.push_back(std::move(f));
+    return *this;
+  }
+
+  /// Loads this section of `ini` (if present) into `s`, over its current values. Unknown,
+  /// refused and malformed keys, out-of-range values and failed checks throw ConfigError naming
+  /// the file, the line, the section and the key.
+  void load(const IniFile& ini, S& s) const { load(ini, name_, s); }
+  /// The same from a section of another name (e.g. a sensor's section, named by the user).
+  void load(const IniFile& ini, const std::string& section, S& s) const {
+    if (const IniSection* sec = ini.section(section)) {
+      for (const IniEntry& e : sec->entries) {
+        const Key* k = find(e.key);
+        if (!k) {
+          if (isForeign(e.key)) continue;
+          for (const auto& [refused, message] : refused_)
+            if (sameName(refused, e.key)) ini.fail(section, e.key, message);
+          detail::unknownKey(ini, section, e.key, names());
+        }
+        if (const std::string err = k->set(e.value, s); !err.empty()) ini.fail(section, e.key, err);
+      }
+    }
+    const Checker c(&ini, section);
+    for (const auto& f : checks_) f(s, c);
+  }
+
+  /// The range and cross-key checks on a struct filled in code. Throws ConfigError
+  /// "configuration key <section>.<key>: ...".
+  void validate(const S& s) const {
+    const Checker c(nullptr, name_);
+    for (const Key& k : keys_)
+      if (k.check)
+        if (const std::string err = k.check(s); !err.empty()) c.fail(k.info.name, err);
+    for (const auto& f : checks_) f(s, c);
+  }
+
+  /// Writes "[name]" and one documented line per key: an INI that loads back to `s`.
+  void dump(const S& s, std::ostream& out) const {
+    dumpHeader(out);
+    for (const Key& k : keys_) detail::dumpLine(out, k.info, k.get(s));
+  }
+  /// Only the lines of the keys (no header), e.g. to add keys of another struct to a section.
+  void dumpKeys(const S& s, std::ostream& out, bool commented = false) const {
+    for (const Key& k : keys_) detail::dumpLine(out, k.info, k.get(s), commented);
+  }
+  /// One key's line (commented out: shown, not set).
+  void dumpKey(const S& s, const std::string& key, std::ostream& out,
+               bool commented = false) const {
+    if (const Key* k = find(key)) detail::dumpLine(out, k->info, k->get(s), commented);
+  }
+  void dumpHeader(std::ostream& out) const;
+
+  std::vector<KeyInfo> keys() const override {
+    const S defaults{};
+    std::vector<KeyInfo> out;
+    for (const Key& k : keys_) {
+      KeyInfo i = k.info;
+      i.default_value = k.get(defaults);
+      out.push_back(std::move(i));
+    }
+    return out;
+  }
+  std::string canonical(const std::string& key, const std::string& text,
+                        std::string& error) const override {
+    const Key* k = find(key);
+    if (!k) {
+      error = "not a key of [" + name_ + "]";
+      return "";
+    }
+    S x{};
+    error = k->set(text, x);
+    return error.empty() ? k->get(x) : "";
+  }
+  /// The value of `key` in `s` as the dump writes it ("" if no such key).
+  std::string value(const S& s, const std::string& key) const {
+    const Key* k = find(key);
+    return k ? k->get(s) : "";
+  }
+
+ private:
+  struct Key {
+    KeyInfo info;
+    std::function<std::string(std::string_view, S&)> set;  ///< returns an error or ""
+    std::function<std::string(const S&)> get;              ///< the value as INI text
+    std::function<std::string(const S&)> check;            ///< range error or "" (optional)
+  };
+  const Key* find(std::string_view key) const {
+    for (const Key& k : keys_)
+      if (sameName(k.info.name, key)) return &k;
+    return nullptr;
+  }
+  bool isForeign(std::string_view key) const {
+    for (const auto& f : foreign_)
+      if (sameName(f, key)) return true;
+    return false;
+  }
+  std::vector<std::string> names() const {
+    std::vector<std::string> n;
+    for (const Key& k : keys_) n.push_back(k.info.name);
+    return n;
+  }
+  std::vector<Key> keys_;
+  std::vector<std::function<void(const S&, const Checker&)>> checks_;
+};
+
+void dumpSectionHeader(std::ostream& out, const std::string& name, const std::string& doc);
+
+template <class S>
+void Section<S>::dumpHeader(std::ostream& out) const {
+  dumpSectionHeader(out, name_, doc_);
+}
+
+}  // namespace freeinit::config

@@ -1,0 +1,178 @@
+#include <freeinit/accel_unit.h>
+#include <freeinit/input_checks.h>
+
+#include <algorithm>
+#include <cmath>
+#include <sstream>
+
+namespace freeinit::input {
+namespace {
+
+std::string fmt(double x) {
+  std::ostringstream os;
+  os.precision(4);
+  os << x;
+  return os.str();
+}
+
+/// "duplicated (t after t)" or "goes backwards (t after t_prev)".
+std::string orderWords(double t, double previous) {
+  return std::string(t == previous ? "duplicated" : "goes backwards") + " (" + formatStamp(t) +
+         " after " + formatStamp(previous) + ")";
+}
+
+}  // namespace
+
+std::string formatStamp(double t) {
+  std::ostringstream os;
+  os.setf(std::ios::fixed);
+  os.precision(6);
+  os << t;
+  return os.str();
+}
+
+std::optional<std::string> imuSampleProblem(const ImuSample& s, const ImuSample* previous) {
+  if (!std::isfinite(s.t)) return std::string("IMU timestamp is not finite");
+  if (!s.gyro.allFinite() || !s.accel.allFinite())
+    return std::string("IMU sample with NaN or infinite values");
+  if (previous != nullptr && !(s.t > previous->t))
+    return "IMU timestamp " + orderWords(s.t, previous->t);
+  return std::nullopt;
+}
+
+bool invalidPoint(const DopplerPoint& p) {
+  return !p.p_l.allFinite() || !std::isfinite(p.doppler) || !std::isfinite(p.time_offset);
+}
+
+void sortByTime(LidarFrame& f) {
+  const auto earlier = [](const DopplerPoint& a, const DopplerPoint& b) {
+    return a.time_offset < b.time_offset;
+  };
+  if (!std::is_sorted(f.points.begin(), f.points.end(), earlier))
+    std::stable_sort(f.points.begin(), f.points.end(), earlier);
+}
+
+FrameSpan frameSpan(const LidarFrame& f) {
+  if (f.points.empty()) return {f.stamp, f.stamp};
+  return {f.stamp + f.points.front().time_offset, f.stamp + f.points.back().time_offset};
+}
+
+std::optional<std::string> frameOrderProblem(const LidarFrame& f,
+                                             const std::optional<double>& previous_stamp,
+                                             const std::optional<double>& previous_end) {
+  if (!std::isfinite(f.stamp)) return std::string("point cloud timestamp is not finite");
+  if (previous_stamp && !(f.stamp > *previous_stamp))
+    return "point cloud timestamp " + orderWords(f.stamp, *previous_stamp);
+  for (std::size_t i = 0; i < f.points.size(); ++i) {
+    if (!std::isfinite(f.points[i].time_offset))
+      return "point " + std::to_string(i) + " has a non-finite time offset";
+    if (i > 0 && f.points[i].time_offset < f.points[i - 1].time_offset)
+      return "points are not sorted by time (point " + std::to_string(i) + ")";
+  }
+  // Points are processed in time order across frames: a frame may not reach back into the
+  // previous one.
+  if (previous_end && !f.points.empty() && frameSpan(f).begin < *previous_end)
+    return "the point cloud overlaps the previous one in time (first point at " +
+           formatStamp(frameSpan(f).begin) + ", the previous cloud ends at " +
+           formatStamp(*previous_end) + ")";
+  return std::nullopt;
+}
+
+bool dopplerAllZero(const std::vector<DopplerPoint>& points) {
+  return std::none_of(points.begin(), points.end(), [](const DopplerPoint& p) {
+    return std::isfinite(p.doppler) && p.doppler != 0.0f;
+  });
+}
+
+std::optional<std::string> imuRateProblem(const std::vector<ImuSample>& imu, double min_rate) {
+  if (imu.size() < 2) return std::nullopt;
+  // IMU rate from the median sample interval.
+  std::vector<double> dts;
+  dts.reserve(imu.size() - 1);
+  for (std::size_t i = 1; i < imu.size(); ++i) dts.push_back(imu[i].t - imu[i - 1].t);
+  std::nth_element(dts.begin(), dts.begin() + static_cast<std::ptrdiff_t>(dts.size() / 2),
+                   dts.end());
+  const double rate = 1.0 / dts[dts.size() / 2];
+  if (rate >= min_rate) return std::nullopt;
+  return "IMU rate " + fmt(rate) + " Hz is below [input] min_imu_rate = " + fmt(min_rate) + " Hz";
+}
+
+std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, bool declared_g) {
+  if (imu.empty()) return std::nullopt;
+  // Units: the specific force averages to about 9.81 m/s^2 (1 g) over any short stretch.
+  Vec3 mean = Vec3::Zero();
+  const std::size_t n_mean = std::min(imu.size(), kImuCheckSamples);
+  for (std::size_t i = 0; i < n_mean; ++i) mean += imu[i].accel;
+  const double g_seen = (mean / static_cast<double>(n_mean)).norm();
+  switch (accelUnitMismatch(g_seen, declared_g)) {
+    case AccelUnitMismatch::kDataInG:
+      return "the mean accelerometer magnitude is " + fmt(g_seen) +
+             ", the IMU reports g, not m/s^2: set [input] imu_accel_in_g = true";
+    case AccelUnitMismatch::kDataInMs2:
+      return "[input] imu_accel_in_g = true but the accelerations are already in m/s^2 (mean "
+             "magnitude " +
+             fmt(g_seen) + " after conversion)";
+    case AccelUnitMismatch::kNone:
+      break;
+  }
+  return std::nullopt;
+}
+
+RestParams restParams(const FreeInitConfig& config) {
+  RestParams p;
+  const auto& sp = config.static_detector;
+  const auto& vp = config.velocimeter;
+  p.max_gyro_dev = sp.max_gyro_dev;
+  p.max_gyro_bias = sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
+  p.gyro_bias_prior = vp.gyro_bias_prior;
+  p.max_accel_dev = std::max(0.3, 6.0 * config.gravity.accel_sigma);
+  p.max_accel_bias = std::sqrt(3.0) * config.gravity.accel_bias_bound;
+  return p;
+}
+
+std::optional<std::string> motionProblem(const std::vector<ImuSample>& imu, const RestParams& p) {
+  if (imu.size() < 2)
+    return "fewer than 2 IMU samples within " + fmt(kRestMargin) +
+           " s of its points to tell rest from motion";
+  Vec3 w_mean = Vec3::Zero(), f_mean = Vec3::Zero();
+  for (const auto& s : imu) {
+    w_mean += s.gyro;
+    f_mean += s.accel;
+  }
+  w_mean /= static_cast<double>(imu.size());
+  f_mean /= static_cast<double>(imu.size());
+  double w_dev = 0, f_dev = 0;
+  for (const auto& s : imu) {
+    w_dev = std::max(w_dev, (s.gyro - w_mean).norm());
+    f_dev = std::max(f_dev, (s.accel - f_mean).norm());
+  }
+  const double w_bias = (w_mean - p.gyro_bias_prior).norm();
+  const double g_dev = std::abs(f_mean.norm() - kGravity);
+  if (w_dev > p.max_gyro_dev)
+    return "the gyro varies by " + fmt(w_dev) + " rad/s (at rest: below " + fmt(p.max_gyro_dev) +
+           ")";
+  if (w_bias > p.max_gyro_bias)
+    return "the gyro reads " + fmt(w_mean.norm()) + " rad/s (at rest: its bias, below " +
+           fmt(p.max_gyro_bias) + ")";
+  if (f_dev > p.max_accel_dev)
+    return "the specific force varies by " + fmt(f_dev) + " m/s^2 (at rest: below " +
+           fmt(p.max_accel_dev) + ")";
+  if (g_dev > p.max_accel_bias)
+    return "the specific force is " + fmt(f_mean.norm()) + " m/s^2 (at rest: 1 g within " +
+           fmt(p.max_accel_bias) + ")";
+  return std::nullopt;
+}
+
+std::optional<std::string> zeroDopplerProblem(const std::vector<ImuSample>& imu,
+                                              const RestParams& p) {
+  const auto motion = motionProblem(imu, p);
+  if (!motion) return std::nullopt;
+  const std::string why = imu.size() < 2
+                              ? "the Doppler field is zero for every point and " + *motion
+                              : "the Doppler field is zero for every point while the "
+                                "IMU shows motion: " +
+                                    *motion;
+  return why + " (an ego-motion-compensated sensor? Free-Init needs the raw range rate)";
+}
+
+}  // namespace freeinit::input

@@ -1,0 +1,294 @@
+// The configuration mechanism of the core (no MRPT): the INI parser, the key declarations
+// (loading, validation, echo) of the estimator's sections, and the window in seconds.
+#include <freeinit/config.h>
+#include <freeinit/config_section.h>
+#include <freeinit/free_init.h>
+#include <freeinit/ini_file.h>
+#include <freeinit/sim/simulator.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <sstream>
+
+using namespace freeinit;
+using config::ConfigError;
+using config::IniFile;
+namespace fs = std::filesystem;
+
+namespace {
+
+// The message of the ConfigError `f` throws ("" and a test failure when it throws none or
+// another type). Every configuration error is one line.
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const ConfigError& e) {
+    const std::string what = e.what();
+    EXPECT_EQ(what.find('\n'), std::string::npos) << "not one line: " << what;
+    return what;
+  } catch (const std::exception& e) {
+    ADD_FAILURE() << "not a ConfigError: " << e.what();
+    return "";
+  }
+  ADD_FAILURE() << "no error";
+  return "";
+}
+
+#define EXPECT_CONTAINS(haystack, needle)                                                      \
+  do {                                                                                         \
+    const std::string h_ = (haystack);                                                         \
+    EXPECT_NE(h_.find(needle), std::string::npos) << h_ << "\n  should contain: " << (needle); \
+  } while (0)
+
+FreeInitConfig loadCore(const std::string& text) {
+  FreeInitConfig c;
+  const IniFile ini = IniFile::parse(text, "t.ini");
+  ini.requireKnownSections(FreeInitConfig::sectionNames());
+  c.load(ini);
+  return c;
+}
+
+}  // namespace
+
+TEST(IniFile, ReadsSectionsKeysAndEveryCommentForm) {
+  const IniFile ini = IniFile::parse(
+      "\xEF\xBB\xBF; a comment\n# another\n\n[One]\nkey = value ; inline\nQuoted = \"a b\"  # x\n"
+      "empty =\n  spaced   =   1 2 3  \n[two]\nk=v\r\n",
+      "t.ini");
+  ASSERT_EQ(ini.sections().size(), 2u);
+  const config::IniSection* one = ini.section("one");  // names compare case-insensitively
+  ASSERT_NE(one, nullptr);
+  EXPECT_EQ(one->line, 4);
+  ASSERT_EQ(one->entries.size(), 4u);
+  EXPECT_EQ(one->find("KEY")->value, "value");
+  EXPECT_EQ(one->find("key")->line, 5);
+  EXPECT_EQ(one->find("quoted")->value, "a b");
+  EXPECT_EQ(one->find("empty")->value, "");
+  EXPECT_EQ(one->find("spaced")->value, "1 2 3");
+  EXPECT_EQ(ini.section("TWO")->find("k")->value, "v");
+}
+
+TEST(IniFile, EveryMalformedLineIsOneErrorNamingFileAndLine) {
+  const auto parse = [](const std::string& text) { IniFile::parse(text, "f.ini"); };
+  EXPECT_CONTAINS(errorOf([&] { parse("[a]\nk = 1\nk = 2\n"); }),
+                  "f.ini:3: [a] k: key given twice (first at line 2)");
+  EXPECT_CONTAINS(errorOf([&] { parse("[a]\nK = 1\nk = 2\n"); }),
+                  "f.ini:3: [a] k: key given twice");
+  EXPECT_CONTAINS(errorOf([&] { parse("[a]\n[b]\n[A]\n"); }),
+                  "f.ini:3: [A]: section given twice (first at line 1)");
+  EXPECT_CONTAINS(errorOf([&] { parse("k = 1\n"); }), "f.ini:1: k: key outside a [section]");
+  EXPECT_CONTAINS(errorOf([&] { parse("[a]\njust words\n"); }),
+                  "f.ini:2: [a]: 'just words': expected 'key = value'");
+  EXPECT_CONTAINS(errorOf([&] { parse("[a\n"); }), "f.ini:1: malformed section header");
+  EXPECT_CONTAINS(errorOf([&] { parse("[]\n"); }), "f.ini:1: empty section name");
+  EXPECT_CONTAINS(errorOf([&] { parse("[a] b\n"); }), "f.ini:1: [a]: unexpected text");
+  EXPECT_CONTAINS(errorOf([&] { parse("[a]\nmy key = 1\n"); }),
+                  "f.ini:2: [a] 'my key' is not a key");
+  EXPECT_CONTAINS(errorOf([&] { parse("[a]\n@include other.ini\n"); }),
+                  "f.ini:2: [a]: '@include other.ini': directives such as @include");
+  // Binary data (e.g. a rawlog given as the INI) is named, never printed.
+  const std::string gz("\x1f\x8b\x08\x00[a]\n", 8);
+  const std::string e = errorOf([&] { parse(gz); });
+  EXPECT_CONTAINS(e, "f.ini:1: binary data (byte 0x1f): not an INI text file");
+  EXPECT_EQ(e.find('\x8b'), std::string::npos);
+}
+
+// MRPT's INI reader expands ${VAR} (and throws a multi-line exception with a call stack on an
+// unclosed one, as in the fuzzer's reproducer "[input]\nimu_label = ${FOO"); ours expands nothing
+// and says so on one line.
+TEST(IniFile, VariablesAreNotExpanded) {
+  EXPECT_CONTAINS(errorOf([] { IniFile::parse("[input]\nimu_label = ${FOO\n", "x.ini"); }),
+                  "x.ini:2: [input] imu_label: '${FOO': variables and expressions ($...{...}) are "
+                  "not expanded");
+  EXPECT_CONTAINS(errorOf([] { IniFile::parse("[a]\nk = $env{HOME}/x\n", "x.ini"); }),
+                  "x.ini:2: [a] k: '$env{HOME}/x': variables");
+}
+
+TEST(IniFile, LoadNamesMissingFilesDirectoriesAndHugeFiles) {
+  const fs::path d = fs::temp_directory_path() / "freeinit_test_config";
+  fs::create_directories(d);
+  EXPECT_CONTAINS(errorOf([&] { IniFile::load((d / "none.ini").string()); }),
+                  "none.ini: configuration file not found");
+  EXPECT_CONTAINS(errorOf([&] { IniFile::load(d.string()); }),
+                  "is a directory, not a configuration file");
+  const std::string big = (d / "big.ini").string();
+  {
+    std::ofstream f(big);
+    f << "[a]\n" << std::string(IniFile::kMaxBytes, ';') << "\n";
+  }
+  EXPECT_CONTAINS(errorOf([&] { IniFile::load(big); }), "too large for a configuration file");
+  const std::string only = (d / "only.ini").string();
+  {
+    std::ofstream f(only);
+    f << "[mine]\nk = 1\n[theirs]\n${whatever MRPT reads\n";
+  }
+  const IniFile ini = IniFile::load(only, {{"mine"}});  // other sections are not read
+  EXPECT_EQ(ini.section("mine")->find("k")->value, "1");
+  EXPECT_FALSE(ini.section("theirs")->checked);
+}
+
+TEST(FreeInitConfigIni, MisspeltSectionsAndKeysAreErrorsWithAHint) {
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimetr]\ndoppler_sigma = 0.1\n"); }),
+                  "t.ini:1: [velocimetr]: unknown section (did you mean [velocimeter]?)");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\n\ndopler_sigma = 0.1\n"); }),
+                  "t.ini:3: [velocimeter] dopler_sigma: unknown key (did you mean doppler_sigma?)");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\nxyz = 1\n"); }),
+                  "t.ini:2: [velocimeter] xyz: unknown key");
+}
+
+TEST(FreeInitConfigIni, MalformedValuesNameTheKeyAndWhatWasExpected) {
+  EXPECT_CONTAINS(errorOf([] { loadCore("[bootstrap]\npoints = ten\n"); }),
+                  "t.ini:2: [bootstrap] points: 'ten' is not a number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[bootstrap]\npoints = 2.5\n"); }),
+                  "[bootstrap] points: '2.5' is not a whole number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ngyro_sigma = 0x10\n"); }),
+                  "[velocimeter] gyro_sigma: '0x10' is not a number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ngyro_sigma = nan\n"); }),
+                  "[velocimeter] gyro_sigma: 'nan' is not a number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ngyro_bias_prior = 0 0\n"); }),
+                  "[velocimeter] gyro_bias_prior: expected 3 numbers separated by blanks, got 2");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[static_detector]\nenabled = maybe\n"); }),
+                  "[static_detector] enabled: 'maybe' is not a boolean (true/false)");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[gravity]\nformulation = numeric\n"); }),
+                  "[gravity] formulation: 'numeric' is not one of 'integrated', 'differentiated'");
+}
+
+// Values off by orders of magnitude are refused on load with the accepted range, instead of
+// running for 22 s into NaN (a prior of 1e300) or failing later with a misleading status.
+TEST(FreeInitConfigIni, AbsurdValuesAreRefusedWithTheAcceptedRange) {
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ngyro_bias_sigma0 = 1e300\n"); }),
+                  "t.ini:2: [velocimeter] gyro_bias_sigma0: 1e300 is out of range: accepted "
+                  "[1e-06, 1] rad/s");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ndoppler_sigma = 30\n"); }),
+                  "[velocimeter] doppler_sigma: 30 is out of range: accepted [1e-04, 1] m/s");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ndoppler_sigma = 1e999\n"); }),
+                  "[velocimeter] doppler_sigma: '1e999' is out of the range of a double");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[window]\nduration = -1\n"); }),
+                  "[window] duration: -1 is out of range: accepted [0.05, 60] s");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\nmin_range = 5\nmax_range = 4\n"); }),
+                  "t.ini:3: [velocimeter] max_range: must exceed min_range (5 m)");
+  EXPECT_CONTAINS(
+      errorOf([] { loadCore("[gravity]\nuse_body_equation = false\nuse_lidar_equation = no\n"); }),
+      "t.ini:2: [gravity] use_body_equation: at least one of the body and LiDAR equations");
+  // The same ranges hold for a configuration filled in code.
+  FreeInitConfig c;
+  c.velocimeter.gyro_bias_sigma0 = 1e300;
+  EXPECT_CONTAINS(errorOf([&] { c.validate(); }),
+                  "configuration key velocimeter.gyro_bias_sigma0: 1e+300 is out of range");
+}
+
+TEST(FreeInitConfigIni, TheWindowKeysInSamplesAreGoneWithAPointerToTheirReplacement) {
+  EXPECT_CONTAINS(errorOf([] { loadCore("[window]\nimu_samples = 100\n"); }),
+                  "t.ini:2: [window] imu_samples: no longer a key: the window is given in "
+                  "seconds, [window] duration");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[window]\nseed_imu_samples = 60\n"); }),
+                  "[window] seed_imu_samples: no longer a key");
+}
+
+// The echo of a configuration loads back to the same configuration: every key of every section
+// changed from its default, dumped, loaded and dumped again.
+TEST(FreeInitConfigIni, EffectiveConfigEchoLoadsBackToTheSameConfig) {
+  FreeInitConfig c;
+  c.velocimeter.doppler_sigma = 0.0123456789012345;
+  c.velocimeter.gyro_bias_prior = Vec3(1e-3, -2.5e-4, 1.0 / 3.0 * 1e-2);
+  c.velocimeter.kinematic_propagation = false;
+  c.velocimeter.point_stride = 7;
+  c.bootstrap.points = 1234;
+  c.static_detector.enabled = false;
+  c.window.duration = 0.75;
+  c.window.seed_duration = 0;
+  c.gravity.formulation = GravityFormulation::Differentiated;
+  c.gravity.loss_scale = 2.0 / 3.0;
+  std::ostringstream a;
+  c.dump(a);
+  const FreeInitConfig d = loadCore(a.str());
+  std::ostringstream b;
+  d.dump(b);
+  EXPECT_EQ(a.str(), b.str());
+  EXPECT_EQ(d.velocimeter.doppler_sigma, c.velocimeter.doppler_sigma);  // exact: shortest digits
+  EXPECT_EQ(d.velocimeter.gyro_bias_prior, c.velocimeter.gyro_bias_prior);
+  EXPECT_EQ(d.gravity.loss_scale, c.gravity.loss_scale);
+  EXPECT_EQ(d.gravity.formulation, GravityFormulation::Differentiated);
+  EXPECT_EQ(d.window.duration, 0.75);
+  EXPECT_FALSE(d.static_detector.enabled);
+  // Each default differs from the value above, so every line was loaded, not defaulted.
+  std::ostringstream defaults;
+  FreeInitConfig().dump(defaults);
+  EXPECT_NE(defaults.str(), a.str());
+}
+
+// The declared keys carry their unit, doc, default (the struct's own) and accepted values.
+TEST(FreeInitConfigIni, DeclarationsDocumentEveryKey) {
+  std::size_t n = 0;
+  for (const config::SectionBase* s : std::initializer_list<const config::SectionBase*>{
+           &velocimeterSection(), &bootstrapSection(), &staticDetectorSection(), &windowSection(),
+           &gravitySection()}) {
+    for (const config::KeyInfo& k : s->keys()) {
+      EXPECT_FALSE(k.unit.empty()) << s->name() << "." << k.name;
+      EXPECT_FALSE(k.doc.empty()) << s->name() << "." << k.name;
+      EXPECT_FALSE(k.default_value.empty()) << s->name() << "." << k.name;
+      ++n;
+    }
+  }
+  EXPECT_EQ(n, 45u);
+  const auto w = windowSection().keys();
+  EXPECT_EQ(w[0].name, "duration");
+  EXPECT_EQ(w[0].unit, "s");
+  EXPECT_EQ(w[0].default_value, "0.5");
+  EXPECT_EQ(w[0].accepted, "[0.05, 60]");
+}
+
+// The window rule: the samples with t - t_0 < duration; rounding of absolute stamps does not
+// move the end by a sample.
+TEST(WindowRule, HalfASecondIsTheSameSpanAtAnyImuRate) {
+  for (const double rate : {200.0, 400.0, 1000.0}) {
+    std::vector<ImuSample> imu(2000);
+    for (std::size_t k = 0; k < imu.size(); ++k)
+      imu[k].t = 1700000000.123 + static_cast<double>(k) / rate;  // stamps rounded at 2.4e-7 s
+    for (const std::size_t first : {0u, 17u, 333u}) {
+      const auto last = windowLastSample(imu, first, 0.5);
+      ASSERT_TRUE(last) << rate;
+      EXPECT_EQ(*last - first + 1, static_cast<std::size_t>(0.5 * rate)) << rate;
+    }
+  }
+  // A recording that ends before the window closes does not cover it.
+  std::vector<ImuSample> shortrec(99);
+  for (std::size_t k = 0; k < shortrec.size(); ++k) shortrec[k].t = 0.005 * static_cast<double>(k);
+  EXPECT_FALSE(windowLastSample(shortrec, 0, 0.5));
+  shortrec.push_back({0.495, Vec3::Zero(), Vec3::Zero()});  // the 100th closes it
+  EXPECT_EQ(windowLastSample(shortrec, 0, 0.5), std::optional<std::size_t>(99));
+}
+
+TEST(WindowRule, AGapBeyondTheEndClosesTheWindowOnTheSampleBefore) {
+  // 200 Hz, then nothing between 0.40 s and 0.60 s.
+  std::vector<ImuSample> imu;
+  for (int k = 0; k <= 80; ++k) imu.push_back({0.005 * k, Vec3::Zero(), Vec3::Zero()});
+  for (int k = 120; k <= 200; ++k) imu.push_back({0.005 * k, Vec3::Zero(), Vec3::Zero()});
+  EXPECT_EQ(windowLastSample(imu, 0, 0.5), std::optional<std::size_t>(80));
+  EXPECT_EQ(windowSample(0, 0.4, 0.6, 0.5), WindowSample::Outside);
+  EXPECT_EQ(windowSample(0, 0.49, 0.495, 0.5), WindowSample::Last);
+  EXPECT_EQ(windowSample(0, 0.485, 0.49, 0.5), WindowSample::Inside);
+  EXPECT_EQ(windowSample(0, 0, 0, 0.5), WindowSample::Inside);  // the first sample
+}
+
+// The estimator's window is 0.5 s whatever the IMU rate (a 1 kHz IMU used to get 0.1 s from the
+// 100-sample window): from the trajectory's first sample to the state, 99 and 499 intervals.
+TEST(WindowRule, TheEstimatorsWindowIsInSeconds) {
+  for (const double rate : {200.0, 1000.0}) {
+    sim::ScenarioConfig sc = sim::preset("dyna_01", 1);
+    sc.duration = 0.7;
+    sc.points_per_frame = 4000;
+    sc.imu_rate = rate;
+    const sim::Recording rec = sim::simulate(sc);
+    FreeInitConfig cfg;
+    cfg.extrinsics = rec.extrinsics;
+    const InitResult r = FreeInit::run(cfg, rec.imu, rec.frames);
+    ASSERT_TRUE(r.state.ok()) << r.state.message;
+    ASSERT_FALSE(r.trajectory.empty());
+    EXPECT_EQ(r.trajectory.size(), static_cast<std::size_t>(0.5 * rate)) << rate;
+    EXPECT_NEAR(r.state.timestamp - r.trajectory.front().t, 0.5 - 1.0 / rate, 1e-6) << rate;
+  }
+}
