@@ -12,6 +12,7 @@
 #include <freeinit/report/version.h>
 #include <freeinit/sim/evaluation.h>
 #include <freeinit/sim/presets.h>
+#include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/simulator.h>
 
 #include <algorithm>
@@ -38,6 +39,12 @@ namespace sim = freeinit::sim;
 const char* const kUsage =
     "Usage: freeinit-eval [options] [preset ...]   (default: every preset)\n"
     "  --seeds N            seeds 1..N per preset (3)\n"
+    "  --random N           N randomized scenarios instead of the presets (seeds from --seed-base;\n"
+    "                       the estimator is given the declared calibration and the datasheet\n"
+    "                       noise, as a user would)\n"
+    "  --seed-base S        first seed of --random (1)\n"
+    "  --calibration-sigma DEG, --time-offset-sigma S: the declared calibration's accuracy\n"
+    "                       ([estimator] calibration_rotation_sigma_deg, time_offset_sigma)\n"
     "  --jobs N             parallel jobs (0: hardware concurrency, the default)\n"
     "  --md FILE            Markdown report (paper Table I/II layout, errors against the\n"
     "                       Cramer-Rao bound, statuses, every run)\n"
@@ -70,6 +77,9 @@ struct UsageError : std::invalid_argument {
 
 struct Options {
   int seeds = 3;
+  int random = 0;                ///< > 0: this many randomized scenarios instead of the presets
+  long long seed_base = 1;       ///< first seed of the randomized scenarios
+  double calibration_sigma = -1, time_offset_sigma = -1;  ///< < 0: the configuration default
   unsigned jobs = 0;
   std::string md, csv, summary_csv, bounds_md, plots;
   report::FailureThresholds thresholds;
@@ -128,6 +138,10 @@ Options parse(int argc, char** argv) {
   };
   const std::map<std::string, std::function<void(int&)>> with_value = {
       {"--seeds", [&](int& i) { o.seeds = integer(i, 1, 100000); }},
+      {"--random", [&](int& i) { o.random = integer(i, 1, 1000000); }},
+      {"--seed-base", [&](int& i) { o.seed_base = integer(i, 0, 2000000000); }},
+      {"--calibration-sigma", [&](int& i) { o.calibration_sigma = number(i, 0, 10); }},
+      {"--time-offset-sigma", [&](int& i) { o.time_offset_sigma = number(i, 0, 0.1); }},
       {"--jobs", [&](int& i) { o.jobs = static_cast<unsigned>(integer(i, 0, 1024)); }},
       {"--md", [&](int& i) { o.md = value(i); }},
       {"--csv", [&](int& i) { o.csv = value(i); }},
@@ -179,6 +193,7 @@ struct EvalCase {
   std::string source;  ///< the tables' input column
   int seed = 0;        ///< the tables' seed column
   sim::ScenarioConfig scenario;
+  bool wrong_calibration = false;  ///< the declared calibration is wrong on purpose
 };
 
 /// The command line's changes to a scenario (duration, points, the zero-gyro-bias variant).
@@ -205,6 +220,20 @@ std::vector<EvalCase> presetCases(const Options& o) {
   return cases;
 }
 
+/// N randomized scenarios from the seed base, named in the tables by platform and start
+/// ("handheld/static", "vehicular/moving", ...).
+std::vector<EvalCase> randomCases(const Options& o) {
+  std::vector<EvalCase> cases;
+  for (long long seed = o.seed_base; seed < o.seed_base + o.random; ++seed) {
+    const sim::RandomScenario r = sim::drawRandomScenario(static_cast<std::uint64_t>(seed));
+    EvalCase c{std::string(sim::platformName(r.info.platform)) + "/" + r.info.start,
+               static_cast<int>(seed), r.config, r.info.calibration_wrong};
+    applyOverrides(o, c.scenario);
+    cases.push_back(std::move(c));
+  }
+  return cases;
+}
+
 struct JobResult {
   std::vector<report::EvalRow> rows;
   std::vector<report::VelocityTrack> tracks;
@@ -220,6 +249,15 @@ void appendf(std::string& s, const char* fmt, Args... args) {
 
 freeinit::FreeInitConfig configFor(const Options& o, const sim::Recording& rec, int seed) {
   freeinit::FreeInitConfig cfg;
+  if (o.calibration_sigma >= 0) cfg.estimator.calibration_rotation_sigma_deg = o.calibration_sigma;
+  if (o.time_offset_sigma >= 0) cfg.estimator.time_offset_sigma = o.time_offset_sigma;
+  if (o.random > 0) {
+    // What a user of this rig would configure: the datasheet noise (the unit's own per-axis
+    // values scatter about it) and the calibration as declared (runMethods takes the extrinsics).
+    cfg.velocimeter.doppler_sigma = rec.config.doppler_sigma;
+    cfg.velocimeter.gyro_sigma = rec.config.gyro_sigma;
+    cfg.gravity.accel_sigma = rec.config.accel_sigma;
+  }
   if (o.stride > 0) cfg.velocimeter.point_stride = o.stride;
   if (o.window > 0) cfg.window.duration = o.window;
   if (o.passes >= 0) cfg.window.refinement_passes = o.passes;
@@ -239,7 +277,8 @@ freeinit::FreeInitConfig configFor(const Options& o, const sim::Recording& rec, 
 JobResult runCase(const Options& o, const EvalCase& c) {
   const auto rec = sim::simulate(c.scenario);
   const freeinit::FreeInitConfig cfg = configFor(o, rec, c.seed);
-  const auto runs = report::runMethods(cfg, rec.imu, rec.frames, rec.extrinsics, o.methods);
+  const auto runs =
+      report::runMethods(cfg, rec.imu, rec.frames, rec.declared_extrinsics, o.methods);
 
   // The bound of each method's window (methods with the same window share it), with the
   // estimator's priors.
@@ -258,7 +297,8 @@ JobResult runCase(const Options& o, const EvalCase& c) {
   JobResult out;
   const report::TruthFn truth = [&](double t) { return sim::stateTruth(rec, t); };
   for (const auto& m : runs) {
-    const report::EvalRow row = report::makeEvalRow(c.source, c.seed, m, truth, boundOf(m.result));
+    report::EvalRow row = report::makeEvalRow(c.source, c.seed, m, truth, boundOf(m.result));
+    row.wrong_calibration = c.wrong_calibration;
     out.rows.push_back(row);
     char head[96];
     std::snprintf(head, sizeof(head), "%-10s %-16s %2d  ", m.method.c_str(), c.source.c_str(),
@@ -276,6 +316,14 @@ JobResult runCase(const Options& o, const EvalCase& c) {
     appendf(out.log, "  nees v=%6.2f tilt=%6.2f bg=%6.2f ba=%6.2f  %7.2f ms", row.nees_velocity,
             row.nees_tilt, row.nees_gyro_bias, row.nees_accel_bias, m.time_ms);
     const std::string wrong = row.confidentlyWrong();
+    if (m.method == "free-init")
+      appendf(out.log, "  rms/sigma=%.3f used=%.2f",
+              m.result.diag.doppler_residual_rms / cfg.velocimeter.doppler_sigma,
+              static_cast<double>(m.result.diag.points_used) /
+                  std::max<std::size_t>(1, m.result.diag.points_used + m.result.diag.points_rejected));
+    if (!m.result.state.warnings.empty())
+      appendf(out.log, "  %zu warning(s)", m.result.state.warnings.size());
+    if (c.wrong_calibration) out.log += "  [wrong calibration]";
     out.log += wrong.empty() ? "\n" : "  CONFIDENT WRONG: " + wrong + "\n";
   }
   out.tracks =
@@ -312,7 +360,7 @@ void writeFigure(const Options& o, const std::vector<EvalCase>& cases,
 }
 
 int run(const Options& o) {
-  const std::vector<EvalCase> cases = presetCases(o);
+  const std::vector<EvalCase> cases = o.random > 0 ? randomCases(o) : presetCases(o);
   std::vector<JobResult> results(cases.size());
   report::parallelFor(cases.size(), o.jobs, [&](std::size_t i) {
     results[i] = runCase(o, cases[i]);

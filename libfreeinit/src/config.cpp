@@ -39,7 +39,17 @@ const config::Section<EstimatorParams>& estimatorSection() {
           .number("rest_velocity_sigma", &P::rest_velocity_sigma, "m/s", between(1e-5, 1),
                   "std of the zero body velocity while the IMU shows rest")
           .number("accel_bias_random_walk", &P::accel_bias_random_walk, "m/s^2/sqrt(s)",
-                  between(0, 1), "accelerometer bias random walk");
+                  between(0, 1), "accelerometer bias random walk")
+          .number("calibration_rotation_sigma_deg", &P::calibration_rotation_sigma_deg, "deg",
+                  between(0, 10),
+                  "accuracy of the declared LiDAR-IMU rotation, estimated where observable "
+                  "(0: exact)")
+          .number("time_offset_sigma", &P::time_offset_sigma, "s", between(0, 0.1),
+                  "accuracy of the LiDAR-IMU time offset, estimated where observable (0: exact)")
+          .number("test_rotation_sigma_deg", &P::test_rotation_sigma_deg, "deg", between(0, 10),
+                  "calibration test: the rotation error the data are asked about (0: no test)")
+          .number("test_time_offset_sigma", &P::test_time_offset_sigma, "s", between(0, 0.1),
+                  "calibration test: the clock offset the data are asked about (0: no test)");
   return s;
 }
 

@@ -15,12 +15,6 @@ const Vec3 kGravityW(0, 0, -kGravity);
 /// m/s^2; the functions are smooth and O(1-100) in these units).
 constexpr double kJacobianStep = 1e-6;
 
-/// Rotation over a signed interval tau from rate w0 (at its start) to w1 (at its end), the rate
-/// linear in between: midpoint rotation vector plus the coning correction, third order in tau.
-Vec3 rotationIncrement(const Vec3& w0, const Vec3& w1, double tau) {
-  return 0.5 * (w0 + w1) * tau + w0.cross(w1) * (tau * tau / 12.0);
-}
-
 /// Right Jacobian of SO(3): Exp(phi + dphi) = Exp(phi) Exp(J_r(phi) dphi) to first order.
 Mat3 rightJacobian(const Vec3& phi) {
   const double t2 = phi.squaredNorm();
@@ -30,9 +24,37 @@ Mat3 rightJacobian(const Vec3& phi) {
   return Mat3::Identity() - (1.0 - std::cos(t)) / t2 * K + (t - std::sin(t)) / (t2 * t) * K * K;
 }
 
-/// d phi / d b_g of rotationIncrement (both rates are gyro - b_g).
+/// d phi / d b_g of the rotation vector (w0 + w1) tau / 2 + (w0 x w1) tau^2 / 12 (both rates are
+/// gyro - b_g; Simpson's middle weights change the first term's form, not its derivative).
 Mat3 incrementBiasJacobian(const Vec3& w0, const Vec3& w1, double tau) {
   return -tau * Mat3::Identity() - (tau * tau / 12.0) * skew(Vec3(w0 - w1));
+}
+
+/// F P for a transition F whose rows below the first 9 (attitude, position, velocity) are those of
+/// the identity (the biases and the calibration do not change between samples).
+DopplerInertialFilter::MatS transitionTimes(const DopplerInertialFilter::MatS& F,
+                                            const DopplerInertialFilter::MatS& P) {
+  constexpr int kN = DopplerInertialFilter::kStateDim, kM = kN - 9;
+  DopplerInertialFilter::MatS FP;
+  FP.topRows<9>() = F.topLeftCorner<9, 9>().lazyProduct(P.topRows<9>()) +
+                    F.topRightCorner<9, kM>().lazyProduct(P.bottomRows<kM>());
+  FP.bottomRows<kM>() = P.bottomRows<kM>();
+  return FP;
+}
+
+/// F P F^T for such a transition, symmetric by construction.
+DopplerInertialFilter::MatS propagateCovariance(const DopplerInertialFilter::MatS& F,
+                                                const DopplerInertialFilter::MatS& P) {
+  constexpr int kN = DopplerInertialFilter::kStateDim, kM = kN - 9;
+  const DopplerInertialFilter::MatS FP = transitionTimes(F, P);
+  DopplerInertialFilter::MatS out;
+  out.topLeftCorner<9, 9>() =
+      FP.topLeftCorner<9, 9>().lazyProduct(F.topLeftCorner<9, 9>().transpose()) +
+      FP.topRightCorner<9, kM>().lazyProduct(F.topRightCorner<9, kM>().transpose());
+  out.topRightCorner<9, kM>() = FP.topRightCorner<9, kM>();
+  out.bottomLeftCorner<kM, 9>() = FP.topRightCorner<9, kM>().transpose();
+  out.bottomRightCorner<kM, kM>() = P.bottomRightCorner<kM, kM>();
+  return 0.5 * (out + out.transpose());
 }
 
 }  // namespace
@@ -45,136 +67,181 @@ DopplerInertialFilter::DopplerInertialFilter(const DopplerInertialFilterParams& 
   r_doppler_ = params.doppler_sigma * params.doppler_sigma;
 }
 
-FilterState DopplerInertialFilter::boxplus(const FilterState& x, const Vec15& dx) {
+FilterState DopplerInertialFilter::boxplus(const FilterState& x, const VecS& dx) {
   FilterState y = x;
   y.R_wb = x.R_wb * Exp(Vec3(dx.segment<3>(0)));
   y.p_w += dx.segment<3>(3);
   y.v_w += dx.segment<3>(6);
   y.b_g += dx.segment<3>(9);
   y.b_a += dx.segment<3>(12);
+  y.phi_bl += dx.segment<3>(kRot);
+  y.dt_l += dx(kTime);
   return y;
 }
 
-DopplerInertialFilter::Vec15 DopplerInertialFilter::boxminus(const FilterState& a,
+DopplerInertialFilter::VecS DopplerInertialFilter::boxminus(const FilterState& a,
                                                              const FilterState& b) {
-  Vec15 d;
+  VecS d;
   d.segment<3>(0) = Log(b.R_wb.transpose() * a.R_wb);
   d.segment<3>(3) = a.p_w - b.p_w;
   d.segment<3>(6) = a.v_w - b.v_w;
   d.segment<3>(9) = a.b_g - b.b_g;
   d.segment<3>(12) = a.b_a - b.b_a;
+  d.segment<3>(kRot) = a.phi_bl - b.phi_bl;
+  d(kTime) = a.dt_l - b.dt_l;
   return d;
 }
 
-FilterState DopplerInertialFilter::propagate(const FilterState& x, const ImuSample& a,
-                                             const ImuSample& b) {
-  const double dt = b.t - a.t;
+void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, double t,
+                                           Vec3& gyro, Vec3& accel) {
+  // The interval of samples that holds t, then up to one more sample on each side.
+  const std::size_t n = imu.size();
+  std::size_t j = 0;  // imu[j].t <= t < imu[j + 1].t (clamped)
+  if (n >= 2) {
+    const auto it = std::upper_bound(imu.begin(), imu.end(), t,
+                                     [](double x, const ImuSample& s) { return x < s.t; });
+    j = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, (it - imu.begin()) - 1));
+    j = std::min(j, n - 2);
+  }
+  const std::size_t lo = j > 0 ? j - 1 : 0;
+  const std::size_t hi = std::min(n - 1, j + 2);
+  gyro.setZero();
+  accel.setZero();
+  for (std::size_t i = lo; i <= hi; ++i) {
+    double w = 1.0;  // Lagrange basis polynomial of node i at t
+    for (std::size_t m = lo; m <= hi; ++m)
+      if (m != i) w *= (t - imu[m].t) / (imu[i].t - imu[m].t);
+    gyro += w * imu[i].gyro;
+    accel += w * imu[i].accel;
+  }
+}
+
+FilterState DopplerInertialFilter::integrate(const FilterState& x,
+                                             const std::vector<ImuSample>& imu, std::size_t k,
+                                             double tau, MatS* J) {
+  // Rates at s = 0, tau/4, tau/2, tau (the node's own sample at s = 0).
+  const double t = imu[k].t;
+  std::array<Vec3, 4> w, f;
+  const std::array<double, 4> s = {0.0, 0.25 * tau, 0.5 * tau, tau};
+  w[0] = imu[k].gyro;
+  f[0] = imu[k].accel;
+  for (int i = 1; i < 4; ++i) interpolateImu(imu, t + s[static_cast<std::size_t>(i)], w[i], f[i]);
+  for (int i = 0; i < 4; ++i) {
+    w[static_cast<std::size_t>(i)] -= x.b_g;
+    f[static_cast<std::size_t>(i)] -= x.b_a;
+  }
+  // Rotation vectors over [0, tau/2] and [0, tau] (Simpson, plus the coning correction).
+  const Vec3 phi_h =
+      (0.5 * tau / 6.0) * (w[0] + 4.0 * w[1] + w[2]) + w[0].cross(w[2]) * (0.25 * tau * tau / 12.0);
+  const Vec3 phi = (tau / 6.0) * (w[0] + 4.0 * w[2] + w[3]) + w[0].cross(w[3]) * (tau * tau / 12.0);
+  const Mat3 E_h = Exp(phi_h), E = Exp(phi);
+  const Mat3 R_h = x.R_wb * E_h, R_1 = x.R_wb * E;
+  const Vec3 a0 = x.R_wb * f[0] + kGravityW, ah = R_h * f[2] + kGravityW, a1 = R_1 * f[3] + kGravityW;
   FilterState y = x;
-  y.t = b.t;
-  const Vec3 w0 = a.gyro - x.b_g, w1 = b.gyro - x.b_g;
-  y.R_wb = x.R_wb * Exp(rotationIncrement(w0, w1, dt));
-  const Vec3 acc0 = x.R_wb * (a.accel - x.b_a) + kGravityW;
-  const Vec3 acc1 = y.R_wb * (b.accel - x.b_a) + kGravityW;
-  y.v_w = x.v_w + 0.5 * dt * (acc0 + acc1);
-  y.p_w = x.p_w + x.v_w * dt + (dt * dt / 6.0) * (2.0 * acc0 + acc1);
+  y.t = t + tau;
+  y.R_wb = R_1;
+  y.v_w = x.v_w + (tau / 6.0) * (a0 + 4.0 * ah + a1);
+  y.p_w = x.p_w + x.v_w * tau + (tau * tau / 6.0) * (a0 + 2.0 * ah);
+  if (J != nullptr) {
+    // dtheta_s = E_s^T dtheta + J_r(phi_s) dphi_s/db_g db_g
+    // da_s = -R_s [f_s]x dtheta_s - R_s db_a;  dv' = dv + tau/6 (da_0 + 4 da_h + da_1)
+    // dp' = dp + tau dv + tau^2/6 (da_0 + 2 da_h)
+    const Mat3 th_h = E_h.transpose(), th_1 = E.transpose();
+    const Mat3 bg_h = rightJacobian(phi_h) * incrementBiasJacobian(w[0], w[2], 0.5 * tau);
+    const Mat3 bg_1 = rightJacobian(phi) * incrementBiasJacobian(w[0], w[3], tau);
+    const Mat3 a0_th = -x.R_wb * skew(f[0]), a0_ba = -x.R_wb;
+    const Mat3 ah_th = -R_h * skew(f[2]) * th_h, ah_bg = -R_h * skew(f[2]) * bg_h, ah_ba = -R_h;
+    const Mat3 a1_th = -R_1 * skew(f[3]) * th_1, a1_bg = -R_1 * skew(f[3]) * bg_1, a1_ba = -R_1;
+    J->setIdentity();  // the biases and the calibration do not change between samples
+    J->block<3, 3>(0, 0) = th_1;
+    J->block<3, 3>(0, 9) = bg_1;
+    const double cv = tau / 6.0, cp = tau * tau / 6.0;
+    J->block<3, 3>(6, 0) = cv * (a0_th + 4.0 * ah_th + a1_th);
+    J->block<3, 3>(6, 9) = cv * (4.0 * ah_bg + a1_bg);
+    J->block<3, 3>(6, 12) = cv * (a0_ba + 4.0 * ah_ba + a1_ba);
+    J->block<3, 3>(3, 6) = tau * Mat3::Identity();
+    J->block<3, 3>(3, 0) = cp * (a0_th + 2.0 * ah_th);
+    J->block<3, 3>(3, 9) = cp * 2.0 * ah_bg;
+    J->block<3, 3>(3, 12) = cp * (a0_ba + 2.0 * ah_ba);
+  }
   return y;
 }
 
-DopplerInertialFilter::Mat15 DopplerInertialFilter::transitionJacobian(const FilterState& x,
-                                                                      const ImuSample& a,
-                                                                      const ImuSample& b) {
-  // Error propagation of propagate() (right attitude perturbation, world-frame p and v):
-  //   dtheta' = Exp(phi)^T dtheta + J_r(phi) dphi/db_g db_g
-  //   dacc_i  = -R_i [f_i - b_a]x dtheta_i - R_i db_a       (i = 0 at a, 1 at b)
-  //   dv'     = dv + dt/2 (dacc0 + dacc1),  dp' = dp + dt dv + dt^2/6 (2 dacc0 + dacc1)
-  const double dt = b.t - a.t;
-  const Vec3 w0 = a.gyro - x.b_g, w1 = b.gyro - x.b_g;
-  const Vec3 phi = rotationIncrement(w0, w1, dt);
-  const Mat3 E = Exp(phi);
-  const Mat3 R1 = x.R_wb * E;
-  const Vec3 f0 = a.accel - x.b_a, f1 = b.accel - x.b_a;
-  Mat15 F = Mat15::Identity();
-  // Rows of dtheta'.
-  const Mat3 th_th = E.transpose();
-  const Mat3 th_bg = rightJacobian(phi) * incrementBiasJacobian(w0, w1, dt);
-  F.block<3, 3>(0, 0) = th_th;
-  F.block<3, 3>(0, 9) = th_bg;
-  // dacc0 and dacc1 as rows over (dtheta, db_g, db_a).
-  const Mat3 a0_th = -x.R_wb * skew(f0), a0_ba = -x.R_wb;
-  const Mat3 a1_th = -R1 * skew(f1) * th_th, a1_bg = -R1 * skew(f1) * th_bg, a1_ba = -R1;
-  F.block<3, 3>(6, 0) = 0.5 * dt * (a0_th + a1_th);
-  F.block<3, 3>(6, 9) = 0.5 * dt * a1_bg;
-  F.block<3, 3>(6, 12) = 0.5 * dt * (a0_ba + a1_ba);
-  const double c = dt * dt / 6.0;
-  F.block<3, 3>(3, 6) = dt * Mat3::Identity();
-  F.block<3, 3>(3, 0) = c * (2.0 * a0_th + a1_th);
-  F.block<3, 3>(3, 9) = c * a1_bg;
-  F.block<3, 3>(3, 12) = c * (2.0 * a0_ba + a1_ba);
+FilterState DopplerInertialFilter::propagate(const FilterState& x,
+                                             const std::vector<ImuSample>& imu, std::size_t k) {
+  FilterState y = integrate(x, imu, k, imu[k + 1].t - imu[k].t);
+  y.t = imu[k + 1].t;
+  return y;
+}
+
+DopplerInertialFilter::MatS DopplerInertialFilter::transitionJacobian(
+    const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k) {
+  MatS F;
+  integrate(x, imu, k, imu[k + 1].t - imu[k].t, &F);
   return F;
 }
 
-DopplerInertialFilter::Mat15 DopplerInertialFilter::numericalTransitionJacobian(
-    const FilterState& x, const ImuSample& a, const ImuSample& b) {
-  const FilterState y = propagate(x, a, b);
-  Mat15 F;
-  for (int i = 0; i < 15; ++i) {
-    Vec15 e = Vec15::Zero();
+DopplerInertialFilter::MatS DopplerInertialFilter::numericalTransitionJacobian(
+    const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k) {
+  const FilterState y = propagate(x, imu, k);
+  MatS F;
+  for (int i = 0; i < kStateDim; ++i) {
+    VecS e = VecS::Zero();
     e(i) = kJacobianStep;
-    const Vec15 plus = boxminus(propagate(boxplus(x, e), a, b), y);
-    const Vec15 minus = boxminus(propagate(boxplus(x, -e), a, b), y);
+    const VecS plus = boxminus(propagate(boxplus(x, e), imu, k), y);
+    const VecS minus = boxminus(propagate(boxplus(x, -e), imu, k), y);
     F.col(i) = (plus - minus) / (2.0 * kJacobianStep);
   }
   return F;
 }
 
-Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const ImuSample* prev,
-                                          const ImuSample& cur, const ImuSample* next, double tau,
-                                          Eigen::Matrix<double, 3, 15>* J) const {
-  const ImuSample* other = tau > 0 ? next : (tau < 0 ? prev : nullptr);
-  double alpha = 0;
-  if (other != nullptr && other->t != cur.t) alpha = tau / (other->t - cur.t);
-  const Vec3 gyro = other ? Vec3(cur.gyro + alpha * (other->gyro - cur.gyro)) : cur.gyro;
-  const Vec3 accel = other ? Vec3(cur.accel + alpha * (other->accel - cur.accel)) : cur.accel;
-  const Vec3 w0 = cur.gyro - x.b_g, w1 = gyro - x.b_g;
-  const Vec3 phi = rotationIncrement(w0, w1, tau);
-  const Mat3 E = Exp(phi);
-  const Mat3 R = x.R_wb * E;
-  const Vec3 f0 = cur.accel - x.b_a, f1 = accel - x.b_a;
-  const Vec3 v_w = x.v_w + 0.5 * tau * (x.R_wb * f0 + R * f1) + kGravityW * tau;
-  const Vec3 v_b = R.transpose() * v_w;
+Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
+                                          std::size_t k, double tau,
+                                          Eigen::Matrix<double, 3, kStateDim>* J) const {
+  const double tau_true = tau - x.dt_l;
+  MatS Js;
+  const FilterState y = integrate(x, imu, k, tau_true, J != nullptr ? &Js : nullptr);
+  Vec3 gyro = imu[k].gyro, accel;
+  if (tau_true != 0) interpolateImu(imu, imu[k].t + tau_true, gyro, accel);
+  const Vec3 omega = gyro - x.b_g;
+  const Vec3 v_b = y.R_wb.transpose() * y.v_w;
+  const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
+  const Vec3 v_l = R_bl.transpose() * (v_b + omega.cross(p_bl_));
   if (J != nullptr) {
-    // dtheta_tau = E^T dtheta + J_r(phi) dphi/db_g db_g
-    // dv_w = dv + tau/2 (-R_k [f0]x dtheta - R_k db_a - R [f1]x dtheta_tau - R db_a)
-    // dv_b = R^T dv_w + [v_b]x dtheta_tau;  dv_l = R_bl^T (dv_b + [p_bl]x db_g)
-    const Mat3 th_th = E.transpose();
-    const Mat3 th_bg = rightJacobian(phi) * incrementBiasJacobian(w0, w1, tau);
-    const Mat3 Rt = R.transpose();
-    const Mat3 vw_th = -0.5 * tau * (x.R_wb * skew(f0) + R * skew(f1) * th_th);
-    const Mat3 vw_bg = -0.5 * tau * R * skew(f1) * th_bg;
-    const Mat3 vw_ba = -0.5 * tau * (x.R_wb + R);
-    const Mat3 S = skew(v_b);
-    const Mat3 Rlb = R_bl_.transpose();
-    J->setZero();
-    J->block<3, 3>(0, 0) = Rlb * (Rt * vw_th + S * th_th);
-    J->block<3, 3>(0, 6) = Rlb * Rt;
-    J->block<3, 3>(0, 9) = Rlb * (Rt * vw_bg + S * th_bg + skew(p_bl_));
-    J->block<3, 3>(0, 12) = Rlb * Rt * vw_ba;
+    // dv_b = R^T dv_w + [v_b]x dtheta;  dv_l = R_bl^T (dv_b + [p_bl]x db_g) + [v_l]x dphi_bl
+    // (R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T); d/d(dt_l) = -dv_l/dtau (central difference).
+    const Mat3 Rt = y.R_wb.transpose();
+    const Mat3 Rlb = R_bl.transpose();
+    const Eigen::Matrix<double, 3, kStateDim> dvb =
+        Rt * Js.middleRows<3>(kVel) + skew(v_b) * Js.topRows<3>();
+    *J = Rlb * dvb;
+    J->block<3, 3>(0, kBg) += Rlb * skew(p_bl_);
+    J->block<3, 3>(0, kRot) = skew(v_l);
+    // dv_l/dt = R_bl^T (a_b - omega x v_b + alpha x p_bl), a_b = f - b_a + R^T g (the angular
+    // acceleration alpha from the interpolated gyro), and dv_l/d(dt_l) = -dv_l/dt.
+    constexpr double kStep = 1e-4;  // [s] for alpha
+    Vec3 g_a, g_b, unused;
+    interpolateImu(imu, imu[k].t + tau_true - kStep, g_a, unused);
+    interpolateImu(imu, imu[k].t + tau_true + kStep, g_b, unused);
+    const Vec3 alpha = (g_b - g_a) / (2 * kStep);
+    Vec3 accel_t = accel;
+    if (tau_true == 0) accel_t = imu[k].accel;
+    const Vec3 a_b = accel_t - x.b_a + Rt * kGravityW;
+    J->col(kTime) = -Rlb * (a_b - omega.cross(v_b) + alpha.cross(p_bl_));
   }
-  return R_bl_.transpose() * (v_b + w1.cross(p_bl_));
+  return v_l;
 }
 
 DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node& n,
                                                                        const FilterState& x,
-                                                                       Mat9x15* G) const {
+                                                                       Mat9xS* G) const {
   // Values at the three fit instants, then the quadratic through them: Q_m = sum_i Vinv(m, i) v_i.
   const Mat3& Vinv = n.V_inv;
   Vec9 Q = Vec9::Zero();
   if (G != nullptr) G->setZero();
-  Eigen::Matrix<double, 3, 15> J;
+  Eigen::Matrix<double, 3, kStateDim> J;
   for (int i = 0; i < 3; ++i) {
-    const Vec3 v = lidarVelocity(x, n.has_prev ? &n.imu_prev : nullptr, n.imu,
-                                 n.has_next ? &n.imu_next : nullptr, n.s_fit[i] * n.h,
-                                 G != nullptr ? &J : nullptr);
+    const Vec3 v = lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, G != nullptr ? &J : nullptr);
     for (int m = 0; m < 3; ++m) {
       Q.segment<3>(3 * m) += Vinv(m, i) * v;
       if (G != nullptr) G->middleRows<3>(3 * m) += Vinv(m, i) * J;
@@ -183,8 +250,8 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   return Q;
 }
 
-DopplerInertialFilter::Mat15 DopplerInertialFilter::processNoise(double dt) const {
-  Mat15 Q = Mat15::Zero();
+DopplerInertialFilter::MatS DopplerInertialFilter::processNoise(double dt) const {
+  MatS Q = MatS::Zero();
   const double qg = params_.gyro_sigma * params_.gyro_sigma * dt * dt;
   const double qa = params_.accel_sigma * params_.accel_sigma * dt * dt;
   Q.block<3, 3>(0, 0).diagonal().setConstant(qg);
@@ -200,42 +267,77 @@ DopplerInertialFilter::Mat15 DopplerInertialFilter::processNoise(double dt) cons
   return Q;
 }
 
-void DopplerInertialFilter::start(const ImuSample& s0, const FilterState& x0, const Mat15& P0,
-                                  const Mat15* P_gate) {
-  P_gate0_ = P_gate != nullptr ? *P_gate : P0;
+void DopplerInertialFilter::addImu(const ImuSample& s) {
+  if (!imu_.empty() && !(s.t > imu_.back().t))
+    throw std::invalid_argument("DopplerInertialFilter::addImu: time does not increase");
+  imu_.push_back(s);
+}
+
+DopplerInertialFilter::MatS DopplerInertialFilter::priorCovariance(const FilterState& x,
+                                                                  double v_scale) const {
+  const StartPrior& p = prior_;
+  // (dtheta, dv_b): roll and pitch in the world, yaw held (the gauge); the body velocity.
+  Mat3 tilt_w = Mat3::Zero();
+  tilt_w(0, 0) = tilt_w(1, 1) = p.tilt_sigma * p.tilt_sigma;
+  tilt_w(2, 2) = 1e-12;
+  const Mat3& R = x.R_wb;
+  const Mat3 C_th = R.transpose() * tilt_w * R;
+  const Mat3 C_vb = p.cov_v_b * v_scale;
+  // v_w = R v_b: dv_w = R dv_b - R [v_b]x dtheta.
+  const Vec3 v_b = R.transpose() * x.v_w;
+  const Mat3 J_th = -R * skew(v_b);
+  MatS P = MatS::Zero();
+  P.block<3, 3>(kTheta, kTheta) = C_th;
+  P.block<3, 3>(kVel, kTheta) = J_th * C_th;
+  P.block<3, 3>(kTheta, kVel) = P.block<3, 3>(kVel, kTheta).transpose();
+  P.block<3, 3>(kVel, kVel) = J_th * C_th * J_th.transpose() + R * C_vb * R.transpose();
+  P.block<3, 3>(kPos, kPos).diagonal().setConstant(1e-12);  // the origin: the gauge
+  P.block<3, 3>(kBg, kBg).diagonal().setConstant(p.gyro_bias_sigma * p.gyro_bias_sigma);
+  P.block<3, 3>(kBa, kBa).diagonal().setConstant(p.accel_bias_sigma * p.accel_bias_sigma);
+  // A tiny variance where the calibration is exact keeps the covariance invertible.
+  P.block<3, 3>(kRot, kRot)
+      .diagonal()
+      .setConstant(std::max(p.rotation_sigma * p.rotation_sigma, 1e-14));
+  P(kTime, kTime) = std::max(p.time_sigma * p.time_sigma, 1e-14);
+  return 0.5 * (P + P.transpose());
+}
+
+void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior) {
+  if (imu_.empty()) throw std::logic_error("DopplerInertialFilter::start before addImu");
+  prior_ = prior;
   nodes_.clear();
   x0_prior_ = x0;
-  x0_prior_.t = s0.t;
-  P0_ = 0.5 * (P0 + P0.transpose());
+  x0_prior_.t = imu_.front().t;
   Node n;
-  n.imu = s0;
+  n.k = 0;
   n.x_pred = x0_prior_;
   n.x = n.xs = x0_prior_;
-  n.P = P0_;
+  n.P = priorCovariance(x0_prior_);
   nodes_.push_back(n);
 }
 
-void DopplerInertialFilter::predict(const ImuSample& s) {
+void DopplerInertialFilter::predict() {
   if (nodes_.empty()) throw std::logic_error("DopplerInertialFilter::predict before start");
   const Node& cur = nodes_.back();
+  if (cur.k + 1 >= imu_.size())
+    throw std::logic_error("DopplerInertialFilter::predict: no IMU sample after the node");
   Node n;
-  n.imu = s;
-  n.imu_prev = cur.imu;
-  n.has_prev = true;
-  const Mat15 F = transitionJacobian(cur.x, cur.imu, s);
-  n.x_pred = propagate(cur.x, cur.imu, s);
-  n.P = F * cur.P * F.transpose() + processNoise(s.t - cur.imu.t);
+  n.k = cur.k + 1;
+  const MatS F = transitionJacobian(cur.x, imu_, cur.k);
+  n.x_pred = propagate(cur.x, imu_, cur.k);
+  n.P = propagateCovariance(F, cur.P) + processNoise(imu_[n.k].t - imu_[cur.k].t);
   n.P = 0.5 * (n.P + n.P.transpose()).eval();
   n.x = n.xs = n.x_pred;
   nodes_.push_back(n);
 }
 
-void DopplerInertialFilter::beginNode(const ImuSample* next) {
+void DopplerInertialFilter::beginNode(bool last) {
   Node& n = nodes_.back();
-  n.has_next = next != nullptr;
-  if (next) n.imu_next = *next;
-  before_ = n.has_prev ? 0.5 * (n.imu.t - n.imu_prev.t) : 0.0;
-  after_ = n.has_next ? 0.5 * (n.imu_next.t - n.imu.t) : 0.0;
+  n.last = last;
+  if (!last && n.k + 1 >= imu_.size())
+    throw std::logic_error("DopplerInertialFilter::beginNode: no IMU sample after the node");
+  before_ = n.k > 0 ? 0.5 * (imu_[n.k].t - imu_[n.k - 1].t) : 0.0;
+  after_ = last ? 0.0 : 0.5 * (imu_[n.k + 1].t - imu_[n.k].t);
   n.h = std::max({before_, after_, 1e-6});
   if (before_ > 0 && after_ > 0)
     n.s_fit = {-before_ / n.h, 0.0, after_ / n.h};
@@ -248,10 +350,14 @@ void DopplerInertialFilter::beginNode(const ImuSample* next) {
   for (int i = 0; i < 3; ++i) V.row(i) << 1.0, n.s_fit[i], n.s_fit[i] * n.s_fit[i];
   n.V_inv = V.inverse();
   n.sums = DopplerSums{};
-  Mat9x15 G;
+  open_points_.clear();
+  open_outcomes_.clear();
+  Mat9xS G;
   q_open_ = velocityPolynomial(n, n.x_pred, &G);
-  const Eigen::Matrix<double, 3, 15> G0 = G.topRows<3>();
-  M_open_ = G0 * (nodes_.size() == 1 ? P_gate0_ : n.P) * G0.transpose();
+  const Eigen::Matrix<double, 3, kStateDim> G0 = G.topRows<3>();
+  M_open_ = G0 *
+            (nodes_.size() == 1 ? priorCovariance(n.x_pred, prior_.gate_velocity_scale) : n.P) *
+            G0.transpose();
 }
 
 DopplerInertialFilter::PointOutcome DopplerInertialFilter::addPoint(double tau,
@@ -270,22 +376,28 @@ DopplerInertialFilter::PointOutcome DopplerInertialFilter::addPoint(double tau,
       std::sqrt(std::max(gate_min2_, gate_k2_ * S)) + params_.gate_rel * q_open_.head<3>().norm();
   // The point in the node's body frame: the body moved by tau (omega, v_b) since the node.
   const Vec3 p_b = R_bl_ * p + p_bl_;
-  const Vec3 omega = n.imu.gyro - n.x_pred.b_g;
+  const Vec3 omega = imu_[n.k].gyro - n.x_pred.b_g;
   const Vec3 v_b = n.x_pred.R_wb.transpose() * n.x_pred.v_w;
   out.x_b = (p_b + tau * (omega.cross(p_b) + v_b)).cast<float>();
+  open_outcomes_.push_back({false, static_cast<float>(r)});
   if (std::abs(r) > gate) return out;
   out.accepted = true;
-  DopplerSums& S_ = n.sums;
+  open_outcomes_.back().accepted = true;
+  open_points_.push_back({s, d, doppler, open_outcomes_.size() - 1});
+  accumulate(n.sums, s, d, doppler);
+  return out;
+}
+
+void DopplerInertialFilter::accumulate(DopplerSums& sums, double s, const Vec3& d, double z) {
   const Mat3 dd = d * d.transpose();
   double sm = 1.0;
   for (int m = 0; m < 5; ++m) {
-    S_.S[static_cast<std::size_t>(m)] += sm * dd;
-    if (m < 3) S_.bz[static_cast<std::size_t>(m)] += (sm * doppler) * d;
+    sums.S[static_cast<std::size_t>(m)] += sm * dd;
+    if (m < 3) sums.bz[static_cast<std::size_t>(m)] += (sm * z) * d;
     sm *= s;
   }
-  S_.c += doppler * doppler;
-  ++S_.n;
-  return out;
+  sums.c += z * z;
+  ++sums.n;
 }
 
 void DopplerInertialFilter::buildRows(Node& n) const {
@@ -318,56 +430,92 @@ void DopplerInertialFilter::buildRows(Node& n) const {
   }
 }
 
-DopplerInertialFilter::Vec15 DopplerInertialFilter::dopplerUpdate(const Node& n,
+DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
                                                                   const FilterState& x_lin,
-                                                                  const Vec15& dx_prior,
-                                                                  Mat15& P) const {
+                                                                  const VecS& dx_prior,
+                                                                  MatS& P) const {
   const int rows = static_cast<int>(n.rows.W.rows());
   if (rows == 0) return dx_prior;
-  Mat9x15 G;
+  Mat9xS G;
   const Vec9 Q = velocityPolynomial(n, x_lin, &G);
-  using RowsX15 = Eigen::Matrix<double, Eigen::Dynamic, 15, 0, 9, 15>;
+  using RowsXS = Eigen::Matrix<double, Eigen::Dynamic, kStateDim, 0, 9, kStateDim>;
   using RowsX1 = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 9, 1>;
   using RowsXRows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
-  const RowsX15 H = n.rows.W * G;
+  const RowsXS H = n.rows.W * G;
   const RowsX1 innovation = -(n.rows.W * Q + n.rows.y0) - H * dx_prior;
   RowsXRows S = H * P * H.transpose();
   S.diagonal().array() += 1.0;
-  const RowsX15 HP = H * P;
-  const Eigen::Matrix<double, 15, Eigen::Dynamic, 0, 15, 9> K = S.ldlt().solve(HP).transpose();
-  const Vec15 dx = dx_prior + K * innovation;
-  const Mat15 IKH = Mat15::Identity() - K * H;
-  P = IKH * P * IKH.transpose() + K * K.transpose();
+  const RowsXS HP = H * P;
+  const Eigen::Matrix<double, kStateDim, Eigen::Dynamic, 0, kStateDim, 9> K = S.ldlt().solve(HP).transpose();
+  const VecS dx = dx_prior + K * innovation;
+  P.noalias() -= K.lazyProduct(HP);
   P = 0.5 * (P + P.transpose()).eval();
   return dx;
 }
 
 void DopplerInertialFilter::update() {
   Node& n = nodes_.back();
-  buildRows(n);
-  if (n.rows.W.rows() == 0) return;
-  const Mat15 P_pred = n.P;
-  FilterState x_lin = n.x_pred;
-  Mat15 P = P_pred;
-  // Iterated update: re-linearize at the updated state while the correction moves it.
-  for (int it = 0; it < 3; ++it) {
-    P = P_pred;
-    const Vec15 dx_prior = boxminus(n.x_pred, x_lin);
-    const Vec15 dx = dopplerUpdate(n, x_lin, dx_prior, P);
-    x_lin = boxplus(x_lin, dx);
-    if (dx.norm() < 1e-9) break;
+  const MatS P_pred = n.P;
+  // Iterated update from the prediction: re-linearize at the updated state while the correction
+  // moves it.
+  auto solve = [&](FilterState& x_out, MatS& P_out) {
+    buildRows(n);
+    x_out = n.x_pred;
+    P_out = P_pred;
+    if (n.rows.W.rows() == 0) return;
+    for (int it = 0; it < 3; ++it) {
+      P_out = P_pred;
+      const VecS dx_prior = boxminus(n.x_pred, x_out);
+      const VecS dx = dopplerUpdate(n, x_out, dx_prior, P_out);
+      x_out = boxplus(x_out, dx);
+      if (dx.norm() < 1e-9) break;
+    }
+  };
+  FilterState x;
+  MatS P;
+  solve(x, P);
+  // Second gate, against the update: the first one, against the prediction, must be wide where
+  // the prediction is uncertain (the first nodes) and lets slow moving objects through; the
+  // points are gated again at regate_sigma of their residual's std after the update (no floor,
+  // no share of the speed: at the update the model is exact for a static point), and the node
+  // is solved again with the points that pass.
+  if (params_.regate_sigma > 0 && !open_points_.empty()) {
+    Mat9xS G;
+    const Vec9 q = velocityPolynomial(n, x, &G);
+    const Eigen::Matrix<double, 3, kStateDim> G0 = G.topRows<3>();
+    const Mat3 M = G0 * P * G0.transpose();
+    const double k2 = params_.regate_sigma * params_.regate_sigma;
+    DopplerSums kept;
+    std::size_t dropped = 0;
+    for (const OpenPoint& o : open_points_) {
+      const Vec3 qs = q.segment<3>(0) + o.s * (q.segment<3>(3) + o.s * q.segment<3>(6));
+      const double r = o.z + o.d.dot(qs);
+      const double gate = std::sqrt(k2 * (o.d.dot(M * o.d) + r_doppler_));
+      PointResult& res = open_outcomes_[o.outcome];
+      res.residual = static_cast<float>(r);
+      if (std::abs(r) > gate) {
+        res.accepted = false;
+        ++dropped;
+        continue;
+      }
+      accumulate(kept, o.s, o.d, o.z);
+    }
+    if (dropped > 0) {
+      n.sums = kept;
+      solve(x, P);
+    }
   }
-  n.x = n.xs = x_lin;
+  n.x = n.xs = x;
   n.P = P;
 }
 
-DopplerInertialFilter::Vec15 DopplerInertialFilter::restUpdate(const Node& n,
+DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, const Vec3& gyro,
                                                                const FilterState& x_lin,
-                                                               const Vec15& dx, Mat15& P) {
+                                                               const VecS& dx, MatS& P) {
   if (!(n.rest_velocity_sigma > 0) && !(n.rest_rate_sigma > 0)) return dx;
   // Zero velocity: v_b = R^T v_w = 0, dv_b = R^T dv_w + [v_b]x dtheta. Zero rate: the gyro
   // sample measures the bias, gyro - b_g = 0 + n, d(.) = -db_g. Stacked, relative to x_lin + dx.
-  Eigen::Matrix<double, 6, 15> H = Eigen::Matrix<double, 6, 15>::Zero();
+  Eigen::Matrix<double, 6, kStateDim> H = Eigen::Matrix<double, 6, kStateDim>::Zero();
   Eigen::Matrix<double, 6, 1> y = Eigen::Matrix<double, 6, 1>::Zero();
   Eigen::Matrix<double, 6, 1> r = Eigen::Matrix<double, 6, 1>::Zero();
   const FilterState x = boxplus(x_lin, dx);
@@ -382,21 +530,19 @@ DopplerInertialFilter::Vec15 DopplerInertialFilter::restUpdate(const Node& n,
   }
   if (n.rest_rate_sigma > 0) {
     H.block<3, 3>(rows, 9) = Mat3::Identity();
-    y.segment<3>(rows) = n.imu.gyro - x.b_g;
+    y.segment<3>(rows) = gyro - x.b_g;
     r.segment<3>(rows).setConstant(n.rest_rate_sigma * n.rest_rate_sigma);
     rows += 3;
   }
-  using RowsX15 = Eigen::Matrix<double, Eigen::Dynamic, 15, 0, 6, 15>;
+  using RowsXS = Eigen::Matrix<double, Eigen::Dynamic, kStateDim, 0, 6, kStateDim>;
   using RowsXRows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
-  const RowsX15 Hr = H.topRows(rows);
+  const RowsXS Hr = H.topRows(rows);
   RowsXRows S = Hr * P * Hr.transpose();
   S.diagonal() += r.head(rows);
-  const Eigen::Matrix<double, 15, Eigen::Dynamic, 0, 15, 6> K =
+  const Eigen::Matrix<double, kStateDim, Eigen::Dynamic, 0, kStateDim, 6> K =
       S.ldlt().solve(Hr * P).transpose();
-  const Vec15 out = dx + K * y.head(rows);
-  // Joseph form: the rest constraints are strong, the plain form loses symmetry and definiteness.
-  const Mat15 IKH = Mat15::Identity() - K * Hr;
-  P = IKH * P * IKH.transpose() + K * r.head(rows).asDiagonal() * K.transpose();
+  const VecS out = dx + K * y.head(rows);
+  P.noalias() -= K.lazyProduct(Hr * P);
   P = 0.5 * (P + P.transpose()).eval();
   return out;
 }
@@ -405,50 +551,59 @@ void DopplerInertialFilter::updateRest(double velocity_sigma, double rate_sigma)
   Node& n = nodes_.back();
   n.rest_velocity_sigma = velocity_sigma;
   n.rest_rate_sigma = rate_sigma;
-  Mat15 P = n.P;
-  const Vec15 dx = restUpdate(n, n.x, Vec15::Zero(), P);
+  MatS P = n.P;
+  const VecS dx = restUpdate(n, imu_[n.k].gyro, n.x, VecS::Zero(), P);
   n.x = n.xs = boxplus(n.x, dx);
   n.P = P;
+}
+
+void DopplerInertialFilter::cancelRestFrom(double t) {
+  for (Node& n : nodes_) {
+    if (imu_[n.k].t < t) continue;
+    n.rest_velocity_sigma = 0;
+    n.rest_rate_sigma = 0;
+  }
 }
 
 int DopplerInertialFilter::smooth() {
   const std::size_t N = nodes_.size();
   if (N == 0) return 0;
-  std::vector<Vec15> dx_f(N), dx_p(N);
-  std::vector<Mat15> P_f(N), P_p(N), F(N > 0 ? N - 1 : 0);
+  std::vector<VecS> dx_f(N), dx_p(N);
+  std::vector<MatS> P_f(N), P_p(N), F(N > 0 ? N - 1 : 0);
   int iterations = 0;
   for (int it = 0; it < params_.max_iterations; ++it) {
     ++iterations;
     // Forward: a Kalman filter on the errors around the nominal trajectory xs.
+    // The prior of node 0, expressed where node 0 now is (its yaw gauge about the current
+    // vertical: held about the prior's, it would hold a part of the tilt too).
     dx_p[0] = boxminus(x0_prior_, nodes_[0].xs);
-    P_p[0] = P0_;
+    P_p[0] = priorCovariance(nodes_[0].xs);
     for (std::size_t k = 0; k < N; ++k) {
       Node& n = nodes_[k];
-      Mat15 P = P_p[k];
-      dx_f[k] = restUpdate(n, n.xs, dopplerUpdate(n, n.xs, dx_p[k], P), P);
+      MatS P = P_p[k];
+      dx_f[k] = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, n.xs, dx_p[k], P), P);
       P_f[k] = P;
       if (k + 1 == N) break;
       const Node& m = nodes_[k + 1];
-      F[k] = transitionJacobian(n.xs, n.imu, m.imu);
-      dx_p[k + 1] = F[k] * dx_f[k] + boxminus(propagate(n.xs, n.imu, m.imu), m.xs);
-      P_p[k + 1] = F[k] * P * F[k].transpose() + processNoise(m.imu.t - n.imu.t);
-      P_p[k + 1] = 0.5 * (P_p[k + 1] + P_p[k + 1].transpose()).eval();
+      F[k] = transitionJacobian(n.xs, imu_, n.k);
+      dx_p[k + 1] = F[k] * dx_f[k] + boxminus(propagate(n.xs, imu_, n.k), m.xs);
+      P_p[k + 1] = propagateCovariance(F[k], P) + processNoise(imu_[m.k].t - imu_[n.k].t);
     }
     // Backward: Rauch-Tung-Striebel.
-    Vec15 dx_s = dx_f[N - 1];
+    VecS dx_s = dx_f[N - 1];
     nodes_[N - 1].P = P_f[N - 1];
-    std::vector<Vec15> dxs(N);
+    std::vector<VecS> dxs(N);
     dxs[N - 1] = dx_s;
     for (std::size_t k = N - 1; k-- > 0;) {
-      const Eigen::LDLT<Mat15> ldlt(P_p[k + 1]);
-      const Mat15 C = ldlt.solve(F[k] * P_f[k]).transpose();  // P_f F^T P_p^-1
+      const Eigen::LDLT<MatS> ldlt(P_p[k + 1]);
+      const MatS C = ldlt.solve(transitionTimes(F[k], P_f[k])).transpose();  // P_f F^T P_p^-1
       dxs[k] = dx_f[k] + C * (dxs[k + 1] - dx_p[k + 1]);
       nodes_[k].P = P_f[k];
     }
     // Converged when no node moves by more than the tolerance of its block (scaled).
-    Vec15 tol;
-    tol << Vec3::Constant(1e-5), Vec3::Constant(1e-4), Vec3::Constant(1e-4), Vec3::Constant(1e-6),
-        Vec3::Constant(1e-4);
+    VecS tol;
+    tol << Vec3::Constant(1e-4), Vec3::Constant(1e-3), Vec3::Constant(1e-4), Vec3::Constant(1e-5),
+        Vec3::Constant(1e-3), Vec3::Constant(1e-4), 1e-4;
     double largest = 0;
     for (std::size_t k = 0; k < N; ++k) {
       nodes_[k].xs = boxplus(nodes_[k].xs, dxs[k]);
@@ -456,7 +611,43 @@ int DopplerInertialFilter::smooth() {
     }
     if (largest < params_.convergence) break;
   }
+  // The filter can go on from the last node (an early smoothing while the window is received).
+  nodes_.back().x = nodes_.back().xs;
   return iterations;
+}
+
+DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
+    double rotation_sigma, double time_sigma) const {
+  // One forward pass of the linear filter around the converged trajectory, the calibration's
+  // prior widened: its estimate at the last node is what the data say of it.
+  CalibrationTest out;
+  const std::size_t N = nodes_.size();
+  if (N == 0) return out;
+  MatS P = priorCovariance(nodes_[0].xs);
+  P.block<3, 3>(kRot, kRot).diagonal().setConstant(rotation_sigma * rotation_sigma);
+  P(kTime, kTime) = time_sigma * time_sigma;
+  VecS dx = boxminus(x0_prior_, nodes_[0].xs);
+  for (std::size_t k = 0; k < N; ++k) {
+    const Node& n = nodes_[k];
+    dx = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, n.xs, dx, P), P);
+    if (k + 1 == N) break;
+    const Node& m = nodes_[k + 1];
+    const MatS F = transitionJacobian(n.xs, imu_, n.k);
+    dx = F * dx + boxminus(propagate(n.xs, imu_, n.k), m.xs);
+    P = propagateCovariance(F, P) + processNoise(imu_[m.k].t - imu_[n.k].t);
+  }
+  out.correction = dx;
+  out.covariance = P;
+  Eigen::Matrix<double, 4, 1> c;
+  c << dx.segment<3>(kRot), dx(kTime);
+  Eigen::Matrix4d Pc;
+  Pc.topLeftCorner<3, 3>() = P.block<3, 3>(kRot, kRot);
+  Pc.topRightCorner<3, 1>() = P.block<3, 1>(kRot, kTime);
+  Pc.bottomLeftCorner<1, 3>() = P.block<1, 3>(kTime, kRot);
+  Pc(3, 3) = P(kTime, kTime);
+  out.mahalanobis2 = c.dot(Pc.ldlt().solve(c));
+  out.ok = std::isfinite(out.mahalanobis2);
+  return out;
 }
 
 double DopplerInertialFilter::residualSumOfSquares() const {

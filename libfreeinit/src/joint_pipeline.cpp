@@ -21,14 +21,22 @@
 namespace freeinit::detail {
 namespace {
 
+constexpr double kPi = 3.14159265358979323846;
+/// [s] how long before the IMU shows it a motion may have begun (a gentle start): the rest
+/// knowledge of those last nodes is taken back.
+constexpr double kRestBackdating = 0.1;
+/// Share of the window after which what has been received is smoothed once.
+constexpr double kEarlySmoothing = 0.6;
+
 double wallSeconds() {
   using Clock = std::chrono::steady_clock;
   return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
 }
 
 /// Whether the IMU still shows rest: each new sample is compared with the rest means of the
-/// start span. One sample beyond 5 sigma, or the mean of the last four beyond 3 sigma (6 of the
+/// start span. One sample beyond 7 sigma, or the mean of the last four beyond 3 sigma (6 of the
 /// mean's sigmas), in the gyro or the accelerometer, ends the rest for the rest of the window.
+/// (A datasheet noise 20 % below the unit's makes a false end at most ~1e-5 likely per sample.)
 class RestTracker {
  public:
   void start(bool at_rest, const Vec3& gyro_mean, const Vec3& accel_mean, double gyro_sigma,
@@ -48,7 +56,7 @@ class RestTracker {
     recent_g_[n_ % 4] = dg;
     recent_a_[n_ % 4] = da;
     ++n_;
-    bool moving = dg.norm() > 5.0 * gyro_sigma_ || da.norm() > 5.0 * accel_sigma_;
+    bool moving = dg.norm() > 7.0 * gyro_sigma_ || da.norm() > 7.0 * accel_sigma_;
     if (n_ >= 4) {
       const Vec3 mg = (recent_g_[0] + recent_g_[1] + recent_g_[2] + recent_g_[3]) / 4.0;
       const Vec3 ma = (recent_a_[0] + recent_a_[1] + recent_a_[2] + recent_a_[3]) / 4.0;
@@ -254,35 +262,27 @@ class JointPipeline final : public Pipeline {
     x0.v_w = R0 * d.chosen.v_b0;
     x0.b_g = cfg_.velocimeter.gyro_bias_prior;
     x0.b_a = Vec3::Zero();
-    using Mat6 = Eigen::Matrix<double, 6, 6>;
-    Mat6 C = Mat6::Zero();  // (dtheta, dv_b)
-    Mat3 tilt_w = Mat3::Zero();
-    const double st = cfg_.estimator.initial_tilt_sigma;
-    tilt_w(0, 0) = tilt_w(1, 1) = st * st;
-    tilt_w(2, 2) = 1e-12;  // yaw: the gauge
-    C.topLeftCorner<3, 3>() = R0.transpose() * tilt_w * R0;
+    DopplerInertialFilter::StartPrior prior;
+    prior.tilt_sigma = cfg_.estimator.initial_tilt_sigma;
     constexpr double kInflation = 9.0;  // variance factor: the filter counts those returns again
-    C.bottomRightCorner<3, 3>() = d.chosen.cov.topLeftCorner<3, 3>() * kInflation;
-    // v_w = R v_b: dv_w = R dv_b - R [v_b]x dtheta, so that a tilt change alone keeps v_b.
-    Mat6 K = Mat6::Identity();
-    K.block<3, 3>(3, 0) = -R0 * skew(d.chosen.v_b0);
-    K.block<3, 3>(3, 3) = R0;
-    const Mat6 Cw = K * C * K.transpose();
-    DopplerInertialFilter::Mat15 P0 = DopplerInertialFilter::Mat15::Zero();
-    P0.block<3, 3>(0, 0) = Cw.block<3, 3>(0, 0);
-    P0.block<3, 3>(0, 6) = Cw.block<3, 3>(0, 3);
-    P0.block<3, 3>(6, 0) = Cw.block<3, 3>(3, 0);
-    P0.block<3, 3>(6, 6) = Cw.block<3, 3>(3, 3);
-    P0.block<3, 3>(3, 3).diagonal().setConstant(1e-12);  // the origin: the gauge
-    const double sg = cfg_.velocimeter.gyro_bias_sigma0;
-    const double sa = cfg_.gravity.accel_bias_prior_sigma;
-    P0.block<3, 3>(9, 9).diagonal().setConstant(sg * sg);
-    P0.block<3, 3>(12, 12).diagonal().setConstant(sa * sa);
-    // Node 0 is gated with the decision's own (not inflated) velocity covariance.
-    DopplerInertialFilter::Mat15 P_gate = P0;
-    P_gate.block<3, 3>(6, 6) /= kInflation;
+    prior.cov_v_b = d.chosen.cov.topLeftCorner<3, 3>() * kInflation;
+    prior.gate_velocity_scale = 1.0 / kInflation;
+    prior.gyro_bias_sigma = cfg_.velocimeter.gyro_bias_sigma0;
+    prior.accel_bias_sigma = cfg_.gravity.accel_bias_prior_sigma;
+    prior.rotation_sigma = cfg_.estimator.calibration_rotation_sigma_deg * kPi / 180.0;
+    prior.time_sigma = cfg_.estimator.time_offset_sigma;
     filter_.emplace(filterParams(), cfg_.extrinsics);
-    filter_->start(seq_.imu()[k0_], x0, P0, &P_gate);
+    fed_ = k0_;
+    feedImu(k0_ + 2);
+    filter_->start(x0, prior);
+  }
+
+  /// Hands the filter the IMU samples up to index `last` (the sequencer's) it has not seen. The
+  /// filter gets no sample beyond the window's last but one: its interpolation near the window's
+  /// end must not depend on how far the IMU stream happens to be ahead.
+  void feedImu(std::size_t last) {
+    const auto& imu = seq_.imu();
+    while (fed_ < imu.size() && fed_ <= last) filter_->addImu(imu[fed_++]);
   }
 
   void run(InitResult& r) {
@@ -300,8 +300,11 @@ class JointPipeline final : public Pipeline {
           last_ = windowSample(imu[k0_].t, imu[k].t, imu[k + 1].t, duration) ==
                   WindowSample::Outside;
         }
+        // The cubic interpolation of the IMU between k and k + 1 wants sample k + 2 too.
+        if (!last_ && k + 2 >= imu.size() && !seq_.finished()) return;
         if (last_) k_end_ = k;
-        filter_->beginNode(last_ ? nullptr : &imu[k + 1]);
+        feedImu(last_ ? k + 1 : k + 2);
+        filter_->beginNode(last_);
         node_open_ = true;
       }
       const bool last = last_;
@@ -323,13 +326,27 @@ class JointPipeline final : public Pipeline {
           continue;
         }
         const auto out = filter_->addPoint(t - t_k, pt.p_l, pt.doppler);
-        (out.accepted ? r.diag.points_used : r.diag.points_rejected)++;
-        recorder_.add(filter_->nodes() - 1, out.x_b, pt.intensity,
-                      static_cast<float>(out.residual), out.accepted);
+        open_.push_back({out.x_b, pt.intensity});
       }
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
       filter_->update();
+      for (std::size_t i = 0; i < open_.size(); ++i) {
+        const bool used = filter_->pointAccepted(i);
+        (used ? r.diag.points_used : r.diag.points_rejected)++;
+        recorder_.add(filter_->nodes() - 1, open_[i].x_b, open_[i].intensity,
+                      static_cast<float>(filter_->pointResidual(i)), used);
+      }
+      open_.clear();
+      const bool was_rest = rest_.atRest();
       const bool rest = rest_.update(imu[k]);
+      if (was_rest && !rest) {
+        // The IMU shows motion only once it has grown beyond its noise: the last nodes held at
+        // rest may already have moved (a gentle start). The smoother does without their rest.
+        filter_->cancelRestFrom(t_k - kRestBackdating);
+        for (std::size_t j = node_rest_.size(); j-- > 0 && imu[k0_ + j].t >= t_k - kRestBackdating;)
+          node_rest_[j] = false;
+        r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
+      }
       if (rest)
         filter_->updateRest(cfg_.estimator.rest_velocity_sigma,
                             cfg_.estimator.zero_rate_at_rest ? vp.gyro_sigma : 0.0);
@@ -341,7 +358,15 @@ class JointPipeline final : public Pipeline {
         finalize(r);
         return;
       }
-      filter_->predict(imu[k + 1]);
+      // Once, past the middle of the window: smooth what has been received, so that the final
+      // smoothing (what an online user waits for) starts from a good linearization.
+      if (!early_smoothed_ && t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration) {
+        const double t0 = wallSeconds();
+        filter_->smooth();
+        r.diag.time_solver += wallSeconds() - t0;
+        early_smoothed_ = true;
+      }
+      filter_->predict();
     }
   }
 
@@ -364,7 +389,7 @@ class JointPipeline final : public Pipeline {
       return;
     }
     diag.iterations = filter_->smooth();
-    diag.time_solver = wallSeconds() - t_solve;
+    diag.time_solver += wallSeconds() - t_solve;
     const std::size_t N = filter_->nodes();
     const FilterState& x = filter_->state(N - 1);
     const std::size_t used = filter_->acceptedPointsTotal();
@@ -385,7 +410,7 @@ class JointPipeline final : public Pipeline {
     s.b_a = x.b_a;
     s.g_w = Vec3(0, 0, -kGravity);
     s.cov.setZero();
-    s.cov.topLeftCorner<15, 15>() = filter_->covariance();
+    s.cov.topLeftCorner<15, 15>() = filter_->covariance().topLeftCorner<15, 15>();
     s.cov.block<3, 3>(kGrav, kGrav).diagonal().setConstant(1e-6);  // fixed by the world frame
     s.cov = 0.5 * (s.cov + s.cov.transpose()).eval();
 
@@ -411,7 +436,8 @@ class JointPipeline final : public Pipeline {
     }
     // The last node's velocity sigma from the state covariance (dv_b = R^T dv_w + [v_b]x dtheta).
     {
-      Eigen::Matrix<double, 3, 15> A = Eigen::Matrix<double, 3, 15>::Zero();
+      constexpr int kN = DopplerInertialFilter::kStateDim;
+      Eigen::Matrix<double, 3, kN> A = Eigen::Matrix<double, 3, kN>::Zero();
       const Vec3 v_b = x.R_wb.transpose() * x.v_w;
       A.block<3, 3>(0, 0) = skew(v_b);
       A.block<3, 3>(0, 6) = x.R_wb.transpose();
@@ -422,7 +448,8 @@ class JointPipeline final : public Pipeline {
     addWarnings(r);
   }
 
-  /// What a user must know about an ok state; a gross inconsistency is not reported as a state.
+  /// The verdict on a state: a contradiction of the data beyond what the noise and the priors
+  /// allow is not reported as a state (a status says why); milder signs become warnings.
   void addWarnings(InitResult& r) {
     InitialState& s = r.state;
     const Diagnostics& d = r.diag;
@@ -433,37 +460,102 @@ class JointPipeline final : public Pipeline {
       return os.str();
     };
     const double sigma = cfg_.velocimeter.doppler_sigma;
-    if (d.points_used >= 100 && d.doppler_residual_rms > 1.5 * sigma) {
+    const bool noisy = d.points_used >= 100 && d.doppler_residual_rms > 1.5 * sigma;
+    const std::size_t judged = d.points_used + d.points_rejected;
+    const double agree = judged > 0 ? static_cast<double>(d.points_used) / judged : 1.0;
+    // Physically implausible biases: the data were explained by a model they do not fit.
+    const double bound = cfg_.gravity.accel_bias_bound;
+    const double ba_max = s.b_a.cwiseAbs().maxCoeff();
+    if (ba_max > bound) {
+      failResult(r, InitStatus::InconsistentData,
+                 "the accelerometer bias the data imply (" + fmt(ba_max) +
+                     " m/s^2 on one axis) exceeds its plausible bound (" + fmt(bound) +
+                     " m/s^2, [gravity] accel_bias_bound): moving objects taken for the world, "
+                     "a wrong calibration or time offset, or an IMU model that does not hold");
+      return;
+    }
+    const Vec3 dbg = s.b_g - cfg_.velocimeter.gyro_bias_prior;
+    const double sg0 = cfg_.velocimeter.gyro_bias_sigma0;
+    if (dbg.cwiseAbs().maxCoeff() > 5.0 * sg0) {
+      failResult(r, InitStatus::InconsistentData,
+                 "the gyro bias the data imply is " + fmt(dbg.cwiseAbs().maxCoeff()) +
+                     " rad/s from its prior, more than 5 prior sigmas (" + fmt(sg0) +
+                     " rad/s, [velocimeter] gyro_bias_sigma0): a wrong calibration or time "
+                     "offset, or moving objects taken for the world");
+      return;
+    }
+    if (noisy && judged >= 100 && agree < 0.5) {
+      failResult(r, InitStatus::AmbiguousMotion,
+                 "only " + fmt(100.0 * agree, 2) + " % of the LiDAR returns agree with the "
+                     "estimated motion and their residuals (RMS " + fmt(d.doppler_residual_rms) +
+                     " m/s) exceed the Doppler noise (" + fmt(sigma) +
+                     " m/s): moving objects may fill the view");
+      return;
+    }
+    if (noisy)
       s.warnings.push_back("the Doppler residuals (RMS " + fmt(d.doppler_residual_rms) +
                            " m/s) exceed the configured Doppler noise (" + fmt(sigma) +
                            " m/s): the noise setting, the extrinsics or the LiDAR-IMU time "
                            "offset may be wrong");
-    }
-    const std::size_t judged = d.points_used + d.points_rejected;
-    if (judged >= 100 && d.points_used < 0.3 * static_cast<double>(judged)) {
-      s.warnings.push_back("only " + fmt(100.0 * d.points_used / judged, 2) +
+    if (judged >= 100 && agree < 0.3)
+      s.warnings.push_back("only " + fmt(100.0 * agree, 2) +
                            " % of the LiDAR returns in the window agree with the estimated "
                            "motion (moving objects, outliers or a wrong calibration)");
-    }
-    const double bound = cfg_.gravity.accel_bias_bound;
-    const double ba_max = s.b_a.cwiseAbs().maxCoeff();
-    if (ba_max > 3.0 * bound) {
-      failResult(r, InitStatus::InconsistentData,
-                 "the accelerometer bias the data imply (" + fmt(ba_max) +
-                     " m/s^2 on one axis) is far beyond its plausible bound (" + fmt(bound) +
-                     " m/s^2): the IMU model, the extrinsics or the time offset is wrong");
+    if (ba_max > 0.7 * bound)
+      s.warnings.push_back("the accelerometer bias (" + fmt(ba_max) +
+                           " m/s^2 on one axis) is close to its plausible bound (" + fmt(bound) +
+                           " m/s^2)");
+    if (dbg.cwiseAbs().maxCoeff() > 3.0 * sg0)
+      s.warnings.push_back("the gyro bias moved " + fmt(dbg.cwiseAbs().maxCoeff()) +
+                           " rad/s from its prior, more than 3 prior sigmas (" + fmt(sg0) +
+                           " rad/s)");
+    testCalibration(r);
+  }
+
+  /// The calibration test: do the data say the declared LiDAR-IMU calibration is off, and would
+  /// an error in it go unnoticed by this window while moving the state by more than users notice?
+  void testCalibration(InitResult& r) {
+    const EstimatorParams& e = cfg_.estimator;
+    const double rot = e.test_rotation_sigma_deg * kPi / 180.0, dt = e.test_time_offset_sigma;
+    if (!(rot > 0 || dt > 0)) return;
+    using F = DopplerInertialFilter;
+    const F::CalibrationTest t =
+        filter_->testCalibration(std::max(rot, 1e-7), std::max(dt, 1e-7));
+    if (!t.ok) return;
+    auto fmt = [](double v, int prec = 2) {
+      std::ostringstream os;
+      os.precision(prec);
+      os << v;
+      return os.str();
+    };
+    const double phi_deg = t.correction.segment<3>(F::kRot).norm() * 180.0 / kPi;
+    const double dt_ms = t.correction(F::kTime) * 1e3;
+    constexpr double kChi2Quantile999Dof4 = 18.47;
+    if (t.mahalanobis2 > kChi2Quantile999Dof4) {
+      r.state.warnings.push_back(
+          "the data say the declared LiDAR-IMU calibration is off: by " + fmt(phi_deg) +
+          " deg of rotation and " + fmt(dt_ms) + " ms of clock offset (significance " +
+          fmt(std::sqrt(t.mahalanobis2), 3) + " sigma over 4 dof); the state assumes the "
+          "declared one: check the extrinsics and the time stamps");
       return;
     }
-    if (ba_max > bound)
-      s.warnings.push_back("the accelerometer bias (" + fmt(ba_max) +
-                           " m/s^2 on one axis) exceeds its plausible bound (" + fmt(bound) +
-                           " m/s^2)");
-    const Vec3 dbg = s.b_g - cfg_.velocimeter.gyro_bias_prior;
-    const double sg0 = cfg_.velocimeter.gyro_bias_sigma0;
-    if (dbg.cwiseAbs().maxCoeff() > 4.0 * sg0)
-      s.warnings.push_back("the gyro bias moved " + fmt(dbg.cwiseAbs().maxCoeff()) +
-                           " rad/s from its prior, more than 4 prior sigmas (" + fmt(sg0) +
-                           " rad/s)");
+    // Sensitivity: the body velocity's uncertainty with such calibration errors, against its own.
+    const std::size_t N = filter_->nodes();
+    const FilterState& x = filter_->state(N - 1);
+    constexpr int kN = F::kStateDim;
+    Eigen::Matrix<double, 3, kN> A = Eigen::Matrix<double, 3, kN>::Zero();
+    const Vec3 v_b = x.R_wb.transpose() * x.v_w;
+    A.block<3, 3>(0, F::kTheta) = skew(v_b);
+    A.block<3, 3>(0, F::kVel) = x.R_wb.transpose();
+    const double sigma_free = std::sqrt((A * t.covariance * A.transpose()).trace());
+    const double sigma_fixed = std::sqrt((A * filter_->covariance() * A.transpose()).trace());
+    constexpr double kVelocityFloor = 0.02;  // [m/s] what a user notices
+    if (sigma_free > std::max(3.0 * sigma_fixed, kVelocityFloor))
+      r.state.warnings.push_back(
+          "this window's motion does not check the LiDAR-IMU calibration: errors of " +
+          fmt(e.test_rotation_sigma_deg) + " deg and " + fmt(dt * 1e3) + " ms in it would "
+          "leave the body velocity uncertain by " + fmt(sigma_free, 3) + " m/s (" +
+          fmt(sigma_fixed, 2) + " m/s with the calibration exact)");
   }
 
   const FreeInitConfig& cfg_;
@@ -476,6 +568,14 @@ class JointPipeline final : public Pipeline {
   MeasurementSequencer::Cursor cursor_;
   bool node_open_ = false;
   bool last_ = false;  ///< the open node is the window's last
+  bool early_smoothed_ = false;
+  std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
+  /// The open node's points, for the map once the filter has judged them.
+  struct OpenPoint {
+    Eigen::Vector3f x_b;
+    float intensity;
+  };
+  std::vector<OpenPoint> open_;
   std::optional<DopplerInertialFilter> filter_;
   RestTracker rest_;
   std::vector<bool> node_rest_;

@@ -1,3 +1,4 @@
+#include <freeinit/doppler_inertial_filter.h>
 #include <freeinit/rotation.h>
 #include <freeinit/start_detector.h>
 
@@ -21,9 +22,6 @@ double chi2Quantile(double dof, double z) {
   return dof * std::pow(1.0 - a + z * std::sqrt(a), 3);
 }
 
-Vec3 rotationIncrement(const Vec3& w0, const Vec3& w1, double tau) {
-  return 0.5 * (w0 + w1) * tau + w0.cross(w1) * (tau * tau / 12.0);
-}
 
 /// A return as a linear equation in theta = (v_b0, g_b0): e = a^T theta + noise.
 struct Row {
@@ -99,14 +97,17 @@ class CoverageGrid {
 /// return changes by (p_bl x u - t v_b(t) x u)^T db (first order; the effect of db on the
 /// integrated specific force, t^2 |f| db, is neglected). At speed this is what limits the gravity
 /// of so short a span: it must be in its covariance.
+/// `at_rest`: the rest hypothesis, velocity zero and gravity the mean specific force (the moving
+/// objects of a static start must not bend either: only the gyro-bias correction is fitted).
 StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, const Vec3& v_start,
-                       const Vec3& g_prior, bool fix_velocity, const StartDetectorParams& p) {
+                       const Vec3& g_prior, bool at_rest, const StartDetectorParams& p) {
   using Vec9 = Eigen::Matrix<double, 9, 1>;
   using Mat9 = Eigen::Matrix<double, 9, 9>;
   Vec3 v = v_start, g = g_prior, db = Vec3::Zero();
   const double inv_r = 1.0 / (p.doppler_sigma * p.doppler_sigma);
-  // Gravity prior: the mean specific force is within a few m/s^2 of it on any real platform.
-  const double g_prior_var = 4.0 * 4.0;
+  // Gravity prior: the mean specific force is within a few m/s^2 of it on any real platform in
+  // motion; at rest it is gravity minus the accelerometer bias, held.
+  const double g_prior_var = at_rest ? 1e-12 : 4.0 * 4.0;
   const double bg_prior_var = p.gyro_bias_sigma * p.gyro_bias_sigma;
   auto rowOf = [&](const Row& r, Vec9& a) {
     const Vec3 v_b = r.R_t.transpose() * (v + r.C_t + g * r.t);
@@ -124,7 +125,7 @@ StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, c
     A.block<3, 3>(3, 3).diagonal().setConstant(1.0 / g_prior_var);
     b.segment<3>(3) = g_prior / g_prior_var;
     A.block<3, 3>(6, 6).diagonal().setConstant(1.0 / bg_prior_var);
-    if (fix_velocity) {
+    if (at_rest) {
       A.topLeftCorner<3, 3>().diagonal().setConstant(1e12);
       b.head<3>() = v_start * 1e12;
     }
@@ -213,19 +214,26 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
     return out;
   }
   const double t_ref = imu[k0].t;
-  // Strapdown integration in b0 over the span: R_0i and C_i at every sample.
-  const std::size_t n_imu = k1 - k0 + 1;
-  std::vector<Mat3> R(n_imu, Mat3::Identity());
-  std::vector<Vec3> C(n_imu, Vec3::Zero());
-  for (std::size_t i = 1; i < n_imu; ++i) {
-    const ImuSample& a = imu[k0 + i - 1];
-    const ImuSample& b = imu[k0 + i];
-    const double dt = b.t - a.t;
-    R[i] = R[i - 1] * Exp(rotationIncrement(Vec3(a.gyro - b_g_prior), Vec3(b.gyro - b_g_prior), dt));
-    C[i] = C[i - 1] + 0.5 * dt * (R[i - 1] * a.accel + R[i] * b.accel);
-  }
+  // Strapdown integration in b0 over the span, with the estimator's own integrator (cubic
+  // interpolation of the IMU and Simpson's rule: a vibrating platform needs them). It integrates
+  // with a gravity, so with the world w = b0 and a start at rest the velocity it gives is
+  // v(t) = C(t) + g_w t, from which C(t) follows.
+  const std::vector<ImuSample> span(imu.begin() + static_cast<std::ptrdiff_t>(k0 > 0 ? k0 - 1 : k0),
+                                    imu.begin() + static_cast<std::ptrdiff_t>(
+                                                      std::min(imu.size(), k1 + 3)));
+  const std::size_t j0 = k0 > 0 ? 1 : 0;  // the window start in `span`
+  const Vec3 g_w(0, 0, -kGravity);
   const double T = imu[k1].t - t_ref;
-  const Vec3 g_mean = -C.back() / T;  // exact at rest, off by the mean acceleration otherwise
+  FilterState x0;
+  x0.t = t_ref;
+  x0.b_g = b_g_prior;
+  std::vector<FilterState> at;  // the state at each sample of the span
+  at.reserve(k1 - k0 + 1);
+  at.push_back(x0);
+  for (std::size_t i = 1; i <= k1 - k0; ++i)
+    at.push_back(DopplerInertialFilter::propagate(at.back(), span, j0 + i - 1));
+  const Vec3 g_mean = -(at.back().v_w - g_w * T) / T;  // exact at rest, off by the mean
+                                                        // acceleration otherwise
   out.imu_still = imuShowsRest(imu, k0, k1 + 1, p.gyro_sigma, p.accel_sigma);
 
   // Every return as a linear equation.
@@ -234,15 +242,14 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   std::size_t i = 0;
   for (const StartPoint& sp : points) {
     if (sp.t < 0 || sp.t > T) continue;
-    while (i + 1 < n_imu - 1 && imu[k0 + i + 1].t - t_ref <= sp.t) ++i;
-    const ImuSample& a = imu[k0 + i];
-    const ImuSample& b = imu[k0 + i + 1];
-    const double tau = sp.t - (a.t - t_ref);
-    const double alpha = tau / (b.t - a.t);
-    const Vec3 gyro = a.gyro + alpha * (b.gyro - a.gyro) - b_g_prior;
-    const Vec3 accel = a.accel + alpha * (b.accel - a.accel);
-    const Mat3 R_t = R[i] * Exp(rotationIncrement(Vec3(a.gyro - b_g_prior), gyro, tau));
-    const Vec3 C_t = C[i] + 0.5 * tau * (R[i] * a.accel + R_t * accel);
+    while (i + 1 < at.size() - 1 && imu[k0 + i + 1].t - t_ref <= sp.t) ++i;
+    const double tau = sp.t - (imu[k0 + i].t - t_ref);
+    const FilterState xt = DopplerInertialFilter::integrate(at[i], span, j0 + i, tau);
+    Vec3 gyro, accel;
+    DopplerInertialFilter::interpolateImu(span, t_ref + sp.t, gyro, accel);
+    gyro -= b_g_prior;
+    const Mat3 R_t = xt.R_wb;
+    const Vec3 C_t = xt.v_w - g_w * sp.t;
     Row r;
     const Vec3 u = extrinsics.R_bl * sp.d_l;
     r.u = u;

@@ -22,8 +22,8 @@ const char* const kHeader =
     "gyro_bias_err_radps,accel_bias_err_mps2,position_err_m,time_ms,crb_velocity_mps,"
     "crb_gravity_deg,crb_gyro_bias_radps,crb_accel_bias_mps2,nees_velocity,nees_tilt,"
     "nees_gyro_bias,nees_accel_bias,ratio_velocity,ratio_gravity,ratio_gyro_bias,"
-    "ratio_accel_bias,confident_wrong,failed,failure";
-constexpr std::size_t kColumns = 27;
+    "ratio_accel_bias,confident_wrong,failed,failure,warnings,wrong_calibration";
+constexpr std::size_t kColumns = 29;
 constexpr std::size_t kFirstRatioColumn = 20;
 constexpr std::size_t kConfidentWrongColumn = 24;
 
@@ -158,7 +158,7 @@ void writeEvalCsv(const std::string& path, const std::vector<EvalRow>& rows) {
       for (const double* x : numbers(r)) o << "," << number(*x);
       for (const double x : ratios(r)) o << "," << number(x);
       o << "," << quoted(r.confidentlyWrong()) << "," << (r.failed ? 1 : 0) << ","
-        << quoted(r.failure) << "\n";
+        << quoted(r.failure) << "," << r.warnings << "," << (r.wrong_calibration ? 1 : 0) << "\n";
     }
   });
 }
@@ -191,6 +191,13 @@ std::vector<EvalRow> readEvalCsv(const std::string& path) {
     if (c[25] != "0" && c[25] != "1") throw std::runtime_error(where + ": failed must be 0 or 1");
     r.failed = c[25] == "1";
     r.failure = c[26];
+    const auto warnings = parseDouble(c[27]);
+    if (!warnings || !(*warnings >= 0 && *warnings <= 1e6) || *warnings != std::floor(*warnings))
+      throw std::runtime_error(where + ": warnings is not a whole number >= 0: '" + c[27] + "'");
+    r.warnings = static_cast<int>(*warnings);
+    if (c[28] != "0" && c[28] != "1")
+      throw std::runtime_error(where + ": wrong_calibration must be 0 or 1");
+    r.wrong_calibration = c[28] == "1";
     rows.push_back(r);
   }
   return rows;
@@ -366,6 +373,14 @@ std::vector<MethodSummary> summarize(const std::vector<EvalRow>& rows,
       ++m.runs;
       const auto it = std::find(names.begin(), names.end(), r.status);
       ++m.status_counts[static_cast<std::size_t>(it - names.begin())];
+      if (r.wrong_calibration) {
+        ++m.wrong_calibration_runs;
+        if (r.status != "ok") continue;
+        ++m.wrong_calibration_ok;
+        if (r.confidentlyWrong(floors).empty()) continue;
+        ++(r.warnings > 0 ? m.wrong_calibration_flagged : m.wrong_calibration_plain_wrong);
+        continue;
+      }
       if (r.status != "ok") continue;
       const std::vector<double> rr = ratios(r);
       if (!std::isnan(rr[0])) {
@@ -446,6 +461,18 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
       o << " " << m.status_counts[i] << " |";
     o << "\n";
   }
+  if (std::any_of(summaries.begin(), summaries.end(),
+                  [](const MethodSummary& m) { return m.wrong_calibration_runs > 0; })) {
+    o << "\nRuns handed a wrong calibration (an undeclared LiDAR-IMU time offset or extrinsics "
+         "error; not in the tables above): how many gave a state, and of those more than 3× "
+         "their bound (above the floors) how many said so with a warning and how many were a "
+         "plain ok.\n\n| method | runs | ok | wrong, flagged | wrong, plain ok |\n"
+         "|---|---|---|---|---|\n";
+    for (const auto& m : summaries)
+      o << "| " << m.method << " | " << m.wrong_calibration_runs << " | "
+        << m.wrong_calibration_ok << " | " << m.wrong_calibration_flagged << " | "
+        << m.wrong_calibration_plain_wrong << " |\n";
+  }
   // The bound itself per input (median over the seeds), for the first method's windows.
   if (!rows.empty()) {
     const std::string& first = rows.front().method;
@@ -480,7 +507,7 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
   std::map<std::string, std::size_t> listed, unlisted;
   for (const EvalRow& r : rows) {
     const std::string wrong = r.confidentlyWrong(floors);
-    if (wrong.empty()) continue;
+    if (wrong.empty() || r.wrong_calibration) continue;
     if (listed[r.method] >= max_listed) {
       ++unlisted[r.method];
       continue;
@@ -512,7 +539,8 @@ void writeSummaryCsv(const std::string& path, const std::vector<EvalRow>& rows,
     o << ",runs_with_nees";
     for (const char* q : {"velocity", "tilt", "gyro_bias", "accel_bias"})
       o << ",nees_" << q << "_above_chi2_999";
-    o << ",confident_wrong\n";
+    o << ",confident_wrong,wrong_calibration_runs,wrong_calibration_ok,"
+         "wrong_calibration_flagged,wrong_calibration_plain_wrong\n";
     for (const auto& m : summaries) {
       o << quoted(m.method) << "," << m.runs;
       for (const int c : m.status_counts) o << "," << c;
@@ -521,7 +549,9 @@ void writeSummaryCsv(const std::string& path, const std::vector<EvalRow>& rows,
         o << "," << number(m.ratio_median[q]) << "," << number(m.ratio_p95[q]);
       o << "," << m.with_nees;
       for (const int c : m.nees_above) o << "," << c;
-      o << "," << m.confident_wrong << "\n";
+      o << "," << m.confident_wrong << "," << m.wrong_calibration_runs << ","
+        << m.wrong_calibration_ok << "," << m.wrong_calibration_flagged << ","
+        << m.wrong_calibration_plain_wrong << "\n";
     }
   });
 }

@@ -78,6 +78,7 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, c
   row.status = toString(r.state.status);
   row.time_ms = run.time_ms;
   if (!r.state.ok()) return row;
+  row.warnings = static_cast<int>(r.state.warnings.size());
   const eval::StateTruth gt = truth(r.state.timestamp);
   const eval::StateErrors e = eval::stateErrors(r.state, gt);
   row.speed = e.speed;

@@ -125,6 +125,18 @@ struct EstimatorParams {
   /// the velocity anyway; this mostly adds the vertical the field of view sees poorly).
   double rest_velocity_sigma = 0.005;
   double accel_bias_random_walk = 1e-3;  ///< [m/s^2/sqrt(s)]
+  /// [deg] std of the declared LiDAR-IMU rotation's error per axis, estimated jointly (0: taken
+  /// as exact, the default: estimating it costs accuracy wherever the motion barely observes it;
+  /// the calibration test below still checks it).
+  double calibration_rotation_sigma_deg = 0.0;
+  /// [s] std of an undeclared LiDAR-IMU clock offset, estimated jointly (0: taken as exact).
+  double time_offset_sigma = 0.0;
+  /// The calibration test after the solve: the data's own estimate of a rotation error (this std
+  /// per axis, [deg]) and a clock offset (this std, [s]). A significant one (99.9 %) is a
+  /// warning; so is a body velocity whose uncertainty such errors would dominate (the window's
+  /// motion does not verify the calibration). 0: no test.
+  double test_rotation_sigma_deg = 2.0;
+  double test_time_offset_sigma = 0.01;
 };
 
 /// Where an IMU sample stands in a span of `duration` seconds that starts at the sample at

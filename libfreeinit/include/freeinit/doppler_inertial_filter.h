@@ -6,8 +6,12 @@
 //
 // State at IMU sample k (a node), world frame w (gravity-aligned, z up; the caller fixes the yaw
 // and origin at the window start): R_wb (attitude), p_w, v_w (body origin), b_g, b_a (constant
-// over the window up to a random walk). Error state (15), the order of the output covariance:
-//   [dtheta (right perturbation, R = R^ Exp(dtheta)), dp_w, dv_w, db_g, db_a].
+// over the window up to a random walk), and the correction of the declared LiDAR-IMU
+// calibration: the rotation phi_bl (R_bl,true = R_bl Exp(phi_bl)) and the LiDAR clock's offset
+// dt_l (a point's true time is its LiDAR time minus dt_l), both constant with a prior from the
+// declared accuracy (zero: the calibration is taken as exact). Error state (19); its first 15
+// are the order of the output covariance:
+//   [dtheta (right perturbation, R = R^ Exp(dtheta)), dp_w, dv_w, db_g, db_a, dphi_bl, ddt_l].
 // Propagation between nodes: strapdown integration of the gyro and the accelerometer (midpoint
 // rotation with coning correction, trapezoidal velocity, exact position for a linear
 // acceleration); the IMU white noises are the process noise (sigma^2 dt^2 per step for the
@@ -52,9 +56,15 @@ struct DopplerInertialFilterParams {
   double gate_sigma = 4.0;  ///< [-] reject |r| > gate_sigma * sqrt(S) ...
   double gate_min = 0.15;   ///< [m/s] ... but never below this
   double gate_rel = 0.01;   ///< [-] ... plus this fraction of the LiDAR speed
+  /// Second gate of each node's points, against the updated node, at this many sigmas of the
+  /// residual (no floor): what the first gate, against the prediction, let through from slow
+  /// moving objects (0: no second gate).
+  double regate_sigma = 3.0;
   int max_iterations = 6;  ///< Gauss-Newton iterations after the forward pass, at most
   /// The iterations stop when no node moves by more than this many tolerances, the tolerances
-  /// being 1e-5 rad, 1e-4 m, 1e-4 m/s, 1e-6 rad/s, 1e-4 m/s^2 (far below what the data resolve).
+  /// being 1e-4 rad, 1e-3 m, 1e-4 m/s, 1e-5 rad/s, 1e-3 m/s^2 (for the calibration 1e-4 rad and
+  /// 1e-4 s): a twentieth or less of what the data resolve (the bounds of the randomized
+  /// scenarios are >= 0.002 m/s, 0.05 deg, 5e-4 rad/s and 0.01 m/s^2).
   double convergence = 1.0;
 };
 
@@ -66,31 +76,56 @@ struct FilterState {
   Vec3 v_w = Vec3::Zero();  ///< [m/s]
   Vec3 b_g = Vec3::Zero();  ///< [rad/s]
   Vec3 b_a = Vec3::Zero();  ///< [m/s^2]
+  Vec3 phi_bl = Vec3::Zero();  ///< [rad] correction of the declared R_bl
+  double dt_l = 0;             ///< [s] LiDAR clock minus IMU clock
 };
 
 class DopplerInertialFilter {
  public:
-  using Mat15 = Eigen::Matrix<double, 15, 15>;
-  using Vec15 = Eigen::Matrix<double, 15, 1>;
+  static constexpr int kStateDim = 19;
+  /// Index of each block in the error state.
+  enum Block : int { kTheta = 0, kPos = 3, kVel = 6, kBg = 9, kBa = 12, kRot = 15, kTime = 18 };
+  using MatS = Eigen::Matrix<double, kStateDim, kStateDim>;
+  using VecS = Eigen::Matrix<double, kStateDim, 1>;
   using Vec9 = Eigen::Matrix<double, 9, 1>;
-  using Mat9x15 = Eigen::Matrix<double, 9, 15>;
+  using Mat9xS = Eigen::Matrix<double, 9, kStateDim>;
 
   DopplerInertialFilter(const DopplerInertialFilterParams& params, const Extrinsics& extrinsics);
 
-  /// Starts with node 0 at IMU sample `s0` (x0.t is set to s0.t) with the prior (x0, P0).
-  /// `P_gate`, if given, is the covariance node 0's points are gated with (a prior that is wide
-  /// on purpose, so as not to count the start decision's returns twice, would let moving objects
-  /// through the first node's gate).
-  void start(const ImuSample& s0, const FilterState& x0, const Mat15& P0,
-             const Mat15* P_gate = nullptr);
+  /// Appends an IMU sample (times increasing). Node k is at sample k, the first one given; the
+  /// integration between two samples interpolates the gyro and the accelerometer with a cubic
+  /// through the samples around them, so the filter wants sample k + 2 before it predicts node
+  /// k + 1 or takes the points of node k (with fewer it falls back to lower orders).
+  void addImu(const ImuSample& s);
+  std::size_t imuSamples() const { return imu_.size(); }
 
-  /// Predicts the next node at IMU sample `s` from the current one, which must have been updated.
-  void predict(const ImuSample& s);
+  /// The prior of the window's first node, in terms the filter re-expresses wherever node 0's
+  /// estimate moves in the smoother's iterations: roll and pitch in the world (the yaw and the
+  /// origin are the world's gauge, held), the body velocity (a tilt change alone keeps it), the
+  /// biases and the calibration (0: exact).
+  struct StartPrior {
+    double tilt_sigma = 0.2;          ///< [rad] world roll and pitch
+    Mat3 cov_v_b = Mat3::Identity();  ///< [(m/s)^2] body velocity
+    /// Node 0's points are gated with cov_v_b times this (a prior that is wide on purpose, so as
+    /// not to count the start decision's returns twice, would let moving objects through).
+    double gate_velocity_scale = 1.0;
+    double gyro_bias_sigma = 0.015;   ///< [rad/s] about x0.b_g
+    double accel_bias_sigma = 0.1;    ///< [m/s^2] about x0.b_a
+    double rotation_sigma = 0;        ///< [rad] calibration rotation, per axis
+    double time_sigma = 0;            ///< [s] LiDAR clock offset
+  };
+  /// Starts with node 0 at the first IMU sample (x0.t is set to its time) with the prior mean x0.
+  void start(const FilterState& x0, const StartPrior& prior);
+  /// The prior covariance of node 0 expressed at state x (velocity block scaled by v_scale).
+  MatS priorCovariance(const FilterState& x, double v_scale = 1.0) const;
 
-  /// Opens the current node for points: `next` is the IMU sample after it (nullptr for the last
-  /// node of the window, which then takes points up to its own time only). Points with
-  /// tau = t - t_node in [-intervalBefore(), intervalAfter()) belong to it.
-  void beginNode(const ImuSample* next);
+  /// Predicts the next node from the current one, which must have been updated.
+  void predict();
+
+  /// Opens the current node for points; `last`: the last node of the window, which then takes
+  /// points up to its own time only. Points with tau = t - t_node in [-intervalBefore(),
+  /// intervalAfter()) belong to it.
+  void beginNode(bool last);
   double intervalBefore() const { return before_; }
   double intervalAfter() const { return after_; }
 
@@ -104,22 +139,41 @@ class DopplerInertialFilter {
   /// node's sums.
   PointOutcome addPoint(double tau, const Eigen::Vector3f& p_l, double doppler);
 
-  /// Applies the open node's sums (iterated update of the node).
+  /// Applies the open node's sums (iterated update of the node), then gates the node's points
+  /// again against the update (regate_sigma) and solves the node again with those that pass.
   void update();
+  /// After update(): whether the i-th point given to the open node was used in the end, and its
+  /// residual against the update (against the prediction if the first gate rejected it).
+  bool pointAccepted(std::size_t i) const { return open_outcomes_[i].accepted; }
+  double pointResidual(std::size_t i) const { return open_outcomes_[i].residual; }
   /// Rest knowledge at the open node (the IMU shows rest): zero body velocity with std
   /// `velocity_sigma` [m/s] and zero rotation, the gyro sample then measuring the bias, with std
   /// `rate_sigma` [rad/s] (<= 0: that part is not used). Call after update().
   void updateRest(double velocity_sigma, double rate_sigma);
+  /// Takes back the rest knowledge of the nodes at or after time t (the motion began before it
+  /// was detected): the smoother does not use it. The filtered states keep it.
+  void cancelRestFrom(double t);
 
-  /// Iterated smoothing over all nodes; call once, after the last node was updated. Returns the
-  /// number of iterations run.
+  /// Iterated smoothing over the nodes so far, after the last one was updated. Returns the number
+  /// of iterations run. The filter may go on afterwards (predict()), from the smoothed last node:
+  /// smoothing once while the window is received leaves the final smoothing little to do.
   int smooth();
+
+  /// What the data say of the calibration: after smooth(), one more forward pass around the
+  /// smoothed trajectory with the calibration's prior std set to these (rad, s).
+  struct CalibrationTest {
+    bool ok = false;
+    VecS correction = VecS::Zero();  ///< at the last node, relative to the smoothed state
+    MatS covariance = MatS::Identity();
+    double mahalanobis2 = 0;  ///< of the calibration correction (4 dof)
+  };
+  CalibrationTest testCalibration(double rotation_sigma, double time_sigma) const;
 
   std::size_t nodes() const { return nodes_.size(); }
   /// Smoothed state of node k after smooth(); before, the filtered one.
   const FilterState& state(std::size_t k) const { return nodes_[k].xs; }
   /// Covariance of the last node's state (the filter's of the last pass).
-  const Mat15& covariance() const { return nodes_.back().P; }
+  const MatS& covariance() const { return nodes_.back().P; }
   std::size_t acceptedPoints(std::size_t k) const { return nodes_[k].sums.n; }
   /// Sum of squared residuals of the accepted points at the current estimate, and their count.
   double residualSumOfSquares() const;
@@ -127,23 +181,34 @@ class DopplerInertialFilter {
   /// Weighted information the Doppler gave about v_l at node k (sum d d^T / sigma^2).
   Mat3 dopplerInformation(std::size_t k) const;
 
-  // The models, exposed for tests.
-  /// Nominal propagation of x from IMU sample a to b.
-  static FilterState propagate(const FilterState& x, const ImuSample& a, const ImuSample& b);
-  /// LiDAR velocity in l at tau from the node state x (node at `cur`; `prev`/`next` the IMU
-  /// samples around it, used on their side of the node).
-  /// With J: also its Jacobian with respect to the error state of x (3x15).
-  Vec3 lidarVelocity(const FilterState& x, const ImuSample* prev, const ImuSample& cur,
-                     const ImuSample* next, double tau,
-                     Eigen::Matrix<double, 3, 15>* J = nullptr) const;
-  static FilterState boxplus(const FilterState& x, const Vec15& dx);
+  // The models, exposed for tests. `imu` holds the samples, x is the state at sample k.
+  /// Integrates x from sample k over a signed tau (within one interval of k): the gyro and the
+  /// accelerometer interpolated by cubics through the samples around the span, the rotation and
+  /// the velocity by Simpson's rule (exact for cubic rates), the position by the same rule on the
+  /// double integral. J (if given): the Jacobian of the result's error state (rows: dtheta, dp, dv,
+  /// then the biases and the calibration) with respect to x's.
+  static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
+                               std::size_t k, double tau, MatS* J = nullptr);
+  /// Nominal propagation of x from sample k to sample k + 1.
+  static FilterState propagate(const FilterState& x, const std::vector<ImuSample>& imu,
+                               std::size_t k);
+  /// LiDAR velocity in l at LiDAR time tau after sample k (true time tau - x.dt_l) from the
+  /// state x at sample k, with the corrected extrinsics; with J its Jacobian (3x19).
+  Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
+                     double tau, Eigen::Matrix<double, 3, kStateDim>* J = nullptr) const;
+  static FilterState boxplus(const FilterState& x, const VecS& dx);
   /// a [-] b: the error state dx with b [+] dx = a.
-  static Vec15 boxminus(const FilterState& a, const FilterState& b);
+  static VecS boxminus(const FilterState& a, const FilterState& b);
   /// Transition Jacobian of propagate() at x (analytic, first order).
-  static Mat15 transitionJacobian(const FilterState& x, const ImuSample& a, const ImuSample& b);
+  static MatS transitionJacobian(const FilterState& x, const std::vector<ImuSample>& imu,
+                                  std::size_t k);
   /// The same by central differences (for tests).
-  static Mat15 numericalTransitionJacobian(const FilterState& x, const ImuSample& a,
-                                           const ImuSample& b);
+  static MatS numericalTransitionJacobian(const FilterState& x,
+                                           const std::vector<ImuSample>& imu, std::size_t k);
+  /// Gyro and accelerometer at time t by Lagrange interpolation through the (up to four)
+  /// samples of `imu` around it (two on each side where they exist).
+  static void interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro,
+                             Vec3& accel);
 
  private:
   using Mat9 = Eigen::Matrix<double, 9, 9>;
@@ -171,10 +236,9 @@ class DopplerInertialFilter {
     FilterState x;       ///< filtered
     FilterState xs;      ///< smoothed
     FilterState x_pred;  ///< predicted (first pass)
-    Mat15 P = Mat15::Identity();
-    ImuSample imu;                   ///< the node's IMU sample
-    ImuSample imu_prev, imu_next;
-    bool has_prev = false, has_next = false;
+    MatS P = MatS::Identity();
+    std::size_t k = 0;               ///< the node's IMU sample (index in imu_)
+    bool last = false;               ///< the window's last node (no points after its time)
     double h = 0;                    ///< [s] time normalization of the interval
     std::array<double, 3> s_fit{};   ///< normalized instants of the q fit
     Mat3 V_inv = Mat3::Identity();   ///< inverse Vandermonde matrix of s_fit
@@ -184,24 +248,41 @@ class DopplerInertialFilter {
     double rest_rate_sigma = 0;      ///< > 0: the node's gyro sample measures the bias
   };
 
-  /// Q = [q0; q1; q2] of node n at state x, optionally with its Jacobian dQ/ddx (9x15).
-  Vec9 velocityPolynomial(const Node& n, const FilterState& x, Mat9x15* G) const;
-  Mat15 processNoise(double dt) const;
+  static void accumulate(DopplerSums& sums, double s, const Vec3& d, double z);
+
+  /// A point of the open node that passed the first gate.
+  struct OpenPoint {
+    double s;             ///< normalized time
+    Vec3 d;               ///< unit direction (LiDAR frame)
+    double z;             ///< Doppler
+    std::size_t outcome;  ///< index in open_outcomes_
+  };
+  struct PointResult {
+    bool accepted;
+    float residual;
+  };
+
+  /// Q = [q0; q1; q2] of node n at state x, optionally with its Jacobian dQ/ddx (9x19).
+  Vec9 velocityPolynomial(const Node& n, const FilterState& x, Mat9xS* G) const;
+  MatS processNoise(double dt) const;
   void buildRows(Node& n) const;
   /// Kalman update of the error dx (prior mean dx_prior relative to x_lin, covariance P) with
   /// node n's rows linearized at x_lin. Returns the posterior error relative to x_lin.
-  Vec15 dopplerUpdate(const Node& n, const FilterState& x_lin, const Vec15& dx_prior,
-                      Mat15& P) const;
+  VecS dopplerUpdate(const Node& n, const FilterState& x_lin, const VecS& dx_prior,
+                      MatS& P) const;
   /// Rest update of the error dx (relative to x_lin, covariance P) at node n.
-  static Vec15 restUpdate(const Node& n, const FilterState& x_lin, const Vec15& dx, Mat15& P);
+  static VecS restUpdate(const Node& n, const Vec3& gyro, const FilterState& x_lin,
+                          const VecS& dx, MatS& P);
 
   DopplerInertialFilterParams params_;
   Mat3 R_bl_;
   Vec3 p_bl_;
+  std::vector<ImuSample> imu_;
   std::vector<Node> nodes_;
   FilterState x0_prior_;
-  Mat15 P0_ = Mat15::Identity();
-  Mat15 P_gate0_ = Mat15::Identity();
+  StartPrior prior_;
+  std::vector<OpenPoint> open_points_;
+  std::vector<PointResult> open_outcomes_;
   // The open node's prediction for gating.
   Vec9 q_open_ = Vec9::Zero();
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction

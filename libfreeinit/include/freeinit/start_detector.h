@@ -35,7 +35,7 @@ struct StartDetectorParams {
   double max_speed = 0.05;        ///< [m/s] a refined speed below this is rest
   /// A rest hypothesis supported by at least this fraction of the best hypothesis' coverage wins
   /// when the IMU shows rest.
-  double rest_coverage_ratio = 0.2;
+  double rest_coverage_ratio = 0.1;
   /// Two motions whose coverages are within this ratio of each other cannot be told apart.
   double ambiguity_ratio = 0.8;
   /// [1/(m/s)^2] smallest eigenvalue of the velocity information of the chosen motion's

@@ -74,13 +74,13 @@ eval::Bound cramerRaoBound(const Recording& rec, const eval::BoundModel& model, 
   const double t0 = bound.nodes().front().t, t1 = bound.nodes().back().t;
   for (std::size_t f = 0; f < rec.frames.size(); ++f) {
     const LidarFrame& frame = rec.frames[f];
-    if (frame.points.empty() || frame.stamp > t1) continue;
-    if (frame.stamp + static_cast<double>(frame.points.back().time_offset) < t0) continue;
+    if (frame.points.empty() || rec.pointTime(frame, frame.points.front()) > t1) continue;
+    if (rec.pointTime(frame, frame.points.back()) < t0) continue;
     const std::vector<PointLabel>& labels = rec.labels[f];
     for (std::size_t i = 0; i < frame.points.size(); ++i) {
       if (labels[i] != PointLabel::Static) continue;
       const DopplerPoint& p = frame.points[i];
-      const double t = frame.stamp + static_cast<double>(p.time_offset);
+      const double t = rec.pointTime(frame, p);  // the true (IMU-clock) time
       if (t < t0 || t > t1) continue;
       bound.addDoppler(t, p.p_l.cast<double>());
     }

@@ -49,6 +49,11 @@ struct EvalRow {
   double nees_accel_bias = kNoValue;
   bool failed = false;  ///< set by markFailures
   std::string failure;  ///< why, when failed
+  int warnings = 0;     ///< warnings of an ok state (InitialState::warnings)
+  /// The calibration handed to the estimator was wrong on purpose (a randomized scenario's
+  /// undeclared time offset or extrinsics error): such a run must be within 3x its bound, flagged
+  /// (a warning or a status), never a plain ok that is wrong.
+  bool wrong_calibration = false;
 
   // error / bound (eval::boundRatio): NaN without a state or a bound.
   double ratioVelocity() const { return eval::boundRatio(velocity_err, crb_velocity); }
@@ -83,7 +88,9 @@ void writeEvalCsv(const std::string& path, const std::vector<EvalRow>& rows);
 /// Reads what writeEvalCsv wrote. Throws std::runtime_error naming the file and line on bad input.
 std::vector<EvalRow> readEvalCsv(const std::string& path);
 
-/// Statistics of one method over its runs.
+/// Statistics of one method over its runs. The error/bound ratios, NEES shares and confident wrong
+/// answers are over the ok runs with a correct calibration; the runs handed a wrong one are
+/// counted apart.
 struct MethodSummary {
   std::string method;
   int runs = 0;
@@ -97,7 +104,12 @@ struct MethodSummary {
   /// b_a), and the ok runs with a NEES.
   int nees_above[4] = {0, 0, 0, 0};
   int with_nees = 0;
-  int confident_wrong = 0;  ///< ok runs with a confident wrong quantity
+  int confident_wrong = 0;  ///< ok runs with a correct calibration and a confident wrong quantity
+  // The runs handed a wrong calibration (not in the ratios, NEES shares or confident_wrong above):
+  int wrong_calibration_runs = 0;
+  int wrong_calibration_ok = 0;       ///< of which status ok
+  int wrong_calibration_flagged = 0;  ///< ok with a warning, and confidently wrong
+  int wrong_calibration_plain_wrong = 0;  ///< ok without a warning and confidently wrong
 };
 
 /// One summary per method, in order of first appearance.
