@@ -55,6 +55,8 @@ std::vector<EvalRow> sampleRows() {
   EvalRow tilted = ok;
   tilted.seed = 2;
   tilted.gravity_err_deg = 3.5;  // over the 2 deg threshold
+  tilted.warnings = 2;
+  tilted.wrong_calibration = true;
   EvalRow none;
   none.source = "a dir, with \"quotes\"/x.rawlog";  // needs CSV quoting
   none.method = "dlio";
@@ -98,6 +100,8 @@ TEST(EvalTable, CsvReadsBackWhatWasWritten) {
     EXPECT_EQ(back[i].status, rows[i].status);
     EXPECT_EQ(back[i].failed, rows[i].failed);
     EXPECT_EQ(back[i].failure, rows[i].failure);
+    EXPECT_EQ(back[i].warnings, rows[i].warnings);
+    EXPECT_EQ(back[i].wrong_calibration, rows[i].wrong_calibration);
     for (auto f : {&EvalRow::speed, &EvalRow::velocity_err, &EvalRow::gravity_err_deg,
                    &EvalRow::gravity_bound_deg, &EvalRow::gyro_bias_err, &EvalRow::accel_bias_err,
                    &EvalRow::position_err, &EvalRow::time_ms, &EvalRow::crb_velocity,
@@ -123,16 +127,19 @@ TEST(EvalTable, BadCsvNamesFileAndLine) {
           << e.what();
     }
   };
-  // A row of the 27 columns: source, seed, method, status, 20 numbers, confident_wrong, failed,
-  // failure.
-  auto line = [](const std::string& seed, const std::string& first_number) {
+  // A row of the 29 columns: source, seed, method, status, 20 numbers, confident_wrong, failed,
+  // failure, warnings, wrong_calibration.
+  auto line = [](const std::string& seed, const std::string& first_number,
+                 const std::string& tail = "0,0") {
     std::string l = "dyna_02," + seed + ",free-init,ok," + first_number;
     for (int i = 0; i < 19; ++i) l += ",";
-    return l + ",,0,";
+    return l + ",,0,," + tail;
   };
   expectError(line("1", "abc"), "not a number");
   expectError(line("2.7", ""), "seed");  // was truncated to 2
-  expectError("dyna_02,1,free-init,ok,,,,,,,,,0,", "14 fields, expected 27");
+  expectError(line("3", "", "1.5,0"), "warnings is not a whole number");
+  expectError(line("4", "", "0,yes"), "wrong_calibration must be 0 or 1");
+  expectError("dyna_02,1,free-init,ok,,,,,,,,,0,", "14 fields, expected 29");
   std::filesystem::remove(path);
   EXPECT_THROW(readEvalCsv(path), std::runtime_error);  // missing file
 }
@@ -247,6 +254,34 @@ TEST(EvalSummary, CountsStatusesRatiosNeesAndConfidentWrongAnswers) {
   EXPECT_EQ(header.rfind("method,runs,ok,not_enough_data,", 0), 0u) << header;
   EXPECT_EQ(line.rfind("m,22,20,0,0,0,0,1,0,1,20,10.5,19.05,", 0), 0u) << line;
   std::filesystem::remove(path);
+}
+
+// A run handed a wrong calibration is a test of the verdict, not of the estimator against its
+// bound: it stays out of the ratios, the NEES and the confident-wrong count, and is counted
+// apart as flagged (a warning came with the wrong state) or plain wrong.
+TEST(EvalSummary, WrongCalibrationRunsAreCountedApart) {
+  std::vector<EvalRow> rows = ratioRows(2);  // ratios 1 and 2: neither confidently wrong
+  EvalRow bad = ratioRows(10).back();        // ratio 10 on every quantity
+  bad.wrong_calibration = true;
+  rows.push_back(bad);  // wrong, no warning
+  bad.warnings = 1;
+  rows.push_back(bad);  // wrong, flagged
+  bad.status = "inconsistent_data";
+  rows.push_back(bad);  // no state
+  const auto s = summarize(rows);
+  ASSERT_EQ(s.size(), 1u);
+  const MethodSummary& m = s[0];
+  EXPECT_EQ(m.runs, 5);
+  EXPECT_EQ(m.with_bound, 2);
+  EXPECT_EQ(m.with_nees, 2);
+  EXPECT_EQ(m.confident_wrong, 0);
+  EXPECT_NEAR(m.ratio_median[0], 1.5, 1e-9);
+  EXPECT_EQ(m.wrong_calibration_runs, 3);
+  EXPECT_EQ(m.wrong_calibration_ok, 2);
+  EXPECT_EQ(m.wrong_calibration_flagged, 1);
+  EXPECT_EQ(m.wrong_calibration_plain_wrong, 1);
+  const std::string md = boundsMarkdown(rows);
+  EXPECT_NE(md.find("| m | 3 | 2 | 1 | 1 |"), std::string::npos) << md;
 }
 
 TEST(DisplacementError, IsFreeOfTheWorldFrame) {

@@ -183,6 +183,9 @@ class JointPipeline final : public Pipeline {
                                (k1 + 1 < imu.size() && imu[k1 + 1].t - t_ref >= cfg_.window.duration);
     if ((!span_complete || !seq_.lidarPassed(imu[k1].t)) && !seq_.finished()) return;
     if (k1 < k + 2) return;  // wait for a few samples at least (finished: not enough data)
+    // The decision interpolates the IMU with the two samples after the span: wait for them, so
+    // that it does not depend on how far the IMU stream happens to be ahead.
+    if (k1 + 2 >= imu.size() && !seq_.finished()) return;
 
     // Returns of the span, evenly thinned to bootstrap_points.
     const double t_end = imu[k1].t;
