@@ -18,12 +18,18 @@ int main(int argc, char** argv) {
                                         true, "", "FILE", cmd);
     TCLAP::ValueArg<std::string> out("o", "out", "output rawlog (default: <bag>.rawlog)", false, "",
                                      "FILE", cmd);
+    TCLAP::ValueArg<std::string> fit_csv(
+        "", "doppler-fit-csv",
+        "also write each imported scan's sensor velocity fitted from its Doppler alone (no IMU; "
+        "[doppler_fit] of the INI) to FILE",
+        false, "", "FILE", cmd);
     TCLAP::SwitchArg quiet("q", "quiet", "no progress bar", cmd);
     cmd.parse(argc, argv);
     freeinit::mrpt_glue::BagImportApp app;
     app.params.bag = bag.getValue();
     app.params.config_file = config.getValue();
     app.params.output = out.getValue();
+    app.params.doppler_fit_csv = fit_csv.getValue();
     app.params.progress = !quiet.getValue();
     app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
     return app.run(std::cout);

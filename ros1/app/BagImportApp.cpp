@@ -1,3 +1,4 @@
+#include <freeinit/atomic_file.h>
 #include <freeinit/mrpt/IniLoader.h>
 #include <freeinit/mrpt/ProgressBar.h>
 #include <freeinit/mrpt/RawlogWriter.h>
@@ -5,8 +6,10 @@
 #include <freeinit/ros1/BagImportApp.h>
 #include <mrpt/config/CConfigFile.h>
 
+#include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -34,7 +37,26 @@ std::string fixed(double x, int precision) {
   return os.str();
 }
 
+void writeFitRow(std::ostream& o, const LidarFrame& f, const ros1::DopplerFit& fit) {
+  o << fixed(f.stamp, 6) << "," << fixed(f.stamp + fit.mean_time_offset, 6) << "," << fit.points
+    << "," << fit.inliers << "," << (fit.ok ? 1 : 0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto num = [&](double x) { o << "," << (fit.ok ? x : nan); };
+  o << std::setprecision(6) << std::defaultfloat;
+  for (int i = 0; i < 3; ++i) num(fit.v_l(i));
+  for (int i = 0; i < 3; ++i) num(std::sqrt(fit.cov(i, i)));
+  num(fit.cov(0, 1));
+  num(fit.cov(0, 2));
+  num(fit.cov(1, 2));
+  num(fit.residual_sigma);
+  o << "\n";
+}
+
 }  // namespace
+
+const char* const kDopplerFitCsvHeader =
+    "stamp,t,points,inliers,ok,v_x,v_y,v_z,sigma_x,sigma_y,sigma_z,cov_xy,cov_xz,cov_yz,"
+    "residual_sigma";
 
 BagImportSettings loadBagImportSettings(const std::string& ini_file) {
   if (!std::filesystem::is_regular_file(ini_file))
@@ -64,6 +86,11 @@ BagImportSettings loadBagImportSettings(const std::string& ini_file) {
   readField(L, "time_field", b.cloud.time.field);
   L(kSection, "time_scale", b.cloud.time.scale);
   L(kSection, "time_relative", b.cloud.time.relative);
+  L(kSection, "frame_duration", b.cloud.time.frame_duration);
+  b.stamp_source = static_cast<ros1::StampSource>(
+      L.choice(kSection, "stamp_source", {"header", "trigger", "bag_time"},
+               static_cast<int>(b.stamp_source)));
+  L(kSection, "trigger_topic", b.trigger_topic);
   readField(L, "intensity_field", b.cloud.intensity);
   readField(L, "line_field", b.cloud.line);
   b.imu_accel_in_g = L.choice(kSection, "imu_accel_unit", {"m/s^2", "g"}, 0) == 1;
@@ -73,7 +100,17 @@ BagImportSettings loadBagImportSettings(const std::string& ini_file) {
   L(kSection, "gap_factor", b.gap_factor);
   L(kSection, "imu_label", s.imu_label);
   L(kSection, "lidar_label", s.lidar_label);
+  ros1::DopplerFitParams& f = s.doppler_fit;
+  L("doppler_fit", "min_range", f.min_range);
+  L("doppler_fit", "inlier_threshold", f.inlier_threshold);
+  L("doppler_fit", "sigma_floor", f.sigma_floor);
+  L("doppler_fit", "min_inlier_fraction", f.min_inlier_fraction);
   L.checkUnknownKeys();
+  if (!(f.min_range >= 0)) L.fail("doppler_fit", "min_range", "must be >= 0");
+  if (!(f.inlier_threshold > 0)) L.fail("doppler_fit", "inlier_threshold", "must be > 0");
+  if (!(f.sigma_floor >= 0)) L.fail("doppler_fit", "sigma_floor", "must be >= 0");
+  if (!(f.min_inlier_fraction >= 0 && f.min_inlier_fraction <= 1))
+    L.fail("doppler_fit", "min_inlier_fraction", "must be in [0, 1]");
   try {
     ros1::validate(b);
   } catch (const std::exception& e) {
@@ -100,18 +137,32 @@ int BagImportApp::run(std::ostream& log) {
     out += ".rawlog";
   }
   const auto& b = settings.bag;
+  const std::string time =
+      b.cloud.time.field.name.empty()
+          ? "no per-point time (points spread over " + fixed(b.cloud.time.frame_duration, 4) +
+                " s in point order)"
+          : "time '" + b.cloud.time.field.name + "' " +
+                ros1::fieldTypeName(b.cloud.time.field.type) + " x " +
+                fixed(b.cloud.time.scale, 12) + " s " +
+                (b.cloud.time.relative ? "after" : "absolute, not after") + " the scan stamp";
   log << "Importing " << params.bag << " -> " << out << "\n  IMU " << b.imu_topic
       << (b.imu_accel_in_g ? " (accelerations in g)" : " (m/s^2)") << ", LiDAR " << b.lidar_topic
-      << ": Doppler '" << b.cloud.doppler.name << "' x" << b.cloud.doppler_sign << ", time '"
-      << b.cloud.time.field.name << "' " << ros1::fieldTypeName(b.cloud.time.field.type) << " x "
-      << b.cloud.time.scale << " s " << (b.cloud.time.relative ? "after" : "absolute, not after")
-      << " the header stamp; LiDAR time offset " << b.lidar_time_offset << " s\n";
+      << ": Doppler '" << b.cloud.doppler.name << "' x" << b.cloud.doppler_sign << ", " << time
+      << "\n  scan stamps: " << ros1::stampSourceName(b.stamp_source)
+      << (b.stamp_source == ros1::StampSource::kTrigger ? " " + b.trigger_topic : std::string())
+      << ", + " << fixed(b.lidar_time_offset, 6) << " s to the IMU clock\n";
 
   RawlogWriter rawlog(out, settings.extrinsics, settings.imu_label, settings.lidar_label);
   ProgressBar bar(log, "  reading", "messages", params.progress_terminal);
   ros1::BagReadCallbacks cb;
   cb.imu = [&](const ImuSample& s) { rawlog.write(s); };
-  cb.frame = [&](LidarFrame&& f) { rawlog.write(f); };
+  std::ostringstream fits;
+  if (!params.doppler_fit_csv.empty()) fits << kDopplerFitCsvHeader << "\n";
+  cb.frame = [&](LidarFrame&& f) {
+    if (!params.doppler_fit_csv.empty())
+      writeFitRow(fits, f, ros1::fitScanVelocity(f.points, settings.doppler_fit));
+    rawlog.write(f);
+  };
   if (params.progress) cb.progress = [&](std::size_t d, std::size_t t) { bar.update(d, t); };
   summary = ros1::readBag(params.bag, b, cb);
   if (params.progress) bar.finish();
@@ -121,6 +172,10 @@ int BagImportApp::run(std::ostream& log) {
   writeExtrinsicsIni(ext, settings.extrinsics,
                      "extrinsics of " + out + " (from " + params.config_file +
                          "; also in each point cloud's sensorPose)");
+  if (!params.doppler_fit_csv.empty()) {
+    writeFileAtomically(params.doppler_fit_csv, [&](std::ostream& o) { o << fits.str(); });
+    log << "Wrote " << params.doppler_fit_csv << " (per-scan Doppler-only velocity fits)\n";
+  }
   summary.print(log);
   log << "Wrote " << out << " (" << rawlog.records() << " records: " << rawlog.imuRecords()
       << " IMU, " << rawlog.frameRecords() << " point clouds, " << summary.points << " points) and "
