@@ -139,7 +139,7 @@ class MemoryBytes : public Bytes {
   explicit MemoryBytes(const std::vector<std::uint8_t>& b) : b_(b) {}
   std::uint64_t size() const override { return b_.size(); }
   void read(std::uint64_t at, std::uint8_t* dst, std::size_t n) override {
-    std::memcpy(dst, b_.data() + at, n);
+    if (n > 0) std::memcpy(dst, b_.data() + at, n);
   }
 
  private:
@@ -156,14 +156,16 @@ struct Record {
   std::uint64_t next() const { return data_at + data_len; }
 };
 
-Record readRecord(Bytes& b, std::uint64_t at, std::uint64_t end, const char* where) {
+// `in_chunk`: the bytes are a chunk's data (for the message), else the file.
+Record readRecord(Bytes& b, std::uint64_t at, std::uint64_t end, const char* where,
+                  bool in_chunk = false) {
   Record r;
   r.at = at;
   auto need = [&](std::uint64_t from, std::uint64_t n, const std::string& what) {
     if (n > end - from)
       throw Bad(from, std::string(where) + ": " + what + " of " + std::to_string(n) +
                           " bytes, but only " + std::to_string(end - from) + " are left" +
-                          (end == b.size() ? " in the file (truncated bag?)" : " in the chunk"));
+                          (in_chunk ? " in the chunk" : " in the file (truncated bag?)"));
   };
   std::array<std::uint8_t, 4> len{};
   need(at, 4, "a record header length");
@@ -189,15 +191,11 @@ std::vector<std::uint8_t> readData(Bytes& b, const Record& r) {
   return d;
 }
 
-// What a chunk holds: its records by offset in the uncompressed data.
-struct ChunkRecord {
-  std::uint8_t op = 0;
-  std::uint32_t conn = 0;
-};
+// What the last chunk holds (its records by offset in the uncompressed data), kept until the next
+// chunk: its index records follow it. Only one chunk's records are held at a time.
 struct Chunk {
   std::uint64_t at = 0;
-  std::map<std::uint32_t, ChunkRecord> records;
-  std::size_t index_records = 0;  // index records that follow it
+  std::map<std::uint32_t, std::uint8_t> records;  // offset -> op
 };
 
 // Decompresses a bz2 chunk, producing at most `declared` bytes (growing as output appears, so
@@ -357,8 +355,9 @@ class Checker {
     if (declared > limits_.max_chunk_bytes)
       throw Bad(r.at, "chunk of " + std::to_string(declared) + " bytes, more than the " +
                           std::to_string(limits_.max_chunk_bytes) + " accepted");
-    Chunk c;
+    Chunk& c = chunk_;
     c.at = r.at;
+    c.records.clear();
     std::vector<std::uint8_t> data;
     if (compression == "none") {
       if (declared != r.data_len)
@@ -376,8 +375,8 @@ class Checker {
       throw Bad(r.at, "chunk compression '" + compression + "' (none, bz2 or lz4 are read)");
     }
     walkChunk(data, c);
-    chunks_[r.at] = std::move(c);
-    last_chunk_ = &chunks_[r.at];
+    index_records_[r.at] = 0;
+    have_chunk_ = true;
   }
 
   // The records inside a chunk; offsets are relative to the chunk's uncompressed data. Errors
@@ -387,20 +386,17 @@ class Checker {
     std::uint64_t at = 0;
     try {
       while (at < data.size()) {
-        const Record r = readRecord(b, at, data.size(), "record in the chunk");
-        ChunkRecord cr;
-        cr.op = r.op;
+        const Record r = readRecord(b, at, data.size(), "record in the chunk", true);
         if (r.op == kOpMessage) {
-          cr.conn = fixedField<std::uint32_t>(r.header, "conn", at, "message record");
+          referenced_.emplace(fixedField<std::uint32_t>(r.header, "conn", at, "message record"),
+                              c.at);
           fixedField<std::uint64_t>(r.header, "time", at, "message record");
-          referenced_.emplace(cr.conn, c.at);
         } else if (r.op == kOpConnection) {
-          cr.conn = fixedField<std::uint32_t>(r.header, "conn", at, "connection record");
           connection(r, b);
         } else {
           throw Bad(at, "a " + opName(r.op) + " inside a chunk");
         }
-        c.records[static_cast<std::uint32_t>(at)] = cr;
+        c.records[static_cast<std::uint32_t>(at)] = r.op;
         at = r.next();
       }
     } catch (const Bad& e) {
@@ -419,7 +415,7 @@ class Checker {
 
   void index(const Record& r) {
     const char* w = "index record";
-    if (last_chunk_ == nullptr) throw Bad(r.at, "an index record before any chunk");
+    if (!have_chunk_) throw Bad(r.at, "an index record before any chunk");
     if (index_pos_ != 0 && r.at >= index_pos_)
       throw Bad(r.at, "an index record after the index position");
     const std::uint32_t ver = fixedField<std::uint32_t>(r.header, "ver", r.at, w);
@@ -432,18 +428,24 @@ class Checker {
     referenced_.emplace(conn, r.at);
     const std::vector<std::uint8_t> d = readData(file_, r);
     for (std::uint32_t i = 0; i < count; ++i) {
+      // librosbag logs and drops an entry whose time is not in [0 s 1 ns, the largest time].
+      const std::uint32_t sec = u32At(d.data() + 12 * i), nsec = u32At(d.data() + 12 * i + 4);
+      if ((sec == 0 && nsec == 0) || nsec >= 1000000000U)
+        throw Bad(r.data_at + 12 * i, "index entry " + std::to_string(i) + " has an invalid time (" +
+                                          std::to_string(sec) + " s " + std::to_string(nsec) +
+                                          " ns)");
       const std::uint32_t offset = u32At(d.data() + 12 * i + 8);
       // librosbag reads the record at `offset`, skipping connection records, and expects a
       // message record there.
-      const auto& records = last_chunk_->records;
+      const auto& records = chunk_.records;
       auto it = records.find(offset);
-      while (it != records.end() && it->second.op == kOpConnection) ++it;
+      while (it != records.end() && it->second == kOpConnection) ++it;
       if (records.count(offset) == 0 || it == records.end())
         throw Bad(r.data_at + 12 * i, "index entry " + std::to_string(i) + " points at byte " +
                                           std::to_string(offset) +
                                           " of its chunk, which is not a message record");
     }
-    ++last_chunk_->index_records;
+    ++index_records_[chunk_.at];
   }
 
   void chunkInfo(const Record& r) {
@@ -493,13 +495,13 @@ class Checker {
         throw Bad(at, "connection " + std::to_string(conn) +
                           " is used but not among the index's connection records");
     for (const auto& info : infos_) {
-      const auto c = chunks_.find(info.chunk_pos);
-      if (c == chunks_.end())
+      const auto c = index_records_.find(info.chunk_pos);
+      if (c == index_records_.end())
         throw Bad(info.at, "chunk info points at byte " + std::to_string(info.chunk_pos) +
                                ", which is not a chunk record");
-      if (c->second.index_records < info.connections)
+      if (c->second < info.connections)
         throw Bad(info.at, "chunk info lists " + std::to_string(info.connections) +
-                               " connections, but " + std::to_string(c->second.index_records) +
+                               " connections, but " + std::to_string(c->second) +
                                " index records follow its chunk");
     }
   }
@@ -513,9 +515,10 @@ class Checker {
   BagGuardLimits limits_;
   std::uint64_t index_pos_ = 0;
   std::uint32_t conn_count_ = 0, chunk_count_ = 0;
-  std::map<std::uint64_t, Chunk> chunks_;
-  Chunk* last_chunk_ = nullptr;
-  std::multimap<std::uint32_t, std::uint64_t> referenced_;
+  Chunk chunk_;  // the last chunk
+  bool have_chunk_ = false;
+  std::map<std::uint64_t, std::size_t> index_records_;  // chunk offset -> index records after it
+  std::map<std::uint32_t, std::uint64_t> referenced_;   // connection -> first record using it
   std::vector<Info> infos_;
 };
 
@@ -550,10 +553,11 @@ class MessageWalker {
     skip(12, "header seq and stamp");
     string("header frame_id");
   }
-  void end() {
-    if (pos_ != n_)
+  std::size_t end(bool exact) {
+    if (exact && pos_ != n_)
       throw std::runtime_error(std::string("serialized ") + type_ + ": " +
                                std::to_string(n_ - pos_) + " byte(s) after the message's end");
+    return pos_;
   }
 
  private:
@@ -581,13 +585,12 @@ void checkBagFile(const std::string& path, const BagGuardLimits& limits) {
   }
 }
 
-void checkSerialized(RosMessage type, const std::uint8_t* data, std::size_t n) {
+std::size_t checkSerialized(RosMessage type, const std::uint8_t* data, std::size_t n, bool exact) {
   switch (type) {
     case RosMessage::kHeader: {
       MessageWalker w(data, n, "std_msgs/Header");
       w.header();
-      w.end();
-      return;
+      return w.end(exact);
     }
     case RosMessage::kImu: {
       MessageWalker w(data, n, "sensor_msgs/Imu");
@@ -595,8 +598,7 @@ void checkSerialized(RosMessage type, const std::uint8_t* data, std::size_t n) {
       // orientation (4), its covariance (9), angular velocity (3) and its covariance (9), linear
       // acceleration (3) and its covariance (9), all float64.
       w.skip(37 * 8, "orientation, angular velocity, linear acceleration and covariances");
-      w.end();
-      return;
+      return w.end(exact);
     }
     case RosMessage::kPointCloud2: {
       MessageWalker w(data, n, "sensor_msgs/PointCloud2");
@@ -611,10 +613,10 @@ void checkSerialized(RosMessage type, const std::uint8_t* data, std::size_t n) {
       w.skip(9, "is_bigendian, point_step and row_step");
       w.string("data");
       w.skip(1, "is_dense");
-      w.end();
-      return;
+      return w.end(exact);
     }
   }
+  return 0;
 }
 
 }  // namespace freeinit::ros1

@@ -38,7 +38,9 @@ void checkBagFile(const std::string& path, const BagGuardLimits& limits = {});
 enum class RosMessage { kImu, kPointCloud2, kHeader };
 
 /// Throws std::runtime_error naming the field whose length or count does not fit in the `n` bytes
-/// at `data`, or the number of bytes left over after the message.
-void checkSerialized(RosMessage type, const std::uint8_t* data, std::size_t n);
+/// at `data`, or (when `exact`, as for a bag's message record) the number of bytes left over after
+/// the message. Returns the message's length.
+std::size_t checkSerialized(RosMessage type, const std::uint8_t* data, std::size_t n,
+                            bool exact = true);
 
 }  // namespace freeinit::ros1
