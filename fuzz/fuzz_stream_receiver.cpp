@@ -41,7 +41,8 @@ std::string fuzzOne(const std::uint8_t* data, std::size_t size) {
   std::size_t pos = 0;
   while (size - pos >= 3) {
     const std::uint8_t flags = data[pos];
-    const std::size_t len = std::min<std::size_t>(data[pos + 1] | (data[pos + 2] << 8), size - pos - 3);
+    const std::size_t len =
+        std::min<std::size_t>(data[pos + 1] | (data[pos + 2] << 8), size - pos - 3);
     std::vector<std::uint8_t> d(data + pos + 3, data + pos + 3 + len);
     pos += 3 + len;
     if (flags & 0x80) patchLengthAndCrc(d);

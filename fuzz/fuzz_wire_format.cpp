@@ -38,7 +38,8 @@ std::string check(const std::uint8_t* data, std::size_t size) {
     }
     case net::PacketType::FrameChunk: {
       const net::FrameChunk& c = p.chunk;
-      if (c.points.empty() || c.chunk_index >= c.chunk_count || c.total_points > net::kMaxFramePoints ||
+      if (c.points.empty() || c.chunk_index >= c.chunk_count ||
+          c.total_points > net::kMaxFramePoints ||
           std::uint64_t{c.first_point} + c.points.size() > c.total_points)
         broken("inconsistent chunk decoded");
       return "chunk";

@@ -52,7 +52,8 @@ LidarFrame frame(double stamp, int n, bool with_time) {
 
 void save(const fs::path& p, const std::vector<std::uint8_t>& bytes) {
   std::ofstream(p, std::ios::binary)
-      .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+      .write(reinterpret_cast<const char*>(bytes.data()),
+             static_cast<std::streamsize>(bytes.size()));
 }
 
 template <class T>
@@ -114,9 +115,9 @@ int main(int argc, char** argv) {
   // Bags: the release layout (uncompressed, lz4, bz2) and the radar-like ones.
   const std::vector<LidarFrame> frames = {frame(kT0 + 0.02, 8, true), frame(kT0 + 0.07, 8, true)};
   using C = ros1::BagWriteOptions::Compression;
-  for (const auto& [name, c] : {std::pair{"release.bag", C::kNone},
-                                std::pair{"release_lz4.bag", C::kLz4},
-                                std::pair{"release_bz2.bag", C::kBz2}}) {
+  for (const auto& [name, c] :
+       {std::pair{"release.bag", C::kNone}, std::pair{"release_lz4.bag", C::kLz4},
+        std::pair{"release_bz2.bag", C::kBz2}}) {
     ros1::BagWriteOptions o;
     o.compression = c;
     o.lidar_publish_delay = 0.03;

@@ -1,14 +1,14 @@
 // Replays inputs through a harness built without libFuzzer: each argument is a file or a folder
 // (its files, sorted); prints "<file>: <outcome>" per input. Exit status 0 once every input ran
 // (a crash or an abort of the harness is the failure), 2 for a missing argument.
-#include "harness.h"
-
 #include <algorithm>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <iterator>
 #include <vector>
+
+#include "harness.h"
 
 int main(int argc, char** argv) {
   namespace fs = std::filesystem;
@@ -34,7 +34,8 @@ int main(int argc, char** argv) {
   }
   for (const auto& p : inputs) {
     std::ifstream in(p, std::ios::binary);
-    const std::vector<char> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    const std::vector<char> bytes((std::istreambuf_iterator<char>(in)),
+                                  std::istreambuf_iterator<char>());
     std::cout << p.string() << ": "
               << freeinit::fuzz::fuzzOne(reinterpret_cast<const std::uint8_t*>(bytes.data()),
                                          bytes.size())

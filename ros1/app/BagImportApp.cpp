@@ -87,9 +87,9 @@ BagImportSettings loadBagImportSettings(const std::string& ini_file) {
   L(kSection, "time_scale", b.cloud.time.scale);
   L(kSection, "time_relative", b.cloud.time.relative);
   L(kSection, "frame_duration", b.cloud.time.frame_duration);
-  b.stamp_source = static_cast<ros1::StampSource>(
-      L.choice(kSection, "stamp_source", {"header", "trigger", "bag_time"},
-               static_cast<int>(b.stamp_source)));
+  b.stamp_source = static_cast<ros1::StampSource>(L.choice(kSection, "stamp_source",
+                                                           {"header", "trigger", "bag_time"},
+                                                           static_cast<int>(b.stamp_source)));
   L(kSection, "trigger_topic", b.trigger_topic);
   readField(L, "intensity_field", b.cloud.intensity);
   readField(L, "line_field", b.cloud.line);
@@ -137,14 +137,14 @@ int BagImportApp::run(std::ostream& log) {
     out += ".rawlog";
   }
   const auto& b = settings.bag;
-  const std::string time =
-      b.cloud.time.field.name.empty()
-          ? "no per-point time (points spread over " + fixed(b.cloud.time.frame_duration, 4) +
-                " s in point order)"
-          : "time '" + b.cloud.time.field.name + "' " +
-                ros1::fieldTypeName(b.cloud.time.field.type) + " x " +
-                fixed(b.cloud.time.scale, 12) + " s " +
-                (b.cloud.time.relative ? "after" : "absolute, not after") + " the scan stamp";
+  const std::string time = b.cloud.time.field.name.empty()
+                               ? "no per-point time (points spread over " +
+                                     fixed(b.cloud.time.frame_duration, 4) + " s in point order)"
+                               : "time '" + b.cloud.time.field.name + "' " +
+                                     ros1::fieldTypeName(b.cloud.time.field.type) + " x " +
+                                     fixed(b.cloud.time.scale, 12) + " s " +
+                                     (b.cloud.time.relative ? "after" : "absolute, not after") +
+                                     " the scan stamp";
   log << "Importing " << params.bag << " -> " << out << "\n  IMU " << b.imu_topic
       << (b.imu_accel_in_g ? " (accelerations in g)" : " (m/s^2)") << ", LiDAR " << b.lidar_topic
       << ": Doppler '" << b.cloud.doppler.name << "' x" << b.cloud.doppler_sign << ", " << time

@@ -101,8 +101,7 @@ T fixedField(const Fields& f, const char* name, std::uint64_t at, const std::str
 const std::string& stringField(const Fields& f, const char* name, std::uint64_t at,
                                const std::string& what) {
   const auto it = f.find(name);
-  if (it == f.end() || it->second.empty())
-    throw Bad(at, what + ": no '" + name + "' field");
+  if (it == f.end() || it->second.empty()) throw Bad(at, what + ": no '" + name + "' field");
   return it->second;
 }
 
@@ -229,8 +228,8 @@ std::vector<std::uint8_t> bz2Decompress(const std::vector<std::uint8_t>& in, std
     ret = BZ2_bzDecompress(&s);
     if (s.avail_out == 0) {
       BZ2_bzDecompressEnd(&s);
-      throw Bad(at, "bz2 chunk decompresses to more than its declared size " +
-                        std::to_string(declared));
+      throw Bad(
+          at, "bz2 chunk decompresses to more than its declared size " + std::to_string(declared));
     }
   }
   BZ2_bzDecompressEnd(&s);
@@ -275,9 +274,10 @@ std::vector<std::uint8_t> lz4Decompress(const std::vector<std::uint8_t>& in, std
     } else {
       const std::size_t before = out.size();
       out.resize(before + std::min(room, max_block));
-      const int n = LZ4_decompress_safe(reinterpret_cast<const char*>(in.data() + pos),
-                                        reinterpret_cast<char*>(out.data() + before),
-                                        static_cast<int>(size), static_cast<int>(out.size() - before));
+      const int n =
+          LZ4_decompress_safe(reinterpret_cast<const char*>(in.data() + pos),
+                              reinterpret_cast<char*>(out.data() + before), static_cast<int>(size),
+                              static_cast<int>(out.size() - before));
       if (n < 0) throw bad("corrupt block (or larger than the declared size)");
       out.resize(before + static_cast<std::size_t>(n));
     }
@@ -344,8 +344,9 @@ class Checker {
     if (enc != r.header.end() && !enc->second.empty() && enc->second != "rosbag/NoEncryptor")
       throw Bad(r.at, "an encrypted bag (" + enc->second + "): decrypt it first (rosbag decrypt)");
     if (index_pos_ == 0)
-      throw Bad(r.at, "the bag is not indexed (a recording that did not finish?): run "
-                      "`rosbag reindex` on it");
+      throw Bad(r.at,
+                "the bag is not indexed (a recording that did not finish?): run "
+                "`rosbag reindex` on it");
   }
 
   void chunk(const Record& r) {
@@ -431,9 +432,9 @@ class Checker {
       // librosbag logs and drops an entry whose time is not in [0 s 1 ns, the largest time].
       const std::uint32_t sec = u32At(d.data() + 12 * i), nsec = u32At(d.data() + 12 * i + 4);
       if ((sec == 0 && nsec == 0) || nsec >= 1000000000U)
-        throw Bad(r.data_at + 12 * i, "index entry " + std::to_string(i) + " has an invalid time (" +
-                                          std::to_string(sec) + " s " + std::to_string(nsec) +
-                                          " ns)");
+        throw Bad(r.data_at + 12 * i, "index entry " + std::to_string(i) +
+                                          " has an invalid time (" + std::to_string(sec) + " s " +
+                                          std::to_string(nsec) + " ns)");
       const std::uint32_t offset = u32At(d.data() + 12 * i + 8);
       // librosbag reads the record at `offset`, skipping connection records, and expects a
       // message record there.
@@ -467,7 +468,8 @@ class Checker {
 
   void finish(const std::vector<std::pair<std::uint64_t, std::uint8_t>>& top) {
     // librosbag reads conn_count connection records from index_pos, then chunk_count chunk infos.
-    auto it = std::find_if(top.begin(), top.end(), [&](const auto& t) { return t.first == index_pos_; });
+    auto it =
+        std::find_if(top.begin(), top.end(), [&](const auto& t) { return t.first == index_pos_; });
     if (it == top.end())
       throw Bad(index_pos_, "the file header's index position is not the start of a record");
     std::set<std::uint32_t> index_conns;
@@ -526,7 +528,8 @@ class Checker {
 // followed by their elements.
 class MessageWalker {
  public:
-  MessageWalker(const std::uint8_t* d, std::size_t n, const char* type) : d_(d), n_(n), type_(type) {}
+  MessageWalker(const std::uint8_t* d, std::size_t n, const char* type)
+      : d_(d), n_(n), type_(type) {}
   void skip(std::size_t bytes, const char* field) {
     if (bytes > n_ - pos_)
       throw std::runtime_error(std::string("serialized ") + type_ + ": " + field + " needs " +
@@ -543,8 +546,8 @@ class MessageWalker {
     const std::uint32_t c = u32(field);
     if (static_cast<std::uint64_t>(c) * min_bytes > n_ - pos_)
       throw std::runtime_error(std::string("serialized ") + type_ + ": " + field + " declares " +
-                               std::to_string(c) + " element(s), the " +
-                               std::to_string(n_ - pos_) + " bytes left hold at most " +
+                               std::to_string(c) + " element(s), the " + std::to_string(n_ - pos_) +
+                               " bytes left hold at most " +
                                std::to_string((n_ - pos_) / min_bytes));
     return c;
   }

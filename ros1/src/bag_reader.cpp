@@ -132,9 +132,9 @@ void BagSummary::print(std::ostream& out) const {
     out << "\n";
   }
   if (!trigger.topic.empty()) {
-    out << "  scan stamps from " << trigger.topic << " (std_msgs/Header, matched by seq): "
-        << trigger.in_bag << " triggers, " << trigger.used << " used, "
-        << trigger.in_bag - trigger.used << " without a cloud";
+    out << "  scan stamps from " << trigger.topic
+        << " (std_msgs/Header, matched by seq): " << trigger.in_bag << " triggers, " << trigger.used
+        << " used, " << trigger.in_bag - trigger.used << " without a cloud";
     if (trigger.repeated_seq > 0) out << ", " << trigger.repeated_seq << " with a repeated seq";
     out << "; clouds recorded " << fmt(trigger.median_bag_delay, 6)
         << " s (median, bag time - trigger stamp) after their trigger\n";
@@ -232,8 +232,8 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
     try {
       for (const rosbag::MessageInstance& m :
            rosbag::View(bag, rosbag::TopicQuery(config.trigger_topic))) {
-        const std::string where = path + ": " + config.trigger_topic + " message " +
-                                  std::to_string(k++);
+        const std::string where =
+            path + ": " + config.trigger_topic + " message " + std::to_string(k++);
         std_msgs::Header h;
         try {
           readMessage(m, RosMessage::kHeader, buf, h);
@@ -299,10 +299,10 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
     sensor_msgs::Imu msg;
     readMessage(m, RosMessage::kImu, buf, msg);
     if (msg.angular_velocity_covariance[0] == -1 || msg.linear_acceleration_covariance[0] == -1)
-      throw BagError(where + ": the IMU declares no " +
-                     (msg.angular_velocity_covariance[0] == -1 ? "angular velocity"
-                                                               : "linear acceleration") +
-                     " (covariance[0] = -1)");
+      throw BagError(
+          where + ": the IMU declares no " +
+          (msg.angular_velocity_covariance[0] == -1 ? "angular velocity" : "linear acceleration") +
+          " (covariance[0] = -1)");
     Pending p;
     p.imu.t = msg.header.stamp.toSec();
     p.imu.gyro = Vec3(msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z);
@@ -375,9 +375,8 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
     total = view.size();
     for (const rosbag::MessageInstance& m : view) {
       const bool is_imu = m.getTopic() == config.imu_topic;
-      const std::string where =
-          path + ": " + (is_imu ? config.imu_topic : config.lidar_topic) + " message " +
-          std::to_string(is_imu ? imu_index++ : lidar_index++);
+      const std::string where = path + ": " + (is_imu ? config.imu_topic : config.lidar_topic) +
+                                " message " + std::to_string(is_imu ? imu_index++ : lidar_index++);
       try {
         if (is_imu)
           imuMessage(m, where);

@@ -3,7 +3,6 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
-
 #include <algorithm>
 #include <cmath>
 #include <random>
@@ -74,8 +73,8 @@ DopplerFit fitScanVelocity(const std::vector<DopplerPoint>& points, const Dopple
       best = v;
     }
   };
-  const double triples = static_cast<double>(n) * static_cast<double>(n - 1) *
-                         static_cast<double>(n - 2) / 6.0;
+  const double triples =
+      static_cast<double>(n) * static_cast<double>(n - 1) * static_cast<double>(n - 2) / 6.0;
   if (triples <= p.hypotheses) {
     for (std::size_t a = 0; a < n; ++a)
       for (std::size_t b = a + 1; b < n; ++b)
@@ -98,7 +97,8 @@ DopplerFit fitScanVelocity(const std::vector<DopplerPoint>& points, const Dopple
   std::size_t m = 0;
   for (int it = 0; it < 20; ++it) {
     std::vector<char> next(n, 0);
-    for (std::size_t i = 0; i < n; ++i) next[i] = std::abs(residual(obs[i], v)) <= p.inlier_threshold;
+    for (std::size_t i = 0; i < n; ++i)
+      next[i] = std::abs(residual(obs[i], v)) <= p.inlier_threshold;
     const bool stable = it > 0 && next == inlier;
     inlier = std::move(next);
     A.setZero();

@@ -129,8 +129,8 @@ std::string guardError(const std::string& path) {
 TEST(BagGuard, ValidBagsPass) {
   const std::string d = dir();
   using C = BagWriteOptions::Compression;
-  for (const auto& [name, c] : {std::pair{"none", C::kNone}, std::pair{"lz4", C::kLz4},
-                                std::pair{"bz2", C::kBz2}})
+  for (const auto& [name, c] :
+       {std::pair{"none", C::kNone}, std::pair{"lz4", C::kLz4}, std::pair{"bz2", C::kBz2}})
     EXPECT_EQ(guardError(validBag(d + "/" + name + ".bag", c)), "") << name;
 }
 
@@ -194,8 +194,9 @@ TEST(BagGuard, UnindexedAndOtherFormats) {
   Bytes b = load(validBag(d + "/ok.bag"));
   const std::size_t index_pos = first(records(b), 0x03).field.at("index_pos");
   std::memset(&b[index_pos], 0, 8);
-  EXPECT_CONTAINS(guardError(save(d + "/active.bag", b)),
-                  "the bag is not indexed (a recording that did not finish?): run `rosbag reindex`");
+  EXPECT_CONTAINS(
+      guardError(save(d + "/active.bag", b)),
+      "the bag is not indexed (a recording that did not finish?): run `rosbag reindex`");
   b = load(d + "/ok.bag");
   std::memcpy(&b[0], "#ROSBAG V1.2", 12);
   EXPECT_CONTAINS(guardError(save(d + "/v12.bag", b)), "a ROS bag of format 1.2");

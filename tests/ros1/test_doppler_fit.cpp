@@ -107,7 +107,6 @@ TEST(DopplerFit, QuantizedDopplerAndTheFloor) {
     ASSERT_TRUE(f.ok) << f.message;
     const Vec3 e = f.v_l - s.v;
     nees += e.dot(f.cov.inverse() * e) / trials;
-
   }
   EXPECT_NEAR(nees, 3.0, 0.6);
 

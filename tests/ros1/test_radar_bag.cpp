@@ -33,10 +33,10 @@ const std::string kBag =
     std::string(FREEINIT_SHARED_DATA) + "/ti_mmwave_radar_imu/ti_mmwave_rospkg_demo.bag";
 const std::string kIni = kSrc + "/ini/import_bag_ti_mmwave.ini";
 
-#define SKIP_WITHOUT_THE_BAG()                                                       \
-  do {                                                                               \
-    if (!fs::is_regular_file(kBag))                                                  \
-      GTEST_SKIP() << "the recording " << kBag                                       \
+#define SKIP_WITHOUT_THE_BAG()                                                                   \
+  do {                                                                                           \
+    if (!fs::is_regular_file(kBag))                                                              \
+      GTEST_SKIP() << "the recording " << kBag                                                   \
                    << " is not here (shared test data; configure with -DFREEINIT_SHARED_DATA=)"; \
   } while (false)
 
@@ -225,8 +225,8 @@ TEST(RadarBag, DopplerFitWhileMovingAgreesWithTheImu) {
     const Vec3 w = 0.5 * (r.imu[i - 1].gyro + r.imu[i].gyro) - bias;
     const double dt = r.imu[i].t - r.imu[i - 1].t;
     const double angle = w.norm() * dt;
-    const Mat3 R = angle > 0 ? Eigen::AngleAxisd(angle, w.normalized()).toRotationMatrix()
-                             : Mat3::Identity();
+    const Mat3 R =
+        angle > 0 ? Eigen::AngleAxisd(angle, w.normalized()).toRotationMatrix() : Mat3::Identity();
     g_b[i] = R.transpose() * g_b[i - 1];  // R_b(i-1)b(i)^T: the fixed vector seen from the new pose
   }
   auto index = [&](double t) {  // last IMU sample at or before t
@@ -242,8 +242,8 @@ TEST(RadarBag, DopplerFitWhileMovingAgreesWithTheImu) {
     const double t0 = r.scans[k].stamp + r.fits[k].mean_time_offset;
     const double t1 = r.scans[k + 1].stamp + r.fits[k + 1].mean_time_offset;
     if (!moving(t0) || !moving(t1)) continue;
-    ASSERT_TRUE(r.fits[k].ok && r.fits[k + 1].ok) << k << ": " << r.fits[k].message << " / "
-                                                   << r.fits[k + 1].message;
+    ASSERT_TRUE(r.fits[k].ok && r.fits[k + 1].ok)
+        << k << ": " << r.fits[k].message << " / " << r.fits[k + 1].message;
     const Vec3 v0 = e.R_bl * r.fits[k].v_l - omega(t0).cross(e.p_bl);
     const Vec3 v1 = e.R_bl * r.fits[k + 1].v_l - omega(t1).cross(e.p_bl);
     // Integrate the body velocity over the IMU samples between the two times.

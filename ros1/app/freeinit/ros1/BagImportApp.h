@@ -35,8 +35,8 @@ struct BagImportAppParams {
 struct BagImportSettings {
   ros1::BagImportConfig bag;
   Extrinsics extrinsics;
-  std::string imu_label = "IMU";      ///< sensorLabel written on the IMU observations
-  std::string lidar_label = "LIDAR";  ///< sensorLabel written on the point clouds
+  std::string imu_label = "IMU";       ///< sensorLabel written on the IMU observations
+  std::string lidar_label = "LIDAR";   ///< sensorLabel written on the point clouds
   ros1::DopplerFitParams doppler_fit;  ///< [doppler_fit]: the per-scan fits of --doppler-fit-csv
 };
 

@@ -7,8 +7,9 @@
 //   range-rate sign of freeinit/types.h. Everything is configurable; nothing is guessed from data.
 // Other sensors: clouds without a per-point time (all points at the scan stamp, or spread evenly
 // over a declared frame duration), scan stamps from a trigger topic matched by sequence number or
-// from the bag's receive time, and a declared offset between the clocks (ini/import_bag_ti_mmwave.ini
-// is a 4D radar with all three).
+// from the bag's receive time, and a declared offset between the clocks
+// (ini/import_bag_ti_mmwave.ini is a 4D radar with all three).
+//
 // No ROS and no MRPT type appears here.
 #pragma once
 
@@ -55,8 +56,8 @@ struct FieldSpec {
 /// frame; frame_duration = 0 puts every point at the scan stamp.
 struct TimeFieldSpec {
   FieldSpec field{"time_offset_ns", FieldType::kInt32};
-  double scale = 1e-9;   ///< [s per unit] 1e-9 for ns, 1e-6 for us, 1 for s
-  bool relative = true;  ///< value is relative to the header stamp (else absolute UNIX time)
+  double scale = 1e-9;        ///< [s per unit] 1e-9 for ns, 1e-6 for us, 1 for s
+  bool relative = true;       ///< value is relative to the header stamp (else absolute UNIX time)
   double frame_duration = 0;  ///< [s] without a time field: the span the points are spread over
 };
 

@@ -45,12 +45,12 @@ struct TopicSummary {
   std::size_t out_of_order = 0;  ///< skipped: stamp earlier than the previous one of the topic
   std::size_t duplicated = 0;    ///< skipped: same stamp as the previous one of the topic
   std::size_t unusable = 0;      ///< skipped: zero stamp, NaN values, no valid point
-  std::size_t untriggered = 0;   ///< skipped: no trigger of the cloud's seq (stamp_source = trigger)
-  double first = 0, last = 0;    ///< [s] first and last imported stamps
-  double median_interval = 0;    ///< [s]
-  std::size_t gaps = 0;          ///< intervals > gap_factor * median_interval
-  double largest_gap = 0;        ///< [s]
-  double largest_gap_at = 0;     ///< [s] stamp at the end of the largest gap
+  std::size_t untriggered = 0;  ///< skipped: no trigger of the cloud's seq (stamp_source = trigger)
+  double first = 0, last = 0;   ///< [s] first and last imported stamps
+  double median_interval = 0;   ///< [s]
+  std::size_t gaps = 0;         ///< intervals > gap_factor * median_interval
+  double largest_gap = 0;       ///< [s]
+  double largest_gap_at = 0;    ///< [s] stamp at the end of the largest gap
   std::size_t skipped() const { return out_of_order + duplicated + unusable + untriggered; }
   double meanRate() const;  ///< [Hz] (imported - 1) / (last - first)
 };
@@ -58,8 +58,8 @@ struct TopicSummary {
 /// The trigger topic (stamp_source = trigger).
 struct TriggerSummary {
   std::string topic;
-  std::size_t in_bag = 0;      ///< std_msgs/Header messages on it
-  std::size_t used = 0;        ///< triggers that stamped a cloud
+  std::size_t in_bag = 0;        ///< std_msgs/Header messages on it
+  std::size_t used = 0;          ///< triggers that stamped a cloud
   std::size_t repeated_seq = 0;  ///< triggers whose seq another trigger also has
   /// [s] median of (cloud bag time - trigger stamp) over the matched clouds: the publishing delay
   /// plus the offset between the recorder's clock and the trigger's.
@@ -69,7 +69,7 @@ struct TriggerSummary {
 struct BagSummary {
   std::string file;
   TopicSummary imu, lidar;
-  TriggerSummary trigger;  ///< empty topic: stamps not from a trigger
+  TriggerSummary trigger;                 ///< empty topic: stamps not from a trigger
   std::vector<std::string> other_topics;  ///< "topic (type, N messages)", not imported
   std::size_t points = 0;                 ///< LiDAR points passed on
   std::size_t invalid_points = 0;         ///< NaN/inf points dropped

@@ -24,11 +24,11 @@
 namespace freeinit::ros1 {
 
 struct DopplerFitParams {
-  double min_range = 0.0;          ///< [m] closer points are not used
-  double inlier_threshold = 0.15;  ///< [m/s] largest |residual| of an inlier
-  double sigma_floor = 0.0;        ///< [m/s] lower bound of the per-point residual std
-  int hypotheses = 400;            ///< 3-point hypotheses (all triples when there are fewer)
-  std::size_t min_points = 8;      ///< fewer usable points: no fit
+  double min_range = 0.0;            ///< [m] closer points are not used
+  double inlier_threshold = 0.15;    ///< [m/s] largest |residual| of an inlier
+  double sigma_floor = 0.0;          ///< [m/s] lower bound of the per-point residual std
+  int hypotheses = 400;              ///< 3-point hypotheses (all triples when there are fewer)
+  std::size_t min_points = 8;        ///< fewer usable points: no fit
   double min_inlier_fraction = 0.5;  ///< fewer inliers: no fit (mostly moving objects or noise)
   /// [-] smallest eigenvalue of D^T D over the inliers (D: rows d^T); below it the directions do
   /// not constrain every velocity axis (the weakest axis' sigma is then above 3x the residual
@@ -39,10 +39,10 @@ struct DopplerFitParams {
 
 struct DopplerFit {
   bool ok = false;
-  std::string message;          ///< why not, when !ok
-  Vec3 v_l = Vec3::Zero();      ///< [m/s] sensor velocity, sensor frame
-  Mat3 cov = Mat3::Zero();      ///< [(m/s)^2]
-  std::size_t points = 0;       ///< points used (within range, finite)
+  std::string message;      ///< why not, when !ok
+  Vec3 v_l = Vec3::Zero();  ///< [m/s] sensor velocity, sensor frame
+  Mat3 cov = Mat3::Zero();  ///< [(m/s)^2]
+  std::size_t points = 0;   ///< points used (within range, finite)
   std::size_t inliers = 0;
   double residual_sigma = 0;    ///< [m/s] std of the inlier residuals (before the floor)
   double mean_time_offset = 0;  ///< [s] mean time offset of the inliers: the time v_l refers to
