@@ -106,7 +106,8 @@ std::vector<Rec> records(const Bytes& b) {
   }
   return out;
 }
-const Rec& first(const std::vector<Rec>& rs, std::uint8_t op) {
+// A copy: callers pass records(b), a temporary.
+Rec first(const std::vector<Rec>& rs, std::uint8_t op) {
   for (const Rec& r : rs)
     if (r.op == op) return r;
   throw std::runtime_error("no record of that op");
