@@ -309,25 +309,23 @@ const config::Section<Shelf>& shelfSection() {
           .choice("kind", &Shelf::kind, {{"plain", "plain"}, {"tilted", "tilted"}}, "shape")
           .number("tilt", &Shelf::tilt, "deg", config::between(-45, 45), "tilt of a tilted shelf")
           .when([](const Shelf& x) { return x.kind == "tilted"; })
-          .custom(
-              "boards", &Shelf::widths, "-", "[0, 10]",
-              std::function<std::string(std::string_view, V&)>([](std::string_view t, V& v) {
-                long double n = 0;
-                std::string err = config::parseInteger(t, 0, 10, n);
-                if (err.empty()) v.resize(static_cast<std::size_t>(n));
-                return err;
-              }),
-              std::function<std::string(const V&)>(
-                  [](const V& v) { return std::to_string(v.size()); }),
-              "number of boards")
-          .items(
-              "board_", &Shelf::widths, "boards", "m", "> 0",
-              std::function<std::string(std::string_view, double&)>(
-                  [](std::string_view t, double& x) { return config::parseNumber(t, x); }),
-              std::function<std::string(const double&)>(config::formatNumber),
-              std::function<std::string(const double&)>(
-                  [](const double& x) { return x > 0 ? "" : "must be > 0"; }),
-              "width of board k");
+          .custom("boards", &Shelf::widths, "-", "[0, 10]",
+                  std::function<std::string(std::string_view, V&)>([](std::string_view t, V& v) {
+                    long double n = 0;
+                    std::string err = config::parseInteger(t, 0, 10, n);
+                    if (err.empty()) v.resize(static_cast<std::size_t>(n));
+                    return err;
+                  }),
+                  std::function<std::string(const V&)>(
+                      [](const V& v) { return std::to_string(v.size()); }),
+                  "number of boards")
+          .items("board_", &Shelf::widths, "boards", "m", "> 0",
+                 std::function<std::string(std::string_view, double&)>(
+                     [](std::string_view t, double& x) { return config::parseNumber(t, x); }),
+                 std::function<std::string(const double&)>(config::formatNumber),
+                 std::function<std::string(const double&)>(
+                     [](const double& x) { return x > 0 ? "" : "must be > 0"; }),
+                 "width of board k");
   return s;
 }
 }  // namespace
@@ -363,8 +361,7 @@ TEST(ConfigSection, ItemsAndKeysDumpedOnlyWhenTheyMatter) {
             "c.ini:2: [shelf] board_2: beyond boards = 1");
   EXPECT_EQ(errorOf([] {
               Shelf x;
-              shelfSection().load(IniFile::parse("[shelf]\nboards = 3\nboard_2 = 1\n", "d.ini"),
-                                  x);
+              shelfSection().load(IniFile::parse("[shelf]\nboards = 3\nboard_2 = 1\n", "d.ini"), x);
             }),
             "d.ini:1: [shelf] board_3: missing (boards = 3)");
   EXPECT_EQ(errorOf([] {

@@ -128,9 +128,9 @@ TEST(SimScenarioIni, BadSectionsKeysAndValuesAreNamedWithTheirLine) {
             "'open', 'parking'");
   EXPECT_EQ(errorOf({{"min_range", "5"}, {"max_range", "4"}}),
             "s.ini:3: [scenario] max_range: must be > min_range");
-  EXPECT_EQ(errorOf({{"preset", "nope"}}).rfind("s.ini:2: [scenario] preset: 'nope' is not one of '",
-                                                0),
-            0u);
+  EXPECT_EQ(
+      errorOf({{"preset", "nope"}}).rfind("s.ini:2: [scenario] preset: 'nope' is not one of '", 0),
+      0u);
   EXPECT_NE(errorOf({{"preset", "nope"}}).find("'stat_01'"), std::string::npos);
   EXPECT_NE(errorOf({{"preset", "nope"}}).find("'random'"), std::string::npos);
   EXPECT_EQ(errorOf({{"seed", "-1"}}).rfind("s.ini:2: [scenario] seed: '-1' is out of range", 0),
@@ -211,9 +211,9 @@ TEST(SimScenarioIni, KeyTableIsCompleteAndConsistent) {
     std::string error;
     EXPECT_EQ(section.canonical(k.name, k.default_value, error), k.default_value) << k.name;
     EXPECT_EQ(error, "") << k.name;
-    EXPECT_NE(help.find(k.name + " [" + k.unit + "] = " + k.default_value + "  (" + k.accepted +
-                        ")"),
-              std::string::npos)
+    EXPECT_NE(
+        help.find(k.name + " [" + k.unit + "] = " + k.default_value + "  (" + k.accepted + ")"),
+        std::string::npos)
         << k.name;
   }
   EXPECT_NE(help.find("lidar_time_offset [s] = 0  ([-1, 1])"), std::string::npos);

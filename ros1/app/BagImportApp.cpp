@@ -115,8 +115,8 @@ const config::Section<BagImportSettings>& bagImportSection() {
             "time_relative", [](auto& x) -> auto& { return x.bag.cloud.time.relative; },
             "true: offset after the scan stamp; false: absolute UNIX time (float64)")
         .number(
-            "frame_duration", [](auto& x) -> auto& { return x.bag.cloud.time.frame_duration; },
-            "s", between(0, 10),
+            "frame_duration", [](auto& x) -> auto& { return x.bag.cloud.time.frame_duration; }, "s",
+            between(0, 10),
             "without a time field: the span after the scan stamp the points are spread over, in "
             "point order (0: all at the scan stamp)")
         .choice(

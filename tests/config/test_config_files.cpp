@@ -287,9 +287,8 @@ TEST(BagImportIni, StampSourcesFrameDurationAndDopplerFit) {
                   "s4.ini:2: [bag_import] frame_duration: is for clouds without a per-point time");
   EXPECT_CONTAINS(errorOf([&] { load("s5.ini", "[bag_import]\nstamp_source = trigger\n"); }),
                   "[bag_import] trigger_topic: is required with stamp_source = trigger");
-  EXPECT_CONTAINS(
-      errorOf([&] { load("s6.ini", "[bag_import]\ntrigger_topic = /t\n"); }),
-      "s6.ini:2: [bag_import] trigger_topic: is only read with stamp_source = trigger");
+  EXPECT_CONTAINS(errorOf([&] { load("s6.ini", "[bag_import]\ntrigger_topic = /t\n"); }),
+                  "s6.ini:2: [bag_import] trigger_topic: is only read with stamp_source = trigger");
   EXPECT_CONTAINS(errorOf([&] { load("s7.ini", "[bag_import]\nlidar_time_offset = 5e9\n"); }),
                   "s7.ini:2: [bag_import] lidar_time_offset: 5e9 is out of range: accepted "
                   "[-4294967296, 4294967296] s");
@@ -325,9 +324,8 @@ std::map<std::string, ShippedIni> shippedIniFiles() {
                          // All defaults: the file loads to the code's default configuration.
                          EXPECT_EQ(dump(loadAppConfig(p)), dump(AppConfig{}));
                        }};
-  m["freeinit_radar.ini"] = {appSections(), {}, false, [](const std::string& p) {
-                               loadAppConfig(p);
-                             }};
+  m["freeinit_radar.ini"] = {
+      appSections(), {}, false, [](const std::string& p) { loadAppConfig(p); }};
   m["icp_slam.ini"] = {{&scanSliceSection()},
                        {"MappingApplication", "MappingApplication_pointsMap_00_insertOpts", "ICP"},
                        false,

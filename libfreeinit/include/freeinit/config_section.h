@@ -492,7 +492,7 @@ class Section : public SectionBase {
     std::function<std::string(std::string_view, S&)> set;  ///< returns an error or ""
     std::function<std::string(const S&)> get;              ///< the value as INI text
     std::function<std::string(const S&)> check;            ///< range error or "" (optional)
-    std::shared_ptr<const Items> items = nullptr;           ///< a list (then set/get are unset)
+    std::shared_ptr<const Items> items = nullptr;          ///< a list (then set/get are unset)
     std::function<bool(const S&)> applies = nullptr;       ///< dumped only when it holds
   };
   const Key* find(std::string_view key) const {

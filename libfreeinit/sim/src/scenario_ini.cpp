@@ -159,8 +159,7 @@ void addChannel(config::Section<C>& s, int channel) {
        "polynomial part of the " + name + " signal: sum c_k tau^k")
       .custom(
           name + "_waves", [signal](auto& c) -> auto& { return signal(c).waves; },
-          angle ? "rad, Hz, rad" : "m, Hz, rad",
-          "amplitude freq_hz phase, ... (freq >= 0) or none",
+          angle ? "rad, Hz, rad" : "m, Hz, rad", "amplitude freq_hz phase, ... (freq >= 0) or none",
           std::function<Text(std::string_view, std::vector<Sinusoid>&)>(toWaves),
           std::function<Text(const std::vector<Sinusoid>&)>(wavesText),
           "sinusoids of the " + name + " signal: A sin(2 pi f tau + phase)");
@@ -179,20 +178,19 @@ config::Section<C> buildSection() {
   bases.emplace_back("random", "random");
   s.choice("preset", &C::name, bases,
            "the base scenario the other keys override (random: randomScenario(seed))")
-      .custom(
-          "seed", &C::seed, "-", "[0, 2^64), whole",
-          std::function<Text(std::string_view, std::uint64_t&)>(
-              [](std::string_view text, std::uint64_t& seed) {
-                long double x = 0;
-                Text err = config::parseInteger(
-                    text, 0, static_cast<long double>(std::numeric_limits<std::uint64_t>::max()),
-                    x);
-                if (err.empty()) seed = static_cast<std::uint64_t>(x);
-                return err;
-              }),
-          std::function<Text(const std::uint64_t&)>(
-              [](const std::uint64_t& seed) { return std::to_string(seed); }),
-          "seeds the base, the scene layout, the noise and the seeded draws")
+      .custom("seed", &C::seed, "-", "[0, 2^64), whole",
+              std::function<Text(std::string_view, std::uint64_t&)>(
+                  [](std::string_view text, std::uint64_t& seed) {
+                    long double x = 0;
+                    Text err = config::parseInteger(
+                        text, 0,
+                        static_cast<long double>(std::numeric_limits<std::uint64_t>::max()), x);
+                    if (err.empty()) seed = static_cast<std::uint64_t>(x);
+                    return err;
+                  }),
+              std::function<Text(const std::uint64_t&)>(
+                  [](const std::uint64_t& seed) { return std::to_string(seed); }),
+              "seeds the base, the scene layout, the noise and the seeded draws")
       .number("t0", &C::t0, "s", above(0), "UNIX time of the first sample")
       .number("duration", &C::duration, "s", above(0), "recording length");
   // Motion.
@@ -220,7 +218,8 @@ config::Section<C> buildSection() {
           "yaw of the path frame (scene and motion) in the world");
   // Scene.
   std::vector<std::pair<Text, Text>> kinds;
-  for (const char* k : {"street", "corridor", "tunnel", "open", "parking"}) kinds.emplace_back(k, k);
+  for (const char* k : {"street", "corridor", "tunnel", "open", "parking"})
+    kinds.emplace_back(k, k);
   auto kind = [](const char* k) { return [k](const C& c) { return c.scene.kind == k; }; };
   auto fixed_extent = [](const C& c) { return !c.scene.auto_extent; };
   s.choice(
@@ -264,8 +263,8 @@ config::Section<C> buildSection() {
           "the presets' traffic placed near the start")
       .when(kind("street"))
       .number(
-          "corridor_half_width", [](auto& c) -> auto& { return c.scene.corridor.half_width; },
-          "m", between(0.5, 20), "wall-to-centre distance")
+          "corridor_half_width", [](auto& c) -> auto& { return c.scene.corridor.half_width; }, "m",
+          between(0.5, 20), "wall-to-centre distance")
       .when(kind("corridor"))
       .number(
           "corridor_height", [](auto& c) -> auto& { return c.scene.corridor.height; }, "m",
@@ -299,20 +298,20 @@ config::Section<C> buildSection() {
       .when(kind("open"))
       .number(
           "parking_aisle_half_width",
-          [](auto& c) -> auto& { return c.scene.parking.aisle_half_width; }, "m",
-          between(1.5, 20), "free half width of the aisle")
+          [](auto& c) -> auto& { return c.scene.parking.aisle_half_width; }, "m", between(1.5, 20),
+          "free half width of the aisle")
       .when(kind("parking"))
       .number(
           "parking_occupancy", [](auto& c) -> auto& { return c.scene.parking.occupancy; }, "-",
           between(0, 1), "share of occupied bays")
       .when(kind("parking"))
       .number(
-          "parking_pedestrians", [](auto& c) -> auto& { return c.scene.parking.pedestrians; },
-          "-", between(0, 100), "people walking along the aisle")
+          "parking_pedestrians", [](auto& c) -> auto& { return c.scene.parking.pedestrians; }, "-",
+          between(0, 100), "people walking along the aisle")
       .when(kind("parking"))
       .number(
-          "parking_moving_cars", [](auto& c) -> auto& { return c.scene.parking.moving_cars; },
-          "-", between(0, 100), "cars driving in the parallel aisles")
+          "parking_moving_cars", [](auto& c) -> auto& { return c.scene.parking.moving_cars; }, "-",
+          between(0, 100), "cars driving in the parallel aisles")
       .when(kind("parking"));
   using Objects = std::vector<SceneObject>;
   s.custom(
@@ -324,7 +323,8 @@ config::Section<C> buildSection() {
          if (err.empty()) o.resize(static_cast<std::size_t>(n));
          return err;
        }),
-       std::function<Text(const Objects&)>([](const Objects& o) { return std::to_string(o.size()); }),
+       std::function<Text(const Objects&)>(
+           [](const Objects& o) { return std::to_string(o.size()); }),
        "number of explicitly placed objects (object_1 ...); new ones must be given")
       .items(
           "object_", [](auto& c) -> auto& { return c.scene.objects; }, "objects", "m, rad, m/s",
@@ -349,8 +349,7 @@ config::Section<C> buildSection() {
               {{"alternating", LineDirection::Alternating}, {"forward", LineDirection::Forward}},
               "azimuth sweep: back and forth, or every line the same way")
       .number("min_range", &C::min_range, "m", atLeast(0), "closer returns are dropped")
-      .number("max_range", &C::max_range, "m", above(0),
-              "farther returns are dropped; > min_range")
+      .number("max_range", &C::max_range, "m", above(0), "farther returns are dropped; > min_range")
       .number("range_sigma", &C::range_sigma, "m", atLeast(0), "range noise std")
       .number("doppler_sigma", &C::doppler_sigma, "m/s", atLeast(0), "Doppler noise std")
       .number("outlier_ratio", &C::outlier_ratio, "-", between(0, 1),
@@ -369,8 +368,7 @@ config::Section<C> buildSection() {
             "draw the biases with the seed (the presets' ranges)")
       .vector3("b_g", &C::b_g, "rad/s", any(), "constant gyro bias (random_biases false)")
       .when([](const C& c) { return !c.random_biases; })
-      .vector3("b_a", &C::b_a, "m/s^2", any(),
-               "constant accelerometer bias (random_biases false)")
+      .vector3("b_a", &C::b_a, "m/s^2", any(), "constant accelerometer bias (random_biases false)")
       .when([](const C& c) { return !c.random_biases; });
   // Calibration: the truth, and what is declared.
   s.vector3("lidar_rpy_deg", &C::lidar_rpy_deg, "deg", any(),
