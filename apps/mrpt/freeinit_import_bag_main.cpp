@@ -13,7 +13,9 @@ int main(int argc, char** argv) {
                         "Doppler and time) to a rawlog for freeinit");
   const auto& bag = cli.positional("input.bag", "input ROS1 bag");
   const auto& config = cli.requiredText(
-      "c", "config", "INI with [bag_import] and [extrinsics] (see ini/import_bag.ini)", "FILE");
+      "c", "config",
+      "INI with [bag_import], [extrinsics] and optionally [doppler_fit] (see ini/import_bag.ini)",
+      "FILE");
   const auto& out = cli.text("o", "out", "output rawlog", "", "FILE", "<bag>.rawlog");
   const auto& fit_csv = cli.text("", "doppler-fit-csv",
                                  "also write each imported scan's sensor velocity fitted from its "
