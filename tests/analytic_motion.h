@@ -13,6 +13,7 @@ namespace freeinit::test {
 struct MotionState {
   Mat3 R_wb = Mat3::Identity();
   Vec3 omega_b = Vec3::Zero();  ///< [rad/s]
+  Vec3 p_w = Vec3::Zero();      ///< [m]
   Vec3 v_w = Vec3::Zero();      ///< [m/s]
   Vec3 a_w = Vec3::Zero();      ///< [m/s^2]
 };
@@ -39,6 +40,8 @@ class AnalyticMotion {
     m.R_wb = Rz * Ry * Rx;
     m.omega_b = Rx.transpose() * Ry.transpose() * Vec3(0, 0, yaw_d) +
                 Rx.transpose() * Vec3(0, pitch_d, 0) + Vec3(roll_d, 0, 0);
+    m.p_w = s_ * Vec3(0.5 * t + 0.2 * std::sin(7.0 * t), 0.15 * std::cos(5.0 * t + 1.0),
+                      0.1 * std::sin(9.0 * t));
     m.v_w = s_ * Vec3(0.5 + 1.4 * std::cos(7.0 * t), -0.75 * std::sin(5.0 * t + 1.0),
                       0.9 * std::cos(9.0 * t));
     m.a_w = s_ * Vec3(-9.8 * std::sin(7.0 * t), -3.75 * std::cos(5.0 * t + 1.0),

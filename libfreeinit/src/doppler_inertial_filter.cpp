@@ -209,14 +209,15 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   const Vec3 v_l = R_bl.transpose() * (v_b + omega.cross(p_bl_));
   if (J != nullptr) {
     // dv_b = R^T dv_w + [v_b]x dtheta;  dv_l = R_bl^T (dv_b + [p_bl]x db_g) + [v_l]x dphi_bl
-    // (R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T); d/d(dt_l) = -dv_l/dtau (central difference).
+    // ((R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T); d/d(dt_l) = -dv_l/dtau (central difference).
     const Mat3 Rt = y.R_wb.transpose();
     const Mat3 Rlb = R_bl.transpose();
     const Eigen::Matrix<double, 3, kStateDim> dvb =
         Rt * Js.middleRows<3>(kVel) + skew(v_b) * Js.topRows<3>();
     *J = Rlb * dvb;
     J->block<3, 3>(0, kBg) += Rlb * skew(p_bl_);
-    J->block<3, 3>(0, kRot) = skew(v_l);
+    // The correction is additive (phi_bl + dphi): Exp(phi + dphi) = Exp(phi) Exp(J_r(phi) dphi).
+    J->block<3, 3>(0, kRot) = skew(v_l) * rightJacobian(x.phi_bl);
     // dv_l/dt = R_bl^T (a_b - omega x v_b + alpha x p_bl), a_b = f - b_a + R^T g (the angular
     // acceleration alpha from the interpolated gyro), and dv_l/d(dt_l) = -dv_l/dt.
     constexpr double kStep = 1e-4;  // [s] for alpha

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <random>
 
 namespace freeinit {
@@ -99,8 +100,10 @@ class CoverageGrid {
 /// of so short a span: it must be in its covariance.
 /// `at_rest`: the rest hypothesis, velocity zero and gravity the mean specific force (the moving
 /// objects of a static start must not bend either: only the gyro-bias correction is fitted).
+/// `inliers` (if given) receives which rows the refined motion explains.
 StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, const Vec3& v_start,
-                       const Vec3& g_prior, bool at_rest, const StartDetectorParams& p) {
+                       const Vec3& g_prior, bool at_rest, const StartDetectorParams& p,
+                       std::vector<bool>* inliers = nullptr) {
   using Vec9 = Eigen::Matrix<double, 9, 1>;
   using Mat9 = Eigen::Matrix<double, 9, 9>;
   Vec3 v = v_start, g = g_prior, db = Vec3::Zero();
@@ -117,13 +120,18 @@ StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, c
     return r.e - a.head<6>().dot((Vec6() << v, g).finished()) - a.tail<3>().dot(db);
   };
   Mat9 A = Mat9::Zero();
-  const std::vector<double> scales = {0.5, 0.3, 0.2, 0.15, 0.1, 0.1, 0.1};
+  // (Cauchy scale [m/s], gravity prior std [m/s^2]) per iteration. Gravity is held near its prior
+  // at first: free from the start, it would let the returns of a large moving object that are
+  // consistent with the start only along some directions pull the motion towards theirs.
+  const std::vector<std::pair<double, double>> schedule = {
+      {0.3, 0.5}, {0.3, 1.0}, {0.2, 4.0}, {0.15, 4.0}, {0.1, 4.0}, {0.1, 4.0}, {0.1, 4.0}};
   Vec9 a;
-  for (const double c : scales) {
+  for (const auto& [c, g_sigma] : schedule) {
+    const double g_var = at_rest ? g_prior_var : g_sigma * g_sigma;
     A.setZero();
     Vec9 b = Vec9::Zero();
-    A.block<3, 3>(3, 3).diagonal().setConstant(1.0 / g_prior_var);
-    b.segment<3>(3) = g_prior / g_prior_var;
+    A.block<3, 3>(3, 3).diagonal().setConstant(1.0 / g_var);
+    b.segment<3>(3) = g_prior / g_var;
     A.block<3, 3>(6, 6).diagonal().setConstant(1.0 / bg_prior_var);
     if (at_rest) {
       A.topLeftCorner<3, 3>().diagonal().setConstant(1e12);
@@ -133,7 +141,7 @@ StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, c
       rowOf(r, a);
       const double res = residual(r, a);
       const double u = res / std::max(c, 3.0 * p.doppler_sigma);
-      const double w = inv_r / (1.0 + u * u);
+      const double w = inv_r / ((1.0 + u * u) * (1.0 + u * u));
       A.noalias() += w * a * a.transpose();
       // Linear in theta given the row: e = a^T theta (the db column depends on v, g: iterate).
       b.noalias() += w * r.e * a;
@@ -166,6 +174,7 @@ StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, c
   const Mat9 cov = info.ldlt().solve(Mat9::Identity()) * k * k;
   h.cov = cov.topLeftCorner<6, 6>();
   h.coverage = grid.coverage(inl);
+  if (inliers != nullptr) *inliers = std::move(inl);
   h.rest = v.norm() < p.max_speed;
   h.min_info_eigen = Eigen::SelfAdjointEigenSolver<Mat3>(info.topLeftCorner<3, 3>()).eigenvalues()(0);
   return h;
@@ -280,64 +289,98 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   }
   const CoverageGrid grid(rows);
 
-  // Hypotheses: RANSAC on the first part of the span (gravity at its mean there), removing the
-  // inliers of each hypothesis found.
-  std::size_t n_slice = 0;
-  const double t_slice = 0.015;
-  while (n_slice < rows.size() && (rows[n_slice].t <= t_slice || n_slice < 200)) ++n_slice;
-  std::vector<std::size_t> pool(n_slice);
-  for (std::size_t j = 0; j < n_slice; ++j) pool[j] = j;
+  // Hypotheses: RANSAC on short slices of the span (gravity at its mean there; a slice is short
+  // enough that the mean acceleration's share of the velocity change within it stays inside the
+  // gate), removing the inliers of each hypothesis found. Slices start at the span's beginning
+  // and at three later times: a scan pattern sweeps the view, so that what the first instants
+  // see may be one large moving object, with the world in view only later.
   std::mt19937_64 rng(0x5eed ^ rows.size());
   std::vector<Vec3> starts;
   const double ransac_gate = 2.0 * p.gate;
-  for (int h = 0; h < p.max_hypotheses && pool.size() >= 10; ++h) {
-    std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
-    std::size_t best = 0;
-    Vec3 best_v = Vec3::Zero();
-    for (int it = 0; it < p.ransac_iterations; ++it) {
-      Mat3 W;
-      Vec3 e;
-      for (int k = 0; k < 3; ++k) {
-        const Row& r = rows[pool[pick(rng)]];
-        W.row(k) = r.w.transpose();
-        e(k) = r.e + r.t * r.w.dot(g_mean);
+  constexpr double kSlice = 0.015;  // [s]
+  constexpr std::size_t kSlicePoints = 200;
+  for (int slice = 0; slice < 4; ++slice) {
+    const double t_s = T * slice / 4.0;
+    std::vector<std::size_t> pool;
+    for (std::size_t j = 0; j < rows.size(); ++j)
+      if (rows[j].t >= t_s && (rows[j].t <= t_s + kSlice || pool.size() < kSlicePoints))
+        pool.push_back(j);
+    for (int h = 0; h < p.max_hypotheses && pool.size() >= 10; ++h) {
+      std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
+      std::size_t best = 0;
+      Vec3 best_v = Vec3::Zero();
+      for (int it = 0; it < p.ransac_iterations; ++it) {
+        Mat3 W;
+        Vec3 e;
+        for (int k = 0; k < 3; ++k) {
+          const Row& r = rows[pool[pick(rng)]];
+          W.row(k) = r.w.transpose();
+          e(k) = r.e + r.t * r.w.dot(g_mean);
+        }
+        if (std::abs(W.determinant()) < 1e-3) continue;
+        const Vec3 v = -W.inverse() * e;
+        std::size_t count = 0;
+        for (std::size_t j : pool)
+          if (std::abs(rows[j].residual(v, g_mean)) < ransac_gate) ++count;
+        if (count > best) {
+          best = count;
+          best_v = v;
+        }
       }
-      if (std::abs(W.determinant()) < 1e-3) continue;
-      const Vec3 v = -W.inverse() * e;
-      std::size_t count = 0;
+      if (best < std::max<std::size_t>(10, pool.size() / 20)) break;
+      starts.push_back(best_v);
+      std::vector<std::size_t> rest;
       for (std::size_t j : pool)
-        if (std::abs(rows[j].residual(v, g_mean)) < ransac_gate) ++count;
-      if (count > best) {
-        best = count;
-        best_v = v;
-      }
+        if (std::abs(rows[j].residual(best_v, g_mean)) >= ransac_gate) rest.push_back(j);
+      pool.swap(rest);
     }
-    if (best < std::max<std::size_t>(10, pool.size() / 20)) break;
-    starts.push_back(best_v);
-    std::vector<std::size_t> rest;
-    for (std::size_t j : pool)
-      if (std::abs(rows[j].residual(best_v, g_mean)) >= ransac_gate) rest.push_back(j);
-    pool.swap(rest);
   }
   // Refine each on the whole span; merge those that converge to the same motion.
+  std::vector<std::vector<bool>> masks;  // the rows each hypothesis explains
   for (const Vec3& v0 : starts) {
-    const StartHypothesis h = refine(rows, grid, v0, g_mean, false, p);
+    std::vector<bool> mask;
+    const StartHypothesis h = refine(rows, grid, v0, g_mean, false, p, &mask);
     if (h.inliers < 10 || !h.v_b0.allFinite()) continue;
+    // Gravity is what the refinement finds it to be: a motion that needs one far from 9.81 m/s^2
+    // is not a motion of the platform (the mean acceleration over the span stays well inside).
+    if (std::abs(h.g_b0.norm() - kGravity) > p.max_gravity_error) continue;
     bool merged = false;
-    for (StartHypothesis& o : out.hypotheses) {
-      if ((o.v_b0 - h.v_b0).norm() < 2.0 * p.gate) {
-        if (h.coverage > o.coverage) o = h;
+    for (std::size_t o = 0; o < out.hypotheses.size(); ++o) {
+      if ((out.hypotheses[o].v_b0 - h.v_b0).norm() < 2.0 * p.gate) {
+        if (h.coverage > out.hypotheses[o].coverage) {
+          out.hypotheses[o] = h;
+          masks[o] = mask;
+        }
         merged = true;
         break;
       }
     }
-    if (!merged) out.hypotheses.push_back(h);
+    if (!merged) {
+      out.hypotheses.push_back(h);
+      masks.push_back(std::move(mask));
+    }
   }
-  std::sort(out.hypotheses.begin(), out.hypotheses.end(),
-            [](const StartHypothesis& a, const StartHypothesis& b) {
-              return a.coverage != b.coverage ? a.coverage > b.coverage : a.inliers > b.inliers;
-            });
-  auto speed = [](const StartHypothesis& h) { return std::to_string(h.v_b0.norm()); };
+  std::vector<std::size_t> order(out.hypotheses.size());
+  for (std::size_t j = 0; j < order.size(); ++j) order[j] = j;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const StartHypothesis &ha = out.hypotheses[a], &hb = out.hypotheses[b];
+    return ha.coverage != hb.coverage ? ha.coverage > hb.coverage : ha.inliers > hb.inliers;
+  });
+  {
+    std::vector<StartHypothesis> hs;
+    std::vector<std::vector<bool>> ms;
+    for (std::size_t j : order) {
+      hs.push_back(out.hypotheses[j]);
+      ms.push_back(std::move(masks[j]));
+    }
+    out.hypotheses.swap(hs);
+    masks.swap(ms);
+  }
+  auto speed = [](const StartHypothesis& h) {
+    char buf[32];
+    std::snprintf(buf, sizeof buf, "%.2f", h.v_b0.norm());
+    return std::string(buf);
+  };
   auto percent = [](double x) { return std::to_string(static_cast<int>(std::lround(100 * x))); };
   const double best_coverage = out.hypotheses.empty() ? 0.0 : out.hypotheses.front().coverage;
 
@@ -365,12 +408,27 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   }
   const StartHypothesis& best = out.hypotheses.front();
   if (out.hypotheses.size() > 1) {
-    const StartHypothesis& second = out.hypotheses[1];
-    if (second.coverage >= p.ambiguity_ratio * best.coverage && second.coverage > 0.2) {
+    // The strongest other motion, counted on the returns the best one does not explain (two
+    // fits of one motion that differ a little share their returns: no contender).
+    double contender = 0;
+    std::size_t c = 0;
+    for (std::size_t j = 1; j < out.hypotheses.size(); ++j) {
+      std::vector<bool> own(rows.size());
+      for (std::size_t r = 0; r < rows.size(); ++r) own[r] = masks[j][r] && !masks[0][r];
+      const double cov = grid.coverage(own);
+      if (cov > contender) {
+        contender = cov;
+        c = j;
+      }
+    }
+    const StartHypothesis& second = out.hypotheses[c];
+    if (c > 0 && contender >= p.ambiguity_ratio * best.coverage &&
+        contender >= p.min_contender_coverage) {
       out.kind = StartDecision::Kind::Ambiguous;
-      out.message = "two motions fit the LiDAR returns about equally well (" + speed(best) +
-                    " and " + speed(second) + " m/s over " + percent(best.coverage) + " and " +
-                    percent(second.coverage) + " % of the view)";
+      out.message = "two motions fit the LiDAR returns (" + speed(best) + " and " +
+                    speed(second) + " m/s over " + percent(best.coverage) + " and " +
+                    percent(contender) +
+                    " % of the view): a large moving object may fill the view";
       return out;
     }
   }

@@ -36,8 +36,14 @@ struct StartDetectorParams {
   /// A rest hypothesis supported by at least this fraction of the best hypothesis' coverage wins
   /// when the IMU shows rest.
   double rest_coverage_ratio = 0.1;
-  /// Two motions whose coverages are within this ratio of each other cannot be told apart.
-  double ambiguity_ratio = 0.8;
+  /// A second motion covering at least this share of the best one's view (and at least
+  /// min_contender_coverage of the view) is a contender: which of the two is the world cannot be
+  /// told from the Doppler and the IMU (an object moving at constant velocity is consistent with
+  /// the IMU as well), so the start is ambiguous. A car passing a vehicle covers far less.
+  double ambiguity_ratio = 0.25;
+  double min_contender_coverage = 0.1;
+  /// [m/s^2] a hypothesis whose refined |gravity| is further than this from 9.81 is dropped.
+  double max_gravity_error = 3.0;
   /// [1/(m/s)^2] smallest eigenvalue of the velocity information of the chosen motion's
   /// inliers below which the directions do not constrain the velocity.
   double min_info_eigen = 100.0;
