@@ -1,0 +1,111 @@
+// The estimator on randomized scenarios it was not tuned on (a fixed subset of seeds apart from
+// the ranges used while developing it and from the held-out evaluation), with frames capped to
+// 20,000 points to fit CI: no ok state far outside its physical limit, its own covariance
+// consistent with its errors, and a static start among walkers in an open scene at rest.
+#include <freeinit/eval/bound_ratio.h>
+#include <freeinit/free_init.h>
+#include <freeinit/sim/evaluation.h>
+#include <freeinit/sim/random_scenario.h>
+#include <freeinit/sim/simulator.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <cstdio>
+#include <string>
+
+namespace freeinit {
+namespace {
+
+struct RandomRun {
+  sim::RandomScenario scenario;
+  sim::Recording rec;
+  FreeInitConfig cfg;
+  InitResult result;
+};
+
+/// What a user of the rig configures: the datasheet noise and the calibration as declared.
+RandomRun runSeed(std::uint64_t seed) {
+  RandomRun r{sim::drawRandomScenario(seed), {}, {}, {}};
+  r.scenario.config.duration = 0.8;
+  r.scenario.config.points_per_frame = std::min(r.scenario.config.points_per_frame, 20000);
+  r.rec = sim::simulate(r.scenario.config);
+  r.cfg.extrinsics = r.rec.declared_extrinsics;
+  r.cfg.velocimeter.doppler_sigma = r.rec.config.doppler_sigma;
+  r.cfg.velocimeter.gyro_sigma = r.rec.config.gyro_sigma;
+  r.cfg.gravity.accel_sigma = r.rec.config.accel_sigma;
+  r.result = FreeInit::run(r.cfg, r.rec.imu, r.rec.frames);
+  return r;
+}
+
+TEST(FreeInitRandomized, NoConfidentWrongStateAndAConsistentCovariance) {
+  constexpr std::uint64_t kFirst = 7001, kRuns = 30;
+  const eval::NoticeFloors floors;
+  // NEES above the 99.9 % chi-square quantile (3 dof: 16.27, the tilt's 2 dof: 13.82), per block
+  // (velocity, tilt, b_g, b_a).
+  const std::array<double, 4> quantile = {16.27, 13.82, 16.27, 16.27};
+  std::array<int, 4> above{};
+  int ok = 0, declined = 0;
+  for (std::uint64_t seed = kFirst; seed < kFirst + kRuns; ++seed) {
+    const RandomRun r = runSeed(seed);
+    // A wrong declared calibration is judged by the evaluation's warnings, not here.
+    if (r.scenario.info.calibration_wrong) continue;
+    const InitialState& s = r.result.state;
+    if (!s.ok()) {
+      // Declining is allowed (the start may be ambiguous, the data inconsistent), never a crash
+      // or an unexplained refusal.
+      EXPECT_FALSE(s.message.empty()) << "seed " << seed;
+      ++declined;
+      continue;
+    }
+    ++ok;
+    const sim::InitErrors e = sim::evaluate(s, r.rec);
+    const eval::Bound b = sim::cramerRaoBound(r.rec, r.cfg, r.result);
+    ASSERT_TRUE(e.valid && b.ok) << "seed " << seed << ": " << b.message;
+    const std::string what = "seed " + std::to_string(seed) + " (" +
+                             sim::platformName(r.scenario.info.platform) + "/" +
+                             r.scenario.info.start + ")";
+    EXPECT_FALSE(eval::confidentlyWrong(e.vel_b, b.velocity, floors.velocity)) << what;
+    EXPECT_FALSE(eval::confidentlyWrong(e.gravity_deg, b.gravity_deg, floors.gravity_deg)) << what;
+    EXPECT_FALSE(eval::confidentlyWrong(e.gyro_bias, b.gyro_bias, floors.gyro_bias)) << what;
+    EXPECT_FALSE(eval::confidentlyWrong(e.accel_bias, b.accel_bias, floors.accel_bias)) << what;
+    const std::array<double, 4> nees = {e.nees_vel_b, e.nees_tilt, e.nees_gyro_bias,
+                                        e.nees_accel_bias};
+    for (std::size_t k = 0; k < 4; ++k)
+      if (!(nees[k] <= quantile[k])) ++above[k];
+  }
+  std::printf("%d ok, %d declined; NEES above the 99.9 %% quantile: v %d, tilt %d, b_g %d, b_a %d\n",
+              ok, declined, above[0], above[1], above[2], above[3]);
+  // Most of these starts can be initialized: the held-out evaluation declines 2 % of those with a
+  // right calibration (4 or more of ~22 would happen with probability < 1 %).
+  EXPECT_GE(ok, 15);
+  EXPECT_LE(declined, 3);
+  // A consistent estimator exceeds the 99.9 % quantile in 0.1 % of the runs; at the 1 % the
+  // estimator is held to, 3 or more of ~25 happen with probability 0.2 %.
+  for (std::size_t k = 0; k < 4; ++k) EXPECT_LE(above[k], 2) << "block " << k;
+}
+
+TEST(FreeInitRandomized, StaticStartAmongWalkersInTheOpen) {
+  // The first randomized seeds (outside every evaluation range) that draw a static start in an
+  // open scene with people walking in view: the state is one of rest, the walkers do not move it.
+  int found = 0;
+  for (std::uint64_t seed = 9001; seed < 9400 && found < 2; ++seed) {
+    const sim::RandomScenario sc = sim::drawRandomScenario(seed);
+    if (!sc.info.static_start || sc.info.movers_in_view == 0 || sc.info.scene != "open" ||
+        sc.info.calibration_wrong)
+      continue;
+    ++found;
+    const RandomRun r = runSeed(seed);
+    ASSERT_TRUE(r.result.state.ok()) << "seed " << seed << ": " << r.result.state.message;
+    EXPECT_TRUE(r.result.diag.static_start) << "seed " << seed;
+    const sim::InitErrors e = sim::evaluate(r.result.state, r.rec);
+    // At rest the Doppler of ~100,000 static returns pins the velocity to ~1 mm/s; walkers taken
+    // for the world would show as tenths of a m/s.
+    EXPECT_LT(e.vel_b, 0.01) << "seed " << seed;
+  }
+  EXPECT_EQ(found, 2);
+}
+
+}  // namespace
+}  // namespace freeinit
