@@ -7,8 +7,13 @@
 #   gui_snapshots/results_bounds.md      error / Cramer-Rao bound, NEES, statuses, the bound per
 #                                        preset, confident wrong answers
 #   gui_snapshots/*.png                  the figures
-# then copies each results_*.md into README.md between its markers (results-table,
-# results-bounds: "<!-- NAME:begin -->" ... "<!-- NAME:end -->"), for the markers README.md has.
+# then runs Free-Init over the held-out randomized scenarios (seeds 2000001-2000300, never used
+# while developing the estimator: seeds 1-200 were, and 1000001-1000300 once) and writes
+#   gui_snapshots/eval_random.csv        every run
+#   gui_snapshots/results_random.md      error / bound, NEES, statuses, wrong-calibration runs
+# and copies each results_*.md into README.md between its markers (results-table,
+# results-bounds, results-random: "<!-- NAME:begin -->" ... "<!-- NAME:end -->"), for the
+# markers README.md has.
 #
 #   ./scripts/update_results.sh [--no-readme]   (--no-readme: write the files only)
 #
@@ -28,18 +33,21 @@ out=gui_snapshots
 taskset -c 0 "$eval_app" --jobs 1 --seeds 3 --md $out/eval_presets.md --csv $out/eval_presets.csv \
   --summary-csv $out/eval_summary.csv --bounds-md $out/results_bounds.md --plots $out > /dev/null
 
+taskset -c 0 "$eval_app" --jobs 1 --random 300 --seed-base 2000001 --no-baselines --duration 0.8 \
+  -q --csv $out/eval_random.csv --bounds-md $out/results_random.md > /dev/null
+
 # The paper-layout summary is the first table of the report.
 awk '/^\| metric \| method \|/ {on = 1} on && !/^\|/ {exit} on' $out/eval_presets.md \
   > $out/results_table.md
-for f in results_table results_bounds; do
+for f in results_table results_bounds results_random; do
   [ -s $out/$f.md ] || { echo "[results] error: $out/$f.md is empty" >&2; exit 1; }
 done
-echo "[results] wrote $out/eval_presets.{md,csv}, $out/eval_summary.csv," \
-  "$out/results_{table,bounds}.md and the figures"
+echo "[results] wrote $out/eval_presets.{md,csv}, $out/eval_summary.csv, $out/eval_random.csv," \
+  "$out/results_{table,bounds,random}.md and the figures"
 [ "$readme" -eq 1 ] || exit 0
 
 # Copy each table file into README.md between its markers.
-for name in results-table results-bounds; do
+for name in results-table results-bounds results-random; do
   file=$out/${name/-/_}.md
   if ! grep -q "^<!-- $name:begin -->$" README.md || ! grep -q "^<!-- $name:end -->$" README.md; then
     echo "[results] README.md has no <!-- $name:begin/end --> markers: $file not copied"
