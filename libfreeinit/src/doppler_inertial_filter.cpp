@@ -439,15 +439,18 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
   if (rows == 0) return dx_prior;
   Mat9xS G;
   const Vec9 Q = velocityPolynomial(n, x_lin, &G);
-  using RowsXS = Eigen::Matrix<double, Eigen::Dynamic, kStateDim, 0, 9, kStateDim>;
-  using RowsX1 = Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 9, 1>;
-  using RowsXRows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 9, 9>;
-  const RowsXS H = n.rows.W * G;
-  const RowsX1 innovation = -(n.rows.W * Q + n.rows.y0) - H * dx_prior;
-  RowsXRows S = H * P * H.transpose();
+  // Fixed-size 9-row form (rows beyond the node's rank are zero: they add an identity block to
+  // S and nothing else), so that every product below is unrolled at compile time.
+  Mat9 W = Mat9::Zero();
+  Vec9 y0 = Vec9::Zero();
+  W.topRows(rows) = n.rows.W;
+  y0.head(rows) = n.rows.y0;
+  const Mat9xS H = W * G;
+  const Vec9 innovation = -(W * Q + y0) - H * dx_prior;
+  const Mat9xS HP = H * P;
+  Mat9 S = HP * H.transpose();
   S.diagonal().array() += 1.0;
-  const RowsXS HP = H * P;
-  const Eigen::Matrix<double, kStateDim, Eigen::Dynamic, 0, kStateDim, 9> K = S.ldlt().solve(HP).transpose();
+  const Eigen::Matrix<double, kStateDim, 9> K = S.ldlt().solve(HP).transpose();
   const VecS dx = dx_prior + K * innovation;
   P.noalias() -= K.lazyProduct(HP);
   P = 0.5 * (P + P.transpose()).eval();

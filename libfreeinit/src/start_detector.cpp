@@ -126,7 +126,11 @@ StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, c
   const std::vector<std::pair<double, double>> schedule = {
       {0.3, 0.5}, {0.3, 1.0}, {0.2, 4.0}, {0.15, 4.0}, {0.1, 4.0}, {0.1, 4.0}, {0.1, 4.0}};
   Vec9 a;
-  for (const auto& [c, g_sigma] : schedule) {
+  for (std::size_t iteration = 0; iteration < schedule.size(); ++iteration) {
+    const auto [c, g_sigma] = schedule[iteration];
+    // The first iterations, which only find the inliers, take every third return (weighted
+    // three times), the last ones every return.
+    const std::size_t step = iteration + 3 < schedule.size() && rows.size() > 1500 ? 3 : 1;
     const double g_var = at_rest ? g_prior_var : g_sigma * g_sigma;
     A.setZero();
     Vec9 b = Vec9::Zero();
@@ -137,12 +141,13 @@ StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, c
       A.topLeftCorner<3, 3>().diagonal().setConstant(1e12);
       b.head<3>() = v_start * 1e12;
     }
-    for (const Row& r : rows) {
+    for (std::size_t i = 0; i < rows.size(); i += step) {
+      const Row& r = rows[i];
       rowOf(r, a);
       const double res = residual(r, a);
       const double u = res / std::max(c, 3.0 * p.doppler_sigma);
-      const double w = inv_r / ((1.0 + u * u) * (1.0 + u * u));
-      A.noalias() += w * a * a.transpose();
+      const double w = static_cast<double>(step) * inv_r / ((1.0 + u * u) * (1.0 + u * u));
+      A.selfadjointView<Eigen::Lower>().rankUpdate(a, w);
       // Linear in theta given the row: e = a^T theta (the db column depends on v, g: iterate).
       b.noalias() += w * r.e * a;
     }
@@ -337,7 +342,15 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   }
   // Refine each on the whole span; merge those that converge to the same motion.
   std::vector<std::vector<bool>> masks;  // the rows each hypothesis explains
-  for (const Vec3& v0 : starts) {
+  for (std::size_t i_start = 0; i_start < starts.size(); ++i_start) {
+    const Vec3& v0 = starts[i_start];
+    // The same motion found again in another slice converges to the same hypothesis: refine it
+    // once (slices see one motion within the mean acceleration times their spacing).
+    bool seen = false;
+    for (std::size_t j = 0; j < i_start && !seen; ++j) seen = (starts[j] - v0).norm() < p.gate;
+    for (const StartHypothesis& o : out.hypotheses)
+      seen = seen || (o.v_b0 - v0).norm() < p.gate;
+    if (seen) continue;
     std::vector<bool> mask;
     const StartHypothesis h = refine(rows, grid, v0, g_mean, false, p, &mask);
     if (h.inliers < 10 || !h.v_b0.allFinite()) continue;
