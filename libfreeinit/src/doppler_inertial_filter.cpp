@@ -489,16 +489,61 @@ void DopplerInertialFilter::update() {
     const Eigen::Matrix<double, 3, kStateDim> G0 = G.topRows<3>();
     const Mat3 M = G0 * P * G0.transpose();
     const double k2 = params_.regate_sigma * params_.regate_sigma;
+    // Residual and its variance against the update; which pass the point's own gate.
+    const std::size_t m = open_points_.size();
+    std::vector<double>& res_r = scratch_r_;
+    std::vector<double>& res_var = scratch_var_;
+    std::vector<char>& pass = scratch_pass_;
+    res_r.resize(m);
+    res_var.resize(m);
+    pass.assign(m, 0);
+    for (std::size_t i = 0; i < m; ++i) {
+      const OpenPoint& o = open_points_[i];
+      const Vec3 qs = q.segment<3>(0) + o.s * (q.segment<3>(3) + o.s * q.segment<3>(6));
+      res_r[i] = o.z + o.d.dot(qs);
+      res_var[i] = o.d.dot(M * o.d) + r_doppler_;
+      open_outcomes_[o.outcome].residual = static_cast<float>(res_r[i]);
+      pass[i] = res_r[i] * res_r[i] <= k2 * res_var[i];
+    }
+    // Coherence: the returns of an object moving slowly along the line of sight each pass the
+    // gate, but neighbours in the scan (consecutive returns) share its residual's sign and size.
+    // A point whose neighbourhood's mean residual is significantly non-zero is dropped (a static
+    // world leaves white residuals against the update).
+    const int K = params_.coherence_window;
+    if (K > 1 && m >= static_cast<std::size_t>(K)) {
+      std::vector<double>& cum_r = scratch_cum_r_;
+      std::vector<double>& cum_v = scratch_cum_v_;
+      std::vector<std::size_t>& idx = scratch_idx_;
+      idx.clear();
+      for (std::size_t i = 0; i < m; ++i)
+        if (pass[i]) idx.push_back(i);
+      const std::size_t np = idx.size();
+      cum_r.assign(np + 1, 0.0);
+      cum_v.assign(np + 1, 0.0);
+      for (std::size_t j = 0; j < np; ++j) {
+        cum_r[j + 1] = cum_r[j] + res_r[idx[j]];
+        cum_v[j + 1] = cum_v[j] + res_var[idx[j]];
+      }
+      const std::size_t half = static_cast<std::size_t>(K / 2);
+      const double c2 = params_.coherence_sigma * params_.coherence_sigma;
+      std::vector<char> incoherent(np, 0);
+      for (std::size_t j = 0; j < np; ++j) {
+        const std::size_t lo = j >= half ? j - half : 0;
+        const std::size_t hi = std::min(np, j + half + 1);
+        if (hi - lo < static_cast<std::size_t>(K) / 2) continue;
+        const double sum = cum_r[hi] - cum_r[lo];
+        const double var = cum_v[hi] - cum_v[lo];  // of the sum
+        incoherent[j] = sum * sum > c2 * var;
+      }
+      for (std::size_t j = 0; j < np; ++j)
+        if (incoherent[j]) pass[idx[j]] = 0;
+    }
     DopplerSums kept;
     std::size_t dropped = 0;
-    for (const OpenPoint& o : open_points_) {
-      const Vec3 qs = q.segment<3>(0) + o.s * (q.segment<3>(3) + o.s * q.segment<3>(6));
-      const double r = o.z + o.d.dot(qs);
-      const double gate = std::sqrt(k2 * (o.d.dot(M * o.d) + r_doppler_));
-      PointResult& res = open_outcomes_[o.outcome];
-      res.residual = static_cast<float>(r);
-      if (std::abs(r) > gate) {
-        res.accepted = false;
+    for (std::size_t i = 0; i < m; ++i) {
+      const OpenPoint& o = open_points_[i];
+      if (!pass[i]) {
+        open_outcomes_[o.outcome].accepted = false;
         ++dropped;
         continue;
       }

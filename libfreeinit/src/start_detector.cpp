@@ -100,17 +100,18 @@ class CoverageGrid {
 /// of so short a span: it must be in its covariance.
 /// `at_rest`: the rest hypothesis, velocity zero and gravity the mean specific force (the moving
 /// objects of a static start must not bend either: only the gyro-bias correction is fitted).
-/// `inliers` (if given) receives which rows the refined motion explains.
+/// `inliers` (if given) receives which rows the refined motion explains; `g_sigma_max` [m/s^2]
+/// caps the gravity prior's std.
 StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, const Vec3& v_start,
                        const Vec3& g_prior, bool at_rest, const StartDetectorParams& p,
-                       std::vector<bool>* inliers = nullptr) {
+                       std::vector<bool>* inliers = nullptr, double g_sigma_max = 4.0) {
   using Vec9 = Eigen::Matrix<double, 9, 1>;
   using Mat9 = Eigen::Matrix<double, 9, 9>;
   Vec3 v = v_start, g = g_prior, db = Vec3::Zero();
   const double inv_r = 1.0 / (p.doppler_sigma * p.doppler_sigma);
   // Gravity prior: the mean specific force is within a few m/s^2 of it on any real platform in
   // motion; at rest it is gravity minus the accelerometer bias, held.
-  const double g_prior_var = at_rest ? 1e-12 : 4.0 * 4.0;
+  const double g_prior_var = at_rest ? 1e-12 : g_sigma_max * g_sigma_max;
   const double bg_prior_var = p.gyro_bias_sigma * p.gyro_bias_sigma;
   auto rowOf = [&](const Row& r, Vec9& a) {
     const Vec3 v_b = r.R_t.transpose() * (v + r.C_t + g * r.t);
@@ -131,7 +132,7 @@ StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, c
     // The first iterations, which only find the inliers, take every third return (weighted
     // three times), the last ones every return.
     const std::size_t step = iteration + 3 < schedule.size() && rows.size() > 1500 ? 3 : 1;
-    const double g_var = at_rest ? g_prior_var : g_sigma * g_sigma;
+    const double g_var = at_rest ? g_prior_var : std::min(g_sigma * g_sigma, g_prior_var);
     A.setZero();
     Vec9 b = Vec9::Zero();
     A.block<3, 3>(3, 3).diagonal().setConstant(1.0 / g_var);
@@ -352,11 +353,17 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
       seen = seen || (o.v_b0 - v0).norm() < p.gate;
     if (seen) continue;
     std::vector<bool> mask;
-    const StartHypothesis h = refine(rows, grid, v0, g_mean, false, p, &mask);
+    StartHypothesis h = refine(rows, grid, v0, g_mean, false, p, &mask);
+    // Gravity is what the refinement finds it to be. A fit that needs one far from 9.81 m/s^2
+    // is tried again with gravity held near the mean specific force (a motion of the platform
+    // cannot need more than its mean acceleration over the span); if that does not fit either,
+    // it is not a motion of the platform.
+    if (h.v_b0.allFinite() && std::abs(h.g_b0.norm() - kGravity) > p.max_gravity_error)
+      h = refine(rows, grid, v0, g_mean, false, p, &mask, 0.5);
     if (h.inliers < 10 || !h.v_b0.allFinite()) continue;
-    // Gravity is what the refinement finds it to be: a motion that needs one far from 9.81 m/s^2
-    // is not a motion of the platform (the mean acceleration over the span stays well inside).
-    if (std::abs(h.g_b0.norm() - kGravity) > p.max_gravity_error) continue;
+    // Kept either way: an implausible motion is never chosen, but its returns still show that
+    // something else moves coherently (a contender, below).
+    h.plausible_gravity = std::abs(h.g_b0.norm() - kGravity) <= p.max_gravity_error;
     bool merged = false;
     for (std::size_t o = 0; o < out.hypotheses.size(); ++o) {
       if ((out.hypotheses[o].v_b0 - h.v_b0).norm() < 2.0 * p.gate) {
@@ -419,31 +426,35 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
     out.message = "no motion is consistent with the LiDAR returns at the start of the window";
     return out;
   }
-  const StartHypothesis& best = out.hypotheses.front();
-  if (out.hypotheses.size() > 1) {
-    // The strongest other motion, counted on the returns the best one does not explain (two
-    // fits of one motion that differ a little share their returns: no contender).
-    double contender = 0;
-    std::size_t c = 0;
-    for (std::size_t j = 1; j < out.hypotheses.size(); ++j) {
-      std::vector<bool> own(rows.size());
-      for (std::size_t r = 0; r < rows.size(); ++r) own[r] = masks[j][r] && !masks[0][r];
-      const double cov = grid.coverage(own);
-      if (cov > contender) {
-        contender = cov;
-        c = j;
-      }
+  // The best plausible motion, and the strongest other one counted on the returns the best does
+  // not explain (two fits of one motion that differ a little share their returns: no contender).
+  std::size_t b = 0;
+  while (b < out.hypotheses.size() && !out.hypotheses[b].plausible_gravity) ++b;
+  if (b == out.hypotheses.size()) {
+    out.message = "no motion with a plausible gravity is consistent with the LiDAR returns at "
+                  "the start of the window";
+    return out;
+  }
+  const StartHypothesis& best = out.hypotheses[b];
+  double contender = 0;
+  std::size_t c = b;
+  for (std::size_t j = 0; j < out.hypotheses.size(); ++j) {
+    if (j == b) continue;
+    std::vector<bool> own(rows.size());
+    for (std::size_t r = 0; r < rows.size(); ++r) own[r] = masks[j][r] && !masks[b][r];
+    const double cov = grid.coverage(own);
+    if (cov > contender) {
+      contender = cov;
+      c = j;
     }
-    const StartHypothesis& second = out.hypotheses[c];
-    if (c > 0 && contender >= p.ambiguity_ratio * best.coverage &&
-        contender >= p.min_contender_coverage) {
-      out.kind = StartDecision::Kind::Ambiguous;
-      out.message = "two motions fit the LiDAR returns (" + speed(best) + " and " +
-                    speed(second) + " m/s over " + percent(best.coverage) + " and " +
-                    percent(contender) +
-                    " % of the view): a large moving object may fill the view";
-      return out;
-    }
+  }
+  if (c != b && contender >= p.ambiguity_ratio * best.coverage &&
+      contender >= p.min_contender_coverage) {
+    out.kind = StartDecision::Kind::Ambiguous;
+    out.message = "two motions fit the LiDAR returns (" + speed(best) + " and " +
+                  speed(out.hypotheses[c]) + " m/s over " + percent(best.coverage) + " and " +
+                  percent(contender) + " % of the view): a large moving object may fill the view";
+    return out;
   }
   out.chosen = best;
   out.kind = best.rest ? StartDecision::Kind::Rest : StartDecision::Kind::Moving;

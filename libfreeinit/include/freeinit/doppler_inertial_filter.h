@@ -60,6 +60,13 @@ struct DopplerInertialFilterParams {
   /// residual (no floor): what the first gate, against the prediction, let through from slow
   /// moving objects (0: no second gate).
   double regate_sigma = 3.0;
+  /// Coherence test of the second gate: a point is dropped when the mean residual of the
+  /// coherence_window returns around it in the scan (those that passed the gate) is more than
+  /// coherence_sigma of that mean's std from zero: the returns of an object that moves slowly
+  /// along the line of sight pass a gate on single residuals, and together they bend the
+  /// velocity (0 or 1: no such test).
+  int coherence_window = 16;
+  double coherence_sigma = 4.0;
   int max_iterations = 6;  ///< Gauss-Newton iterations after the forward pass, at most
   /// The iterations stop when no node moves by more than this many tolerances, the tolerances
   /// being 1e-4 rad, 1e-3 m, 1e-4 m/s, 1e-5 rad/s, 1e-3 m/s^2 (for the calibration 1e-4 rad and
@@ -282,6 +289,10 @@ class DopplerInertialFilter {
   FilterState x0_prior_;
   StartPrior prior_;
   std::vector<OpenPoint> open_points_;
+  // Work buffers of update(), kept to avoid allocations per node.
+  std::vector<double> scratch_r_, scratch_var_, scratch_cum_r_, scratch_cum_v_;
+  std::vector<char> scratch_pass_;
+  std::vector<std::size_t> scratch_idx_;
   std::vector<PointResult> open_outcomes_;
   // The open node's prediction for gating.
   Vec9 q_open_ = Vec9::Zero();

@@ -42,7 +42,8 @@ struct StartDetectorParams {
   /// the IMU as well), so the start is ambiguous. A car passing a vehicle covers far less.
   double ambiguity_ratio = 0.25;
   double min_contender_coverage = 0.1;
-  /// [m/s^2] a hypothesis whose refined |gravity| is further than this from 9.81 is dropped.
+  /// [m/s^2] a hypothesis whose refined |gravity| is further than this from 9.81 is not chosen
+  /// (it may still be a contender).
   double max_gravity_error = 3.0;
   /// [1/(m/s)^2] smallest eigenvalue of the velocity information of the chosen motion's
   /// inliers below which the directions do not constrain the velocity.
@@ -69,6 +70,8 @@ struct StartHypothesis {
   double residual_rms = 0;   ///< [m/s] of the inliers
   double min_info_eigen = 0; ///< [1/(m/s)^2] weakest direction of the inliers' velocity information
   bool rest = false;         ///< |v_b0| below max_speed
+  /// |g_b0| within max_gravity_error of 9.81 m/s^2: only such a motion can be the platform's.
+  bool plausible_gravity = true;
 };
 
 struct StartDecision {
