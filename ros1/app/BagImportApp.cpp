@@ -2,8 +2,12 @@
 #include <freeinit/mrpt/ProgressBar.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/app_config.h>
+#include <freeinit/mrpt/output_set.h>
+#include <freeinit/mrpt/stop_signal.h>
 #include <freeinit/ros1/BagImportApp.h>
 
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <ostream>
@@ -174,20 +178,56 @@ int BagImportApp::run(std::ostream& log) {
       << b.cloud.time.scale << " s " << (b.cloud.time.relative ? "after" : "absolute, not after")
       << " the header stamp; LiDAR time offset " << b.lidar_time_offset << " s\n";
 
-  RawlogWriter rawlog(out, settings.extrinsics, settings.imu_label, settings.lidar_label);
+  // The rawlog and its extrinsics file are one set (output_set.h), named after the rawlog.
+  const std::filesystem::path stem_path(rawlogStem(out));
+  const std::string base = stem_path.filename().string();
+  const std::string rawlog_name = std::filesystem::path(out).filename().string();
+  const std::string ext = rawlogStem(out) + ".extrinsics.ini";
+  OutputSetOptions set_options;
+  set_options.owned = {rawlog_name, base + ".extrinsics.ini"};
+  set_options.install_last = {rawlog_name};
+  OutputSet set(stem_path.parent_path().string(), base, set_options, log);
+
+  RawlogWriter rawlog(set.path(rawlog_name), settings.extrinsics, settings.imu_label,
+                      settings.lidar_label);
   ProgressBar bar(log, "  reading", "messages", params.progress_terminal);
   ros1::BagReadCallbacks cb;
-  cb.imu = [&](const ImuSample& s) { rawlog.write(s); };
-  cb.frame = [&](LidarFrame&& f) { rawlog.write(f); };
+  std::size_t count = 0;
+  auto poll = [&] {
+    if (++count % 256 == 0) throwIfStopRequested();
+  };
+  cb.imu = [&](const ImuSample& s) {
+    poll();
+    rawlog.write(s);
+  };
+  cb.frame = [&](LidarFrame&& f) {
+    poll();
+    rawlog.write(f);
+  };
   if (params.progress) cb.progress = [&](std::size_t d, std::size_t t) { bar.update(d, t); };
-  summary = ros1::readBag(params.bag, b, cb);
+  try {
+    summary = ros1::readBag(params.bag, b, cb);
+  } catch (const std::exception& e) {
+    // The reader reports what a callback threw as a bag error: a stop is a stop, a full disk a
+    // full disk.
+    throwIfStopRequested();
+    if (std::string(e.what()).find(std::strerror(ENOSPC)) != std::string::npos)
+      throw OutputError(set.describe(rawlog_name, e.what()));
+    throw;
+  }
   if (params.progress) bar.finish();
-  rawlog.commit();
+  try {
+    rawlog.commit();
+  } catch (const std::exception& e) {
+    throw OutputError(set.describe(rawlog_name, e.what()));
+  }
   rawlog_written = out;
-  const std::string ext = rawlogStem(out) + ".extrinsics.ini";
-  writeExtrinsicsIni(ext, settings.extrinsics,
-                     "extrinsics of " + out + " (from " + params.config_file +
-                         "; also in each point cloud's sensorPose)");
+  set.write(base + ".extrinsics.ini", [&](const std::string& p) {
+    writeExtrinsicsIni(p, settings.extrinsics,
+                       "extrinsics of " + out + " (from " + params.config_file +
+                           "; also in each point cloud's sensorPose)");
+  });
+  set.commit();
   summary.print(log);
   log << "Wrote " << out << " (" << rawlog.records() << " records: " << rawlog.imuRecords()
       << " IMU, " << rawlog.frameRecords() << " point clouds, " << summary.points << " points) and "
