@@ -179,6 +179,7 @@ int FreeInitApp::run(std::ostream& log) {
   // 2. The starts.
   log << "Reading " << params.rawlog << "\n";
   RawlogReader reader(params.rawlog, params.index);
+  reader.setSalvage(params.salvage);
   index_used = reader.indexLoaded();
   if (index_used) log << "  seek index found (" << reader.index().records.size() << " records)\n";
   std::optional<double> first;
@@ -351,6 +352,11 @@ int FreeInitApp::run(std::ostream& log) {
   const std::size_t last_record = reader.nextRecord();
   records_read = reader.recordsDeserialized();
   read_to_end = reader.atEnd();
+  salvage_stop = reader.salvageStop();
+  if (!salvage_stop.empty()) {
+    log << "Warning: " << salvage_stop << "\n";
+    warnings.push_back(salvage_stop);
+  }
 
   if (read_error) {
     // Unreadable from here on: the open windows fail; what comes after is not checked.

@@ -173,7 +173,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   // The ingest path, as offline: wire items -> record checks -> one session.
   const std::string source_name = "live stream";
   RecordChecker checker(config);
-  InitSession session(config, source_name);
+  InitSession session(config, source_name, false);
   const double accel_scale = config.input.imu_accel_in_g ? kGravity : 1.0;
   std::vector<CheckedItem> checked;
   ready_live = false;

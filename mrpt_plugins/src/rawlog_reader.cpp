@@ -76,41 +76,68 @@ struct RawlogReader::Impl {
   std::optional<RawlogObject> pending;  ///< read ahead by seekToTime / firstTime
   std::size_t deserialized = 0;
   bool at_end = false;
+  bool salvage = false;
+  std::string salvage_stop;
+  std::uint64_t failed_at = 0;  ///< where the last failure was, in the decompressed stream
+  std::string failure;          ///< what it was
 
   std::string at(std::size_t record) const {
     return path + ": record " + std::to_string(record) + ": ";
   }
 
+  /// readOne() in salvage mode: a bad tail ends the data.
   bool readOne(RawlogObject& out) {
+    if (!salvage) return readOneStrict(out);
+    try {
+      return readOneStrict(out);
+    } catch (const InputError&) {
+      if (next == 0) throw;  // nothing whole to salvage
+      salvage_stop = path + ": read up to record " + std::to_string(next - 1) +
+                     ", the last whole one; record " + std::to_string(next) + " (byte " +
+                     std::to_string(failed_at) + " of the decompressed stream, about byte " +
+                     std::to_string(in.compressedPosition()) + " of the file): " + failure;
+      at_end = true;
+      return false;
+    }
+  }
+
+  /// Throws InputError "<file>: record N: <why> (byte B of the decompressed stream)", keeping
+  /// why and B for salvage.
+  [[noreturn]] void fail(std::uint64_t start, std::string why) {
+    failed_at = start;
+    failure = std::move(why);
+    throw InputError(at(next) + failure + " (byte " + std::to_string(start) +
+                     " of the decompressed stream)");
+  }
+
+  bool readOneStrict(RawlogObject& out) {
+    const std::uint64_t start = in.getPosition();
     if (in.atEnd()) {
-      if (!in.error().empty()) throw InputError(at(next) + "cannot be read: " + in.error());
+      if (!in.error().empty()) fail(start, "cannot be read: " + in.error());
       if (in.truncated())
-        throw InputError(at(next) +
-                         "the file ends inside the gzip stream (truncated file; records 0.." +
-                         std::to_string(next == 0 ? 0 : next - 1) + " are whole)");
-      if (next == 0) throw InputError(path + ": empty file (no rawlog records)");
+        fail(start, "the file ends inside the gzip stream (truncated file; records 0.." +
+                        std::to_string(next == 0 ? 0 : next - 1) + " are whole)");
+      if (next == 0)
+        throw InputError(path + ": no rawlog record in the file (" +
+                         (in.gzip() ? "an empty gzip stream" : "no data") +
+                         "; an MRPT tool that did not load the freeinit plugin writes such a file "
+                         "from a rawlog with Doppler clouds: give it -p libfreeinit_mrpt.so)");
       if (next == index.records.size()) index.complete = true;
       at_end = true;
       return false;
     }
-    const std::uint64_t start = in.getPosition();
     mrpt::serialization::CSerializable::Ptr obj;
     try {
       obj = archive->ReadObject();
     } catch (const std::exception& e) {
-      const bool ended = in.atEnd();
-      std::string why;
-      if (!in.error().empty())
-        why = in.error();
-      else if (ended)
-        why = "the file ends inside this record (truncated file)";
-      else
-        why =
-            "corrupted data or a class that is not registered (rawlogs with Doppler clouds need "
-            "the freeinit_mrpt plugin)";
-      throw InputError(at(next) + "(byte " + std::to_string(start) +
-                       " of the decompressed stream) cannot be read: " + why +
-                       ". MRPT: " + mrptCause(e));
+      if (!in.error().empty()) fail(start, "cannot be read: " + in.error());
+      if (in.atEnd())
+        fail(start, "the file ends inside this record (truncated file; records 0.." +
+                        std::to_string(next == 0 ? 0 : next - 1) + " are whole)");
+      fail(start,
+           "cannot be read: corrupted data or a class that is not registered (rawlogs with "
+           "Doppler clouds need the freeinit_mrpt plugin); MRPT: " +
+               mrptCause(e));
     }
     if (!obj) throw InputError(at(next) + "null object");
     IndexedRecord entry = describe(*obj);
@@ -163,13 +190,18 @@ RawlogReader::RawlogReader(std::string path, RawlogIndexPolicy policy)
   auto& m = *impl_;
   m.path = std::move(path);
   m.policy = std::move(policy);
-  if (!std::filesystem::is_regular_file(m.path)) throw InputError(m.path + ": file not found");
+  std::error_code ec;
+  if (std::filesystem::is_directory(m.path, ec))
+    throw InputError(m.path + ": is a folder, not a rawlog file");
+  if (!std::filesystem::exists(m.path, ec)) throw InputError(m.path + ": file not found");
+  if (!std::filesystem::is_regular_file(m.path, ec))
+    throw InputError(m.path + ": not a regular file (a rawlog is read from a file)");
   try {
     m.in.open(m.path);
   } catch (const std::exception& e) {
     throw InputError(m.path + ": cannot open: " + e.what());
   }
-  if (m.in.fileBytes() == 0) throw InputError(m.path + ": empty file (no rawlog records)");
+  if (m.in.fileBytes() == 0) throw InputError(m.path + ": empty file (0 bytes, no rawlog records)");
   if (m.policy.use) {
     try {
       const RawlogIdentity id = rawlogIdentity(m.path);
@@ -259,6 +291,9 @@ std::optional<double> RawlogReader::firstTime() {
   }
   return std::nullopt;
 }
+
+void RawlogReader::setSalvage(bool on) { impl_->salvage = on; }
+const std::string& RawlogReader::salvageStop() const { return impl_->salvage_stop; }
 
 std::uint64_t RawlogReader::fileBytes() const { return impl_->in.fileBytes(); }
 std::uint64_t RawlogReader::bytesRead() const { return impl_->in.compressedPosition(); }

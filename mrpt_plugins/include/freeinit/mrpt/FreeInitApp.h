@@ -45,6 +45,7 @@ struct FreeInitAppParams {
   double every = 0;                ///< --every [s] (> 0: repeated starts from `start` or 0)
   std::string starts_file;         ///< --starts FILE
   bool check_all = false;          ///< --check-all: read and check the whole file
+  bool salvage = false;  ///< --salvage: a file cut short is read up to its last whole record
   RawlogIndexPolicy index;         ///< --no-index: use = false
   std::string command;             ///< the command line, for the table's header
 };
@@ -80,6 +81,7 @@ class FreeInitApp {
   std::vector<std::string> warnings;  ///< as logged
   std::size_t records_read = 0;       ///< records deserialized
   bool read_to_end = false;           ///< the whole file was read (and checked)
+  std::string salvage_stop;           ///< --salvage: where a cut file stopped ("" if whole)
   bool index_used = false;            ///< the rawlog's index was found and used
   std::string index_written;          ///< where the index was written ("" if not)
 };

@@ -76,6 +76,15 @@ class RawlogReader {
   bool indexLoaded() const;        ///< a valid index was found when opening
   const RawlogIndex& index() const;
 
+  /// Salvage mode, for a file cut short (a power loss while recording): next() returns false at
+  /// the first record that cannot be read whole (the file ends inside it, or the data are
+  /// corrupt from there on) instead of throwing; salvageStop() then says where and why.
+  void setSalvage(bool on);
+  /// In salvage mode, after next() returned false on a bad tail: "<file>: read up to record
+  /// N-1, the last whole one; record N (byte B of the decompressed stream, byte C of the file):
+  /// why" ("" when the file ended cleanly).
+  const std::string& salvageStop() const;
+
   /// Writes the index if it grew and the policy allows it, beside the rawlog or else in the
   /// cache folder. Returns the path written, or "" (with the reason in `why` if it failed).
   std::string saveIndex(std::string* why = nullptr);
