@@ -5,9 +5,11 @@
 // resident memory of the import process. The bag is made once (kept in the temp folder) and the
 // import is run in a child process, so that neither the simulated recording nor the other length's
 // run counts in the peak; the import streams the bag, so its peak must not grow with the bag's
-// length (compare the two lengths).
+// length (compare the two lengths). BM_CheckBagFile: the structure check readBag runs before
+// librosbag opens the bag (bag_guard.h), alone; bytes/s of the bag.
 #include <benchmark/benchmark.h>
 #include <freeinit/ros1/BagImportApp.h>
+#include <freeinit/ros1/bag_guard.h>
 #include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/bag_writer.h>
 #include <freeinit/sim/simulator.h>
@@ -60,6 +62,17 @@ void BM_ReadBag(benchmark::State& state) {
     points += freeinit::ros1::readBag(bag, freeinit::ros1::BagImportConfig(), cb).points;
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(points));
+}
+
+void BM_CheckBagFile(benchmark::State& state) {
+  const std::string bag = makeBag(static_cast<int>(state.range(0)),
+                                  fs::temp_directory_path() / "freeinit_bench_bag_import");
+  if (bag.empty()) {
+    state.SkipWithError("could not write the bag");
+    return;
+  }
+  for (auto _ : state) freeinit::ros1::checkBagFile(bag);
+  state.SetBytesProcessed(static_cast<std::int64_t>(fs::file_size(bag)) * state.iterations());
 }
 
 void BM_ImportBag(benchmark::State& state) {
@@ -115,6 +128,7 @@ void BM_ImportBag(benchmark::State& state) {
 
 }  // namespace
 
+BENCHMARK(BM_CheckBagFile)->Arg(5)->Unit(benchmark::kSecond)->Iterations(3)->UseRealTime();
 BENCHMARK(BM_ReadBag)->Arg(5)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 BENCHMARK(BM_ImportBag)->Arg(5)->Arg(20)->Unit(benchmark::kSecond)->Iterations(1)->UseRealTime();
 

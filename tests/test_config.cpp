@@ -292,3 +292,91 @@ TEST(WindowRule, TheEstimatorsWindowIsInSeconds) {
     EXPECT_NEAR(r.state.timestamp - r.trajectory.front().t, 0.5 - 1.0 / rate, 1e-6) << rate;
   }
 }
+
+// A list of values as numbered keys (items()) and keys dumped only when they matter (when()): the
+// element keys apply after the length whatever their order, an element beyond the length or one
+// the length adds but the file leaves out is named, and the dump reads back to the same struct.
+namespace {
+struct Shelf {
+  std::string kind = "plain";
+  double tilt = 0;  ///< only for kind = tilted
+  std::vector<double> widths = {1.0};
+};
+const config::Section<Shelf>& shelfSection() {
+  using V = std::vector<double>;
+  static const auto s =
+      config::Section<Shelf>("shelf")
+          .choice("kind", &Shelf::kind, {{"plain", "plain"}, {"tilted", "tilted"}}, "shape")
+          .number("tilt", &Shelf::tilt, "deg", config::between(-45, 45), "tilt of a tilted shelf")
+          .when([](const Shelf& x) { return x.kind == "tilted"; })
+          .custom("boards", &Shelf::widths, "-", "[0, 10]",
+                  std::function<std::string(std::string_view, V&)>([](std::string_view t, V& v) {
+                    long double n = 0;
+                    std::string err = config::parseInteger(t, 0, 10, n);
+                    if (err.empty()) v.resize(static_cast<std::size_t>(n));
+                    return err;
+                  }),
+                  std::function<std::string(const V&)>(
+                      [](const V& v) { return std::to_string(v.size()); }),
+                  "number of boards")
+          .items("board_", &Shelf::widths, "boards", "m", "> 0",
+                 std::function<std::string(std::string_view, double&)>(
+                     [](std::string_view t, double& x) { return config::parseNumber(t, x); }),
+                 std::function<std::string(const double&)>(config::formatNumber),
+                 std::function<std::string(const double&)>(
+                     [](const double& x) { return x > 0 ? "" : "must be > 0"; }),
+                 "width of board k");
+  return s;
+}
+}  // namespace
+
+TEST(ConfigSection, ItemsAndKeysDumpedOnlyWhenTheyMatter) {
+  Shelf s;
+  shelfSection().load(
+      IniFile::parse("[shelf]\nboard_2 = 0.5\nboards = 3\nboard_3 = 0.25\nboard_1 = 2\n", "a.ini"),
+      s);
+  EXPECT_EQ(s.widths, (std::vector<double>{2, 0.5, 0.25}));
+  std::ostringstream out;
+  shelfSection().dump(s, out);
+  EXPECT_EQ(out.str().find("\ntilt "), std::string::npos) << out.str();
+  EXPECT_NE(out.str().find("board_3                         = 0.25"), std::string::npos)
+      << out.str();
+  Shelf back;
+  shelfSection().load(IniFile::parse(out.str(), "dump.ini"), back);
+  EXPECT_EQ(back.widths, s.widths);
+  s.kind = "tilted";
+  s.tilt = 3;
+  std::ostringstream tilted;
+  shelfSection().dump(s, tilted);
+  EXPECT_NE(tilted.str().find("\ntilt "), std::string::npos) << tilted.str();
+  // Only the length's new elements must be given (board_1 keeps the struct's value).
+  Shelf two;
+  shelfSection().load(IniFile::parse("[shelf]\nboards = 2\nboard_2 = 3\n", "b.ini"), two);
+  EXPECT_EQ(two.widths, (std::vector<double>{1, 3}));
+
+  EXPECT_EQ(errorOf([] {
+              Shelf x;
+              shelfSection().load(IniFile::parse("[shelf]\nboard_2 = 1\n", "c.ini"), x);
+            }),
+            "c.ini:2: [shelf] board_2: beyond boards = 1");
+  EXPECT_EQ(errorOf([] {
+              Shelf x;
+              shelfSection().load(IniFile::parse("[shelf]\nboards = 3\nboard_2 = 1\n", "d.ini"), x);
+            }),
+            "d.ini:1: [shelf] board_3: missing (boards = 3)");
+  EXPECT_EQ(errorOf([] {
+              Shelf x;
+              shelfSection().load(IniFile::parse("[shelf]\nboard_1 = -1\n", "e.ini"), x);
+            }),
+            "e.ini:2: [shelf] board_1: must be > 0");
+  EXPECT_EQ(errorOf([] {
+              Shelf x;
+              x.widths = {1, 0};
+              shelfSection().validate(x);
+            }),
+            "configuration key shelf.board_2: must be > 0");
+  const auto keys = shelfSection().keys();
+  ASSERT_EQ(keys.size(), 4u);
+  EXPECT_EQ(keys[3].name, "board_<k>");
+  EXPECT_EQ(keys[3].default_value, "");
+}

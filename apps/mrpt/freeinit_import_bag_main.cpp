@@ -1,4 +1,5 @@
-// freeinit-import-bag <bag> -c <config.ini> [-o out.rawlog]: a ROS1 bag to a typed rawlog.
+// freeinit-import-bag <bag> -c <config.ini> [-o out.rawlog] [--doppler-fit-csv FILE]: a ROS1 bag
+// to a typed rawlog.
 #include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/ros1/BagImportApp.h>
 #include <unistd.h>
@@ -12,8 +13,14 @@ int main(int argc, char** argv) {
                         "Doppler and time) to a rawlog for freeinit");
   const auto& bag = cli.positional("input.bag", "input ROS1 bag");
   const auto& config = cli.requiredText(
-      "c", "config", "INI with [bag_import] and [extrinsics] (see ini/import_bag.ini)", "FILE");
+      "c", "config",
+      "INI with [bag_import], [extrinsics] and optionally [doppler_fit] (see ini/import_bag.ini)",
+      "FILE");
   const auto& out = cli.text("o", "out", "output rawlog", "", "FILE", "<bag>.rawlog");
+  const auto& fit_csv = cli.text("", "doppler-fit-csv",
+                                 "also write each imported scan's sensor velocity fitted from its "
+                                 "Doppler alone (no IMU; [doppler_fit] of the INI) to FILE",
+                                 "", "FILE", "none");
   const auto& quiet = cli.flag("q", "quiet", "no progress bar");
   if (const auto code = cli.parse(argc, argv)) return *code;
   return glue::runMain(cli.program(), [&] {
@@ -21,6 +28,7 @@ int main(int argc, char** argv) {
     app.params.bag = bag.value;
     app.params.config_file = config.value;
     app.params.output = out.value;
+    app.params.doppler_fit_csv = fit_csv.value;
     app.params.progress = !quiet.value;
     app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
     return app.run(std::cout);

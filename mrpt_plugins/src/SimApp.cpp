@@ -8,7 +8,6 @@
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/scenario_ini.h>
 #include <freeinit/sim/simulator.h>
-#include <mrpt/config/CConfigFile.h>
 
 #include <filesystem>
 #include <iomanip>
@@ -19,23 +18,10 @@
 namespace freeinit::mrpt_glue {
 namespace {
 
-// The [scenario] section of `file` over its base (sim/scenario_ini.h); every unknown key is an
-// error.
+// The [scenario] section of `file` over its base (sim/scenario_ini.h), read strictly: unknown
+// sections and keys, keys given twice and bad values are errors naming the file, line and key.
 sim::ScenarioConfig loadScenario(const std::string& file, const SimAppParams& p) {
-  if (!std::filesystem::is_regular_file(file))
-    throw std::invalid_argument(file + ": scenario file not found");
-  mrpt::config::CConfigFile cfg(file);
-  const std::string sec = "scenario";
-  if (!cfg.sectionExists(sec)) throw std::invalid_argument(file + ": no [scenario] section");
-  std::vector<std::string> keys;
-  cfg.getAllKeys(sec, keys);
-  sim::ScenarioKeyValues section;
-  for (const auto& k : keys) section.emplace_back(k, cfg.read_string(sec, k, ""));
-  try {
-    return sim::scenarioFromKeys(section, {p.preset, p.seed});
-  } catch (const std::invalid_argument& e) {
-    throw std::invalid_argument(file + ": [" + sec + "] " + e.what());
-  }
+  return sim::loadScenarioIni(file, {p.preset, p.seed});
 }
 
 bool sameExtrinsics(const Extrinsics& a, const Extrinsics& b) {

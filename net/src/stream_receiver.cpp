@@ -191,41 +191,37 @@ void StreamReceiver::handleChunk(FrameChunk& c, SteadyClock::time_point received
     a.frame.frame_id = c.frame_id;
     a.frame.stamp_ns = c.stamp_ns;
     a.frame.extrinsics = c.extrinsics;
-    a.frame.points.resize(c.total_points);
+    a.total_points = c.total_points;
     a.chunk_count = c.chunk_count;
-    a.have.assign(c.chunk_count, false);
-    a.spans.assign(c.chunk_count, {0, 0});
     assembly_ = std::move(a);
   }
   Assembly& a = *assembly_;
-  if (a.frame.stamp_ns != c.stamp_ns || a.frame.points.size() != c.total_points ||
+  if (a.frame.stamp_ns != c.stamp_ns || a.total_points != c.total_points ||
       a.chunk_count != c.chunk_count || a.frame.extrinsics.R_bl != c.extrinsics.R_bl ||
-      a.frame.extrinsics.p_bl != c.extrinsics.p_bl) {
+      a.frame.extrinsics.p_bl != c.extrinsics.p_bl ||
+      a.received_points + c.points.size() > a.total_points) {
     ++stats_.frames_inconsistent;
     assembly_.reset();
     return;
   }
-  if (a.have[c.chunk_index]) {
+  if (a.chunks.count(c.chunk_index) > 0) {
     ++stats_.duplicates;  // the same chunk again under a new sequence number
     return;
   }
-  std::copy(c.points.begin(), c.points.end(),
-            a.frame.points.begin() + static_cast<std::ptrdiff_t>(c.first_point));
-  a.have[c.chunk_index] = true;
-  a.spans[c.chunk_index] = {c.first_point, static_cast<std::uint32_t>(c.points.size())};
-  ++a.received_chunks;
+  a.received_points += c.points.size();
+  a.chunks.emplace(c.chunk_index, std::make_pair(c.first_point, std::move(c.points)));
   a.last_chunk = received;
-  if (a.received_chunks < a.chunk_count) return;
+  if (a.chunks.size() < a.chunk_count) return;
 
   // All chunks are here; they must tile the frame in index order (no overlap, no hole), or some
-  // points were never written.
+  // points were never sent.
   std::uint64_t next_point = 0;
   bool tiled = true;
-  for (const auto& [first, count] : a.spans) {
-    tiled = tiled && first == next_point;
-    next_point += count;
+  for (const auto& [index, chunk] : a.chunks) {
+    tiled = tiled && chunk.first == next_point;
+    next_point += chunk.second.size();
   }
-  if (!tiled || next_point != a.frame.points.size()) {
+  if (!tiled || next_point != a.total_points) {
     ++stats_.frames_inconsistent;
     assembly_.reset();
     return;
@@ -236,6 +232,9 @@ void StreamReceiver::handleChunk(FrameChunk& c, SteadyClock::time_point received
   } else {
     last_frame_ns_ = a.frame.stamp_ns;
     ++stats_.frames;
+    a.frame.points.reserve(a.total_points);
+    for (auto& [index, chunk] : a.chunks)
+      a.frame.points.insert(a.frame.points.end(), chunk.second.begin(), chunk.second.end());
     StreamEvent e;
     e.kind = StreamEvent::Kind::Frame;
     e.session = *session_;

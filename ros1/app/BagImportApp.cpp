@@ -1,3 +1,4 @@
+#include <freeinit/atomic_file.h>
 #include <freeinit/config_section.h>
 #include <freeinit/mrpt/ProgressBar.h>
 #include <freeinit/mrpt/RawlogWriter.h>
@@ -7,9 +8,12 @@
 #include <freeinit/ros1/BagImportApp.h>
 
 #include <cerrno>
+#include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <iomanip>
+#include <limits>
+#include <optional>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -19,6 +23,9 @@ namespace freeinit::mrpt_glue {
 namespace {
 
 constexpr const char* kSection = "bag_import";
+/// [s] the largest clock offset: ROS1 times are uint32 seconds, so two of them differ by less
+/// than 2^32 s (a scan stamp from a clock since boot against bag times since 1970 is ~1.7e9 s).
+constexpr double kMaxClockOffset = 4294967296.0;
 
 std::string parseFieldType(std::string_view text, ros1::FieldType& t) {
   try {
@@ -51,7 +58,26 @@ std::string fixed(double x, int precision) {
   return os.str();
 }
 
+void writeFitRow(std::ostream& o, const LidarFrame& f, const ros1::DopplerFit& fit) {
+  o << fixed(f.stamp, 6) << "," << fixed(f.stamp + fit.mean_time_offset, 6) << "," << fit.points
+    << "," << fit.inliers << "," << (fit.ok ? 1 : 0);
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  auto num = [&](double x) { o << "," << (fit.ok ? x : nan); };
+  o << std::setprecision(6) << std::defaultfloat;
+  for (int i = 0; i < 3; ++i) num(fit.v_l(i));
+  for (int i = 0; i < 3; ++i) num(std::sqrt(fit.cov(i, i)));
+  num(fit.cov(0, 1));
+  num(fit.cov(0, 2));
+  num(fit.cov(1, 2));
+  num(fit.residual_sigma);
+  o << "\n";
+}
+
 }  // namespace
+
+const char* const kDopplerFitCsvHeader =
+    "stamp,t,points,inliers,ok,v_x,v_y,v_z,sigma_x,sigma_y,sigma_z,cov_xy,cov_xz,cov_yz,"
+    "residual_sigma";
 
 const config::Section<BagImportSettings>& bagImportSection() {
   using config::between;
@@ -86,13 +112,28 @@ const config::Section<BagImportSettings>& bagImportSection() {
             "Doppler)");
     addField(
         sec, "time_field", [](auto& x) -> auto& { return x.bag.cloud.time.field; },
-        "per-point time");
+        "per-point time (empty: none, see frame_duration)");
     sec.number(
            "time_scale", [](auto& x) -> auto& { return x.bag.cloud.time.scale; }, "s per unit",
            config::aboveUpTo(0, 1e3), "1e-9: ns, 1e-6: us, 1: s")
         .flag(
             "time_relative", [](auto& x) -> auto& { return x.bag.cloud.time.relative; },
-            "true: offset after the header stamp; false: absolute UNIX time (float64)");
+            "true: offset after the scan stamp; false: absolute UNIX time (float64)")
+        .number(
+            "frame_duration", [](auto& x) -> auto& { return x.bag.cloud.time.frame_duration; }, "s",
+            between(0, 10),
+            "without a time field: the span after the scan stamp the points are spread over, in "
+            "point order (0: all at the scan stamp)")
+        .choice(
+            "stamp_source", [](auto& x) -> auto& { return x.bag.stamp_source; },
+            {{"header", ros1::StampSource::kHeader},
+             {"trigger", ros1::StampSource::kTrigger},
+             {"bag_time", ros1::StampSource::kBagTime}},
+            "scan stamp: the cloud's header stamp, the stamp of the trigger_topic message with "
+            "the cloud's seq, or the time the bag recorded the cloud")
+        .text(
+            "trigger_topic", [](auto& x) -> auto& { return x.bag.trigger_topic; },
+            "std_msgs/Header topic of the scan starts (only with stamp_source = trigger)");
     addField(
         sec, "intensity_field", [](auto& x) -> auto& { return x.bag.cloud.intensity; },
         "optional intensity");
@@ -105,7 +146,9 @@ const config::Section<BagImportSettings>& bagImportSection() {
            "unit of linear_acceleration (checked against the data: mean |a| ~ 9.81 or ~ 1)")
         .number(
             "lidar_time_offset", [](auto& x) -> auto& { return x.bag.lidar_time_offset; }, "s",
-            between(-3600, 3600), "added to LiDAR times to put them on the IMU clock")
+            between(-kMaxClockOffset, kMaxClockOffset),
+            "added to every scan stamp to put it on the IMU clock (bag times are often days "
+            "off)")
         .number(
             "reorder_window", [](auto& x) -> auto& { return x.bag.reorder_window; }, "s",
             between(0, 3600),
@@ -137,11 +180,28 @@ const config::Section<BagImportSettings>& bagImportSection() {
   return s;
 }
 
+const config::Section<ros1::DopplerFitParams>& dopplerFitSection() {
+  using config::between;
+  using P = ros1::DopplerFitParams;
+  static const auto s =
+      config::Section<P>("doppler_fit",
+                         "the per-scan Doppler-only velocity fits of --doppler-fit-csv")
+          .number("min_range", &P::min_range, "m", between(0, 1000), "closer points are not used")
+          .number("inlier_threshold", &P::inlier_threshold, "m/s", config::aboveUpTo(0, 100),
+                  "largest |residual| of an inlier")
+          .number("sigma_floor", &P::sigma_floor, "m/s", between(0, 10),
+                  "lower bound of the per-point residual std (quantized Doppler: step/sqrt(12))")
+          .number("min_inlier_fraction", &P::min_inlier_fraction, "-", between(0, 1),
+                  "fewer inliers than this fraction of the points: no fit");
+  return s;
+}
+
 BagImportSettings loadBagImportSettings(const std::string& ini_file) {
   const config::IniFile ini = config::IniFile::load(ini_file);
-  ini.requireKnownSections({kSection, "extrinsics"});
+  ini.requireKnownSections({kSection, dopplerFitSection().name(), "extrinsics"});
   BagImportSettings s;
   bagImportSection().load(ini, s);
+  dopplerFitSection().load(ini, s.doppler_fit);
   // [extrinsics]: the pose keys of the main app's section, required (a bag has no sensor poses;
   // the importer writes them as each cloud's sensorPose).
   LidarPoseParams pose;
@@ -171,12 +231,20 @@ int BagImportApp::run(std::ostream& log) {
     out += ".rawlog";
   }
   const auto& b = settings.bag;
+  const std::string time = b.cloud.time.field.name.empty()
+                               ? "no per-point time (points spread over " +
+                                     fixed(b.cloud.time.frame_duration, 4) + " s in point order)"
+                               : "time '" + b.cloud.time.field.name + "' " +
+                                     ros1::fieldTypeName(b.cloud.time.field.type) + " x " +
+                                     fixed(b.cloud.time.scale, 12) + " s " +
+                                     (b.cloud.time.relative ? "after" : "absolute, not after") +
+                                     " the scan stamp";
   log << "Importing " << params.bag << " -> " << out << "\n  IMU " << b.imu_topic
       << (b.imu_accel_in_g ? " (accelerations in g)" : " (m/s^2)") << ", LiDAR " << b.lidar_topic
-      << ": Doppler '" << b.cloud.doppler.name << "' x" << b.cloud.doppler_sign << ", time '"
-      << b.cloud.time.field.name << "' " << ros1::fieldTypeName(b.cloud.time.field.type) << " x "
-      << b.cloud.time.scale << " s " << (b.cloud.time.relative ? "after" : "absolute, not after")
-      << " the header stamp; LiDAR time offset " << b.lidar_time_offset << " s\n";
+      << ": Doppler '" << b.cloud.doppler.name << "' x" << b.cloud.doppler_sign << ", " << time
+      << "\n  scan stamps: " << ros1::stampSourceName(b.stamp_source)
+      << (b.stamp_source == ros1::StampSource::kTrigger ? " " + b.trigger_topic : std::string())
+      << ", + " << fixed(b.lidar_time_offset, 6) << " s to the IMU clock\n";
 
   // The rawlog and its extrinsics file are one set (output_set.h), named after the rawlog.
   const std::filesystem::path stem_path(rawlogStem(out));
@@ -187,6 +255,14 @@ int BagImportApp::run(std::ostream& log) {
   set_options.owned = {rawlog_name, base + ".extrinsics.ini"};
   set_options.install_last = {rawlog_name};
   OutputSet set(stem_path.parent_path().string(), base, set_options, log);
+  // The fits table, where the user wants it: a set of its own.
+  std::optional<OutputSet> fit_set;
+  if (!params.doppler_fit_csv.empty()) {
+    const std::filesystem::path fit(params.doppler_fit_csv);
+    OutputSetOptions fit_options;
+    fit_options.owned = {fit.filename().string()};
+    fit_set.emplace(fit.parent_path().string(), fit.filename().string(), fit_options, log);
+  }
 
   RawlogWriter rawlog(set.path(rawlog_name), settings.extrinsics, settings.imu_label,
                       settings.lidar_label);
@@ -200,8 +276,12 @@ int BagImportApp::run(std::ostream& log) {
     poll();
     rawlog.write(s);
   };
+  std::ostringstream fits;
+  if (!params.doppler_fit_csv.empty()) fits << kDopplerFitCsvHeader << "\n";
   cb.frame = [&](LidarFrame&& f) {
     poll();
+    if (!params.doppler_fit_csv.empty())
+      writeFitRow(fits, f, ros1::fitScanVelocity(f.points, settings.doppler_fit));
     rawlog.write(f);
   };
   if (params.progress) cb.progress = [&](std::size_t d, std::size_t t) { bar.update(d, t); };
@@ -227,7 +307,17 @@ int BagImportApp::run(std::ostream& log) {
                        "extrinsics of " + out + " (from " + params.config_file +
                            "; also in each point cloud's sensorPose)");
   });
+  if (fit_set) {
+    const std::string name = std::filesystem::path(params.doppler_fit_csv).filename().string();
+    fit_set->write(name, [&](const std::string& p) {
+      writeFileAtomically(p, [&](std::ostream& o) { o << fits.str(); });
+    });
+  }
   set.commit();
+  if (fit_set) {
+    fit_set->commit();
+    log << "Wrote " << params.doppler_fit_csv << " (per-scan Doppler-only velocity fits)\n";
+  }
   summary.print(log);
   log << "Wrote " << out << " (" << rawlog.records() << " records: " << rawlog.imuRecords()
       << " IMU, " << rawlog.frameRecords() << " point clouds, " << summary.points << " points) and "

@@ -135,32 +135,41 @@ LidarFrame decodeCloud(const sensor_msgs::PointCloud2& msg, const CloudLayout& l
   const BoundField fi = bind(msg, layout.intensity, "intensity", "intensity_field");
   const BoundField fl = bind(msg, layout.line, "scan line", "line_field");
 
-  const std::size_t width = msg.width, height = msg.height;
-  if (width > 0 && height > 0) {
-    if (msg.row_step < width * msg.point_step)
-      throw LayoutError("row_step " + std::to_string(msg.row_step) + " < width " +
-                        std::to_string(width) + " x point_step " + std::to_string(msg.point_step));
-    if (msg.data.size() < (height - 1) * msg.row_step + width * msg.point_step)
-      throw LayoutError("data holds " + std::to_string(msg.data.size()) + " bytes, " +
-                        std::to_string(height) + " rows of " + std::to_string(msg.row_step) +
-                        " bytes need more (truncated message)");
-  }
-  const bool swap = (msg.is_bigendian != 0) != kHostBigEndian;
-  const double stamp = msg.header.stamp.toSec();
-
+  // Sizes in 64 bits, checked whatever the width or height: a cloud of width 0 and height 4e9
+  // has no point and must not run a row loop over data it does not have.
+  const std::uint64_t width = msg.width, height = msg.height;
+  const std::uint64_t n = width * height;
   LidarFrame frame;
-  frame.stamp = stamp;
-  frame.points.reserve(width * height);
+  frame.stamp = msg.header.stamp.toSec();
+  if (n == 0) return frame;
+  const std::uint64_t row_bytes = width * msg.point_step;
+  if (msg.row_step < row_bytes)
+    throw LayoutError("row_step " + std::to_string(msg.row_step) + " < width " +
+                      std::to_string(width) + " x point_step " + std::to_string(msg.point_step));
+  if (msg.data.size() < (height - 1) * msg.row_step + row_bytes)
+    throw LayoutError("data holds " + std::to_string(msg.data.size()) + " bytes, " +
+                      std::to_string(height) + " rows of " + std::to_string(msg.row_step) +
+                      " bytes need more (truncated message)");
+  const bool swap = (msg.is_bigendian != 0) != kHostBigEndian;
+  const double stamp = frame.stamp;
+  // Without a time field, point i of n sits in the middle of its share of the frame.
+  const double spread = layout.time.frame_duration / static_cast<double>(n);
+
+  frame.points.reserve(n);
   std::size_t invalid = 0;
-  for (std::size_t r = 0; r < height; ++r) {
+  for (std::uint64_t r = 0; r < height; ++r) {
     const std::uint8_t* row = msg.data.data() + r * msg.row_step;
-    for (std::size_t c = 0; c < width; ++c) {
+    for (std::uint64_t c = 0; c < width; ++c) {
       const std::uint8_t* pt = row + c * msg.point_step;
+      const std::uint64_t index = r * width + c;
       auto get = [&](const BoundField& f) {
         return f.offset ? loadAs(pt + *f.offset, f.type, swap) : 0.0;
       };
-      double t = get(ft) * layout.time.scale;
-      if (!layout.time.relative) t -= stamp;
+      double t = (static_cast<double>(index) + 0.5) * spread;
+      if (ft.offset) {
+        t = get(ft) * layout.time.scale;
+        if (!layout.time.relative) t -= stamp;
+      }
       DopplerPoint p;
       p.p_l = Eigen::Vector3f(static_cast<float>(get(fx)), static_cast<float>(get(fy)),
                               static_cast<float>(get(fz)));
@@ -169,12 +178,12 @@ LidarFrame decodeCloud(const sensor_msgs::PointCloud2& msg, const CloudLayout& l
       p.intensity = static_cast<float>(get(fi));
       const double line = get(fl);
       if (!(line >= 0 && line <= 65535))
-        throw LayoutError("point " + std::to_string(r * width + c) + ": line index " +
+        throw LayoutError("point " + std::to_string(index) + ": line index " +
                           std::to_string(line) + " is not in [0, 65535]");
       p.line = static_cast<std::uint16_t>(line);
       if (!p.p_l.allFinite() || !std::isfinite(p.doppler) || !std::isfinite(p.time_offset)) {
         if (!drop_invalid)
-          throw LayoutError("point " + std::to_string(r * width + c) +
+          throw LayoutError("point " + std::to_string(index) +
                             " has a NaN or infinite coordinate, Doppler or time (set "
                             "drop_invalid_points = true to drop such points)");
         ++invalid;

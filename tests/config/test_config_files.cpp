@@ -258,6 +258,50 @@ TEST(BagImportIni, ExtrinsicsAreRequiredAndOtherSectionsRefused) {
       loadBagImportSettings(tmpFile("b7.ini", "[bag_import]\nintensity_field =\n" + ext));
   EXPECT_EQ(s.bag.cloud.intensity.name, "");
 }
+
+// Clouds without a per-point time, scan stamps from a trigger topic or the bag time, clock offsets
+// of days, and the optional [doppler_fit]: declared, range-checked and cross-checked.
+TEST(BagImportIni, StampSourcesFrameDurationAndDopplerFit) {
+  const std::string ext = "[extrinsics]\nR_bl = 1 0 0 0 1 0 0 0 1\np_bl = 0 0 0\n";
+  auto load = [&](const std::string& name, const std::string& text) {
+    return loadBagImportSettings(tmpFile(name, text + ext));
+  };
+  const auto radar = load("s1.ini",
+                          "[bag_import]\ntime_field =\nframe_duration = 0.0185\n"
+                          "stamp_source = bag_time\nlidar_time_offset = -338525.016\n"
+                          "[doppler_fit]\nsigma_floor = 0.036\nmin_inlier_fraction = 0.6\n");
+  EXPECT_EQ(radar.bag.cloud.time.field.name, "");
+  EXPECT_EQ(radar.bag.cloud.time.frame_duration, 0.0185);
+  EXPECT_EQ(radar.bag.stamp_source, ros1::StampSource::kBagTime);
+  EXPECT_EQ(radar.bag.lidar_time_offset, -338525.016);
+  EXPECT_EQ(radar.doppler_fit.sigma_floor, 0.036);
+  EXPECT_EQ(radar.doppler_fit.min_inlier_fraction, 0.6);
+  EXPECT_EQ(radar.doppler_fit.inlier_threshold, ros1::DopplerFitParams{}.inlier_threshold);
+  EXPECT_CONTAINS(errorOf([&] { load("s2.ini", "[bag_import]\nstamp_source = gps\n"); }),
+                  "s2.ini:2: [bag_import] stamp_source: 'gps' is not one of 'header', 'trigger', "
+                  "'bag_time'");
+  EXPECT_CONTAINS(
+      errorOf([&] { load("s3.ini", "[bag_import]\ntime_field =\nframe_duration = 11\n"); }),
+      "s3.ini:3: [bag_import] frame_duration: 11 is out of range: accepted [0, 10] s");
+  EXPECT_CONTAINS(errorOf([&] { load("s4.ini", "[bag_import]\nframe_duration = 0.1\n"); }),
+                  "s4.ini:2: [bag_import] frame_duration: is for clouds without a per-point time");
+  EXPECT_CONTAINS(errorOf([&] { load("s5.ini", "[bag_import]\nstamp_source = trigger\n"); }),
+                  "[bag_import] trigger_topic: is required with stamp_source = trigger");
+  EXPECT_CONTAINS(errorOf([&] { load("s6.ini", "[bag_import]\ntrigger_topic = /t\n"); }),
+                  "s6.ini:2: [bag_import] trigger_topic: is only read with stamp_source = trigger");
+  EXPECT_CONTAINS(errorOf([&] { load("s7.ini", "[bag_import]\nlidar_time_offset = 5e9\n"); }),
+                  "s7.ini:2: [bag_import] lidar_time_offset: 5e9 is out of range: accepted "
+                  "[-4294967296, 4294967296] s");
+  EXPECT_CONTAINS(
+      errorOf([&] { load("s8.ini", "[doppler_fit]\nmin_inlier_fraction = 1.5\n"); }),
+      "s8.ini:2: [doppler_fit] min_inlier_fraction: 1.5 is out of range: accepted [0, 1]");
+  EXPECT_CONTAINS(errorOf([&] { load("s9.ini", "[doppler_fit]\ninlier_treshold = 0.1\n"); }),
+                  "s9.ini:2: [doppler_fit] inlier_treshold: unknown key (did you mean "
+                  "inlier_threshold?)");
+  EXPECT_CONTAINS(errorOf([&] { load("s10.ini", "[doppler_fit]\ninlier_threshold = 0\n"); }),
+                  "s10.ini:2: [doppler_fit] inlier_threshold: 0 is out of range: accepted "
+                  "(0, 100] m/s");
+}
 #endif
 
 // ---------------------------------------------------------------------------------------------
@@ -280,6 +324,8 @@ std::map<std::string, ShippedIni> shippedIniFiles() {
                          // All defaults: the file loads to the code's default configuration.
                          EXPECT_EQ(dump(loadAppConfig(p)), dump(AppConfig{}));
                        }};
+  m["freeinit_radar.ini"] = {
+      appSections(), {}, false, [](const std::string& p) { loadAppConfig(p); }};
   m["icp_slam.ini"] = {{&scanSliceSection()},
                        {"MappingApplication", "MappingApplication_pointsMap_00_insertOpts", "ICP"},
                        false,
@@ -291,10 +337,11 @@ std::map<std::string, ShippedIni> shippedIniFiles() {
         sensor.loadConfig(cfg, udpDriverSection().name());
       }};
 #ifdef FREEINIT_WITH_BAG_IMPORT
-  for (const char* f : {"import_bag.ini", "import_bag_vehicular.ini"})
-    m[f] = {{&bagImportSection(), &extrinsicsPoseSection()}, {}, false, [](const std::string& p) {
-              loadBagImportSettings(p);
-            }};
+  for (const char* f : {"import_bag.ini", "import_bag_vehicular.ini", "import_bag_ti_mmwave.ini"})
+    m[f] = {{&bagImportSection(), &dopplerFitSection(), &extrinsicsPoseSection()},
+            {},
+            false,
+            [](const std::string& p) { loadBagImportSettings(p); }};
 #endif
   return m;
 }

@@ -17,7 +17,9 @@
 // Members are given as pointers to members or, for nested fields, as accessors
 // `[](auto& s) -> auto& { return s.cloud.x.name; }`. Numbers in another unit than their member
 // (a key in ms for a member in s) are declared with scaled(), so that the conversion is written
-// once. Errors are ConfigError, one line naming the file, the line, the section and the key.
+// once. A list of values is a family of numbered keys (items(): object_1, object_2, ...), its
+// length another key. A key that matters only for some values of others is dumped only then
+// (when()). Errors are ConfigError, one line naming the file, the line, the section and the key.
 #pragma once
 
 #include <freeinit/ini_file.h>
@@ -26,6 +28,7 @@
 #include <functional>
 #include <iosfwd>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -310,6 +313,44 @@ class Section : public SectionBase {
     return *this;
   }
 
+  /// A family of numbered keys <prefix>1, <prefix>2, ... (documented as "<prefix><k>"): element
+  /// k-1 of a std::vector member, read by `parse` and written by `format` (as custom()), checked
+  /// by `check` (returns an error or ""; also by validate()). The vector's length is set by the key
+  /// `count_key` (declared before, e.g. with custom()); element keys are applied after the
+  /// section's other keys whatever their order in the file, and an element key beyond the length
+  /// is an error, as is an element the length adds (beyond the struct's before loading) that the
+  /// file does not give.
+  template <class M, class T = typename detail::MemberType<S, M>::value_type>
+  Section& items(std::string prefix, M member, std::string count_key, std::string unit,
+                 std::string accepted, std::function<std::string(std::string_view, T&)> parse,
+                 std::function<std::string(const T&)> format,
+                 std::function<std::string(const T&)> check, std::string doc) {
+    auto acc = detail::accessor<S>(member);
+    Key k{{prefix + "<k>", std::move(unit), std::move(doc), "", std::move(accepted)}, {}, {}, {}};
+    Items it;
+    it.prefix = std::move(prefix);
+    it.count_key = std::move(count_key);
+    it.size = [acc](const S& s) { return acc(s).size(); };
+    it.set = [acc, parse](std::string_view text, S& s, std::size_t i) {
+      T x = acc(s)[i];
+      std::string err = parse(text, x);
+      if (err.empty()) acc(s)[i] = std::move(x);
+      return err;
+    };
+    it.get = [acc, format](const S& s, std::size_t i) { return format(acc(s)[i]); };
+    it.check = [acc, check](const S& s, std::size_t i) { return check(acc(s)[i]); };
+    k.items = std::make_shared<Items>(std::move(it));
+    keys_.push_back(std::move(k));
+    return *this;
+  }
+
+  /// The key declared last is dumped only when `applies` holds for the struct (it is still read
+  /// and checked): a key that matters only for some values of others.
+  Section& when(std::function<bool(const S&)> applies) {
+    keys_.back().applies = std::move(applies);
+    return *this;
+  }
+
   /// A key that is refused with its own message (e.g. a key renamed in an earlier version:
   /// "no longer a key: ..." saying what replaces it).
   Section& refused(std::string key, std::string message) {
@@ -334,7 +375,16 @@ class Section : public SectionBase {
   /// The same from a section of another name (e.g. a sensor's section, named by the user).
   void load(const IniFile& ini, const std::string& section, S& s) const {
     if (const IniSection* sec = ini.section(section)) {
+      std::vector<std::size_t> sizes;  // of the lists before loading
+      for (const Key& k : keys_)
+        if (k.items) sizes.push_back(k.items->size(s));
+      std::vector<std::pair<const IniEntry*, std::pair<const Key*, std::size_t>>> elements;
       for (const IniEntry& e : sec->entries) {
+        std::size_t index = 0;
+        if (const Key* k = findItem(e.key, index)) {
+          elements.push_back({&e, {k, index}});
+          continue;
+        }
         const Key* k = find(e.key);
         if (!k) {
           if (isForeign(e.key)) continue;
@@ -343,6 +393,26 @@ class Section : public SectionBase {
           detail::unknownKey(ini, section, e.key, names());
         }
         if (const std::string err = k->set(e.value, s); !err.empty()) ini.fail(section, e.key, err);
+      }
+      for (const auto& [e, item] : elements) {
+        const Items& it = *item.first->items;
+        const std::size_t n = it.size(s);
+        if (item.second > n)
+          ini.fail(section, e->key, "beyond " + it.count_key + " = " + std::to_string(n));
+        std::string err = it.set(e->value, s, item.second - 1);
+        if (err.empty()) err = it.check(s, item.second - 1);
+        if (!err.empty()) ini.fail(section, e->key, err);
+      }
+      std::size_t list = 0;
+      for (const Key& k : keys_) {
+        if (!k.items) continue;
+        const std::size_t n = k.items->size(s);
+        for (std::size_t i = sizes[list++] + 1; i <= n; ++i) {
+          const std::string key = k.items->prefix + std::to_string(i);
+          if (!sec->find(key))
+            ini.fail(section, key,
+                     "missing (" + k.items->count_key + " = " + std::to_string(n) + ")");
+        }
       }
     }
     const Checker c(&ini, section);
@@ -353,25 +423,32 @@ class Section : public SectionBase {
   /// "configuration key <section>.<key>: ...".
   void validate(const S& s) const {
     const Checker c(nullptr, name_);
-    for (const Key& k : keys_)
+    for (const Key& k : keys_) {
       if (k.check)
         if (const std::string err = k.check(s); !err.empty()) c.fail(k.info.name, err);
+      if (k.items)
+        for (std::size_t i = 0; i < k.items->size(s); ++i)
+          if (const std::string err = k.items->check(s, i); !err.empty())
+            c.fail(k.items->prefix + std::to_string(i + 1), err);
+    }
     for (const auto& f : checks_) f(s, c);
   }
 
-  /// Writes "[name]" and one documented line per key: an INI that loads back to `s`.
+  /// Writes "[name]" and one documented line per key (each element of a list; not the keys
+  /// whose when() does not hold): an INI that loads back to `s` over a struct that agrees with it
+  /// on the keys left out.
   void dump(const S& s, std::ostream& out) const {
     dumpHeader(out);
-    for (const Key& k : keys_) detail::dumpLine(out, k.info, k.get(s));
+    dumpKeys(s, out);
   }
   /// Only the lines of the keys (no header), e.g. to add keys of another struct to a section.
   void dumpKeys(const S& s, std::ostream& out, bool commented = false) const {
-    for (const Key& k : keys_) detail::dumpLine(out, k.info, k.get(s), commented);
+    for (const Key& k : keys_) dumpKey(k, s, out, commented);
   }
   /// One key's line (commented out: shown, not set).
   void dumpKey(const S& s, const std::string& key, std::ostream& out,
                bool commented = false) const {
-    if (const Key* k = find(key)) detail::dumpLine(out, k->info, k->get(s), commented);
+    if (const Key* k = find(key)) dumpKey(*k, s, out, commented);
   }
   void dumpHeader(std::ostream& out) const;
 
@@ -380,7 +457,7 @@ class Section : public SectionBase {
     std::vector<KeyInfo> out;
     for (const Key& k : keys_) {
       KeyInfo i = k.info;
-      i.default_value = k.get(defaults);
+      if (!k.items) i.default_value = k.get(defaults);  // a list's elements have none
       out.push_back(std::move(i));
     }
     return out;
@@ -403,16 +480,49 @@ class Section : public SectionBase {
   }
 
  private:
+  struct Items {  ///< a list's element keys
+    std::string prefix, count_key;
+    std::function<std::size_t(const S&)> size;
+    std::function<std::string(std::string_view, S&, std::size_t)> set;  ///< error or ""
+    std::function<std::string(const S&, std::size_t)> get;
+    std::function<std::string(const S&, std::size_t)> check;  ///< error or ""
+  };
   struct Key {
     KeyInfo info;
     std::function<std::string(std::string_view, S&)> set;  ///< returns an error or ""
     std::function<std::string(const S&)> get;              ///< the value as INI text
     std::function<std::string(const S&)> check;            ///< range error or "" (optional)
+    std::shared_ptr<const Items> items = nullptr;          ///< a list (then set/get are unset)
+    std::function<bool(const S&)> applies = nullptr;       ///< dumped only when it holds
   };
   const Key* find(std::string_view key) const {
     for (const Key& k : keys_)
-      if (sameName(k.info.name, key)) return &k;
+      if (!k.items && sameName(k.info.name, key)) return &k;
     return nullptr;
+  }
+  /// The list whose element `key` is (<prefix><k>, k >= 1 without leading zeros), or nullptr.
+  const Key* findItem(std::string_view key, std::size_t& index) const {
+    for (const Key& k : keys_) {
+      if (!k.items) continue;
+      const std::string& p = k.items->prefix;
+      if (key.size() <= p.size() || !sameName(key.substr(0, p.size()), p)) continue;
+      const std::string_view digits = key.substr(p.size());
+      if (digits.size() > 9 || digits[0] == '0' ||
+          digits.find_first_not_of("0123456789") != std::string_view::npos)
+        continue;
+      index = std::stoul(std::string(digits));
+      return &k;
+    }
+    return nullptr;
+  }
+  void dumpKey(const Key& k, const S& s, std::ostream& out, bool commented) const {
+    if (k.applies && !k.applies(s)) return;
+    if (!k.items) return detail::dumpLine(out, k.info, k.get(s), commented);
+    for (std::size_t i = 0; i < k.items->size(s); ++i) {
+      KeyInfo element = k.info;
+      element.name = k.items->prefix + std::to_string(i + 1);
+      detail::dumpLine(out, element, k.items->get(s, i), commented);
+    }
   }
   bool isForeign(std::string_view key) const {
     for (const auto& f : foreign_)

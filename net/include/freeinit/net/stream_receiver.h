@@ -89,13 +89,16 @@ class StreamReceiver {
     Packet packet;
     SteadyClock::time_point received;
   };
+  // A frame being reassembled. Chunks are kept as they arrive, and the frame is built when the
+  // last one is in: memory follows the points received (never more than the frame declares), not
+  // the declared size, which a single corrupt-but-CRC-valid datagram would otherwise allocate.
   struct Assembly {
-    FrameMessage frame;
+    FrameMessage frame;  ///< id, stamp and extrinsics; points filled when complete
+    std::uint32_t total_points = 0;
     std::uint16_t chunk_count = 0;
-    std::vector<bool> have;
-    /// Per chunk index: (first point, points), to check that the chunks tile the frame.
-    std::vector<std::pair<std::uint32_t, std::uint32_t>> spans;
-    std::size_t received_chunks = 0;
+    /// Per chunk index: its first point index and its points.
+    std::map<std::uint16_t, std::pair<std::uint32_t, std::vector<DopplerPoint>>> chunks;
+    std::uint64_t received_points = 0;
     SteadyClock::time_point last_chunk;
   };
 

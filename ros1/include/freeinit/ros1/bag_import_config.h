@@ -5,6 +5,11 @@
 //   reflectivity velocity, int32 time_offset_ns (point time minus the header stamp, ns) and uint8
 //   line_index; header stamp = frame start; raw (relative, not ego-compensated) Doppler with the
 //   range-rate sign of freeinit/types.h. Everything is configurable; nothing is guessed from data.
+// Other sensors: clouds without a per-point time (all points at the scan stamp, or spread evenly
+// over a declared frame duration), scan stamps from a trigger topic matched by sequence number or
+// from the bag's receive time, and a declared offset between the clocks
+// (ini/import_bag_ti_mmwave.ini is a 4D radar with all three).
+//
 // No ROS and no MRPT type appears here.
 #pragma once
 
@@ -44,13 +49,19 @@ struct FieldSpec {
 /// Where a point's time comes from. point time = header stamp + offset, with
 ///   offset = value * scale                       (relative = true: value is an offset)
 ///   offset = value * scale - header stamp        (relative = false: value is absolute time)
+/// Without a time field (field.name empty) the offsets come from the point order: point i of the
+/// n points of a cloud (row-major, dropped invalid points included) is at
+///   offset = frame_duration * (i + 0.5) / n,
+/// the middle of its share of the frame, so that the points' mean time is the middle of the
+/// frame; frame_duration = 0 puts every point at the scan stamp.
 struct TimeFieldSpec {
   FieldSpec field{"time_offset_ns", FieldType::kInt32};
-  double scale = 1e-9;   ///< [s per unit] 1e-9 for ns, 1e-6 for us, 1 for s
-  bool relative = true;  ///< value is relative to the header stamp (else absolute UNIX time)
+  double scale = 1e-9;        ///< [s per unit] 1e-9 for ns, 1e-6 for us, 1 for s
+  bool relative = true;       ///< value is relative to the header stamp (else absolute UNIX time)
+  double frame_duration = 0;  ///< [s] without a time field: the span the points are spread over
 };
 
-/// The PointCloud2 layout. x, y, z, the Doppler and the time are required.
+/// The PointCloud2 layout. x, y, z and the Doppler are required; the time field is optional.
 struct CloudLayout {
   FieldSpec x{"x", FieldType::kFloat32};
   FieldSpec y{"y", FieldType::kFloat32};
@@ -70,12 +81,25 @@ enum class DopplerMode {
   kEgoCompensated,  ///< the sensor's ego velocity already removed ("absolute" Doppler)
 };
 
+/// Where a scan's stamp (the time its point offsets are relative to) comes from.
+enum class StampSource {
+  kHeader,   ///< the cloud's header stamp
+  kTrigger,  ///< the stamp of the std_msgs/Header on trigger_topic whose seq is the cloud's seq
+  kBagTime,  ///< the time the bag recorded the cloud (the recorder's clock, usually not the IMU's)
+};
+
 struct BagImportConfig {
   std::string imu_topic = "/imu/data";
   std::string lidar_topic = "/aeva/AeriesII/point_cloud_frame";
   CloudLayout cloud;
+  StampSource stamp_source = StampSource::kHeader;
+  /// std_msgs/Header messages marking each scan's start (stamp_source = trigger): a cloud takes the
+  /// stamp of the trigger whose seq equals its header.seq (the nearest in bag time if a seq is
+  /// repeated). Clouds without a trigger are skipped and counted.
+  std::string trigger_topic;
   bool imu_accel_in_g = false;  ///< linear_acceleration is in g (converted with kGravity)
-  /// [s] added to every LiDAR time to put it on the IMU clock: t_imu = t_lidar + offset.
+  /// [s] added to every scan stamp (whatever its source) to put it on the IMU clock:
+  /// t_imu = t_scan + offset.
   double lidar_time_offset = 0;
   DopplerMode doppler_mode = DopplerMode::kRelative;
   /// [s] how far (in header time) a message may arrive after later-stamped ones and still be
@@ -91,8 +115,14 @@ struct BagImportConfig {
   int unit_check_samples = 200;
 };
 
+/// "header", "trigger", "bag_time" (the INI values); throws std::invalid_argument otherwise.
+StampSource stampSourceFromName(const std::string& name);
+std::string stampSourceName(StampSource s);
+
 /// Throws std::invalid_argument naming the key for inconsistent settings (empty required field
-/// names, scale <= 0, doppler_sign not +-1, non-finite offsets, ...).
+/// names, scale <= 0, doppler_sign not +-1, non-finite offsets, a trigger source without a
+/// trigger topic, ...): what reading needs. The INI keys' accepted ranges are declared by the
+/// importer's [bag_import] section.
 void validate(const BagImportConfig& c);
 
 }  // namespace freeinit::ros1

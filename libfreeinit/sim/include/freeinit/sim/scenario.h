@@ -137,8 +137,9 @@ struct ScenarioConfig {
   Vec3 accelSigmaPerAxis() const { return accel_sigma * accel_sigma_scale; }
 };
 
-/// Throws std::invalid_argument "<key>: <what is wrong>" (key as in the scenario INI) for a config
-/// simulate() cannot run.
+/// The checks of the scenario INI's keys (scenario_ini.h: ranges and checks across keys) on a
+/// config built in code: throws config::ConfigError (a std::invalid_argument) "configuration key
+/// scenario.<key>: <what is wrong>" for a config simulate() cannot run.
 void validateScenario(const ScenarioConfig& config);
 
 /// The rig/IMU trajectory of a config (t0 = config.t0).
