@@ -180,6 +180,7 @@ int FreeInitApp::run(std::ostream& log) {
   log << "Reading " << params.rawlog << "\n";
   RawlogReader reader(params.rawlog, params.index);
   reader.setSalvage(params.salvage);
+  reader.setMaxRecordBytes(static_cast<std::size_t>(config.input.max_record_mb * 1e6));
   index_used = reader.indexLoaded();
   if (index_used) log << "  seek index found (" << reader.index().records.size() << " records)\n";
   std::optional<double> first;
