@@ -208,7 +208,18 @@ int IcpSlamApp::run(std::ostream& log) {
   if (!std::filesystem::is_regular_file(params.icp_ini))
     throw std::invalid_argument(params.icp_ini + ": no such file");
   const std::string ini_text = mrpt::io::file_get_contents(params.icp_ini);
-  mrpt::config::CConfigFileMemory ini(ini_text);
+  // MRPT's own parser reads the stock app's sections ([MappingApplication], [ICP]); its errors
+  // name neither the file nor the line's text, and carry a backtrace.
+  mrpt::config::CConfigFileMemory ini;
+  try {
+    ini.setContent(ini_text);
+  } catch (const std::exception& e) {
+    std::string why = e.what();
+    if (const auto m = why.find("Message:"); m != std::string::npos) why.erase(0, m + 8);
+    why.erase(0, why.find_first_not_of(' '));
+    why = why.substr(0, why.find('\n'));
+    throw std::invalid_argument(params.icp_ini + ": cannot be read as an icp-slam INI: " + why);
+  }
   if (!ini.sectionExists(kMappingSection) || !ini.sectionExists("ICP"))
     throw std::invalid_argument(params.icp_ini +
                                 ": needs the [MappingApplication] and [ICP] "

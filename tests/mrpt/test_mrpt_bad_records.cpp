@@ -1,7 +1,8 @@
 // What a corrupt rawlog record may cost: the per-record allocation budget of the rawlog reader
 // (read_budget.h, with the program's allocation guard linked in as in the apps), the point count
-// of a Doppler cloud, the IMU presence flags. Each error is one line naming the file and the record
-// (or key).
+// of a Doppler cloud, the IMU presence flags, and the INI MRPT parses for freeinit-icp-slam.
+// Each error is one line naming the file and the record (or key).
+#include <freeinit/mrpt/IcpSlamApp.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/conversions.h>
@@ -26,6 +27,8 @@ using namespace freeinit::mrpt_glue;
 namespace fs = std::filesystem;
 
 namespace {
+
+const std::string kSrc = FREEINIT_SOURCE_DIR;
 
 std::string tmpPath(const std::string& name) {
   const auto dir = fs::temp_directory_path() / "freeinit_bad_records_tests";
@@ -199,4 +202,29 @@ TEST(AppConfig, MaxRecordMbIsCheckedOnLoad) {
     EXPECT_NE(m.find("a.ini"), std::string::npos) << m;
     EXPECT_NE(m.find("max_record_mb"), std::string::npos) << m;
   }
+}
+
+TEST(IcpSlamInputs, AnIniMrptCannotParseIsOneLineNamingTheFile) {
+  // MRPT's parser throws on an unterminated ${...} with a backtrace and no file name.
+  const fs::path dir = fs::path(tmpPath("icp_dollar"));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string ini = (dir / "icp.ini").string();
+  std::ofstream(ini) << "[MappingApplication]\nlogOutput_dir = ${FOO\n[ICP]\n";
+  IcpSlamApp app;
+  app.params.icp_ini = ini;
+  app.params.freeinit_ini = kSrc + "/ini/freeinit.ini";
+  app.params.rawlog = kSrc + "/rawlogs/dyna_01.rawlog";
+  app.params.out_dir = (dir / "out").string();
+  std::ostringstream log;
+  try {
+    app.run(log);
+    FAIL() << "no error";
+  } catch (const std::invalid_argument& e) {
+    const std::string m = e.what();
+    EXPECT_EQ(m.rfind(ini + ": cannot be read as an icp-slam INI: ", 0), 0u) << m;
+    EXPECT_EQ(m.find('\n'), std::string::npos) << m;
+    EXPECT_EQ(m.find("backtrace"), std::string::npos) << m;
+  }
+  EXPECT_FALSE(fs::exists(dir / "out"));
 }
