@@ -33,7 +33,9 @@ std::size_t ReadBudget::charged() const noexcept { return t_state.used; }
 bool ReadBudget::charge(std::size_t bytes) noexcept {
   State& s = t_state;
   if (!s.open) return true;
-  if (bytes > s.limit - s.used) {
+  // Small requests are counted, never refused: MRPT builds its error messages (with a backtrace)
+  // inside what(), which may not throw, so a refusal there would terminate the program.
+  if (bytes >= kLargeRequest && (bytes > s.limit || s.used > s.limit - bytes)) {
     if (s.refused == 0) s.refused = bytes;
     return false;
   }

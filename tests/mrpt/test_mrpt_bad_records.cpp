@@ -9,6 +9,7 @@
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/read_budget.h>
 #include <gtest/gtest.h>
+#include <mrpt/core/exceptions.h>
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/serialization/CArchive.h>
@@ -106,19 +107,36 @@ void expectOneLineNaming(const std::string& m, const std::string& path, const st
 
 }  // namespace
 
-TEST(ReadBudget, TheGuardRefusesARequestOverTheOpenBudget) {
+TEST(ReadBudget, TheGuardRefusesALargeRequestOverTheOpenBudget) {
   ASSERT_TRUE(ReadBudget::enforced()) << "the allocation guard is not linked into this test";
+  const std::size_t large = ReadBudget::kLargeRequest;
   {
-    ReadBudget budget(1000);
-    auto small = std::make_unique<char[]>(600);
+    ReadBudget budget(3 * large);
+    auto first = std::make_unique<char[]>(2 * large);
     EXPECT_EQ(budget.refused(), 0u);
-    EXPECT_GE(budget.charged(), 600u);
-    // 600 + 600 > 1000: this one does not fit.
-    EXPECT_THROW(std::make_unique<char[]>(600), std::bad_alloc);
-    EXPECT_EQ(budget.refused(), 600u);
+    EXPECT_GE(budget.charged(), 2 * large);
+    // 2 + 2 > 3: this one does not fit.
+    EXPECT_THROW(std::make_unique<char[]>(2 * large), std::bad_alloc);
+    EXPECT_EQ(budget.refused(), 2 * large);
+    // Small requests are counted, never refused.
+    auto small = std::make_unique<char[]>(large / 2);
+    EXPECT_GE(budget.charged(), 2 * large + large / 2);
   }
   // Closed: no limit.
   EXPECT_NO_THROW(std::make_unique<char[]>(std::size_t{8} << 20));
+}
+
+TEST(ReadBudget, MrptCanDescribeAnErrorOnceTheBudgetIsSpent) {
+  // MRPT builds an exception's message, with a backtrace, inside what(), which may not throw: a
+  // refusal there terminated the program (found by fuzzing the rawlog reader).
+  ReadBudget budget(ReadBudget::kLargeRequest);
+  auto all = std::make_unique<char[]>(ReadBudget::kLargeRequest);
+  try {
+    THROW_EXCEPTION("corrupt data");
+  } catch (const std::exception& e) {
+    EXPECT_NE(std::string(e.what()).find("corrupt data"), std::string::npos);
+  }
+  EXPECT_EQ(budget.refused(), 0u);
 }
 
 TEST(RawlogReader, ARecordOverTheConfiguredMaximumIsRefusedNamingTheKey) {

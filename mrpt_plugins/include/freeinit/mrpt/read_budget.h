@@ -5,8 +5,10 @@
 // crash. A ReadBudget, opened by the rawlog reader around each record, gives this thread a total
 // it may allocate; the program's allocation functions (alloc_guard.cpp: operator new and MRPT's
 // aligned allocator, linked into every app) charge it and throw std::bad_alloc, before
-// allocating, for the request that would exceed it. Programs without them (stock MRPT tools
-// loading the plugin) are unguarded; the reader works the same.
+// allocating, for the request that would exceed it. Requests under kLargeRequest are counted but
+// never refused (the corrupt counts ask for one large block; MRPT's error handling, which may not
+// throw, needs small ones). Programs without them (stock MRPT tools loading the plugin) are
+// unguarded; the reader works the same.
 #pragma once
 
 #include <cstddef>
@@ -15,6 +17,9 @@ namespace freeinit::mrpt_glue {
 
 class ReadBudget {
  public:
+  /// [bytes] requests from this size on are refused when they do not fit.
+  static constexpr std::size_t kLargeRequest = std::size_t{64} << 10;
+
   /// Opens a budget of `bytes` for this thread (replacing any open one until destroyed).
   explicit ReadBudget(std::size_t bytes) noexcept;
   ~ReadBudget();
@@ -27,7 +32,7 @@ class ReadBudget {
   std::size_t charged() const noexcept;
 
   /// For the allocation functions: charges `bytes` to this thread's open budget; false (and the
-  /// request is recorded) when it does not fit. True when no budget is open.
+  /// request is recorded) when a large request does not fit. True when no budget is open.
   static bool charge(std::size_t bytes) noexcept;
   /// Whether this program's allocation functions charge budgets (alloc_guard.cpp is linked in).
   static bool enforced() noexcept;
