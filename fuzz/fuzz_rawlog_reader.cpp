@@ -2,9 +2,10 @@
 // reader with its per-record allocation budget (read_budget.h: the program's operator new and
 // MRPT's aligned allocator are the guard's, alloc_guard.cpp), MRPT's deserialization with our
 // Doppler points map class, the decoder to core types and the record checks. Then the same file
-// in salvage mode. Invariants: records numbered 0, 1, ...; what passes the checks is finite, IMU
-// stamps increase, a frame's points are sorted by time; salvage reads exactly the records the
-// strict reader read before its error, and reports where it stopped.
+// in salvage mode. Invariants: an error is one line naming the file; records numbered 0, 1, ...;
+// what passes the checks is finite, IMU stamps increase, a frame's points are sorted by time;
+// salvage reads exactly the records the strict reader read before its error, and reports where it
+// stopped.
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/ingest.h>
 #include <freeinit/mrpt/ingest_sources.h>
@@ -89,8 +90,9 @@ Pass read(const std::string& path, bool salvage) {
     inspect(checked);
     p.stop = reader.salvageStop();
   } catch (const std::exception& e) {
-    p.error = firstLine(e.what());
+    p.error = e.what();
     if (p.error.empty()) broken("an error without a message");
+    if (p.error.find('\n') != std::string::npos) broken("a multi-line error");
   }
   return p;
 }
