@@ -7,6 +7,11 @@
 #       "<importer>: error: FILE: ...", and leave no rawlog
 #   replay_finding.sh replay BASE FILE DRIVER
 #       DRIVER FILE must exit 0 with exactly one line, "FILE: ok: ..." or "FILE: error: ..."
+#   replay_finding.sh rawlog BASE FILE APP INI
+#       APP INI FILE (freeinit) must exit 1 with exactly one line on stderr,
+#       "<app>: error: FILE: ...", and leave no output folder
+#   replay_finding.sh ini BASE FILE APP RAWLOG
+#       APP FILE RAWLOG (freeinit) the same, the line naming the INI file
 # The limit of import and replay is BASE's figure + 300 MB; the time limit 20 s. Exit 77 (ctest:
 # skipped) when FILE is absent.
 set -u
@@ -31,7 +36,7 @@ measure)
   echo $hi > "$out"
   echo "a valid input runs within ulimit -v $hi KB: $*"
   ;;
-import | replay)
+import | replay | rawlog | ini)
   base=$1 file=$2 tool=$3
   [ -f "$file" ] || { echo "skipped: $file is not here"; exit 77; }
   limit=$(($(cat "$base") + EXTRA_KB))
@@ -41,6 +46,12 @@ import | replay)
   if [ "$mode" = import ]; then
     # The message is on stderr (stdout has the progress lines).
     (ulimit -v $limit; exec timeout $SECONDS_LIMIT "$tool" "$file" -c "$4" -q -o "$tmp/out.rawlog") \
+      > "$tmp/other" 2> "$tmp/line"
+  elif [ "$mode" = rawlog ]; then
+    (ulimit -v $limit; exec timeout $SECONDS_LIMIT "$tool" "$4" "$file" -q --out "$tmp/out") \
+      > "$tmp/other" 2> "$tmp/line"
+  elif [ "$mode" = ini ]; then
+    (ulimit -v $limit; exec timeout $SECONDS_LIMIT "$tool" "$file" "$4" -q --out "$tmp/out") \
       > "$tmp/other" 2> "$tmp/line"
   else
     (ulimit -v $limit; exec timeout $SECONDS_LIMIT "$tool" "$file") > "$tmp/line" 2> "$tmp/other"
@@ -55,6 +66,10 @@ import | replay)
     [ $rc -eq 1 ] || { echo "FAIL: exit code $rc, expected 1"; exit 1; }
     [ ! -e "$tmp/out.rawlog" ] && [ ! -e "$tmp/out.rawlog.tmp" ] || { echo "FAIL: a rawlog was left"; exit 1; }
     expect="$name: error: $file: "
+  elif [ "$mode" = rawlog ] || [ "$mode" = ini ]; then
+    [ $rc -eq 1 ] || { echo "FAIL: exit code $rc, expected 1"; exit 1; }
+    [ ! -e "$tmp/out" ] || { echo "FAIL: an output folder was left"; exit 1; }
+    expect="$name: error: $file"
   else
     [ $rc -eq 0 ] || { echo "FAIL: exit code $rc, expected 0"; cat "$tmp/other"; exit 1; }
     expect="$file: "
@@ -67,7 +82,7 @@ import | replay)
   echo "PASS"
   ;;
 *)
-  echo "usage: $0 measure OUT -- CMD... | import BASE FILE IMPORTER INI | replay BASE FILE DRIVER" >&2
+  echo "usage: $0 measure OUT -- CMD... | import BASE FILE IMPORTER INI | replay BASE FILE DRIVER | rawlog BASE FILE APP INI | ini BASE FILE APP RAWLOG" >&2
   exit 2
   ;;
 esac

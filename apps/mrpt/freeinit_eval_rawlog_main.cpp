@@ -3,18 +3,21 @@
 // with the same tables and figures as freeinit-eval. Each rawlog is read with the validated
 // reader (no silent truncation) and is one independent job; reading is serialized, the
 // initializations run in parallel.
+#include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/ground_truth.h>
 #include <freeinit/mrpt/input_validator.h>
+#include <freeinit/mrpt/output_set.h>
 #include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt/stop_signal.h>
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/figures.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
-#include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <mutex>
 #include <stdexcept>
 
@@ -61,66 +64,90 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
   return out;
 }
 
+/// One output file of the run, as a set of its own (output_set.h): locked now, installed last.
+std::unique_ptr<glue::OutputSet> fileSet(const std::string& file, std::ostream& log) {
+  if (file.empty()) return nullptr;
+  const std::filesystem::path p(file);
+  const std::string name = p.filename().string();
+  if (name.empty() || std::filesystem::is_directory(p))
+    throw std::invalid_argument(file + ": a file name is needed (this is a folder)");
+  glue::OutputSetOptions options;
+  options.owned = {name};
+  return std::make_unique<glue::OutputSet>(p.parent_path().string(), name, options, log);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
-  try {
-    TCLAP::CmdLine cmd(
-        "freeinit-eval-rawlog: Free-Init and the baseline initializers on rawlogs with ground "
-        "truth (<name>.truth.csv beside each), as Markdown/CSV tables and figures",
-        ' ', "0.1");
-    TCLAP::UnlabeledValueArg<std::string> ini("config", "INI configuration file", true, "",
-                                              "config.ini", cmd);
-    TCLAP::UnlabeledMultiArg<std::string> rawlogs("rawlogs", "input rawlogs", true, "a.rawlog",
-                                                  cmd);
-    TCLAP::ValueArg<std::string> md("", "md", "Markdown report", false, "", "FILE", cmd);
-    TCLAP::ValueArg<std::string> csv("", "csv", "CSV, one row per rawlog and method", false, "",
-                                     "FILE", cmd);
-    TCLAP::ValueArg<std::string> plots("", "plots", "folder for velocity_error.png", false, "",
-                                       "DIR", cmd);
-    TCLAP::ValueArg<unsigned> jobs("j", "jobs", "parallel jobs (0: hardware concurrency)", false, 0,
-                                   "N", cmd);
-    TCLAP::ValueArg<double> fail_v("", "fail-velocity", "failure above this velocity error [m/s]",
-                                   false, 0.2, "V", cmd);
-    TCLAP::ValueArg<double> fail_g("", "fail-gravity", "failure above this gravity error [deg]",
-                                   false, 2.0, "D", cmd);
-    TCLAP::ValueArg<double> dlio("", "dlio-duration", "DLIO's static calibration time [s]", false,
-                                 3.0, "S", cmd);
-    TCLAP::SwitchArg no_baselines("", "no-baselines", "Free-Init only", cmd);
-    cmd.parse(argc, argv);
-
+  namespace range = freeinit::config;
+  glue::CommandLine cli("freeinit-eval-rawlog",
+                        "Free-Init and the baseline initializers on rawlogs with ground truth "
+                        "(<name>.truth.csv beside each), as Markdown/CSV tables and figures");
+  const auto& ini = cli.positional("config.ini", "INI configuration file (ini/freeinit.ini)");
+  const auto& rawlogs = cli.positionals("input.rawlog", "input rawlogs, each with its truth");
+  const auto& md = cli.text("", "md", "Markdown report", "", "FILE", "none");
+  const auto& csv = cli.text("", "csv", "CSV, one row per rawlog and method", "", "FILE", "none");
+  const auto& plots = cli.text("", "plots", "folder for velocity_error.png", "", "DIR", "none");
+  const auto& jobs =
+      cli.integer("j", "jobs", "parallel jobs (0: hardware concurrency)", 0, 0, 1024, "N");
+  const auto& fail_v = cli.number("", "fail-velocity", "failure above this velocity error [m/s]",
+                                  0.2, range::aboveUpTo(0, 1e3), "V");
+  const auto& fail_g = cli.number("", "fail-gravity", "failure above this gravity error [deg]", 2.0,
+                                  range::aboveUpTo(0, 180), "D");
+  const auto& dlio = cli.number("", "dlio-duration", "DLIO's static calibration time [s]", 3.0,
+                                range::aboveUpTo(0, 3600), "S");
+  const auto& no_baselines = cli.flag("", "no-baselines", "Free-Init only");
+  if (const auto code = cli.parse(argc, argv)) return *code;
+  return glue::runMain(cli.program(), [&] {
     std::string command = "freeinit-eval-rawlog";
     for (int i = 1; i < argc; ++i) command += std::string(" ") + argv[i];
-    const glue::AppConfig config = glue::loadAppConfig(ini.getValue());
+    // Each output is a set of its own (its staging beside it), all installed once every table
+    // and figure is ready.
+    auto csv_set = fileSet(csv.value, std::cout);
+    auto md_set = fileSet(md.value, std::cout);
+    std::unique_ptr<glue::OutputSet> plots_set;
+    if (!plots.value.empty()) {
+      glue::OutputSetOptions options;
+      options.owned = {"velocity_error.png"};
+      plots_set =
+          std::make_unique<glue::OutputSet>(plots.value, "velocity_error", options, std::cout);
+    }
+    const glue::AppConfig config = glue::loadAppConfig(ini.value);
     report::MethodOptions options;
-    options.baselines = !no_baselines.getValue();
-    options.dlio_duration = dlio.getValue();
-    const report::FailureThresholds thresholds{fail_v.getValue(), fail_g.getValue()};
+    options.baselines = !no_baselines.value;
+    options.dlio_duration = dlio.value;
+    const report::FailureThresholds thresholds{fail_v.value, fail_g.value};
 
-    const auto& files = rawlogs.getValue();
+    const auto& files = rawlogs.value;
     std::vector<JobResult> results(files.size());
-    report::parallelFor(files.size(), jobs.getValue(), [&](std::size_t i) {
+    report::parallelFor(files.size(), static_cast<unsigned>(jobs.value), [&](std::size_t i) {
+      glue::throwIfStopRequested();
       results[i] = evaluateRawlog(config, files[i], options);
     });
+    glue::throwIfStopRequested();
     std::vector<report::EvalRow> rows;
     for (const auto& r : results) rows.insert(rows.end(), r.rows.begin(), r.rows.end());
     report::markFailures(rows, thresholds);
     std::cout << report::markdownSummary(rows, thresholds);
-    if (!csv.getValue().empty()) report::writeEvalCsv(csv.getValue(), rows);
-    if (!md.getValue().empty()) report::writeEvalMarkdown(md.getValue(), rows, thresholds, command);
-    if (!plots.getValue().empty()) {
-      std::filesystem::create_directories(plots.getValue());
+    if (csv_set)
+      csv_set->write(std::filesystem::path(csv.value).filename().string(),
+                     [&](const std::string& p) { report::writeEvalCsv(p, rows); });
+    if (md_set)
+      md_set->write(std::filesystem::path(md.value).filename().string(), [&](const std::string& p) {
+        report::writeEvalMarkdown(p, rows, thresholds, command);
+      });
+    if (plots_set) {
       std::vector<cv::Mat> panels;
       for (std::size_t i = 0; i < files.size(); ++i)
         panels.push_back(report::velocityErrorPanel(std::filesystem::path(files[i]).filename(),
                                                     results[i].tracks, 640, 400));
-      const auto png = (std::filesystem::path(plots.getValue()) / "velocity_error.png").string();
-      report::savePng(png, report::tile(panels, panels.size() >= 2 ? 2 : 1));
-      std::cout << "wrote " << png << "\n";
+      plots_set->write("velocity_error.png", [&](const std::string& p) {
+        report::savePng(p, report::tile(panels, panels.size() >= 2 ? 2 : 1));
+      });
     }
+    for (auto* set : {csv_set.get(), md_set.get(), plots_set.get()})
+      if (set) set->commit();
+    if (plots_set) std::cout << "wrote " << plots_set->finalPath("velocity_error.png") << "\n";
     return 0;
-  } catch (const std::exception& e) {
-    std::cerr << "freeinit-eval-rawlog: error: " << e.what() << "\n";
-    return 1;
-  }
+  });
 }

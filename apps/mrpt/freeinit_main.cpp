@@ -1,5 +1,5 @@
 // freeinit <config.ini> <input.rawlog> [--out DIR] [--start T | --every S | --starts FILE]
-// [--check-all] [--no-index]: Free-Init on an MRPT rawlog.
+// [--check-all] [--salvage] [--no-index]: Free-Init on an MRPT rawlog.
 #include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/mrpt/FreeInitApp.h>
 #include <unistd.h>
@@ -31,6 +31,10 @@ int main(int argc, char** argv) {
   const auto& check_all = cli.flag("", "check-all",
                                    "read and check the whole file (by default reading stops once "
                                    "the state is ready)");
+  const auto& salvage = cli.flag("", "salvage",
+                                 "read a rawlog cut short (e.g. a recording when the power went "
+                                 "off) up to its last whole record, with a warning naming where "
+                                 "it stopped");
   const auto& no_index =
       cli.flag("", "no-index", "neither use nor write the seek index <input>.freeinit.idx");
   if (const auto code = cli.parse(argc, argv)) return *code;
@@ -45,6 +49,7 @@ int main(int argc, char** argv) {
     app.params.every = every.value;
     app.params.starts_file = starts.value;
     app.params.check_all = check_all.value;
+    app.params.salvage = salvage.value;
     app.params.index.use = !no_index.value;
     app.params.command = "freeinit";
     for (int i = 1; i < argc; ++i) app.params.command += std::string(" ") + argv[i];

@@ -15,10 +15,23 @@ std::string fmt(double x) {
   return os.str();
 }
 
-/// "duplicated (t after t)" or "goes backwards (t after t_prev)".
+/// "duplicated (t after t)" or "goes backwards (t after t_prev)", with the digits it takes for
+/// two different stamps to print differently (MRPT's clock counts 100 ns).
 std::string orderWords(double t, double previous) {
-  return std::string(t == previous ? "duplicated" : "goes backwards") + " (" + formatStamp(t) +
-         " after " + formatStamp(previous) + ")";
+  std::string a = formatStamp(t), b = formatStamp(previous);
+  for (int digits = 7; a == b && t != previous && digits <= 9; ++digits) {
+    std::ostringstream x, y;
+    x.setf(std::ios::fixed);
+    y.setf(std::ios::fixed);
+    x.precision(digits);
+    y.precision(digits);
+    x << t;
+    y << previous;
+    a = x.str();
+    b = y.str();
+  }
+  return std::string(t == previous ? "duplicated" : "goes backwards") + " (" + a + " after " + b +
+         ")";
 }
 
 }  // namespace

@@ -3,6 +3,8 @@
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <algorithm>
+
 namespace freeinit::mrpt_glue {
 
 IMPLEMENTS_SERIALIZABLE(CPointsMapDoppler, CPointsMap, freeinit::mrpt_glue)
@@ -153,21 +155,40 @@ void CPointsMapDoppler::serializeTo(mrpt::serialization::CArchive& out) const {
   likelihoodOptions.writeToStream(out);
 }
 
+namespace {
+
+/// Reads `n` values into `v` a chunk at a time: what is allocated follows what the stream really
+/// holds, so a corrupt count fails where the data end instead of at the allocator (MRPT's aligned
+/// allocator returns null rather than throwing).
+template <class Vec>
+void readChunked(mrpt::serialization::CArchive& in, Vec& v, std::size_t n) {
+  constexpr std::size_t kChunk = std::size_t{1} << 16;
+  v.clear();
+  for (std::size_t done = 0; done < n;) {
+    const std::size_t k = std::min(kChunk, n - done);
+    v.resize(done + k);
+    in.ReadBufferFixEndianness(v.data() + done, k);
+    done += k;
+  }
+}
+
+}  // namespace
+
 void CPointsMapDoppler::serializeFrom(mrpt::serialization::CArchive& in, uint8_t version) {
   switch (version) {
     case 0: {
       uint32_t n = 0;
       in >> n;
-      setSize(n);
-      if (n > 0) {
-        in.ReadBufferFixEndianness(m_x.data(), n);
-        in.ReadBufferFixEndianness(m_y.data(), n);
-        in.ReadBufferFixEndianness(m_z.data(), n);
-        in.ReadBufferFixEndianness(doppler_.data(), n);
-        in.ReadBufferFixEndianness(time_offset_.data(), n);
-        in.ReadBufferFixEndianness(intensity_.data(), n);
-        in.ReadBufferFixEndianness(line_.data(), n);
-      }
+      if (n > kMaxPoints)
+        THROW_EXCEPTION_FMT("%u points declared for one cloud, at most %u are read",
+                            static_cast<unsigned>(n), static_cast<unsigned>(kMaxPoints));
+      readChunked(in, m_x, n);
+      readChunked(in, m_y, n);
+      readChunked(in, m_z, n);
+      readChunked(in, doppler_, n);
+      readChunked(in, time_offset_, n);
+      readChunked(in, intensity_, n);
+      readChunked(in, line_, n);
       insertionOptions.readFromStream(in);
       likelihoodOptions.readFromStream(in);
       mark_as_modified();

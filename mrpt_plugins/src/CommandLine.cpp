@@ -2,9 +2,11 @@
 // collects the positional tokens) and converted by this class, so that every message has the same
 // form and no value is silently wrapped, truncated or defaulted.
 #include <freeinit/mrpt/CommandLine.h>
+#include <freeinit/mrpt/stop_signal.h>
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
 #include <algorithm>
+#include <csignal>
 #include <iostream>
 #include <sstream>
 
@@ -316,8 +318,19 @@ int runMain(const std::string& program, const std::function<int()>& body) {
     std::cerr << program << ": error: " << (message.empty() ? "unknown error" : message) << "\n";
     return 1;
   };
+  installStopHandlers();
   try {
     return body();
+  } catch (const Interrupted& e) {
+    // Stopped by a signal: the outputs' set has removed what this run staged. The process then
+    // ends by the same signal, so that a calling shell or script sees it (status 128 + signal).
+    std::cout.flush();
+    std::cerr << program << ": stopped by " << signalName(e.signal())
+              << "; no output of this run was written\n";
+    std::cerr.flush();
+    std::signal(e.signal(), SIG_DFL);
+    std::raise(e.signal());
+    return 128 + e.signal();
   } catch (const std::exception& e) {
     return report(e.what());
   } catch (...) {

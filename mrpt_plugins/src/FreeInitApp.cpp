@@ -4,8 +4,10 @@
 #include <freeinit/mrpt/ingest.h>
 #include <freeinit/mrpt/ingest_sources.h>
 #include <freeinit/mrpt/map_export.h>
+#include <freeinit/mrpt/output_set.h>
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/snapshots.h>
+#include <freeinit/mrpt/stop_signal.h>
 
 #include <chrono>
 #include <cmath>
@@ -16,7 +18,6 @@
 #include <limits>
 #include <memory>
 #include <ostream>
-#include <set>
 #include <sstream>
 
 namespace freeinit::mrpt_glue {
@@ -74,26 +75,19 @@ struct Slot {
   std::unique_ptr<InitSession> session;
 };
 
-/// Writes one start's outputs into `dir` (created).
-void writeStateSet(const std::string& dir, const AppConfig& config, const InitResult& result,
-                   const std::optional<TruthErrors>& errors, const std::vector<TruthSample>& truth,
-                   const std::string* effective) {
-  fs::create_directories(dir);
-  auto file = [&](const char* name) { return (fs::path(dir) / name).string(); };
+/// Stages one start's outputs in `set` under `prefix` ("" or "start_0012.000/").
+void writeStateSet(OutputSet& set, const std::string& prefix, const AppConfig& config,
+                   const InitResult& result, const std::optional<TruthErrors>& errors,
+                   const std::vector<TruthSample>& truth, const std::string* effective) {
   if (effective != nullptr)
-    writeFileAtomically(file(kConfigFile), [&](std::ostream& o) { o << *effective; });
-  writeInitialStateIni(file(kStateFile), result.state);
-  if (errors) writeTruthErrors(file(kErrorsFile), *errors);
-  writeResultFiles(dir, config.output, result, truth);
-}
-
-/// Replaces `target` (a folder) by `staging` as a whole.
-void swapInto(const fs::path& staging, const fs::path& target) {
-  const fs::path old = target.parent_path() / ("." + target.filename().string() + ".old");
-  fs::remove_all(old);
-  if (fs::exists(target)) fs::rename(target, old);
-  fs::rename(staging, target);
-  fs::remove_all(old);
+    set.write(prefix + kConfigFile, [&](const std::string& p) {
+      writeFileAtomically(p, [&](std::ostream& o) { o << *effective; });
+    });
+  set.write(prefix + kStateFile,
+            [&](const std::string& p) { writeInitialStateIni(p, result.state); });
+  if (errors)
+    set.write(prefix + kErrorsFile, [&](const std::string& p) { writeTruthErrors(p, *errors); });
+  writeResultFiles(set, prefix, config.output, result, truth);
 }
 
 }  // namespace
@@ -134,20 +128,28 @@ std::vector<std::string> resultFileNames() {
           kVelocityCsvFile, kMapPngFile, kVelocityPngFile};
 }
 
-void writeResultFiles(const std::string& out_dir, const OutputParams& output,
+void writeResultFiles(OutputSet& set, const std::string& prefix, const OutputParams& output,
                       const InitResult& result, const std::vector<TruthSample>& truth) {
-  const fs::path out(out_dir);
-  auto file = [&](const char* name) { return (out / name).string(); };
-  if (output.simplemap) writeStaticSimplemap(file(kSimplemapFile), result);
-  if (output.ply) writePly(file(kPlyFile), result.static_map);
-  if (output.trajectory) writeTum(file(kTrajectoryFile), result.trajectory);
-  if (output.velocities) writeVelocityCsv(file(kVelocityCsvFile), result.velocities);
+  auto file = [&](const char* name) { return prefix + name; };
+  if (output.simplemap)
+    set.write(file(kSimplemapFile),
+              [&](const std::string& p) { writeStaticSimplemap(p, result); });
+  if (output.ply)
+    set.write(file(kPlyFile), [&](const std::string& p) { writePly(p, result.static_map); });
+  if (output.trajectory)
+    set.write(file(kTrajectoryFile), [&](const std::string& p) { writeTum(p, result.trajectory); });
+  if (output.velocities)
+    set.write(file(kVelocityCsvFile),
+              [&](const std::string& p) { writeVelocityCsv(p, result.velocities); });
   if (output.snapshots) {
     if (!result.static_map.empty())
-      renderMapSnapshot(file(kMapPngFile), result, output.snapshot_width, output.snapshot_height);
+      set.write(file(kMapPngFile), [&](const std::string& p) {
+        renderMapSnapshot(p, result, output.snapshot_width, output.snapshot_height);
+      });
     if (!result.velocities.empty())
-      renderVelocityPlot(file(kVelocityPngFile), result, truth, output.snapshot_width,
-                         output.snapshot_height);
+      set.write(file(kVelocityPngFile), [&](const std::string& p) {
+        renderVelocityPlot(p, result, truth, output.snapshot_width, output.snapshot_height);
+      });
   }
 }
 
@@ -164,6 +166,9 @@ int FreeInitApp::run(std::ostream& log) {
   warnings.clear();
   result = InitResult{};
   errors_wrt_gt.reset();
+  // The outputs' set: locked now, installed as a whole at the end; on any failure (an exception
+  // through here) the earlier run's outputs are removed with the staging folder.
+  OutputSet set(params.out_dir, "", folderSetOptions(), log);
 
   // 1. Configuration, echoed.
   config = loadAppConfig(params.config_file);
@@ -174,6 +179,8 @@ int FreeInitApp::run(std::ostream& log) {
   // 2. The starts.
   log << "Reading " << params.rawlog << "\n";
   RawlogReader reader(params.rawlog, params.index);
+  reader.setSalvage(params.salvage);
+  reader.setMaxRecordBytes(static_cast<std::size_t>(config.input.max_record_mb * 1e6));
   index_used = reader.indexLoaded();
   if (index_used) log << "  seek index found (" << reader.index().records.size() << " records)\n";
   std::optional<double> first;
@@ -194,17 +201,6 @@ int FreeInitApp::run(std::ostream& log) {
   if (params.start)
     log << "  start at " << input::formatStamp(from) << " (" << from - *first
         << " s after the first record)\n";
-
-  if (multi && fs::is_directory(params.out_dir)) {
-    // Staging folders an interrupted run left behind.
-    for (const auto& e : fs::directory_iterator(params.out_dir)) {
-      const std::string n = e.path().filename().string();
-      const bool ours = n.rfind(".start_", 0) == 0 &&
-                        (n.size() > 4 && (n.compare(n.size() - 4, 4, ".tmp") == 0 ||
-                                          n.compare(n.size() - 4, 4, ".old") == 0));
-      if (e.is_directory() && ours) fs::remove_all(e.path());
-    }
-  }
 
   std::vector<TruthSample> truth;
   const std::string truth_file = truthPathFor(params.rawlog);
@@ -287,11 +283,7 @@ int FreeInitApp::run(std::ostream& log) {
           errs = row.truth->errors;
         }
       }
-      // The start's set appears whole: written into a staging folder, renamed into place.
-      const fs::path staging = out / ("." + name + ".tmp");
-      fs::remove_all(staging);
-      writeStateSet(staging.string(), config, r, errs, truth, nullptr);
-      swapInto(staging, out / name);
+      writeStateSet(set, name + "/", config, r, errs, truth, nullptr);
       row.folder = name;
     }
     log << "Start " << row.index << " at " << std::fixed << std::setprecision(3) << row.start_offset
@@ -329,6 +321,7 @@ int FreeInitApp::run(std::ostream& log) {
         break;
       }
     }
+    throwIfStopRequested();
     RawlogObject rec;
     try {
       // Idle: straight to the next start (no record at or after it: the end).
@@ -360,6 +353,11 @@ int FreeInitApp::run(std::ostream& log) {
   const std::size_t last_record = reader.nextRecord();
   records_read = reader.recordsDeserialized();
   read_to_end = reader.atEnd();
+  salvage_stop = reader.salvageStop();
+  if (!salvage_stop.empty()) {
+    log << "Warning: " << salvage_stop << "\n";
+    warnings.push_back(salvage_stop);
+  }
 
   if (read_error) {
     // Unreadable from here on: the open windows fail; what comes after is not checked.
@@ -414,28 +412,22 @@ int FreeInitApp::run(std::ostream& log) {
   if (!why.empty()) log << "Warning: the seek index could not be written: " << why << "\n";
 
   if (multi) {
-    fs::create_directories(out);
-    writeFileAtomically((out / kConfigFile).string(),
-                        [&](std::ostream& o) { o << effective.str(); });
+    set.write(kConfigFile, [&](const std::string& p) {
+      writeFileAtomically(p, [&](std::ostream& o) { o << effective.str(); });
+    });
     std::sort(rows.begin(), rows.end(),
               [](const StartRow& a, const StartRow& b) { return a.index < b.index; });
-    // The table names the set; it is written last. Start folders of an earlier run that this
-    // one did not write would pass for its own: they go.
-    std::set<std::string> ours;
-    for (const auto& r : rows) ours.insert(r.folder);
-    for (const auto& e : fs::directory_iterator(out)) {
-      const std::string n = e.path().filename().string();
-      if (e.is_directory() && n.rfind("start_", 0) == 0 && !ours.count(n) &&
-          fs::exists(e.path() / kStateFile))
-        fs::remove_all(e.path());
-    }
     if (std::any_of(rows.begin(), rows.end(),
                     [](const StartRow& r) { return r.state && r.state->ok(); }))
-      renderStartPlot((out / "starts.png").string(), rows, config.output.snapshot_width,
-                      config.output.snapshot_height);
-    writeStartTableCsv((out / "starts.csv").string(), rows);
-    writeStartTableMarkdown((out / "starts.md").string(), rows, params.rawlog,
-                            params.command.empty() ? "freeinit" : params.command);
+      set.write("starts.png", [&](const std::string& p) {
+        renderStartPlot(p, rows, config.output.snapshot_width, config.output.snapshot_height);
+      });
+    set.write("starts.csv", [&](const std::string& p) { writeStartTableCsv(p, rows); });
+    set.write("starts.md", [&](const std::string& p) {
+      writeStartTableMarkdown(p, rows, params.rawlog,
+                              params.command.empty() ? "freeinit" : params.command);
+    });
+    set.commit();
     const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
     std::size_t ok = 0;
     for (const auto& r : rows) ok += r.status == toString(InitStatus::Ok) ? 1 : 0;
@@ -467,9 +459,10 @@ int FreeInitApp::run(std::ostream& log) {
         << "  accel bias  " << errors_wrt_gt->accel_bias << " m/s^2\n";
   }
 
-  // 5. Outputs, each written atomically.
+  // 5. The outputs, staged, then installed as one set.
   const std::string effective_text = effective.str();
-  writeStateSet(params.out_dir, config, result, errors_wrt_gt, truth, &effective_text);
+  writeStateSet(set, "", config, result, errors_wrt_gt, truth, &effective_text);
+  set.commit();
   const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
   log << "Outputs in " << out.string() << " (" << std::setprecision(3) << secs << " s total)\n";
   return s.ok() ? 0 : 3;

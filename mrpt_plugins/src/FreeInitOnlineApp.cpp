@@ -4,9 +4,11 @@
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/ingest.h>
 #include <freeinit/mrpt/ingest_sources.h>
+#include <freeinit/mrpt/output_set.h>
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/register.h>
+#include <freeinit/mrpt/stop_signal.h>
 #include <freeinit/mrpt/stream_conversions.h>
 
 #include <chrono>
@@ -24,6 +26,10 @@
 namespace freeinit::mrpt_glue {
 namespace {
 
+constexpr const char* kStateFile = "initial_state.ini";
+constexpr const char* kStatsFile = "stream_stats.ini";
+constexpr const char* kConfigFile = "effective_config.ini";
+
 using Clock = std::chrono::steady_clock;
 double secondsBetween(Clock::time_point a, Clock::time_point b) {
   return std::chrono::duration<double>(b - a).count();
@@ -40,11 +46,12 @@ struct Recorded {
 // Converts the received items to MRPT observations and serializes and compresses them (a
 // RawlogWriter) in its own thread, off the estimator's path. The queue is bounded: when the disk
 // cannot keep up, push() waits, and the source's bounded queue then drops (and counts) instead.
-// Destroyed without commit() (an error on the way), it leaves no file behind.
+// Destroyed without commit() (an error on the way), it keeps what was written.
 class RecordWriter {
  public:
   RecordWriter(const std::string& path, std::size_t max_queued)
       : writer_(path), max_queued_(max_queued) {
+    writer_.keepPartial();  // a recording is never lost, even when closing it fails
     thread_ = std::thread([this] { loop(); });
   }
   ~RecordWriter() { stop(); }
@@ -125,6 +132,17 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   registerClasses();
   const auto t_start = Clock::now();
 
+  // The outputs are one set (output_set.h): the earlier run's go when this run's first data
+  // arrive (its recording renamed, never deleted); the state is installed the moment the window
+  // closes, the rest when the stream ends.
+  if (params.record.find('/') != std::string::npos)
+    throw std::invalid_argument("--record " + params.record +
+                                ": a file name in the output folder, without '/'");
+  OutputSetOptions options = folderSetOptions();
+  options.recording = params.record;
+  options.recording_companion = params.record.empty() ? "" : kStatsFile;
+  OutputSet set(params.out_dir, "", options, log);
+
   config = loadAppConfig(params.config_file);
   std::ostringstream effective;
   dumpAppConfig(config, effective);
@@ -132,23 +150,15 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   const StreamLabels labels{config.input.imu_label.empty() ? "IMU" : config.input.imu_label,
                             config.input.lidar_label.empty() ? "LIDAR" : config.input.lidar_label};
 
-  const std::filesystem::path out(params.out_dir);
-  std::filesystem::create_directories(out);
-  auto file = [&](const char* name) { return (out / name).string(); };
-  const std::string state_file = file("initial_state.ini");
-  record_path = params.record.empty() ? "" : (out / params.record).string();
-  // Outputs of an earlier run must not pass for this one's, nor sit next to them: remove every
-  // file this run may write (the result files depend on [output] and on how the run ends).
-  std::vector<std::string> stale = {state_file, file("stream_stats.ini"),
-                                    file("effective_config.ini")};
-  for (const auto& name : resultFileNames()) stale.push_back((out / name).string());
-  if (!record_path.empty()) stale.insert(stale.end(), {record_path, record_path + ".tmp"});
-  for (const auto& path : stale) std::filesystem::remove(path);
-  writeFileAtomically(file("effective_config.ini"), [&](std::ostream& o) { o << effective.str(); });
+  const std::string state_file = set.finalPath(kStateFile);
+  record_path = params.record.empty() ? "" : set.finalPath(params.record);
+  set.write(kConfigFile, [&](const std::string& p) {
+    writeFileAtomically(p, [&](std::ostream& o) { o << effective.str(); });
+  });
 
-  // The recording: written to a temporary name, renamed when committed.
+  // The recording: written into the staging folder, kept whatever happens.
   std::unique_ptr<RecordWriter> rec;
-  if (!record_path.empty()) rec = std::make_unique<RecordWriter>(record_path, 128);
+  if (!record_path.empty()) rec = std::make_unique<RecordWriter>(set.path(params.record), 128);
 
   std::unique_ptr<net::StreamSource> src =
       source ? std::move(source) : std::make_unique<net::UdpStreamSource>(params.source);
@@ -156,13 +166,14 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   if (const auto* udp = dynamic_cast<const net::UdpStreamSource*>(src.get())) {
     log << "Listening on UDP " << params.source.address << ":" << udp->port() << " (receive buffer "
         << udp->receiveBufferGranted() << " bytes)\n";
+    log.flush();  // a live tool's log is followed as it runs (e.g. tail -f on a file)
     if (on_listening) on_listening(udp->port());
   }
 
   // The ingest path, as offline: wire items -> record checks -> one session.
   const std::string source_name = "live stream";
   RecordChecker checker(config);
-  InitSession session(config, source_name);
+  InitSession session(config, source_name, false);
   const double accel_scale = config.input.imu_accel_in_g ? kGravity : 1.0;
   std::vector<CheckedItem> checked;
   ready_live = false;
@@ -170,6 +181,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   recorded = 0;
   std::string input_error;
   bool data_seen = false, end = false, stopped = false;
+  int stopped_by_signal = 0;
   int sessions = 0;
   auto last_data = Clock::now();
   std::vector<net::StreamEvent> events;
@@ -182,7 +194,9 @@ int FreeInitOnlineApp::run(std::ostream& log) {
       return;
     }
     const auto t_processed = Clock::now();
-    writeInitialStateIni(state_file, session.result().state);
+    set.write(kStateFile,
+              [&](const std::string& p) { writeInitialStateIni(p, session.result().state); });
+    set.install({kStateFile});
     const auto t_written = Clock::now();
     latency.queue = secondsBetween(e.received, t_fed);
     latency.estimator = secondsBetween(t_fed, t_processed);
@@ -201,14 +215,23 @@ int FreeInitOnlineApp::run(std::ostream& log) {
         << " IMU samples and " << stats_at_ready.queue_dropped_frames << " frames dropped, "
         << stats_at_ready.receiver.frames_incomplete + stats_at_ready.receiver.frames_inconsistent
         << " frames incomplete or inconsistent)\n";
+    log.flush();
     if (params.stop_when_ready) end = true;
   };
   while (!end) {
+    if (const int sig = stopSignal()) {
+      // The normal way to stop a live tool: the end of the stream, with every output written.
+      log << "Stopped by " << signalName(sig) << ": end of the stream\n";
+      clearStopRequest();
+      stopped_by_signal = sig;
+      break;
+    }
     events.clear();
     src->poll(events, 0.05);
     const auto now = Clock::now();
     if (!events.empty()) {
       last_data = now;
+      if (!data_seen) set.install({kConfigFile});  // the earlier run's outputs go now
       data_seen = true;
     } else if (data_seen && params.idle_timeout > 0 &&
                secondsBetween(last_data, now) > params.idle_timeout) {
@@ -270,29 +293,50 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   src->stop();
   stats = src->stats();
   if (rec) {
-    rec->commit();
+    try {
+      rec->commit();
+    } catch (const std::exception& e) {
+      throw OutputError(set.describe(params.record, e.what()));
+    }
     rec.reset();
-    log << "Recorded " << recorded << " observations to " << record_path << "\n";
+    if (recorded == 0) {
+      std::filesystem::remove(set.path(params.record));  // nothing was recorded
+    } else {
+      log << "Recorded " << recorded << " observations to " << record_path << "\n";
+    }
+  }
+  if (!data_seen) {
+    std::ostringstream within;
+    if (params.wait_first > 0) within << " within " << params.wait_first << " s";
+    throw InputError(source_name + ": no data received" + within.str() +
+                     (stopped_by_signal != 0 ? " before " + signalName(stopped_by_signal) : "") +
+                     "; nothing written");
   }
   std::ostringstream st;
   net::printStats(st, stats);
   log << "Stream statistics:\n" << st.str();
-  writeFileAtomically(file("stream_stats.ini"), [&](std::ostream& o) {
-    o << "[stream]\n" << st.str() << "recorded            = " << recorded << "\n";
-    if (ready_live)
-      o << std::setprecision(6) << "latency_total_ms    = " << 1e3 * latency.total
-        << "\nlatency_queue_ms    = " << 1e3 * latency.queue
-        << "\nlatency_estimator_ms= " << 1e3 * latency.estimator
-        << "\nlatency_write_ms    = " << 1e3 * latency.write
-        << "\n; stream anomalies before the state was written (data possibly in the window)"
-        << "\nanomalies_before_ready = " << stats_at_ready.anomalies()
-        << "\nlost_before_ready   = " << stats_at_ready.receiver.lost
-        << "\nqueue_dropped_imu_before_ready    = " << stats_at_ready.queue_dropped_imu
-        << "\nqueue_dropped_frames_before_ready = " << stats_at_ready.queue_dropped_frames << "\n";
+  set.write(kStatsFile, [&](const std::string& p) {
+    writeFileAtomically(p, [&](std::ostream& o) {
+      o << "[stream]\n" << st.str() << "recorded            = " << recorded << "\n";
+      if (stopped_by_signal != 0) o << "stopped_by          = " << signalName(stopped_by_signal) << "\n";
+      if (ready_live)
+        o << std::setprecision(6) << "latency_total_ms    = " << 1e3 * latency.total
+          << "\nlatency_queue_ms    = " << 1e3 * latency.queue
+          << "\nlatency_estimator_ms= " << 1e3 * latency.estimator
+          << "\nlatency_write_ms    = " << 1e3 * latency.write
+          << "\n; stream anomalies before the state was written (data possibly in the window)"
+          << "\nanomalies_before_ready = " << stats_at_ready.anomalies()
+          << "\nlost_before_ready   = " << stats_at_ready.receiver.lost
+          << "\nqueue_dropped_imu_before_ready    = " << stats_at_ready.queue_dropped_imu
+          << "\nqueue_dropped_frames_before_ready = " << stats_at_ready.queue_dropped_frames
+          << "\n";
+    });
   });
   if (stats.anomalies() > 0)
     log << "Warning: " << stats.anomalies()
         << " datagrams or items lost, dropped or rejected (see stream_stats.ini)\n";
+  // An input error: the recording and its statistics are kept (abandon() installs them), the
+  // rest goes.
   if (!input_error.empty()) throw InputError(input_error);
 
   if (!session.done()) {
@@ -305,11 +349,16 @@ int FreeInitOnlineApp::run(std::ostream& log) {
       throw InputError(session.errors().front());
     }
     if (!session.ready()) throw InputError(session.endOfDataReason());
-    writeInitialStateIni(state_file, session.result().state);
+    set.write(kStateFile,
+              [&](const std::string& p) { writeInitialStateIni(p, session.result().state); });
   }
   for (const auto& w : session.warnings()) log << "Warning: " << w << "\n";
   result = session.result();
-  writeResultFiles(params.out_dir, config.output, result, {});
+  if (stopped_by_signal != 0 && !ready_live)
+    log << "The stream was stopped by " << signalName(stopped_by_signal)
+        << " before the window closed\n";
+  writeResultFiles(set, "", config.output, result, {});
+  set.commit();
   log << "Initialization: " << toString(result.state.status)
       << (result.state.message.empty() ? "" : " (" + result.state.message + ")") << "\n";
   return result.state.ok() ? 0 : 3;

@@ -4,9 +4,11 @@
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/input_validator.h>
 #include <freeinit/mrpt/map_export.h>
+#include <freeinit/mrpt/output_set.h>
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/mrpt/snapshots.h>
+#include <freeinit/mrpt/stop_signal.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #include <mrpt/io/vector_loadsave.h>
 #include <mrpt/maps/CPointsMap.h>
@@ -33,24 +35,6 @@ constexpr const char* kMapFile = "_finalmap_.simplemap";
 constexpr const char* kStepLogFile = "log_estimated_path.txt";
 constexpr const char* kPathFile = "estimated_path_tum.txt";
 constexpr const char* kErrorsFile = "errors_wrt_gt.ini";
-
-/// Removes whatever an earlier run of this app left in its output folders (only the files it
-/// writes, for every mode), so that a run that fails half-way leaves no result that looks current.
-/// Creates nothing; throws std::filesystem::filesystem_error when a file cannot be removed.
-void removeEarlierOutputs(const IcpSlamAppParams& p) {
-  namespace fs = std::filesystem;
-  const fs::path out(p.out_dir);
-  for (const char* f : {kSeedIniFile, kOdometryAloneFile, kResultsFile, kPictureFile})
-    fs::remove(out / f);
-  for (const IcpSeedMode m : {IcpSeedMode::Plain, IcpSeedMode::Seeded, IcpSeedMode::Odometry}) {
-    for (const char* f : {kMapFile, kStepLogFile, kPathFile, kErrorsFile})
-      fs::remove(out / toString(m) / f);
-    if (!p.export_dir.empty()) {
-      fs::remove(fs::path(p.export_dir) / (std::string(toString(m)) + ".rawlog"));
-      fs::remove(fs::path(p.export_dir) / (std::string(toString(m)) + ".ini"));
-    }
-  }
-}
 
 const char* kMappingSection = "MappingApplication";
 
@@ -124,6 +108,7 @@ BuilderOutput runBuilder(const mrpt::config::CConfigFileBase& ini, const IcpSeed
   std::ostringstream steps;
   int step = 0;
   for (const auto& obs : observations) {
+    throwIfStopRequested();
     builder.processObservation(obs);
     const auto pose = builder.getCurrentPoseEstimation()->getMeanVal();
     steps << step++ << " " << std::fixed << std::setprecision(6) << pose.x() << " " << pose.y()
@@ -210,13 +195,31 @@ void renderRuns(const std::string& png, const std::string& title,
 }  // namespace
 
 int IcpSlamApp::run(std::ostream& log) {
-  // 0. No output of an earlier run survives this one, whether it succeeds or fails.
-  removeEarlierOutputs(params);
+  // 0. The outputs are one set per folder (output_set.h), installed when the run is complete; a
+  // run that fails leaves no output of ours in either folder, nor one of an earlier run.
+  OutputSet set(params.out_dir, "", folderSetOptions(), log);
+  std::optional<OutputSet> own_export_set;
+  const bool exporting = !params.export_dir.empty();
+  if (exporting && std::filesystem::weakly_canonical(params.export_dir) !=
+                       std::filesystem::weakly_canonical(params.out_dir))
+    own_export_set.emplace(params.export_dir, "", folderSetOptions(), log);
+  OutputSet* export_set = own_export_set ? &*own_export_set : exporting ? &set : nullptr;
   // 1. Configuration (both files), then the input: everything is checked before any output.
   if (!std::filesystem::is_regular_file(params.icp_ini))
     throw std::invalid_argument(params.icp_ini + ": no such file");
   const std::string ini_text = mrpt::io::file_get_contents(params.icp_ini);
-  mrpt::config::CConfigFileMemory ini(ini_text);
+  // MRPT's own parser reads the stock app's sections ([MappingApplication], [ICP]); its errors
+  // name neither the file nor the line's text, and carry a backtrace.
+  mrpt::config::CConfigFileMemory ini;
+  try {
+    ini.setContent(ini_text);
+  } catch (const std::exception& e) {
+    std::string why = e.what();
+    if (const auto m = why.find("Message:"); m != std::string::npos) why.erase(0, m + 8);
+    why.erase(0, why.find_first_not_of(' '));
+    why = why.substr(0, why.find('\n'));
+    throw std::invalid_argument(params.icp_ini + ": cannot be read as an icp-slam INI: " + why);
+  }
   if (!ini.sectionExists(kMappingSection) || !ini.sectionExists("ICP"))
     throw std::invalid_argument(params.icp_ini +
                                 ": needs the [MappingApplication] and [ICP] "
@@ -271,7 +274,6 @@ int IcpSlamApp::run(std::ostream& log) {
   auto scansFor = [&](IcpSeedMode m) -> const auto& {
     return m == IcpSeedMode::Odometry ? odometry_scans : scans;
   };
-  std::filesystem::create_directories(params.out_dir);
   if (!odometry.empty() && !truth.empty()) {
     // The odometry alone, at the scans after the state time: the reference the fed run starts
     // from (no map, no loop: its drift grows with the integrated velocity error).
@@ -282,7 +284,7 @@ int IcpSlamApp::run(std::ostream& log) {
       const BodyPose b = bodyPoseAt(odometry, t);
       path.push_back({t, planarPose(b.q_wb, b.p_w)});
     }
-    writeTumPlanar((std::filesystem::path(params.out_dir) / kOdometryAloneFile).string(), path);
+    set.write(kOdometryAloneFile, [&](const std::string& p) { writeTumPlanar(p, path); });
     odometry_errors = comparePathWithTruth(path, truth, s.timestamp);
     log << std::fixed << std::setprecision(3) << "  odometry alone: ATE "
         << odometry_errors->ate_rmse << " m, end-point " << odometry_errors->end_point << " m\n"
@@ -299,8 +301,6 @@ int IcpSlamApp::run(std::ostream& log) {
   }
 
   // 3. One icp-slam run per mode; outputs as the stock app names them, in <out>/<mode>/.
-  const std::filesystem::path out(params.out_dir);
-  std::filesystem::create_directories(out);
   // How the seed enters (MRPT 2.5.8; README "What MRPT 2.5.8 does with the seed"): the map
   // through initialize(); the pose through the first odometry reading, in w, as the stock app on
   // the export gets it. initialize()'s pose argument is used only when a lone reading would block
@@ -316,7 +316,7 @@ int IcpSlamApp::run(std::ostream& log) {
              "localization/insertion distances: it goes in as initialize()'s pose prior, "
              "without the velocity (a lone odometry reading would stop ICP)\n";
   }
-  if (seed) writeSeedIni((out / kSeedIniFile).string(), *seed);
+  if (seed) set.write(kSeedIniFile, [&](const std::string& p) { writeSeedIni(p, *seed); });
   runs.clear();
   for (const IcpSeedMode mode : modes) {
     const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
@@ -329,11 +329,12 @@ int IcpSlamApp::run(std::ostream& log) {
     r.keyframes = b.map.size();
     r.map_x = std::move(b.map_x);
     r.map_y = std::move(b.map_y);
-    const std::filesystem::path dir = out / toString(mode);
-    std::filesystem::create_directories(dir);
-    saveSimplemapAtomically((dir / kMapFile).string(), b.map);
-    writeFileAtomically((dir / kStepLogFile).string(), [&](std::ostream& o) { o << b.step_log; });
-    writeTumPlanar((dir / kPathFile).string(), r.path);
+    const std::string dir = std::string(toString(mode)) + "/";
+    set.write(dir + kMapFile, [&](const std::string& p) { saveSimplemapAtomically(p, b.map); });
+    set.write(dir + kStepLogFile, [&](const std::string& p) {
+      writeFileAtomically(p, [&](std::ostream& o) { o << b.step_log; });
+    });
+    set.write(dir + kPathFile, [&](const std::string& p) { writeTumPlanar(p, r.path); });
     log << "icp-slam " << std::left << std::setw(9) << toString(mode) << std::right << ": "
         << r.path.size() << " scans, " << r.keyframes << " keyframes";
     if (!truth.empty() && s.ok()) {
@@ -342,12 +343,14 @@ int IcpSlamApp::run(std::ostream& log) {
       const PathErrors& e = *r.errors;
       log << std::fixed << std::setprecision(3) << ", ATE " << e.ate_rmse << " m, end-point "
           << e.end_point << " m over " << e.length << " m" << std::defaultfloat;
-      writeFileAtomically((dir / kErrorsFile).string(), [&](std::ostream& o) {
-        o << "; icp-slam path vs ground truth, poses at the scans from the Free-Init state time,\n"
-             "; after the best SE(2) alignment\n[errors_wrt_gt]\nmode = "
-          << toString(mode) << "\nsamples = " << e.samples << "\nate_rmse = " << e.ate_rmse
-          << "   ; [m]\nend_point = " << e.end_point << "   ; [m]\ntrue_length = " << e.length
-          << "   ; [m]\n";
+      set.write(dir + kErrorsFile, [&](const std::string& p) {
+        writeFileAtomically(p, [&](std::ostream& o) {
+          o << "; icp-slam path vs ground truth, poses at the scans from the Free-Init state "
+               "time,\n; after the best SE(2) alignment\n[errors_wrt_gt]\nmode = "
+            << toString(mode) << "\nsamples = " << e.samples << "\nate_rmse = " << e.ate_rmse
+            << "   ; [m]\nend_point = " << e.end_point << "   ; [m]\ntrue_length = " << e.length
+            << "   ; [m]\n";
+        });
       });
     }
     log << "\n";
@@ -360,9 +363,9 @@ int IcpSlamApp::run(std::ostream& log) {
   // followed by the same observations as above (the seed pose as an odometry reading in w). It
   // cannot take a pose prior: in the seeded mode of a slow start it starts at w's origin, within
   // icp-slam's localization distance of the seed pose.
-  if (!params.export_dir.empty()) {
+  if (export_set) {
+    // The INI names the files where they will be once installed.
     const std::filesystem::path ex = std::filesystem::absolute(params.export_dir);
-    std::filesystem::create_directories(ex);
     for (const IcpSeedMode mode : modes) {
       const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
       std::vector<mrpt::obs::CObservation::Ptr> obs;
@@ -371,16 +374,19 @@ int IcpSlamApp::run(std::ostream& log) {
       obs.insert(obs.end(), rest.begin(), rest.end());
       const std::string name = toString(mode);
       const std::string rawlog = (ex / (name + ".rawlog")).string();
-      writeObservationRawlog(rawlog, obs);
+      export_set->write(name + ".rawlog",
+                        [&](const std::string& p) { writeObservationRawlog(p, obs); });
       mrpt::config::CConfigFileMemory cfg(ini_text);
       cfg.write(kMappingSection, "rawlog_file", rawlog);
       cfg.write(kMappingSection, "logOutput_dir", (ex / (name + "_icp_slam_out")).string());
       std::string text;
       cfg.getContent(text);
-      writeFileAtomically((ex / (name + ".ini")).string(), [&](std::ostream& o) {
-        o << "; icp-slam " << name << ".ini   (from " << params.icp_ini << " for " << rawlog
-          << ")\n"
-          << text;
+      export_set->write(name + ".ini", [&](const std::string& p) {
+        writeFileAtomically(p, [&](std::ostream& o) {
+          o << "; icp-slam " << name << ".ini   (from " << params.icp_ini << " for " << rawlog
+            << ")\n"
+            << text;
+        });
       });
       log << "Export: icp-slam " << (ex / (name + ".ini")).string() << "\n";
     }
@@ -388,24 +394,29 @@ int IcpSlamApp::run(std::ostream& log) {
 
   // 5. Results table and the picture.
   if (!runs.empty() && runs.front().errors) {
-    writeFileAtomically((out / kResultsFile).string(), [&](std::ostream& o) {
-      o << "# mode ate_rmse[m] end_point[m] true_length[m] scans keyframes\n" << std::fixed;
-      if (odometry_errors)
-        o << "odometry_alone " << std::setprecision(3) << odometry_errors->ate_rmse << " "
-          << odometry_errors->end_point << " " << odometry_errors->length << " "
-          << odometry_errors->samples << " 0\n";
-      for (const auto& r : runs)
-        o << toString(r.mode) << " " << std::setprecision(3) << r.errors->ate_rmse << " "
-          << r.errors->end_point << " " << r.errors->length << " " << r.path.size() << " "
-          << r.keyframes << "\n";
+    set.write(kResultsFile, [&](const std::string& p) {
+      writeFileAtomically(p, [&](std::ostream& o) {
+        o << "# mode ate_rmse[m] end_point[m] true_length[m] scans keyframes\n" << std::fixed;
+        if (odometry_errors)
+          o << "odometry_alone " << std::setprecision(3) << odometry_errors->ate_rmse << " "
+            << odometry_errors->end_point << " " << odometry_errors->length << " "
+            << odometry_errors->samples << " 0\n";
+        for (const auto& r : runs)
+          o << toString(r.mode) << " " << std::setprecision(3) << r.errors->ate_rmse << " "
+            << r.errors->end_point << " " << r.errors->length << " " << r.path.size() << " "
+            << r.keyframes << "\n";
+      });
     });
   }
   if (params.snapshot && !runs.empty()) {
-    const std::string png = (out / kPictureFile).string();
-    renderRuns(png, std::filesystem::path(params.rawlog).filename().string(), runs, truth,
-               s.timestamp, params.snapshot_width, params.snapshot_height);
-    log << "Picture: " << png << "\n";
+    set.write(kPictureFile, [&](const std::string& p) {
+      renderRuns(p, std::filesystem::path(params.rawlog).filename().string(), runs, truth,
+                 s.timestamp, params.snapshot_width, params.snapshot_height);
+    });
+    log << "Picture: " << set.finalPath(kPictureFile) << "\n";
   }
+  if (own_export_set) own_export_set->commit();
+  set.commit();
   return rc;
 }
 

@@ -9,7 +9,9 @@
 #include <mrpt/serialization/CArchive.h>
 #include <zlib.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <ostream>
@@ -28,20 +30,39 @@ class GzFileOut : public mrpt::io::CStream {
   bool open(const std::string& path) {
     // Level 1, as MRPT's own rawlog writer: a 60,000-point frame compresses several times faster
     // than at zlib's default level, which matters when recording a live stream.
+    path_ = path;
+    errno = 0;
     file_ = gzopen(path.c_str(), "wb1");
+    if (file_ == nullptr) error_ = errno != 0 ? std::strerror(errno) : "cannot open";
     return file_ != nullptr;
   }
-  /// True if everything written reached the file.
+  /// True if everything written reached the file (else error() says why).
   bool close() {
     if (file_ == nullptr) return false;
+    errno = 0;
     const int rc = gzclose(file_);
     file_ = nullptr;
-    return rc == Z_OK;
+    if (rc != Z_OK && error_.empty())
+      error_ = rc == Z_ERRNO && errno != 0 ? std::strerror(errno) : "gzip error " + std::to_string(rc);
+    return rc == Z_OK && error_.empty();
   }
+  /// Why writing failed ("" if it did not), e.g. "No space left on device".
+  const std::string& error() const { return error_; }
   std::size_t Write(const void* buffer, std::size_t count) override {
     if (file_ == nullptr || count == 0) return 0;
+    errno = 0;
     const int n = gzwrite(file_, buffer, static_cast<unsigned>(count));
-    return n > 0 ? static_cast<std::size_t>(n) : 0;  // a short count makes CArchive throw
+    if (n <= 0 || static_cast<std::size_t>(n) != count) {
+      int zerr = Z_OK;
+      const char* what = gzerror(file_, &zerr);
+      if (error_.empty())
+        error_ = zerr == Z_ERRNO && errno != 0 ? std::strerror(errno)
+                                               : std::string(what != nullptr ? what : "error");
+      // Thrown here rather than returning a short count, so that the message names the file
+      // and the system's reason instead of MRPT's generic one.
+      throw std::runtime_error(path_ + ": cannot write: " + error_);
+    }
+    return static_cast<std::size_t>(n);
   }
   std::size_t Read(void*, std::size_t) override {
     throw std::logic_error("GzFileOut is write-only");
@@ -57,6 +78,8 @@ class GzFileOut : public mrpt::io::CStream {
     return file_ == nullptr ? 0 : static_cast<std::uint64_t>(gztell(file_));
   }
   gzFile file_ = nullptr;
+  std::string path_;
+  std::string error_;
 };
 
 }  // namespace
@@ -77,7 +100,8 @@ RawlogWriter::RawlogWriter(std::string path, const Extrinsics& extrinsics, std::
   if (const auto dir = std::filesystem::path(path_).parent_path(); !dir.empty())
     std::filesystem::create_directories(dir);
   if (!stream_->file.open(path_ + ".tmp"))
-    throw std::runtime_error(path_ + ": cannot create " + path_ + ".tmp");
+    throw std::runtime_error(path_ + ": cannot create " + path_ + ".tmp: " +
+                             stream_->file.error());
   stream_->archive = mrpt::serialization::archiveUniquePtrFrom(stream_->file);
 }
 
@@ -85,7 +109,17 @@ RawlogWriter::~RawlogWriter() {
   if (!stream_) return;
   stream_->archive.reset();
   stream_->file.close();
-  std::remove((path_ + ".tmp").c_str());
+  if (keep_partial_)
+    std::rename((path_ + ".tmp").c_str(), path_.c_str());
+  else
+    std::remove((path_ + ".tmp").c_str());
+}
+
+void RawlogWriter::keepPartial() { keep_partial_ = true; }
+
+void RawlogWriter::writeObject(const mrpt::serialization::CSerializable& obj) {
+  *stream_->archive << obj;
+  ++records_;
 }
 
 void RawlogWriter::write(const ImuSample& s) {
@@ -111,10 +145,14 @@ void RawlogWriter::commit() {
   if (!stream_) throw std::logic_error(path_ + ": committed twice");
   stream_->archive.reset();
   const bool closed = stream_->file.close();
+  const std::string why = stream_->file.error();
   stream_.reset();
   if (!closed) {
-    std::remove((path_ + ".tmp").c_str());
-    throw std::runtime_error(path_ + ": writing " + path_ + ".tmp failed (disk full?)");
+    if (keep_partial_)
+      std::rename((path_ + ".tmp").c_str(), path_.c_str());
+    else
+      std::remove((path_ + ".tmp").c_str());
+    throw std::runtime_error(path_ + ": cannot write: " + why);
   }
   std::error_code ec;
   std::filesystem::rename(path_ + ".tmp", path_, ec);

@@ -98,7 +98,10 @@ const config::Section<InputParams>& inputSection() {
           .number("min_imu_rate", &P::min_imu_rate, "Hz", between(1, 1e5),
                   "slower IMU streams are rejected")
           .flag("drop_invalid_points", &P::drop_invalid_points,
-                "drop NaN/inf points (reported) instead of failing");
+                "drop NaN/inf points (reported) instead of failing")
+          .number("max_record_mb", &P::max_record_mb, "MB", between(1, 65536),
+                  "most one rawlog record may allocate while it is read (a 60,000-point cloud "
+                  "takes 1.6 MB); a record claiming more is corrupt and refused");
   return s;
 }
 

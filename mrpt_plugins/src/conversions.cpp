@@ -4,6 +4,8 @@
 #include <mrpt/math/CMatrixFixed.h>
 
 #include <algorithm>
+#include <cstdint>
+#include <cstring>
 #include <numeric>
 #include <stdexcept>
 
@@ -17,16 +19,27 @@ mrpt::Clock::time_point fromUnix(double t) { return mrpt::Clock::fromDouble(t); 
 
 ImuSample imuFromObservation(const CObservationIMU& obs, double accel_scale) {
   using namespace mrpt::obs;  // TIMUDataIndex enumerators
+  // MRPT deserializes the presence flags as raw bytes into bools: a corrupt file can hold any
+  // byte there, and loading such a bool is undefined. Read the bytes themselves.
+  std::uint8_t present[COUNT_IMU_DATA_FIELDS];
+  static_assert(sizeof(obs.dataIsPresent) == sizeof(present));
+  std::memcpy(present, obs.dataIsPresent.data(), sizeof(present));
+  for (std::size_t i = 0; i < sizeof(present); ++i)
+    if (present[i] > 1)
+      throw std::invalid_argument("CObservationIMU '" + obs.sensorLabel +
+                                  "': corrupt data (a field's presence flag is byte " +
+                                  std::to_string(present[i]) + ", not 0 or 1)");
   for (auto idx : {IMU_WX, IMU_WY, IMU_WZ, IMU_X_ACC, IMU_Y_ACC, IMU_Z_ACC}) {
-    if (!obs.has(idx))
+    if (present[idx] == 0)
       throw std::invalid_argument("CObservationIMU '" + obs.sensorLabel +
                                   "' lacks angular velocity or acceleration fields");
   }
   ImuSample s;
   s.t = toUnix(obs.timestamp);
   // MRPT 2.5.8 stores the angular rates as yaw (z), pitch (y), roll (x) rates: indices 3, 4, 5.
-  s.gyro = Vec3(obs.get(IMU_WX), obs.get(IMU_WY), obs.get(IMU_WZ));
-  s.accel = accel_scale * Vec3(obs.get(IMU_X_ACC), obs.get(IMU_Y_ACC), obs.get(IMU_Z_ACC));
+  const auto& m = obs.rawMeasurements;
+  s.gyro = Vec3(m[IMU_WX], m[IMU_WY], m[IMU_WZ]);
+  s.accel = accel_scale * Vec3(m[IMU_X_ACC], m[IMU_Y_ACC], m[IMU_Z_ACC]);
   return s;
 }
 

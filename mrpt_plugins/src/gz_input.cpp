@@ -101,6 +101,13 @@ std::uint64_t GzInput::compressedPosition() const {
   return gzip_ ? file_pos_ - z_.avail_in : getPosition();
 }
 
+std::uint64_t GzInput::remainingBound() const {
+  const std::uint64_t buffered = out_end_ - out_begin_;
+  const std::uint64_t unread = file_bytes_ > file_pos_ ? file_bytes_ - file_pos_ : 0;
+  if (!gzip_) return buffered + unread;
+  return buffered + 1032 * (unread + z_.avail_in);
+}
+
 void GzInput::maybeAddPoint() {
   // Between two deflate blocks (bit 128), not inside the last one (bit 64).
   if (sink_ == nullptr || (z_.data_type & 128) == 0 || (z_.data_type & 64) != 0) return;

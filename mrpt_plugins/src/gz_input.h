@@ -54,6 +54,9 @@ class GzInput : public mrpt::io::CStream {
   const std::string& error() const { return error_; }
   /// [bytes] of the file consumed so far (progress).
   std::uint64_t compressedPosition() const;
+  /// [bytes] at least as much as the decompressed data left: what is buffered, and what the rest
+  /// of the file can inflate to (deflate's largest ratio is 1032:1).
+  std::uint64_t remainingBound() const;
 
   // mrpt::io::CStream: read-only, forward-only.
   std::size_t Read(void* buffer, std::size_t count) override;

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iomanip>
+#include <sstream>
 #include <limits>
 #include <stdexcept>
 #include <utility>
@@ -123,8 +125,8 @@ void RecordChecker::finish(std::vector<CheckedItem>& out) { resolve(true, out); 
 // ---------------------------------------------------------------------------------------------
 // InitSession
 
-InitSession::InitSession(const AppConfig& config, std::string source)
-    : config_(config), source_(std::move(source)) {
+InitSession::InitSession(const AppConfig& config, std::string source, bool from_file)
+    : config_(config), source_(std::move(source)), from_file_(from_file) {
   config_.core.validate();
   extrinsics_known_ = !config_.extrinsics.from_sensor_pose;
   imu_check_samples_ = input::kWindowImuCheckSamples;
@@ -271,22 +273,45 @@ std::vector<std::string> InitSession::warnings() const {
 }
 
 std::string InitSession::endOfDataReason() const {
-  std::string seen;
-  for (const auto& [what, n] : ignored_) seen += (seen.empty() ? "" : ", ") + what;
-  if (seen.empty()) seen = "none";
+  std::string others;
+  for (const auto& [what, n] : ignored_)
+    others += (others.empty() ? "" : ", ") + std::to_string(n) + " " + what;
   const auto& in = config_.input;
+  // MRPT tools that did not load the plugin silently stop at the first Doppler cloud: a copy
+  // made that way holds only what came before it.
+  const std::string plugin_hint =
+      from_file_ ? " (a rawlog copied by an MRPT tool without the freeinit plugin keeps only the "
+                   "records before the first Doppler cloud: give the tool -p "
+                   "libfreeinit_mrpt.so)"
+                 : "";
+  if (imu_count_ == 0 && frame_count_ == 0)
+    return source_ + ": neither a CObservationIMU '" + in.imu_label +
+           "' nor a CObservationPointCloud '" + in.lidar_label +
+           "' ([input] imu_label, lidar_label); " +
+           (others.empty() ? std::string("nothing else either") : "other observations: " + others);
   if (imu_count_ == 0)
     return source_ + ": no CObservationIMU with sensorLabel '" + in.imu_label +
-           "' ([input] imu_label); other observations: " + seen;
+           "' ([input] imu_label); the input holds " + std::to_string(frame_count_) +
+           (frame_count_ == 1 ? " point cloud '" : " point clouds '") + in.lidar_label + "'" +
+           (others.empty() ? std::string(" and nothing else") : " and " + others);
   if (frame_count_ == 0)
     return source_ + ": no CObservationPointCloud with sensorLabel '" + in.lidar_label +
-           "' ([input] lidar_label); other observations: " + seen;
+           "' ([input] lidar_label); the input holds only " + std::to_string(imu_count_) +
+           (imu_count_ == 1 ? " IMU sample '" : " IMU samples '") + in.imu_label + "'" +
+           (others.empty() ? "" : " and " + others) +
+           plugin_hint;
   if (imu_count_ < 2)
     return source_ + ": record " + std::to_string(first_imu_record_) + ": a single IMU sample";
-  return source_ +
-         ": recording shorter than the window: " + std::to_string(imu_after_first_frame_) +
-         " IMU samples after the first point cloud (record " + std::to_string(first_frame_record_) +
-         "), [window] duration = " + std::to_string(config_.core.window.duration) + " s";
+  std::ostringstream covered;
+  covered << std::setprecision(3)
+          << (last_t_ && first_frame_t_ ? *last_t_ - *first_frame_t_ : 0.0);
+  std::ostringstream window;
+  window << config_.core.window.duration;
+  return source_ + ": " + (from_file_ ? "recording" : "stream") + " shorter than the window: " +
+         covered.str() + " s (" + std::to_string(imu_after_first_frame_) +
+         " IMU samples) after the first point cloud (record " +
+         std::to_string(first_frame_record_) + "), the window needs " + window.str() +
+         " s ([window] duration)";
 }
 
 }  // namespace freeinit::mrpt_glue

@@ -11,6 +11,7 @@ namespace freeinit::mrpt_glue {
 ValidatedInput readRecording(const std::string& path, const AppConfig& config,
                              const RawlogIndexPolicy& index) {
   RawlogReader reader(path, index);
+  reader.setMaxRecordBytes(static_cast<std::size_t>(config.input.max_record_mb * 1e6));
   ObservationDecoder decoder(config.input);
   RecordChecker checker(config);
   ValidatedInput in;

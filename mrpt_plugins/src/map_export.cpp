@@ -1,15 +1,12 @@
+#include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/map_export.h>
-#include <mrpt/io/CFileGZOutputStream.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/serialization/CArchive.h>
 
-#include <cstdio>
-#include <filesystem>
-#include <stdexcept>
 
 namespace freeinit::mrpt_glue {
 
@@ -31,29 +28,19 @@ void writeStaticSimplemap(const std::string& path, const InitResult& result) {
   saveSimplemapAtomically(path, map);
 }
 
+// Through RawlogWriter's gzip stream rather than CSimpleMap::saveToFile / CFileGZOutputStream,
+// which in MRPT 2.5.8 ignore a failed final flush (a full disk gives a cut file and success).
 void saveSimplemapAtomically(const std::string& path, const mrpt::maps::CSimpleMap& map) {
-  const std::string tmp = path + ".tmp";
-  if (!map.saveToFile(tmp)) {
-    std::remove(tmp.c_str());
-    throw std::runtime_error(path + ": cannot write the simple map");
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error(path + ": " + ec.message());
+  RawlogWriter w(path);
+  w.writeObject(map);
+  w.commit();
 }
 
 void writeObservationRawlog(const std::string& path,
                             const std::vector<mrpt::obs::CObservation::Ptr>& observations) {
-  const std::string tmp = path + ".tmp";
-  {
-    mrpt::io::CFileGZOutputStream f;
-    if (!f.open(tmp)) throw std::runtime_error(path + ": cannot create " + tmp);
-    auto arch = mrpt::serialization::archiveFrom(f);
-    for (const auto& o : observations) arch << *o;
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, path, ec);
-  if (ec) throw std::runtime_error(path + ": " + ec.message());
+  RawlogWriter w(path);
+  for (const auto& o : observations) w.write(*o);
+  w.commit();
 }
 
 }  // namespace freeinit::mrpt_glue

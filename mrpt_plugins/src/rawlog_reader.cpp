@@ -1,4 +1,5 @@
 #include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt/read_budget.h>
 #include <freeinit/mrpt/register.h>
 #include <mrpt/core/Clock.h>
 #include <mrpt/obs/CActionCollection.h>
@@ -8,7 +9,9 @@
 #include <mrpt/serialization/CArchive.h>
 
 #include <algorithm>
+#include <exception>
 #include <filesystem>
+#include <iomanip>
 #include <limits>
 #include <sstream>
 
@@ -18,6 +21,22 @@ namespace freeinit::mrpt_glue {
 namespace {
 
 constexpr std::int64_t kNoTime = std::numeric_limits<std::int64_t>::min();
+// A record's budget from what the rest of the file can hold: objects take more memory than their
+// serialized bytes (a CObservationIMU of ~300 bytes is a ~600-byte object with its shared_ptr),
+// and a small file's records get a few MB whatever.
+constexpr std::size_t kBudgetFactor = 16;
+constexpr std::size_t kBudgetSlack = std::size_t{4} << 20;
+
+std::string megabytes(std::size_t bytes) {
+  std::ostringstream os;
+  const double mb = static_cast<double>(bytes) / 1e6;
+  os << std::fixed << std::setprecision(mb < 10 ? 1 : 0);
+  if (mb >= 1000)
+    os << std::setprecision(1) << mb / 1e3 << " GB";
+  else
+    os << mb << " MB";
+  return os.str();
+}
 
 double ticksToUnix(std::int64_t ticks) {
   return mrpt::Clock::toDouble(mrpt::Clock::time_point(mrpt::Clock::duration(ticks)));
@@ -48,16 +67,36 @@ IndexedRecord describe(const mrpt::serialization::CSerializable& obj) {
   return r;
 }
 
-/// MRPT exceptions carry nested messages and a backtrace: keep the "Message:" lines.
-std::string mrptCause(const std::exception& e) {
-  std::string cause;
+/// What MRPT's nested exception says, in one line: its innermost message and the objects being
+/// read when it was thrown ("... (in CObservationPointCloud > CPointsMapDoppler)"). MRPT's
+/// exceptions carry one "Message:" line per level and a backtrace.
+struct MrptCause {
+  std::string innermost;
+  std::string objects;  ///< "CObservationPointCloud > CPointsMapDoppler"
+  std::string line() const {
+    return innermost + (objects.empty() ? std::string() : " (in " + objects + ")");
+  }
+};
+
+MrptCause mrptCause(const std::exception& e) {
+  MrptCause c;
   std::istringstream lines(e.what());
+  const std::string typed = "Exception while parsing typed object '";
   for (std::string l; std::getline(lines, l);) {
     if (l.rfind("Message:", 0) != 0) continue;
     l.erase(0, l.find_first_not_of(' ', 8));
-    cause += (cause.empty() ? "" : " <- ") + l;
+    while (!l.empty() && (l.back() == '\r' || l.back() == ' ')) l.pop_back();
+    if (l.rfind(typed, 0) == 0) {
+      std::string cls = l.substr(typed.size(), l.find('\'', typed.size()) - typed.size());
+      if (const auto colon = cls.rfind("::"); colon != std::string::npos) cls.erase(0, colon + 2);
+      c.objects += (c.objects.empty() ? "" : " > ") + cls;
+    } else {
+      c.innermost = l;
+    }
   }
-  return cause.empty() ? std::string(e.what()) : cause;
+  if (c.innermost.empty() && c.objects.empty()) c.innermost = e.what();
+  if (const auto nl = c.innermost.find('\n'); nl != std::string::npos) c.innermost.resize(nl);
+  return c;
 }
 
 }  // namespace
@@ -76,41 +115,116 @@ struct RawlogReader::Impl {
   std::optional<RawlogObject> pending;  ///< read ahead by seekToTime / firstTime
   std::size_t deserialized = 0;
   bool at_end = false;
+  bool salvage = false;
+  std::string salvage_stop;
+  std::size_t max_record_bytes = std::size_t{256} << 20;
+  std::uint64_t failed_at = 0;  ///< where the last failure was, in the decompressed stream
+  std::string failure;          ///< what it was
 
   std::string at(std::size_t record) const {
     return path + ": record " + std::to_string(record) + ": ";
   }
 
+  /// readOne() in salvage mode: a bad tail ends the data.
   bool readOne(RawlogObject& out) {
+    if (!salvage) return readOneStrict(out);
+    try {
+      return readOneStrict(out);
+    } catch (const InputError&) {
+      if (next == 0) throw;  // nothing whole to salvage
+      salvage_stop = path + ": read up to record " + std::to_string(next - 1) +
+                     ", the last whole one; record " + std::to_string(next) + " (byte " +
+                     std::to_string(failed_at) + " of the decompressed stream, about byte " +
+                     std::to_string(in.compressedPosition()) + " of the file): " + failure;
+      at_end = true;
+      return false;
+    }
+  }
+
+  /// Throws InputError "<file>: record N: <why> (byte B of the decompressed stream)", keeping
+  /// why and B for salvage.
+  /// The records before the current one, for messages: "records 0..N are whole".
+  std::string wholeRecords() const {
+    if (next == 0) return "no record before it";
+    return next == 1 ? "record 0 is whole"
+                     : "records 0.." + std::to_string(next - 1) + " are whole";
+  }
+
+  [[noreturn]] void fail(std::uint64_t start, std::string why) {
+    failed_at = start;
+    failure = std::move(why);
+    throw InputError(at(next) + failure + " (byte " + std::to_string(start) +
+                     " of the decompressed stream)");
+  }
+
+  bool readOneStrict(RawlogObject& out) {
+    const std::uint64_t start = in.getPosition();
     if (in.atEnd()) {
-      if (!in.error().empty()) throw InputError(at(next) + "cannot be read: " + in.error());
+      if (!in.error().empty()) fail(start, "cannot be read: " + in.error());
       if (in.truncated())
-        throw InputError(at(next) +
-                         "the file ends inside the gzip stream (truncated file; records 0.." +
-                         std::to_string(next == 0 ? 0 : next - 1) + " are whole)");
-      if (next == 0) throw InputError(path + ": empty file (no rawlog records)");
+        fail(start,
+             "the file ends inside the gzip stream (truncated file; " + wholeRecords() + ")");
+      if (next == 0)
+        throw InputError(path + ": no rawlog record in the file (" +
+                         (in.gzip() ? "an empty gzip stream" : "no data") +
+                         "; an MRPT tool that did not load the freeinit plugin writes such a file "
+                         "from a rawlog with Doppler clouds: give it -p libfreeinit_mrpt.so)");
       if (next == index.records.size()) index.complete = true;
       at_end = true;
       return false;
     }
-    const std::uint64_t start = in.getPosition();
+    // What this record may allocate: a few times what the rest of the file can hold (objects
+    // take more memory than their bytes), at most max_record_bytes.
+    const std::uint64_t bound = in.remainingBound();
+    const std::uint64_t file_budget =
+        bound < (std::numeric_limits<std::uint64_t>::max() - kBudgetSlack) / kBudgetFactor
+            ? bound * kBudgetFactor + kBudgetSlack
+            : std::numeric_limits<std::uint64_t>::max();
+    const bool by_file = file_budget < max_record_bytes;
+    const std::size_t budget = by_file ? static_cast<std::size_t>(file_budget) : max_record_bytes;
     mrpt::serialization::CSerializable::Ptr obj;
-    try {
-      obj = archive->ReadObject();
-    } catch (const std::exception& e) {
-      const bool ended = in.atEnd();
-      std::string why;
-      if (!in.error().empty())
-        why = in.error();
-      else if (ended)
-        why = "the file ends inside this record (truncated file)";
-      else
-        why =
-            "corrupted data or a class that is not registered (rawlogs with Doppler clouds need "
-            "the freeinit_mrpt plugin)";
-      throw InputError(at(next) + "(byte " + std::to_string(start) +
-                       " of the decompressed stream) cannot be read: " + why +
-                       ". MRPT: " + mrptCause(e));
+    std::exception_ptr error;
+    std::size_t refused = 0;
+    {
+      ReadBudget guard(budget);
+      try {
+        obj = archive->ReadObject();
+      } catch (...) {
+        error = std::current_exception();
+      }
+      refused = guard.refused();
+    }
+    if (refused > 0)
+      fail(start, "cannot be read: it would allocate " + megabytes(refused) +
+                      (by_file ? ", more than the rest of the file can hold"
+                               : ", more than the " + megabytes(max_record_bytes) +
+                                     " a record may take ([input] max_record_mb)") +
+                      ": a corrupt length or count");
+    if (error) {
+      try {
+        std::rethrow_exception(error);
+      } catch (const std::bad_alloc&) {
+        fail(start, "cannot be read: out of memory while reading it (a corrupt length or count)");
+      } catch (const std::exception& e) {
+        if (!in.error().empty()) fail(start, "cannot be read: " + in.error());
+        if (in.atEnd())
+          fail(start,
+               "the file ends inside this record (truncated file, or a corrupt length or "
+               "count; " +
+                   wholeRecords() + ")");
+        const MrptCause cause = mrptCause(e);
+        if (cause.innermost.find("not registered") != std::string::npos)
+          fail(start, "cannot be read: " + cause.line() +
+                          " (rawlogs with Doppler clouds need the freeinit_mrpt plugin)");
+        if (cause.innermost.find("Cannot read requested number of bytes") != std::string::npos)
+          fail(start,
+               "cannot be read: corrupted data (a length or count beyond the record's "
+               "data; " +
+                   cause.line() + ")");
+        fail(start, "cannot be read: corrupted data: " + cause.line());
+      } catch (...) {
+        fail(start, "cannot be read: corrupted data");
+      }
     }
     if (!obj) throw InputError(at(next) + "null object");
     IndexedRecord entry = describe(*obj);
@@ -163,13 +277,18 @@ RawlogReader::RawlogReader(std::string path, RawlogIndexPolicy policy)
   auto& m = *impl_;
   m.path = std::move(path);
   m.policy = std::move(policy);
-  if (!std::filesystem::is_regular_file(m.path)) throw InputError(m.path + ": file not found");
+  std::error_code ec;
+  if (std::filesystem::is_directory(m.path, ec))
+    throw InputError(m.path + ": is a folder, not a rawlog file");
+  if (!std::filesystem::exists(m.path, ec)) throw InputError(m.path + ": file not found");
+  if (!std::filesystem::is_regular_file(m.path, ec))
+    throw InputError(m.path + ": not a regular file (a rawlog is read from a file)");
   try {
     m.in.open(m.path);
   } catch (const std::exception& e) {
     throw InputError(m.path + ": cannot open: " + e.what());
   }
-  if (m.in.fileBytes() == 0) throw InputError(m.path + ": empty file (no rawlog records)");
+  if (m.in.fileBytes() == 0) throw InputError(m.path + ": empty file (0 bytes, no rawlog records)");
   if (m.policy.use) {
     try {
       const RawlogIdentity id = rawlogIdentity(m.path);
@@ -259,6 +378,10 @@ std::optional<double> RawlogReader::firstTime() {
   }
   return std::nullopt;
 }
+
+void RawlogReader::setSalvage(bool on) { impl_->salvage = on; }
+void RawlogReader::setMaxRecordBytes(std::size_t bytes) { impl_->max_record_bytes = bytes; }
+const std::string& RawlogReader::salvageStop() const { return impl_->salvage_stop; }
 
 std::uint64_t RawlogReader::fileBytes() const { return impl_->in.fileBytes(); }
 std::uint64_t RawlogReader::bytesRead() const { return impl_->in.compressedPosition(); }

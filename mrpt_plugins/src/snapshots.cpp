@@ -1,4 +1,5 @@
 #include <freeinit/mrpt/snapshots.h>
+#include <freeinit/report/plot.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CArrow.h>
 #include <mrpt/opengl/CFBORender.h>
@@ -26,12 +27,10 @@ namespace {
 
 using mrpt::img::TColor;
 
+// Encoded in memory and written by the atomic writer: its errors name the file and the system's
+// reason (a full disk), which CImage::saveToFile's boolean does not.
 void saveAtomically(const mrpt::img::CImage& img, const std::string& png) {
-  const std::string tmp = png + ".tmp.png";  // the extension selects the format
-  if (!img.saveToFile(tmp)) throw std::runtime_error(png + ": cannot write the image");
-  std::error_code ec;
-  std::filesystem::rename(tmp, png, ec);
-  if (ec) throw std::runtime_error(png + ": " + ec.message());
+  report::savePng(png, img.asCvMatRef());
 }
 
 std::string num(double x, int prec = 3) {

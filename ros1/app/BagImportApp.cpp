@@ -3,12 +3,17 @@
 #include <freeinit/mrpt/ProgressBar.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/app_config.h>
+#include <freeinit/mrpt/output_set.h>
+#include <freeinit/mrpt/stop_signal.h>
 #include <freeinit/ros1/BagImportApp.h>
 
+#include <cerrno>
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <iomanip>
 #include <limits>
+#include <optional>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -241,28 +246,76 @@ int BagImportApp::run(std::ostream& log) {
       << (b.stamp_source == ros1::StampSource::kTrigger ? " " + b.trigger_topic : std::string())
       << ", + " << fixed(b.lidar_time_offset, 6) << " s to the IMU clock\n";
 
-  RawlogWriter rawlog(out, settings.extrinsics, settings.imu_label, settings.lidar_label);
+  // The rawlog and its extrinsics file are one set (output_set.h), named after the rawlog.
+  const std::filesystem::path stem_path(rawlogStem(out));
+  const std::string base = stem_path.filename().string();
+  const std::string rawlog_name = std::filesystem::path(out).filename().string();
+  const std::string ext = rawlogStem(out) + ".extrinsics.ini";
+  OutputSetOptions set_options;
+  set_options.owned = {rawlog_name, base + ".extrinsics.ini"};
+  set_options.install_last = {rawlog_name};
+  OutputSet set(stem_path.parent_path().string(), base, set_options, log);
+  // The fits table, where the user wants it: a set of its own.
+  std::optional<OutputSet> fit_set;
+  if (!params.doppler_fit_csv.empty()) {
+    const std::filesystem::path fit(params.doppler_fit_csv);
+    OutputSetOptions fit_options;
+    fit_options.owned = {fit.filename().string()};
+    fit_set.emplace(fit.parent_path().string(), fit.filename().string(), fit_options, log);
+  }
+
+  RawlogWriter rawlog(set.path(rawlog_name), settings.extrinsics, settings.imu_label,
+                      settings.lidar_label);
   ProgressBar bar(log, "  reading", "messages", params.progress_terminal);
   ros1::BagReadCallbacks cb;
-  cb.imu = [&](const ImuSample& s) { rawlog.write(s); };
+  std::size_t count = 0;
+  auto poll = [&] {
+    if (++count % 256 == 0) throwIfStopRequested();
+  };
+  cb.imu = [&](const ImuSample& s) {
+    poll();
+    rawlog.write(s);
+  };
   std::ostringstream fits;
   if (!params.doppler_fit_csv.empty()) fits << kDopplerFitCsvHeader << "\n";
   cb.frame = [&](LidarFrame&& f) {
+    poll();
     if (!params.doppler_fit_csv.empty())
       writeFitRow(fits, f, ros1::fitScanVelocity(f.points, settings.doppler_fit));
     rawlog.write(f);
   };
   if (params.progress) cb.progress = [&](std::size_t d, std::size_t t) { bar.update(d, t); };
-  summary = ros1::readBag(params.bag, b, cb);
+  try {
+    summary = ros1::readBag(params.bag, b, cb);
+  } catch (const std::exception& e) {
+    // The reader reports what a callback threw as a bag error: a stop is a stop, a full disk a
+    // full disk.
+    throwIfStopRequested();
+    if (std::string(e.what()).find(std::strerror(ENOSPC)) != std::string::npos)
+      throw OutputError(set.describe(rawlog_name, e.what()));
+    throw;
+  }
   if (params.progress) bar.finish();
-  rawlog.commit();
+  try {
+    rawlog.commit();
+  } catch (const std::exception& e) {
+    throw OutputError(set.describe(rawlog_name, e.what()));
+  }
   rawlog_written = out;
-  const std::string ext = rawlogStem(out) + ".extrinsics.ini";
-  writeExtrinsicsIni(ext, settings.extrinsics,
-                     "extrinsics of " + out + " (from " + params.config_file +
-                         "; also in each point cloud's sensorPose)");
-  if (!params.doppler_fit_csv.empty()) {
-    writeFileAtomically(params.doppler_fit_csv, [&](std::ostream& o) { o << fits.str(); });
+  set.write(base + ".extrinsics.ini", [&](const std::string& p) {
+    writeExtrinsicsIni(p, settings.extrinsics,
+                       "extrinsics of " + out + " (from " + params.config_file +
+                           "; also in each point cloud's sensorPose)");
+  });
+  if (fit_set) {
+    const std::string name = std::filesystem::path(params.doppler_fit_csv).filename().string();
+    fit_set->write(name, [&](const std::string& p) {
+      writeFileAtomically(p, [&](std::ostream& o) { o << fits.str(); });
+    });
+  }
+  set.commit();
+  if (fit_set) {
+    fit_set->commit();
     log << "Wrote " << params.doppler_fit_csv << " (per-scan Doppler-only velocity fits)\n";
   }
   summary.print(log);

@@ -19,6 +19,10 @@ class CPointsMapDoppler : public mrpt::maps::CPointsMap {
  public:
   /// Number of fields in getPointAllFields(): [x y z doppler time_offset intensity line].
   static constexpr std::size_t kFieldCount = 7;
+  /// Most points a deserialized cloud may declare (2^26, 1.7 GB of fields; real frames hold up to
+  /// a few 10^5): more is corrupt data. Fields are read as their bytes arrive, so a corrupt count
+  /// below this takes no more memory than the file holds.
+  static constexpr std::uint32_t kMaxPoints = std::uint32_t{1} << 26;
 
   CPointsMapDoppler() = default;
   CPointsMapDoppler(const CPointsMapDoppler& o) : CPointsMap() { impl_copyFrom(o); }

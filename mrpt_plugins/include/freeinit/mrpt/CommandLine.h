@@ -91,7 +91,9 @@ class CommandLine {
 };
 
 /// Runs a main's body: an exception becomes one line "<program>: error: <message>" on stderr
-/// (the first line of the message: MRPT's exceptions carry a call stack) and exit code 1.
+/// (the first line of the message: MRPT's exceptions carry a call stack) and exit code 1. The
+/// stop handlers are installed first (stop_signal.h); a body that stops on a signal (Interrupted)
+/// prints one line and the process ends by that signal.
 int runMain(const std::string& program, const std::function<int()>& body);
 
 }  // namespace freeinit::mrpt_glue

@@ -7,8 +7,10 @@
 // the first record, or a UNIX stamp when T > 1e8), seeking with the rawlog's index (rawlog_index.h)
 // instead of reading what comes before. `--every S` / `--starts FILE` initialize at many starts in
 // one pass, several estimators side by side when windows overlap: each start's outputs go to its
-// own folder (written as a whole: a staging folder renamed into place), then one table of all
-// starts (starts.csv, starts.md) and a plot (starts.png), written last.
+// own folder, with one table of all starts (starts.csv, starts.md) and a plot (starts.png).
+//
+// Whatever the mode, the outputs are one set (output_set.h): staged while the run goes on and
+// installed as a whole when it is complete, replacing the earlier run's.
 #pragma once
 
 #include <freeinit/initial_state.h>
@@ -43,24 +45,29 @@ struct FreeInitAppParams {
   double every = 0;                ///< --every [s] (> 0: repeated starts from `start` or 0)
   std::string starts_file;         ///< --starts FILE
   bool check_all = false;          ///< --check-all: read and check the whole file
+  bool salvage = false;  ///< --salvage: a file cut short is read up to its last whole record
   RawlogIndexPolicy index;         ///< --no-index: use = false
   std::string command;             ///< the command line, for the table's header
 };
 
+class OutputSet;
+
 /// Names of every file writeResultFiles may write (whatever [output] enables).
 std::vector<std::string> resultFileNames();
 
-/// Writes the [output] files other than initial_state.ini (static map .simplemap / .ply,
-/// trajectory, velocimeter CSV, snapshots) into `out_dir`, each atomically. `truth` may be empty.
-void writeResultFiles(const std::string& out_dir, const OutputParams& output,
+/// Stages the [output] files other than initial_state.ini (static map .simplemap / .ply,
+/// trajectory, velocimeter CSV, snapshots) in `set`, under `prefix` ("" or "start_0012.000/").
+/// `truth` may be empty.
+void writeResultFiles(OutputSet& set, const std::string& prefix, const OutputParams& output,
                       const InitResult& result, const std::vector<TruthSample>& truth);
 
 class FreeInitApp {
  public:
   FreeInitAppParams params;
 
-  /// Runs the whole job. Bad input or configuration throws (InputError / std::invalid_argument)
-  /// before any output is written. Returns the process exit code: 0 initialized, 3 not
+  /// Runs the whole job. The outputs are one set (output_set.h): staged, installed at the end;
+  /// bad input or configuration throws (InputError / std::invalid_argument), a stop request
+  /// Interrupted, and --out then holds no output of ours. Returns the process exit code: 0 initialized, 3 not
   /// initialized (the reason is in initial_state.ini); with several starts 0 if every start
   /// whose window the recording covers initialized, else 3 (the table says why; starts the
   /// recording ends too early for are listed as not_enough_data).
@@ -74,6 +81,7 @@ class FreeInitApp {
   std::vector<std::string> warnings;  ///< as logged
   std::size_t records_read = 0;       ///< records deserialized
   bool read_to_end = false;           ///< the whole file was read (and checked)
+  std::string salvage_stop;           ///< --salvage: where a cut file stopped ("" if whole)
   bool index_used = false;            ///< the rawlog's index was found and used
   std::string index_written;          ///< where the index was written ("" if not)
 };

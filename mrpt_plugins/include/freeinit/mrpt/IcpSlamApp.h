@@ -43,9 +43,10 @@ class IcpSlamApp {
  public:
   IcpSlamAppParams params;
 
-  /// First removes the files an earlier run wrote in out_dir (and export_dir), every mode's; then
-  /// bad input or configuration throws before any output exists. Returns 0, or 3 when Free-Init
-  /// did not initialize and a seeded mode was asked for (the plain run is still done).
+  /// The outputs in out_dir (and export_dir) are one set each (output_set.h): installed when the
+  /// run is complete, replacing an earlier run's; a run that throws (bad input or configuration,
+  /// a stop request) leaves none of ours there. Returns 0, or 3 when Free-Init did not
+  /// initialize and a seeded mode was asked for (the plain run is still done).
   int run(std::ostream& log);
 
   // Filled by run(), for callers and tests.

@@ -19,6 +19,9 @@ struct InputParams {
   bool imu_accel_in_g = false;        ///< accelerations are in g: multiply by 9.81
   double min_imu_rate = 50.0;         ///< [Hz] slower IMU streams are rejected
   bool drop_invalid_points = false;   ///< drop NaN/inf points (reported) instead of failing
+  /// [MB] most one rawlog record may allocate while it is read (read_budget.h): a record
+  /// claiming more (a corrupt length or count) is refused before the allocation
+  double max_record_mb = 256;
 };
 
 /// Where the LiDAR-IMU extrinsics come from. INI section [extrinsics] (with R_bl, p_bl).

@@ -91,8 +91,9 @@ struct RecordProblem {
 /// extrinsics; then everything goes to the estimator as it comes.
 class InitSession {
  public:
-  /// `source` names the input in messages (a file name, "live stream").
-  InitSession(const AppConfig& config, std::string source);
+  /// `source` names the input in messages (a file name, "live stream"); `from_file`: it is a
+  /// rawlog (false: a stream), for the hints of endOfDataReason().
+  InitSession(const AppConfig& config, std::string source, bool from_file = true);
 
   void push(const CheckedItem& c);
   /// End of the input: closes a window still open with what is there.
@@ -135,6 +136,7 @@ class InitSession {
 
   AppConfig config_;
   std::string source_;
+  bool from_file_ = true;
   std::unique_ptr<FreeInit> estimator_;
   bool extrinsics_known_ = false;
   bool imu_checked_ = false;

@@ -2,7 +2,9 @@
 // the first object whose class is not registered (or at a cut-off file) and still succeed. This
 // reader streams the file (gzip or plain), deserializes one top-level record at a time and
 // requires the data to end exactly at the end of a record and of the gzip stream; anything else
-// is an error naming the file and the record index. Memory is that of one record.
+// is an error naming the file and the record index. Memory is that of one record, and a record
+// may allocate no more than its budget (setMaxRecordBytes, read_budget.h): what the rest of the
+// file can hold, at most 256 MB.
 //
 // Seeking: rawlog_index.h. A reader loads the rawlog's index when there is one, extends it as it
 // reads past what it covers, and saveIndex() writes it for rawlogs large enough to need it.
@@ -75,6 +77,20 @@ class RawlogReader {
   bool atEnd() const;              ///< next() returned false: the whole file was read
   bool indexLoaded() const;        ///< a valid index was found when opening
   const RawlogIndex& index() const;
+
+  /// Most one record may allocate while it is deserialized (read_budget.h; 256 MB by default).
+  /// The budget of a record is also bounded by what the rest of the file can hold; a record
+  /// over it is an error naming the record ("a corrupt length or count").
+  void setMaxRecordBytes(std::size_t bytes);
+
+  /// Salvage mode, for a file cut short (a power loss while recording): next() returns false at
+  /// the first record that cannot be read whole (the file ends inside it, or the data are
+  /// corrupt from there on) instead of throwing; salvageStop() then says where and why.
+  void setSalvage(bool on);
+  /// In salvage mode, after next() returned false on a bad tail: "<file>: read up to record
+  /// N-1, the last whole one; record N (byte B of the decompressed stream, byte C of the file):
+  /// why" ("" when the file ended cleanly).
+  const std::string& salvageStop() const;
 
   /// Writes the index if it grew and the policy allows it, beside the rawlog or else in the
   /// cache folder. Returns the path written, or "" (with the reason in `why` if it failed).

@@ -1,0 +1,129 @@
+// Fuzz harness: a whole rawlog file (gzip or plain) through the apps' reading path: the rawlog
+// reader with its per-record allocation budget (read_budget.h: the program's operator new and
+// MRPT's aligned allocator are the guard's, alloc_guard.cpp), MRPT's deserialization with our
+// Doppler points map class, the decoder to core types and the record checks. Then the same file
+// in salvage mode. Invariants: an error is one line naming the file; records numbered 0, 1, ...;
+// what passes the checks is finite, IMU stamps increase, a frame's points are sorted by time;
+// salvage reads exactly the records the strict reader read before its error, and reports where it
+// stopped.
+#include <freeinit/mrpt/app_config.h>
+#include <freeinit/mrpt/ingest.h>
+#include <freeinit/mrpt/ingest_sources.h>
+#include <freeinit/mrpt/rawlog_reader.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "harness.h"
+
+namespace freeinit::fuzz {
+namespace {
+
+// A record may allocate less here than in the apps (256 MB): the same guard, faster executions.
+constexpr std::size_t kMaxRecordBytes = std::size_t{32} << 20;
+
+struct Pass {
+  std::size_t records = 0, imu = 0, frames = 0, rejected = 0;
+  std::string error;  ///< first line of the error that stopped it ("" at a clean end)
+  std::string stop;   ///< salvage: where it stopped
+};
+
+Pass read(const std::string& path, bool salvage) {
+  mrpt_glue::RawlogIndexPolicy no_index;
+  no_index.use = false;
+  Pass p;
+  mrpt_glue::AppConfig config;
+  mrpt_glue::ObservationDecoder decoder(config.input);
+  mrpt_glue::RecordChecker checker(config);
+  std::vector<mrpt_glue::IngestItem> items;
+  std::vector<mrpt_glue::CheckedItem> checked;
+  double last_imu = -INFINITY;
+  auto inspect = [&](const std::vector<mrpt_glue::CheckedItem>& out) {
+    for (const auto& c : out) {
+      if (!c.ok()) {
+        ++p.rejected;
+        continue;
+      }
+      const auto& it = c.item;
+      if (it.kind == mrpt_glue::IngestItem::Kind::Imu) {
+        if (!std::isfinite(it.imu.t) || !it.imu.gyro.allFinite() || !it.imu.accel.allFinite())
+          broken("non-finite IMU sample passed the checks");
+        if (!(it.imu.t > last_imu)) broken("IMU stamps passed the checks without increasing");
+        last_imu = it.imu.t;
+        ++p.imu;
+      } else if (it.kind == mrpt_glue::IngestItem::Kind::Frame) {
+        if (!it.frame || it.frame->points.empty()) broken("empty frame passed the checks");
+        for (std::size_t i = 0; i < it.frame->points.size(); ++i) {
+          const DopplerPoint& q = it.frame->points[i];
+          if (!q.p_l.allFinite() || !std::isfinite(q.doppler) || !std::isfinite(q.time_offset))
+            broken("non-finite point passed the checks");
+          if (i > 0 && q.time_offset < it.frame->points[i - 1].time_offset)
+            broken("frame points not sorted by time");
+        }
+        ++p.frames;
+      }
+    }
+  };
+  try {
+    mrpt_glue::RawlogReader reader(path, no_index);
+    reader.setMaxRecordBytes(kMaxRecordBytes);
+    reader.setSalvage(salvage);
+    mrpt_glue::RawlogObject rec;
+    while (reader.next(rec)) {
+      if (rec.index != p.records) broken("records not numbered in order");
+      ++p.records;
+      items.clear();
+      decoder.decode(rec.index, rec.object, items);
+      rec.object.reset();
+      for (auto& item : items) {
+        checked.clear();
+        checker.push(std::move(item), checked);
+        inspect(checked);
+      }
+    }
+    checked.clear();
+    checker.finish(checked);
+    inspect(checked);
+    p.stop = reader.salvageStop();
+  } catch (const std::exception& e) {
+    p.error = e.what();
+    if (p.error.empty()) broken("an error without a message");
+    if (p.error.find('\n') != std::string::npos) broken("a multi-line error");
+  }
+  return p;
+}
+
+}  // namespace
+
+std::string fuzzOne(const std::uint8_t* data, std::size_t size) {
+  static const std::string path = (std::filesystem::temp_directory_path() /
+                                   ("freeinit_fuzz_rawlog_" + std::to_string(getpid()) + ".rawlog"))
+                                      .string();
+  if (FILE* f = std::fopen(path.c_str(), "wb")) {
+    const bool ok = std::fwrite(data, 1, size, f) == size;
+    std::fclose(f);
+    if (!ok) return "error: cannot write " + path;
+  } else {
+    return "error: cannot write " + path;
+  }
+  const Pass strict = read(path, false);
+  if (!strict.error.empty() && strict.error.find(path) == std::string::npos)
+    broken("an error that does not name the file");
+  const Pass salvaged = read(path, true);
+  if (strict.error.empty()) {
+    if (!salvaged.error.empty() || !salvaged.stop.empty() || salvaged.records != strict.records)
+      broken("salvage differs on a file the strict reader reads whole");
+  } else if (salvaged.error.empty() && salvaged.records != strict.records) {
+    broken("salvage did not stop where the strict reader failed");
+  }
+  if (!strict.error.empty()) return "error: " + strict.error;
+  return "ok: " + std::to_string(strict.records) + " records, " + std::to_string(strict.imu) +
+         " IMU samples, " + std::to_string(strict.frames) + " frames, " +
+         std::to_string(strict.rejected) + " rejected";
+}
+
+}  // namespace freeinit::fuzz

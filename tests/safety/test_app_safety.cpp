@@ -1,0 +1,562 @@
+// The apps as a user runs them, as processes: stopped by SIGINT / SIGTERM, two runs on one
+// output, a full disk, live recordings across runs, a recording cut short, and the messages of
+// bad inputs. Each case asserts the exit status, the message and what is left on disk.
+#include <freeinit/mrpt/RawlogWriter.h>
+#include <freeinit/mrpt/rawlog_reader.h>
+#include <mrpt/obs/CObservationIMU.h>
+#include <gtest/gtest.h>
+#include <signal.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <fcntl.h>
+#include <filesystem>
+#include <fstream>
+#include <optional>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <thread>
+
+namespace {
+
+namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
+
+const std::string kSrc = FREEINIT_SOURCE_DIR;
+const std::string kIni = kSrc + "/ini/freeinit.ini";
+const std::string kSample = kSrc + "/rawlogs/dyna_01.rawlog";
+
+fs::path freshDir(const std::string& name) {
+  const fs::path d = fs::current_path() / "app_safety" / name;
+  fs::remove_all(d);
+  fs::create_directories(d);
+  return d;
+}
+
+std::string readText(const fs::path& p) {
+  std::ifstream in(p);
+  std::ostringstream os;
+  os << in.rdbuf();
+  return os.str();
+}
+
+std::set<std::string> listing(const fs::path& dir) {
+  std::set<std::string> out;
+  if (!fs::exists(dir)) return out;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    out.insert(fs::relative(e.path(), dir).string());
+  return out;
+}
+
+std::size_t lineCount(const std::string& s) {
+  std::size_t n = 0;
+  for (const char c : s) n += c == '\n';
+  return n;
+}
+
+#define EXPECT_CONTAINS(haystack, needle) \
+  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
+
+/// A process of one of the apps, its output in files of `dir`.
+class Process {
+ public:
+  Process(const std::vector<std::string>& argv, const fs::path& dir, const std::string& tag)
+      : out_(dir / (tag + ".out")), err_(dir / (tag + ".err")) {
+    pid_ = fork();
+    if (pid_ == 0) {
+      const int o = open(out_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      const int e = open(err_.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+      const int in = open("/dev/null", O_RDONLY);
+      dup2(o, 1);
+      dup2(e, 2);
+      dup2(in, 0);
+      std::vector<char*> args;
+      for (const auto& a : argv) args.push_back(const_cast<char*>(a.c_str()));
+      args.push_back(nullptr);
+      execv(args[0], args.data());
+      _exit(127);
+    }
+  }
+  ~Process() {
+    if (pid_ > 0 && status_ < 0) {
+      kill(pid_, SIGKILL);
+      waitpid(pid_, nullptr, 0);
+    }
+  }
+  pid_t pid() const { return pid_; }
+  void signal(int sig) const { kill(pid_, sig); }
+  /// Waits for the end (at most `timeout_s`) and returns the wait status.
+  int wait(double timeout_s = 120) {
+    const auto t0 = Clock::now();
+    while (status_ < 0) {
+      int st = 0;
+      if (waitpid(pid_, &st, WNOHANG) == pid_) {
+        status_ = st;
+        break;
+      }
+      if (std::chrono::duration<double>(Clock::now() - t0).count() > timeout_s) {
+        kill(pid_, SIGKILL);
+        waitpid(pid_, &st, 0);
+        status_ = st;
+        ADD_FAILURE() << "process did not end within " << timeout_s << " s";
+      }
+      std::this_thread::sleep_for(std::chrono::milliseconds(2));
+    }
+    return status_;
+  }
+  bool running() {
+    int st = 0;
+    if (status_ >= 0) return false;
+    if (waitpid(pid_, &st, WNOHANG) == pid_) {
+      status_ = st;
+      return false;
+    }
+    return true;
+  }
+  std::string out() const { return readText(out_); }
+  std::string err() const { return readText(err_); }
+
+ private:
+  fs::path out_, err_;
+  pid_t pid_ = -1;
+  int status_ = -1;
+};
+
+/// Polls until `pred` or the timeout.
+template <class Pred>
+bool waitUntil(Pred pred, double timeout_s = 60) {
+  const auto t0 = Clock::now();
+  while (!pred()) {
+    if (std::chrono::duration<double>(Clock::now() - t0).count() > timeout_s) return false;
+    std::this_thread::sleep_for(std::chrono::milliseconds(1));
+  }
+  return true;
+}
+
+/// Starts `argv`, and sends `sig` while the run is working (its staging folder exists), frozen
+/// (SIGSTOP) so that it cannot finish in between; false when the run ended before (then retry).
+bool interruptWhileStaged(Process& p, const fs::path& staging, int sig) {
+  if (!waitUntil([&] { return fs::exists(staging) || !p.running(); })) return false;
+  p.signal(SIGSTOP);
+  const bool staged = fs::exists(staging);
+  if (staged) p.signal(sig);
+  p.signal(SIGCONT);
+  return staged;
+}
+
+bool killedBy(int status, int sig) { return WIFSIGNALED(status) && WTERMSIG(status) == sig; }
+int exitCode(int status) { return WIFEXITED(status) ? WEXITSTATUS(status) : -1; }
+
+/// What an earlier run of freeinit left: a complete set.
+void earlierFreeinitRun(const fs::path& out) {
+  Process p({FREEINIT_APP, kIni, kSample, "-q", "--out", out.string()}, out.parent_path(),
+            "earlier");
+  ASSERT_EQ(exitCode(p.wait()), 0) << p.err();
+  ASSERT_TRUE(fs::exists(out / "errors_wrt_gt.ini"));
+}
+
+/// Runs `argv` and stops it with `sig` while it works; the run must end by that signal with one
+/// line, leaving `expected` (what is not ours) and nothing else.
+void expectStoppedCleanly(const std::vector<std::string>& argv, const fs::path& dir,
+                          const fs::path& staging, int sig, const std::set<std::string>& expected,
+                          const std::string& program) {
+  for (int attempt = 0; attempt < 5; ++attempt) {
+    Process p(argv, dir, "stopped");
+    if (!interruptWhileStaged(p, staging, sig)) {
+      p.wait();
+      continue;  // it finished first: again
+    }
+    const int st = p.wait();
+    EXPECT_TRUE(killedBy(st, sig)) << "status " << st << "\n" << p.err();
+    EXPECT_EQ(p.err(), program + ": stopped by " + (sig == SIGINT ? "SIGINT" : "SIGTERM") +
+                           "; no output of this run was written\n");
+    std::set<std::string> left = listing(dir);
+    left.erase("stopped.out");
+    left.erase("stopped.err");
+    EXPECT_EQ(left, expected);
+    return;
+  }
+  FAIL() << "the run always ended before it could be stopped";
+}
+
+// Ctrl-C while freeinit works: the outputs of the earlier run go with this run's (nothing in the
+// folder passes for a result), no temporary file, the user's file stays.
+TEST(StopSignals, FreeinitLeavesNoOutputOfOursAndNoTemporaryFile) {
+  for (const int sig : {SIGINT, SIGTERM}) {
+    const fs::path d = freshDir(sig == SIGINT ? "freeinit_sigint" : "freeinit_sigterm");
+    const fs::path out = d / "out";
+    earlierFreeinitRun(out);
+    std::ofstream(out / "notes.txt") << "mine\n";
+    expectStoppedCleanly({FREEINIT_APP, kIni, kSample, "-q", "--check-all", "--out", out.string()},
+                         d, out / ".freeinit.staging", sig,
+                         {"earlier.out", "earlier.err", "out", "out/notes.txt"}, "freeinit");
+  }
+}
+
+TEST(StopSignals, SimulatorLeavesNoFile) {
+  const fs::path d = freshDir("sim_sigterm");
+  expectStoppedCleanly(
+      {FREEINIT_SIM_APP, "-p", "dyna_05", "-d", "3", "-n", "20000", "-o", (d / "x.rawlog").string()},
+      d, d / ".x.freeinit.staging", SIGTERM, {}, "freeinit-sim");
+}
+
+TEST(StopSignals, IcpSlamLeavesNoFile) {
+  const fs::path d = freshDir("icp_sigint");
+  expectStoppedCleanly({FREEINIT_ICP_SLAM_APP, kSrc + "/ini/icp_slam.ini", kIni, kSample, "--out",
+                        (d / "out").string(), "--export", (d / "export").string()},
+                       d, d / "out" / ".freeinit.staging", SIGINT, {}, "freeinit-icp-slam");
+}
+
+TEST(StopSignals, EvalRawlogLeavesNoFile) {
+  const fs::path d = freshDir("eval_sigint");
+  expectStoppedCleanly({FREEINIT_EVAL_RAWLOG_APP, kIni, kSample, kSrc + "/rawlogs/stat_01.rawlog",
+                        "--csv", (d / "eval.csv").string(), "--md", (d / "eval.md").string()},
+                       d, d / ".eval.csv.freeinit.staging", SIGINT, {}, "freeinit-eval-rawlog");
+}
+
+// Two runs on one folder: the second is refused at once with one line naming the folder and the
+// holder; the first then completes its set alone.
+TEST(OutputLock, ASecondRunOnTheSameOutputIsRefused) {
+  const fs::path d = freshDir("lock");
+  const fs::path out = d / "out";
+  for (int attempt = 0;; ++attempt) {
+    ASSERT_LT(attempt, 5) << "the first run always ended before the second started";
+    Process first({FREEINIT_APP, kIni, kSample, "-q", "--out", out.string()}, d, "first");
+    ASSERT_TRUE(waitUntil([&] { return fs::exists(out / ".freeinit.staging") || !first.running(); }));
+    first.signal(SIGSTOP);
+    if (!fs::exists(out / ".freeinit.staging")) {
+      first.signal(SIGCONT);
+      first.wait();
+      continue;
+    }
+    Process second({FREEINIT_APP, kIni, kSrc + "/rawlogs/stat_01.rawlog", "-q", "--out",
+                    out.string()},
+                   d, "second");
+    const int st = second.wait();
+    first.signal(SIGCONT);
+    EXPECT_EQ(exitCode(st), 1);
+    const std::string err = second.err();
+    EXPECT_EQ(lineCount(err), 1u) << err;
+    EXPECT_CONTAINS(err, "freeinit: error: " + out.string() + ": in use by another run (pid " +
+                             std::to_string(first.pid()) + ": freeinit " + kIni + " " + kSample);
+    EXPECT_EQ(exitCode(first.wait()), 0) << first.err();
+    break;
+  }
+  // The set is the first run's, whole.
+  for (const char* f : {"initial_state.ini", "errors_wrt_gt.ini", "static_map.ply", "velocity.png"})
+    EXPECT_TRUE(fs::exists(out / f)) << f;
+  EXPECT_FALSE(fs::exists(out / ".freeinit.lock"));
+  EXPECT_FALSE(fs::exists(out / ".freeinit.staging"));
+}
+
+/// Runs `script` in a private mount namespace with a `size` tmpfs at `mnt`; false when this
+/// machine does not allow it (not root, no unshare).
+bool withSmallDisk(const fs::path& mnt, const std::string& size, const std::string& script,
+                   const fs::path& log) {
+  fs::create_directories(mnt);
+  const std::string cmd = "unshare -m sh -c 'mount -t tmpfs -o size=" + size + " none " +
+                          mnt.string() + " 2>/dev/null || exit 77; " + script + "' > " +
+                          log.string() + " 2>&1";
+  const int st = std::system(cmd.c_str());
+  return !(WIFEXITED(st) && WEXITSTATUS(st) == 77);
+}
+
+// A full disk: one line saying "no space left" and naming the file; nothing that looks like a
+// result is left (the folder the run created goes too).
+TEST(FullDisk, NoSpaceLeftNamesTheFileAndLeavesNothing) {
+  const fs::path d = freshDir("full_disk");
+  const fs::path mnt = d / "mnt";
+  const std::string script =
+      std::string(FREEINIT_APP) + " -q " + kIni + " " + kSample + " --out " + mnt.string() +
+      "/out > " + (d / "freeinit.out").string() + " 2> " + (d / "freeinit.err").string() +
+      "; echo $? > " + (d / "freeinit.rc").string() + "; ls -A " + mnt.string() + " > " +
+      (d / "freeinit.left").string() + "; " + FREEINIT_SIM_APP + " -p stat_01 -d 1 -n 6000 -o " +
+      mnt.string() + "/sim/x.rawlog > /dev/null 2> " + (d / "sim.err").string() + "; echo $? > " +
+      (d / "sim.rc").string() + "; ls -A " + mnt.string() + "/sim > " + (d / "sim.left").string();
+  if (!withSmallDisk(mnt, "400k", script, d / "unshare.log"))
+    GTEST_SKIP() << "cannot mount a tmpfs here (not root?)";
+  EXPECT_EQ(readText(d / "freeinit.rc"), "1\n") << readText(d / "unshare.log");
+  const std::string err = readText(d / "freeinit.err");
+  EXPECT_EQ(lineCount(err), 1u) << err;
+  EXPECT_TRUE(std::regex_search(err, std::regex("^freeinit: error: " + mnt.string() +
+                                                "/out/[a-z_.]+: cannot be written: no space left "
+                                                "on the device")))
+      << err;
+  EXPECT_EQ(readText(d / "freeinit.left"), "");
+  EXPECT_EQ(readText(d / "sim.rc"), "1\n");
+  const std::string sim_err = readText(d / "sim.err");
+  EXPECT_EQ(lineCount(sim_err), 1u) << sim_err;
+  EXPECT_CONTAINS(sim_err, "freeinit-sim: error: " + mnt.string() +
+                               "/sim/x.rawlog: cannot be written: no space left on the device");
+  EXPECT_EQ(readText(d / "sim.left"), "");
+}
+
+// --- live recordings ---
+
+/// freeinit-online on any free port; returns the port once it listens.
+int listeningPort(Process& online) {
+  int port = 0;
+  EXPECT_TRUE(waitUntil([&] {
+    std::smatch m;
+    const std::string out = online.out();
+    if (std::regex_search(out, m, std::regex("Listening on UDP 127\\.0\\.0\\.1:([0-9]+)")))
+      port = std::stoi(m[1]);
+    return port != 0 || !online.running();
+  }));
+  return port;
+}
+
+std::size_t readableRecords(const std::string& rawlog) {
+  return freeinit::mrpt_glue::readRawlog(rawlog).size();
+}
+
+// Stopping freeinit-online with Ctrl-C or SIGTERM (the normal way to stop a live tool) while the
+// stream runs: the recording is closed as a readable rawlog with its statistics; the earlier
+// run's recording is kept under another name, never deleted.
+TEST(LiveRecordings, StoppedWhileStreamingTheRecordingIsReadableAndTheEarlierOneKept) {
+  for (const int sig : {SIGINT, SIGTERM}) {
+    const fs::path d = freshDir(sig == SIGINT ? "live_sigint" : "live_sigterm");
+    const fs::path out = d / "live";
+    fs::create_directories(out);
+    fs::copy_file(kSample, out / "live.rawlog");  // an earlier run's recording
+    std::ofstream(out / "stream_stats.ini") << "[stream]\nearlier = 1\n";
+    std::ofstream(out / "initial_state.ini") << "[initial_state]\nstatus = ok\n";
+    Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-i", "30"}, d,
+                   "online");
+    const int port = listeningPort(online);
+    ASSERT_GT(port, 0) << online.err();
+    Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port), "-x", "0.5"}, d,
+                   "stream");
+    // Data arrived: the earlier run's outputs are gone, its recording renamed.
+    ASSERT_TRUE(waitUntil([&] { return fs::exists(out / "effective_config.ini"); }));
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));
+    online.signal(sig);
+    const int st = online.wait();
+    stream.wait();
+    EXPECT_TRUE(exitCode(st) == 0 || exitCode(st) == 3) << st << online.err();
+    EXPECT_CONTAINS(online.out(), std::string("Stopped by ") + (sig == SIGINT ? "SIGINT" : "SIGTERM"));
+    EXPECT_GT(readableRecords((out / "live.rawlog").string()), 0u);
+    EXPECT_CONTAINS(readText(out / "stream_stats.ini"),
+                    std::string("stopped_by          = ") + (sig == SIGINT ? "SIGINT" : "SIGTERM"));
+    std::size_t kept = 0;
+    for (const auto& e : fs::directory_iterator(out)) {
+      const std::string n = e.path().filename().string();
+      if (std::regex_match(n, std::regex("live\\.[0-9]{8}-[0-9]{6}\\.rawlog"))) {
+        ++kept;
+        EXPECT_EQ(fs::file_size(e.path()), fs::file_size(kSample));
+        const std::string stats = n.substr(0, n.size() - 7) + ".stream_stats.ini";
+        EXPECT_EQ(readText(out / stats), "[stream]\nearlier = 1\n");
+      }
+      EXPECT_EQ(n.find(".tmp"), std::string::npos) << n;
+    }
+    EXPECT_EQ(kept, 1u);
+    EXPECT_FALSE(fs::exists(out / ".freeinit.staging"));
+    EXPECT_FALSE(fs::exists(out / ".freeinit.lock"));
+  }
+}
+
+// Re-running freeinit-online when no data ever arrives keeps the earlier recording (renamed).
+TEST(LiveRecordings, NoDataTheEarlierRecordingIsKept) {
+  const fs::path d = freshDir("live_no_data");
+  const fs::path out = d / "live";
+  fs::create_directories(out);
+  fs::copy_file(kSample, out / "live.rawlog");
+  Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-w", "0.3"}, d,
+                 "online");
+  EXPECT_EQ(exitCode(online.wait()), 1);
+  EXPECT_EQ(online.err(),
+            "freeinit-online: error: live stream: no data received within 0.3 s; nothing written\n");
+  const auto left = listing(out);
+  ASSERT_EQ(left.size(), 1u);
+  EXPECT_TRUE(std::regex_match(*left.begin(), std::regex("live\\.[0-9]{8}-[0-9]{6}\\.rawlog")));
+}
+
+// A run killed outright (SIGKILL, a power loss) leaves its recording in the staging folder: the
+// next run keeps it, says so, and it reads up to its last whole record with --salvage.
+TEST(LiveRecordings, ARecordingOfARunThatDiedIsKeptByTheNextRun) {
+  const fs::path d = freshDir("live_killed");
+  const fs::path out = d / "live";
+  {
+    Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-i", "30"}, d,
+                   "online");
+    const int port = listeningPort(online);
+    ASSERT_GT(port, 0);
+    Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port), "-x", "0.5"},
+                   d, "stream");
+    const fs::path staged = out / ".freeinit.staging" / "live.rawlog.tmp";
+    ASSERT_TRUE(waitUntil([&] { return fs::exists(staged) && fs::file_size(staged) > 200000; }));
+    online.signal(SIGKILL);
+    online.wait();
+    stream.wait();
+  }
+  Process next({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-w", "0.2"}, d, "next");
+  next.wait();
+  std::smatch m;
+  const std::string log = next.out();
+  ASSERT_TRUE(std::regex_search(
+      log, m, std::regex("Kept the recording of an interrupted run as (\\S+live\\.[0-9-]+\\.rawlog)")))
+      << log;
+  const std::string kept = m[1];
+  EXPECT_TRUE(fs::exists(kept));
+  Process strict({FREEINIT_APP, kIni, kept, "-q", "--out", (d / "strict").string()}, d, "strict");
+  EXPECT_EQ(exitCode(strict.wait()), 1);
+  Process salvage({FREEINIT_APP, kIni, kept, "-q", "--salvage", "--out", (d / "salvage").string()},
+                  d, "salvage");
+  const int st = salvage.wait();
+  EXPECT_TRUE(exitCode(st) == 0 || exitCode(st) == 1) << salvage.err();
+  EXPECT_CONTAINS(salvage.out(), "Warning: " + kept + ": read up to record ");
+}
+
+// A rawlog cut short (power loss while recording): the strict reader refuses what the cut
+// reaches, naming the record; --salvage reads up to the last whole record, says where it stopped,
+// and the windows the cut ends close as at the end of a file.
+TEST(Salvage, ACutRecordingIsReadUpToItsLastWholeRecord) {
+  const fs::path d = freshDir("salvage");
+  const fs::path cut = d / "cut.rawlog";
+  fs::copy_file(kSample, cut);
+  fs::resize_file(cut, fs::file_size(cut) * 6 / 10);
+  Process strict({FREEINIT_APP, kIni, cut.string(), "-q", "--every", "0.3", "--out",
+                  (d / "strict").string()},
+                 d, "strict");
+  EXPECT_EQ(exitCode(strict.wait()), 3);
+  EXPECT_TRUE(std::regex_search(
+      strict.out(), std::regex("Start 2 at 0\\.600 s: input_error \\(\\S+cut\\.rawlog: record "
+                               "[0-9]+: the file ends inside this record \\(truncated file")))
+      << strict.out();
+  Process salvage({FREEINIT_APP, kIni, cut.string(), "-q", "--every", "0.3", "--salvage", "--out",
+                   (d / "salvaged").string()},
+                  d, "salvage");
+  EXPECT_EQ(exitCode(salvage.wait()), 0) << salvage.err();
+  EXPECT_TRUE(std::regex_search(
+      salvage.out(),
+      std::regex("Warning: \\S+cut\\.rawlog: read up to record ([0-9]+), the last whole one; "
+                 "record [0-9]+ \\(byte [0-9]+ of the decompressed stream, about byte [0-9]+ of "
+                 "the file\\): the file ends inside this record \\(truncated file")))
+      << salvage.out();
+  EXPECT_CONTAINS(salvage.out(), "Start 2 at 0.600 s: not_enough_data (the recording ends");
+  EXPECT_TRUE(fs::exists(d / "salvaged" / "start_0000.300" / "initial_state.ini"));
+}
+
+// --- messages: one line naming the file, the record and the likely cause ---
+
+struct Outcome {
+  int code;
+  std::string out, err;
+};
+
+Outcome runFreeinit(const fs::path& d, const std::string& ini, const std::string& rawlog) {
+  Process p({FREEINIT_APP, ini, rawlog, "-q", "--out", (d / "out").string()}, d, "run");
+  const int st = p.wait();
+  EXPECT_FALSE(fs::exists(d / "out"));
+  return {exitCode(st), p.out(), p.err()};
+}
+
+TEST(Messages, AFolderGivenAsTheRawlog) {
+  const fs::path d = freshDir("msg_folder");
+  const auto r = runFreeinit(d, kIni, d.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(r.err, "freeinit: error: " + d.string() + ": is a folder, not a rawlog file\n");
+}
+
+TEST(Messages, SwappedRawlogAndIniSaysWhatTheFileIsWithoutBinary) {
+  const fs::path d = freshDir("msg_swapped");
+  const auto r = runFreeinit(d, kSample, kIni);
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  EXPECT_CONTAINS(r.err, "freeinit: error: " + kSample + ":1: binary data");
+  EXPECT_CONTAINS(r.err, "not an INI text file");
+  for (const char c : r.err) EXPECT_TRUE(c == '\n' || (c >= 32 && c < 127)) << int(c);
+  EXPECT_EQ(r.err.find("backtrace"), std::string::npos);
+}
+
+// What an MRPT tool without the plugin makes of a rawlog with Doppler clouds: the records before
+// the first cloud, or none at all. The messages say so and name the flag.
+TEST(Messages, ARawlogEmptiedByAStockToolHintsAtThePlugin) {
+  const fs::path d = freshDir("msg_stock");
+  const fs::path empty = d / "empty.rawlog";
+  {
+    // rawlog-edit without -p, keeping the clouds only: an empty gzip stream.
+    freeinit::mrpt_glue::RawlogWriter w(empty.string());
+    w.commit();
+  }
+  auto r = runFreeinit(d, kIni, empty.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  EXPECT_CONTAINS(r.err, empty.string() + ": no rawlog record in the file");
+  EXPECT_CONTAINS(r.err, "-p libfreeinit_mrpt.so");
+
+  const fs::path imu_only = d / "imu_only.rawlog";
+  {
+    freeinit::mrpt_glue::RawlogWriter w(imu_only.string());
+    for (int i = 0; i < 301; ++i) {
+      freeinit::ImuSample s;
+      s.t = 1700000000.0 + 0.005 * i;
+      s.accel = freeinit::Vec3(0, 0, 9.81);
+      w.write(s);
+    }
+    w.commit();
+  }
+  r = runFreeinit(d, kIni, imu_only.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  EXPECT_CONTAINS(r.err, imu_only.string() +
+                             ": no CObservationPointCloud with sensorLabel 'LIDAR' ([input] "
+                             "lidar_label); the input holds only 301 IMU samples 'IMU'");
+  EXPECT_CONTAINS(r.err, "-p libfreeinit_mrpt.so");
+}
+
+// Stamps 200 ns apart print differently: one IMU stamp of the sample moved just before the
+// previous one, inside the window.
+TEST(Messages, StampsHaveTheDigitsToDiffer) {
+  const fs::path d = freshDir("msg_stamps");
+  const fs::path f = d / "back.rawlog";
+  {
+    auto records = freeinit::mrpt_glue::readRawlog(kSample);
+    freeinit::mrpt_glue::RawlogWriter w(f.string());
+    std::optional<mrpt::Clock::time_point> previous_imu;
+    int imu = 0;
+    for (auto& r : records) {
+      if (IS_CLASS(*r.obs, mrpt::obs::CObservationIMU)) {
+        if (++imu == 40) r.obs->timestamp = *previous_imu - mrpt::Clock::duration(2);  // 200 ns
+        previous_imu = r.obs->timestamp;
+      }
+      w.write(*r.obs);
+    }
+    w.commit();
+  }
+  const auto r = runFreeinit(d, kIni, f.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  EXPECT_TRUE(std::regex_search(
+      r.err, std::regex("back\\.rawlog: record [0-9]+: .*goes backwards \\(([0-9.]+) after ([0-9.]+)\\)")))
+      << r.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.err, m, std::regex("goes backwards \\(([0-9.]+) after ([0-9.]+)\\)")));
+  EXPECT_NE(m[1].str(), m[2].str());
+}
+
+// freeinit-eval-rawlog's command line follows every app's rule.
+TEST(CommandLines, EvalRawlogHelpVersionAndBadFlags) {
+  const fs::path d = freshDir("eval_cli");
+  {
+    Process p({FREEINIT_EVAL_RAWLOG_APP, "--help", "--csv", (d / "x.csv").string()}, d, "help");
+    EXPECT_EQ(exitCode(p.wait()), 0);
+    EXPECT_CONTAINS(p.out(), "Usage: freeinit-eval-rawlog");
+  }
+  {
+    Process p({FREEINIT_EVAL_RAWLOG_APP, kIni}, d, "none");
+    EXPECT_EQ(exitCode(p.wait()), 2);
+    EXPECT_EQ(lineCount(p.err()), 1u) << p.err();
+  }
+  {
+    Process p({FREEINIT_EVAL_RAWLOG_APP, kIni, kSample, "--fail-velocity", "-1"}, d, "bad");
+    EXPECT_EQ(exitCode(p.wait()), 2);
+    EXPECT_CONTAINS(p.err(), "freeinit-eval-rawlog: error: --fail-velocity: ");
+  }
+  EXPECT_EQ(listing(d), (std::set<std::string>{"help.out", "help.err", "none.out", "none.err",
+                                               "bad.out", "bad.err"}));
+}
+
+}  // namespace
