@@ -83,8 +83,9 @@ void writeStateSet(OutputSet& set, const std::string& prefix, const AppConfig& c
     set.write(prefix + kConfigFile, [&](const std::string& p) {
       writeFileAtomically(p, [&](std::ostream& o) { o << *effective; });
     });
+  const StateVerdict verdict = verdictOf(result, config.core.velocimeter.doppler_sigma);
   set.write(prefix + kStateFile,
-            [&](const std::string& p) { writeInitialStateIni(p, result.state); });
+            [&](const std::string& p) { writeInitialStateIni(p, result.state, &verdict); });
   if (errors)
     set.write(prefix + kErrorsFile, [&](const std::string& p) { writeTruthErrors(p, *errors); });
   writeResultFiles(set, prefix, config.output, result, truth);
@@ -445,6 +446,7 @@ int FreeInitApp::run(std::ostream& log) {
       << std::defaultfloat << "  points: " << result.diag.points_used << " used, "
       << result.diag.points_rejected << " rejected, " << result.diag.points_skipped
       << " skipped; static start: " << (result.diag.static_start ? "yes" : "no") << "\n";
+  if (s.ok()) printVerdict(log, verdictOf(result, config.core.velocimeter.doppler_sigma));
   if (config.extrinsics.from_sensor_pose && decoder.firstCloudExtrinsics())
     log << "Extrinsics from sensorPose: p_bl = " << v3(decoder.firstCloudExtrinsics()->p_bl)
         << " m\n";

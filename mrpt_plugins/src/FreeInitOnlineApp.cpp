@@ -195,7 +195,11 @@ int FreeInitOnlineApp::run(std::ostream& log) {
     }
     const auto t_processed = Clock::now();
     set.write(kStateFile,
-              [&](const std::string& p) { writeInitialStateIni(p, session.result().state); });
+              [&](const std::string& p) {
+                const StateVerdict v =
+                    verdictOf(session.result(), config.core.velocimeter.doppler_sigma);
+                writeInitialStateIni(p, session.result().state, &v);
+              });
     set.install({kStateFile});
     const auto t_written = Clock::now();
     latency.queue = secondsBetween(e.received, t_fed);
@@ -350,9 +354,15 @@ int FreeInitOnlineApp::run(std::ostream& log) {
     }
     if (!session.ready()) throw InputError(session.endOfDataReason());
     set.write(kStateFile,
-              [&](const std::string& p) { writeInitialStateIni(p, session.result().state); });
+              [&](const std::string& p) {
+                const StateVerdict v =
+                    verdictOf(session.result(), config.core.velocimeter.doppler_sigma);
+                writeInitialStateIni(p, session.result().state, &v);
+              });
   }
   for (const auto& w : session.warnings()) log << "Warning: " << w << "\n";
+  if (session.ready() && session.result().state.ok())
+    printVerdict(log, verdictOf(session.result(), config.core.velocimeter.doppler_sigma));
   result = session.result();
   if (stopped_by_signal != 0 && !ready_live)
     log << "The stream was stopped by " << signalName(stopped_by_signal)

@@ -11,6 +11,7 @@
 #include <freeinit/mrpt/output_writers.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <gtest/gtest.h>
+#include <mrpt/config/CConfigFile.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -175,6 +176,49 @@ TEST(FreeInitAppEndToEnd, DynamicSampleDyna01) {
   }
 }
 
+// The verdict a user without ground truth reads: the state file and the console give the sigmas
+// of the main quantities, the window and the Doppler residuals against the configured noise; the
+// sigmas are those of the state's own covariance, and the truth lies within a few of them.
+TEST(FreeInitAppEndToEnd, StateFileCarriesTheVerdict) {
+  const std::string out = outDir("verdict");
+  auto app = makeApp(kSrc + "/rawlogs/dyna_01.rawlog", out);
+  std::ostringstream log;
+  ASSERT_EQ(app.run(log), 0) << log.str();
+  EXPECT_NE(log.str().find("  sigma: v_b "), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find("Doppler residual RMS"), std::string::npos) << log.str();
+  mrpt::config::CConfigFile ini((fs::path(out) / "initial_state.ini").string());
+  auto vec3 = [&](const char* key) {
+    std::istringstream is(ini.read_string("initial_state", key, ""));
+    Vec3 v(-1, -1, -1);
+    is >> v.x() >> v.y() >> v.z();
+    return v;
+  };
+  const Vec3 sigma_v = vec3("sigma_v_b");
+  const StateVerdict expected = verdictOf(app.result, 0.03);
+  // The estimator's own body-velocity sigma at the state time (from its filter's covariance),
+  // to the 6 digits the file keeps.
+  ASSERT_FALSE(app.result.velocities.empty());
+  const Vec3 own = app.result.velocities.back().sigma_v_b;
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(sigma_v(i), own(i), 1e-5 * own(i));
+    EXPECT_NEAR(sigma_v(i), expected.sigma_v_b(i), 1e-5 * own(i));
+    EXPECT_GT(sigma_v(i), 0.0);
+  }
+  EXPECT_LT(expected.sigma_v_b.norm(), 0.02);
+  EXPECT_GT(ini.read_double("initial_state", "sigma_tilt_deg", -1), 0.0);
+  EXPECT_GT(vec3("sigma_b_g").minCoeff(), 0.0);
+  EXPECT_GT(vec3("sigma_b_a").minCoeff(), 0.0);
+  EXPECT_NEAR(ini.read_double("initial_state", "window_s", -1), 0.5, 0.02);
+  EXPECT_GE(ini.read_int("initial_state", "window_frames", -1), 5);
+  EXPECT_EQ(static_cast<std::size_t>(ini.read_int("initial_state", "points_used", -1)),
+            app.result.diag.points_used);
+  // The sample's Doppler noise is 0.03 m/s: the used points' residuals show it.
+  EXPECT_NEAR(ini.read_double("initial_state", "doppler_residual_rms", -1), 0.03, 0.006);
+  EXPECT_DOUBLE_EQ(ini.read_double("initial_state", "doppler_sigma", -1), 0.03);
+  ASSERT_TRUE(app.errors_wrt_gt);
+  EXPECT_LT(app.errors_wrt_gt->velocity, 5 * expected.sigma_v_b.norm() + 1e-3) << log.str();
+}
+
 TEST(FreeInitAppEndToEnd, StaticSampleStat01) {
   auto app = makeApp(kSrc + "/rawlogs/stat_01.rawlog", outDir("stat_01"));
   std::ostringstream log;
@@ -280,7 +324,8 @@ TEST(FreeInitAppStreaming, StopsAtTheWindowWithTheStateOfTheWholeRecording) {
     if (config.extrinsics.from_sensor_pose) config.core.extrinsics = *in.sensor_pose_extrinsics;
     const InitResult whole = FreeInit::run(config.core, in.imu, in.frames);
     const std::string path = tmpFile("whole_initial_state.ini");
-    writeInitialStateIni(path, whole.state);
+    const StateVerdict verdict = verdictOf(whole, config.core.velocimeter.doppler_sigma);
+    writeInitialStateIni(path, whole.state, &verdict);
     EXPECT_EQ(state, readText(path));
   }
 }
