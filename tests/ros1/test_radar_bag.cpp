@@ -6,7 +6,9 @@
 // stamps zero), 413 trigger messages on the IMU clock whose seq matches the scans' (the last
 // trigger, seq 521, has no scan: the recording stopped within that frame). At rest for ~13 s, then
 // carried by hand, near rest again from ~34 s.
+#include <freeinit/doppler_inertial_filter.h>
 #include <freeinit/free_init.h>
+#include <freeinit/rotation.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/rawlog_reader.h>
@@ -20,6 +22,7 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -458,4 +461,116 @@ TEST(RadarBag, EstimatorWhileMovingAgreesWithTheDopplerFits) {
         << v_fit.transpose();
   }
   EXPECT_GE(states, 2);
+}
+
+// Along the whole recording (a start every second, as `--every 1`): each state, propagated with
+// the IMU to the next start's state time (its own biases, the IMU noise as process noise),
+// agrees with that start's state in what does not depend on the world frame (body velocity,
+// gravity direction in the body, both biases) within their covariances, or one of the two says
+// why it could not initialize. Chi-square, 11 dof, 99.9 %: 31.26; the two windows share data,
+// so treating their errors as independent makes the test conservative.
+//
+// Disabled: it does not hold on this recording. 15 of 33 pairs agree, and 4 starts decline (17 of
+// 37 with the calibration estimated in the state, 3 deg and 5 ms). The worst pair is 0.4 m/s
+// apart in body velocity against sigmas of a few cm/s. On simulated recordings the same check
+// passes on every pair (chi-square 8-15). Together with the calibration warnings of every moving
+// start, it says that the radar's model (calibration, scan timing) is off by more than the
+// covariance admits. Run it with --gtest_also_run_disabled_tests.
+TEST(RadarBag, DISABLED_EstimatorAlongTheRecordingIsSelfConsistent) {
+  SKIP_WITHOUT_THE_BAG();
+  using F = DopplerInertialFilter;
+  const Recording& r = recording();
+  const FreeInitConfig cfg = mrpt_glue::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core;
+  const double duration = r.imu.back().t - r.imu.front().t;
+  std::vector<InitResult> starts;
+  for (double T = 0; T + 3.0 < duration; T += 1.0) starts.push_back(initializeAt(T));
+  auto sampleAt = [&](double t) {
+    const auto it = std::lower_bound(r.imu.begin(), r.imu.end(), t - 1e-7,
+                                     [](const ImuSample& s, double x) { return s.t < x; });
+    return static_cast<std::size_t>(it - r.imu.begin());
+  };
+  int pairs = 0, agree = 0, declined = 0;
+  std::string worst;
+  double worst_d2 = 0;
+  for (std::size_t i = 0; i + 1 < starts.size(); ++i) {
+    const InitialState& a = starts[i].state;
+    const InitialState& b = starts[i + 1].state;
+    if (!a.ok() || !b.ok()) {
+      ++declined;
+      continue;
+    }
+    // Propagate a to b's time.
+    std::size_t k = sampleAt(a.timestamp);
+    const std::size_t k_end = sampleAt(b.timestamp);
+    ASSERT_NEAR(r.imu[k].t, a.timestamp, 1e-6);
+    ASSERT_NEAR(r.imu[k_end].t, b.timestamp, 1e-6);
+    FilterState x;
+    x.t = a.timestamp;
+    x.R_wb = a.q_wb.toRotationMatrix();
+    x.p_w = a.p_w;
+    x.v_w = a.v_w;
+    x.b_g = a.b_g;
+    x.b_a = a.b_a;
+    F::MatS P = F::MatS::Zero();
+    P.topLeftCorner<15, 15>() = a.cov.topLeftCorner<15, 15>();
+    for (; k < k_end; ++k) {
+      const F::MatS J = F::transitionJacobian(x, r.imu, k);
+      const double dt = r.imu[k + 1].t - r.imu[k].t;
+      x = F::propagate(x, r.imu, k);
+      P = J * P * J.transpose();
+      const double qg = std::pow(cfg.velocimeter.gyro_sigma * dt, 2);
+      const double qa = std::pow(cfg.gravity.accel_sigma * dt, 2);
+      for (int j = 0; j < 3; ++j) {
+        P(F::kTheta + j, F::kTheta + j) += qg;
+        P(F::kVel + j, F::kVel + j) += qa;
+        P(F::kBg + j, F::kBg + j) += 1e-8 * dt;  // the filter's bias random walks
+        P(F::kBa + j, F::kBa + j) += 1e-6 * dt;
+      }
+    }
+    // The frame-free quantities and their Jacobians w.r.t. each state's error.
+    auto bodyVelocity = [](const Mat3& R, const Vec3& v_w, Eigen::Matrix<double, 3, 15>& J) {
+      J.setZero();
+      const Vec3 v_b = R.transpose() * v_w;
+      J.block<3, 3>(0, 0) = skew(v_b);
+      J.block<3, 3>(0, 6) = R.transpose();
+      return v_b;
+    };
+    const Mat3 R_b = b.q_wb.toRotationMatrix();
+    Eigen::Matrix<double, 3, 15> Jva, Jvb;
+    const Vec3 va = bodyVelocity(x.R_wb, x.v_w, Jva);
+    const Vec3 vb = bodyVelocity(R_b, b.v_w, Jvb);
+    const Vec3 ua = (x.R_wb.transpose() * b.g_w).normalized();
+    const Vec3 ub = (R_b.transpose() * b.g_w).normalized();
+    Eigen::Matrix<double, 3, 2> T;  // a basis across b's gravity
+    T.col(0) = ub.unitOrthogonal();
+    T.col(1) = ub.cross(T.col(0));
+    Eigen::Matrix<double, 11, 1> e;
+    e << va - vb, T.transpose() * (ua - ub), x.b_g - b.b_g, x.b_a - b.b_a;
+    Eigen::Matrix<double, 11, 15> Ja = Eigen::Matrix<double, 11, 15>::Zero(), Jb = Ja;
+    Ja.topRows<3>() = Jva;
+    Jb.topRows<3>() = -Jvb;
+    Ja.block<2, 3>(3, 0) = T.transpose() * skew(ua);
+    Jb.block<2, 3>(3, 0) = -T.transpose() * skew(ub);
+    Ja.block<3, 3>(5, 9) = Mat3::Identity();
+    Jb.block<3, 3>(5, 9) = -Mat3::Identity();
+    Ja.block<3, 3>(8, 12) = Mat3::Identity();
+    Jb.block<3, 3>(8, 12) = -Mat3::Identity();
+    const Eigen::Matrix<double, 11, 11> C = Ja * P.topLeftCorner<15, 15>() * Ja.transpose() +
+                                            Jb * b.cov.topLeftCorner<15, 15>() * Jb.transpose();
+    const double d2 = e.dot(C.ldlt().solve(e));
+    ++pairs;
+    if (d2 < 31.26) ++agree;
+    if (d2 > worst_d2) {
+      worst_d2 = d2;
+      std::ostringstream os;
+      os << "start " << i << " s -> " << i + 1 << " s: chi2 " << d2 << ", v_b " << va.transpose()
+         << " vs " << vb.transpose() << ", b_g " << x.b_g.transpose() << " vs "
+         << b.b_g.transpose();
+      worst = os.str();
+    }
+  }
+  std::printf("%d pairs, %d agree, %d with a start that declined; worst: %s\n", pairs, agree,
+              declined, worst.c_str());
+  EXPECT_GE(pairs, 20);
+  EXPECT_GE(agree, pairs - pairs / 10) << worst;
 }
