@@ -8,7 +8,10 @@
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
 
+#include <unistd.h>
+
 #include <algorithm>
+#include <cstdio>
 #include <exception>
 #include <filesystem>
 #include <iomanip>
@@ -70,6 +73,50 @@ IndexedRecord describe(const mrpt::serialization::CSerializable& obj) {
 /// What MRPT's nested exception says, in one line: its innermost message and the objects being
 /// read when it was thrown ("... (in CObservationPointCloud > CPointsMapDoppler)"). MRPT's
 /// exceptions carry one "Message:" line per level and a backtrace.
+/// Holds what is written to stderr (file descriptor 2) while one record is deserialized: MRPT
+/// prints some errors itself (e.g. "[TRuntimeClassId::createObject] ...") before it throws, and
+/// the reader's own one-line error says what is wrong. What was held is passed on to stderr
+/// unless the record failed. One scratch file serves every record (rewound each time).
+class StderrHold {
+ public:
+  StderrHold() {
+    static std::FILE* scratch = std::tmpfile();
+    if (scratch == nullptr) return;
+    std::fflush(stderr);
+    saved_ = ::dup(2);
+    if (saved_ < 0) return;
+    scratch_ = scratch;
+    if (::ftruncate(::fileno(scratch_), 0) != 0 || ::lseek(::fileno(scratch_), 0, SEEK_SET) != 0 ||
+        ::dup2(::fileno(scratch_), 2) < 0) {
+      ::close(saved_);
+      saved_ = -1;
+    }
+  }
+  StderrHold(const StderrHold&) = delete;
+  StderrHold& operator=(const StderrHold&) = delete;
+  ~StderrHold() { release(true); }
+  /// Restores stderr; with `pass`, writes what was held to it.
+  void release(bool pass) {
+    if (saved_ < 0) return;
+    std::fflush(stderr);
+    ::dup2(saved_, 2);
+    ::close(saved_);
+    saved_ = -1;
+    if (!pass) return;
+    const int fd = ::fileno(scratch_);
+    const off_t size = ::lseek(fd, 0, SEEK_END);
+    if (size <= 0 || ::lseek(fd, 0, SEEK_SET) != 0) return;
+    char buf[4096];
+    ssize_t n;
+    while ((n = ::read(fd, buf, sizeof buf)) > 0)
+      if (::write(2, buf, static_cast<std::size_t>(n)) < 0) break;
+  }
+
+ private:
+  std::FILE* scratch_ = nullptr;
+  int saved_ = -1;
+};
+
 struct MrptCause {
   std::string innermost;
   std::string objects;  ///< "CObservationPointCloud > CPointsMapDoppler"
@@ -186,13 +233,17 @@ struct RawlogReader::Impl {
     std::exception_ptr error;
     std::size_t refused = 0;
     {
-      ReadBudget guard(budget);
-      try {
-        obj = archive->ReadObject();
-      } catch (...) {
-        error = std::current_exception();
+      StderrHold hold;
+      {
+        ReadBudget guard(budget);
+        try {
+          obj = archive->ReadObject();
+        } catch (...) {
+          error = std::current_exception();
+        }
+        refused = guard.refused();
       }
-      refused = guard.refused();
+      hold.release(!error && refused == 0);
     }
     if (refused > 0)
       fail(start, "cannot be read: it would allocate " + megabytes(refused) +
