@@ -500,6 +500,14 @@ class JointPipeline final : public Pipeline {
                            " m/s) exceed the configured Doppler noise (" + fmt(sigma) +
                            " m/s): the noise setting, the extrinsics or the LiDAR-IMU time "
                            "offset may be wrong");
+    // Few returns: under ten per IMU sample (2,000 per second at 200 Hz, a fiftieth of what a
+    // 64-line LiDAR gives at the default stride) the state rests on little Doppler.
+    const std::size_t nodes = filter_->nodes();
+    if (d.points_used < 10 * nodes)
+      s.warnings.push_back("only " + std::to_string(d.points_used) +
+                           " LiDAR returns were used in the window (" +
+                           fmt(static_cast<double>(d.points_used) / static_cast<double>(nodes), 2) +
+                           " per IMU sample): the state rests on few Doppler measurements");
     if (judged >= 100 && agree < 0.3)
       s.warnings.push_back("only " + fmt(100.0 * agree, 2) +
                            " % of the LiDAR returns in the window agree with the estimated "

@@ -447,6 +447,7 @@ int FreeInitApp::run(std::ostream& log) {
       << result.diag.points_rejected << " rejected, " << result.diag.points_skipped
       << " skipped; static start: " << (result.diag.static_start ? "yes" : "no") << "\n";
   if (s.ok()) printVerdict(log, verdictOf(result, config.core.velocimeter.doppler_sigma));
+  for (const auto& w : s.warnings) log << "  warning: " << w << "\n";
   if (config.extrinsics.from_sensor_pose && decoder.firstCloudExtrinsics())
     log << "Extrinsics from sensorPose: p_bl = " << v3(decoder.firstCloudExtrinsics()->p_bl)
         << " m\n";

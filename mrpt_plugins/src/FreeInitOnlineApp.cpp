@@ -361,8 +361,10 @@ int FreeInitOnlineApp::run(std::ostream& log) {
               });
   }
   for (const auto& w : session.warnings()) log << "Warning: " << w << "\n";
-  if (session.ready() && session.result().state.ok())
+  if (session.ready() && session.result().state.ok()) {
     printVerdict(log, verdictOf(session.result(), config.core.velocimeter.doppler_sigma));
+    for (const auto& w : session.result().state.warnings) log << "  warning: " << w << "\n";
+  }
   result = session.result();
   if (stopped_by_signal != 0 && !ready_live)
     log << "The stream was stopped by " << signalName(stopped_by_signal)

@@ -398,6 +398,10 @@ TEST(RadarBag, EstimatorAtRestFindsTheMeanGyroAndGravity) {
   ASSERT_TRUE(res.state.ok()) << res.state.message;
   EXPECT_TRUE(res.diag.static_start);
   EXPECT_LT(res.state.v_b().norm(), 0.01);
+  // ~2 returns per IMU sample: the state says it rests on few Doppler measurements.
+  ASSERT_FALSE(res.state.warnings.empty());
+  EXPECT_NE(res.state.warnings.front().find("few Doppler measurements"), std::string::npos)
+      << res.state.warnings.front();
   const Recording& r = recording();
   Vec3 gyro = Vec3::Zero(), f = Vec3::Zero();
   std::size_t n = 0;
