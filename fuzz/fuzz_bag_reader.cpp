@@ -45,16 +45,9 @@ ros1::BagImportConfig configFor(const std::uint8_t* d, std::size_t n) {
 }  // namespace
 
 std::string fuzzOne(const std::uint8_t* data, std::size_t size) {
-  static const std::string path = (std::filesystem::temp_directory_path() /
-                                   ("freeinit_fuzz_bag_" + std::to_string(getpid()) + ".bag"))
-                                      .string();
-  if (FILE* f = std::fopen(path.c_str(), "wb")) {
-    const bool ok = std::fwrite(data, 1, size, f) == size;
-    std::fclose(f);
-    if (!ok) return "error: cannot write " + path;
-  } else {
-    return "error: cannot write " + path;
-  }
+  std::string error;
+  const std::string path = writeInput("bag", ".bag", data, size, error);
+  if (path.empty()) return error;
   double last_imu = -1, last_frame = -1;
   std::size_t imu = 0, frames = 0, points = 0;
   ros1::BagReadCallbacks cb;

@@ -100,16 +100,9 @@ Pass read(const std::string& path, bool salvage) {
 }  // namespace
 
 std::string fuzzOne(const std::uint8_t* data, std::size_t size) {
-  static const std::string path = (std::filesystem::temp_directory_path() /
-                                   ("freeinit_fuzz_rawlog_" + std::to_string(getpid()) + ".rawlog"))
-                                      .string();
-  if (FILE* f = std::fopen(path.c_str(), "wb")) {
-    const bool ok = std::fwrite(data, 1, size, f) == size;
-    std::fclose(f);
-    if (!ok) return "error: cannot write " + path;
-  } else {
-    return "error: cannot write " + path;
-  }
+  std::string error;
+  const std::string path = writeInput("rawlog", ".rawlog", data, size, error);
+  if (path.empty()) return error;
   const Pass strict = read(path, false);
   if (!strict.error.empty() && strict.error.find(path) == std::string::npos)
     broken("an error that does not name the file");

@@ -11,7 +11,10 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <string>
+
+#include <unistd.h>
 
 namespace freeinit::fuzz {
 
@@ -21,6 +24,21 @@ std::string fuzzOne(const std::uint8_t* data, std::size_t size);
 [[noreturn]] inline void broken(const char* what) {
   std::fprintf(stderr, "invariant broken: %s\n", what);
   std::abort();
+}
+
+/// Writes the input to a file of this process ("freeinit_fuzz_<stem>_<pid><ext>" in the temporary
+/// folder) for the readers that take a path; returns its path, or "" (with `error`) on failure.
+inline std::string writeInput(const char* stem, const char* ext, const std::uint8_t* data,
+                              std::size_t size, std::string& error) {
+  const std::string path =
+      (std::filesystem::temp_directory_path() /
+       ("freeinit_fuzz_" + std::string(stem) + "_" + std::to_string(getpid()) + ext))
+          .string();
+  FILE* f = std::fopen(path.c_str(), "wb");
+  const bool ok = f != nullptr && std::fwrite(data, 1, size, f) == size;
+  if (f != nullptr) std::fclose(f);
+  if (!ok) error = "error: cannot write " + path;
+  return ok ? path : std::string();
 }
 
 /// The first line of a message (outcomes are one line).

@@ -9,6 +9,8 @@
 
 #include <cmath>
 
+#include "bound_trajectories.h"
+
 namespace freeinit::eval {
 namespace {
 
@@ -16,22 +18,8 @@ using Vec18 = Eigen::Matrix<double, 18, 1>;
 using Vec12 = Eigen::Matrix<double, 12, 1>;
 
 const Vec3 kG(0, 0, -kGravity);
+using test::movingTrajectory;
 
-/// Walking with fast hand rotation: up to ~6 rad/s and ~10 m/s^2.
-sim::AnalyticTrajectory movingTrajectory() {
-  sim::TrajectoryParams p;
-  p.t0 = 0;
-  p.p_start_w = Vec3(1, 2, 1.4);
-  p.rpy_start = Vec3(0.2, -0.3, 0.5);
-  p.pos[0].poly = {0.0, 1.2, 0.4};
-  p.pos[0].waves = {{0.05, 1.8, 0.3}};
-  p.pos[1].waves = {{0.08, 1.1, 1.0}};
-  p.pos[2].waves = {{0.04, 2.2, 0.2}};
-  p.rpy[0].waves = {{0.3, 2.0, 0.4}};
-  p.rpy[1].waves = {{0.25, 1.7, 2.0}};
-  p.rpy[2].waves = {{0.5, 1.6, 0.7}};
-  return sim::AnalyticTrajectory(p);
-}
 
 KinematicTruth kinematics(const sim::Trajectory& traj, double t) {
   const sim::TruthState s = traj.at(t);

@@ -526,7 +526,8 @@ void DopplerInertialFilter::update() {
       }
       const std::size_t half = static_cast<std::size_t>(K / 2);
       const double c2 = params_.coherence_sigma * params_.coherence_sigma;
-      std::vector<char> incoherent(np, 0);
+      std::vector<char>& incoherent = scratch_incoherent_;
+      incoherent.assign(np, 0);
       for (std::size_t j = 0; j < np; ++j) {
         const std::size_t lo = j >= half ? j - half : 0;
         const std::size_t hi = std::min(np, j + half + 1);

@@ -291,7 +291,7 @@ class DopplerInertialFilter {
   std::vector<OpenPoint> open_points_;
   // Work buffers of update(), kept to avoid allocations per node.
   std::vector<double> scratch_r_, scratch_var_, scratch_cum_r_, scratch_cum_v_;
-  std::vector<char> scratch_pass_;
+  std::vector<char> scratch_pass_, scratch_incoherent_;
   std::vector<std::size_t> scratch_idx_;
   std::vector<PointResult> open_outcomes_;
   // The open node's prediction for gating.
