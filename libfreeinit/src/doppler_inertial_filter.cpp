@@ -1,6 +1,7 @@
 #include <freeinit/doppler_inertial_filter.h>
 #include <freeinit/rotation.h>
 
+#include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
@@ -57,6 +58,43 @@ DopplerInertialFilter::MatS propagateCovariance(const DopplerInertialFilter::Mat
   return 0.5 * (out + out.transpose());
 }
 
+/// The gain K = B S^-1 of a Kalman update, for S symmetric positive definite (9x9, overwritten by
+/// its Cholesky factor L, S = L L^T) and B = P H^T (n x 9), in place of B: K L = Y with Y L^T = B,
+/// by column operations on B (fixed-size, vectorized; at this size faster than Eigen's blocked
+/// triangular solves).
+template <int N>
+void kalmanGainInPlace(Eigen::Matrix<double, 9, 9>& S, Eigen::Matrix<double, N, 9>& B) {
+  constexpr int n = 9;
+  for (int j = 0; j < n; ++j) {  // S = L L^T (lower triangle)
+    double d = S(j, j);
+    for (int k = 0; k < j; ++k) d -= S(j, k) * S(j, k);
+    d = std::sqrt(d);
+    S(j, j) = d;
+    for (int i = j + 1; i < n; ++i) {
+      double v = S(i, j);
+      for (int k = 0; k < j; ++k) v -= S(i, k) * S(j, k);
+      S(i, j) = v / d;
+    }
+  }
+  for (int j = 0; j < n; ++j) {  // Y: B(:, j) = sum_{i <= j} L(j, i) Y(:, i)
+    for (int i = 0; i < j; ++i) B.col(j) -= S(j, i) * B.col(i);
+    B.col(j) /= S(j, j);
+  }
+  for (int j = n; j-- > 0;) {  // K: Y(:, j) = sum_{i >= j} K(:, i) L(i, j)
+    for (int i = j + 1; i < n; ++i) B.col(j) -= S(i, j) * B.col(i);
+    B.col(j) /= S(j, j);
+  }
+}
+
+/// Whether no block of a Gauss-Newton step exceeds `scale` times its tolerance
+/// (DopplerInertialFilterParams::convergence).
+bool negligibleStep(const DopplerInertialFilter::VecS& dx, double scale) {
+  DopplerInertialFilter::VecS tol;
+  tol << Vec3::Constant(1e-4), Vec3::Constant(1e-3), Vec3::Constant(1e-4), Vec3::Constant(1e-5),
+      Vec3::Constant(1e-3), Vec3::Constant(1e-4), 1e-4;
+  return dx.cwiseAbs().cwiseQuotient(tol).maxCoeff() < scale;
+}
+
 }  // namespace
 
 DopplerInertialFilter::DopplerInertialFilter(const DopplerInertialFilterParams& params,
@@ -93,26 +131,42 @@ DopplerInertialFilter::VecS DopplerInertialFilter::boxminus(const FilterState& a
 }
 
 void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, double t,
-                                           Vec3& gyro, Vec3& accel) {
+                                           Vec3& gyro, Vec3& accel, std::size_t hint,
+                                           Vec3* gyro_rate) {
   // The interval of samples that holds t, then up to one more sample on each side.
   const std::size_t n = imu.size();
   std::size_t j = 0;  // imu[j].t <= t < imu[j + 1].t (clamped)
   if (n >= 2) {
-    const auto it = std::upper_bound(imu.begin(), imu.end(), t,
-                                     [](double x, const ImuSample& s) { return x < s.t; });
-    j = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, (it - imu.begin()) - 1));
+    if (hint < n) {
+      // A few steps from the hint (the callers' times lie within an interval of it).
+      j = hint;
+      while (j + 1 < n && imu[j + 1].t <= t) ++j;
+      while (j > 0 && imu[j].t > t) --j;
+    } else {
+      const auto it = std::upper_bound(imu.begin(), imu.end(), t,
+                                       [](double x, const ImuSample& s) { return x < s.t; });
+      j = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, (it - imu.begin()) - 1));
+    }
     j = std::min(j, n - 2);
   }
   const std::size_t lo = j > 0 ? j - 1 : 0;
   const std::size_t hi = std::min(n - 1, j + 2);
   gyro.setZero();
   accel.setZero();
+  if (gyro_rate != nullptr) gyro_rate->setZero();
   for (std::size_t i = lo; i <= hi; ++i) {
-    double w = 1.0;  // Lagrange basis polynomial of node i at t
-    for (std::size_t m = lo; m <= hi; ++m)
-      if (m != i) w *= (t - imu[m].t) / (imu[i].t - imu[m].t);
+    // Lagrange basis polynomial of node i at t, and its derivative (product rule).
+    double w = 1.0, dw = 0.0;
+    for (std::size_t m = lo; m <= hi; ++m) {
+      if (m == i) continue;
+      const double inv = 1.0 / (imu[i].t - imu[m].t);
+      const double f = (t - imu[m].t) * inv;
+      dw = dw * f + w * inv;
+      w *= f;
+    }
     gyro += w * imu[i].gyro;
     accel += w * imu[i].accel;
+    if (gyro_rate != nullptr) *gyro_rate += dw * imu[i].gyro;
   }
 }
 
@@ -125,7 +179,8 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
   const std::array<double, 4> s = {0.0, 0.25 * tau, 0.5 * tau, tau};
   w[0] = imu[k].gyro;
   f[0] = imu[k].accel;
-  for (int i = 1; i < 4; ++i) interpolateImu(imu, t + s[static_cast<std::size_t>(i)], w[i], f[i]);
+  for (int i = 1; i < 4; ++i)
+    interpolateImu(imu, t + s[static_cast<std::size_t>(i)], w[i], f[i], k);
   for (int i = 0; i < 4; ++i) {
     w[static_cast<std::size_t>(i)] -= x.b_g;
     f[static_cast<std::size_t>(i)] -= x.b_a;
@@ -168,8 +223,8 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
 }
 
 FilterState DopplerInertialFilter::propagate(const FilterState& x,
-                                             const std::vector<ImuSample>& imu, std::size_t k) {
-  FilterState y = integrate(x, imu, k, imu[k + 1].t - imu[k].t);
+                                             const std::vector<ImuSample>& imu, std::size_t k, MatS* F) {
+  FilterState y = integrate(x, imu, k, imu[k + 1].t - imu[k].t, F);
   y.t = imu[k + 1].t;
   return y;
 }
@@ -201,8 +256,9 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   const double tau_true = tau - x.dt_l;
   MatS Js;
   const FilterState y = integrate(x, imu, k, tau_true, J != nullptr ? &Js : nullptr);
-  Vec3 gyro = imu[k].gyro, accel;
-  if (tau_true != 0) interpolateImu(imu, imu[k].t + tau_true, gyro, accel);
+  Vec3 gyro = imu[k].gyro, accel = imu[k].accel, alpha = Vec3::Zero();
+  if (tau_true != 0 || J != nullptr)
+    interpolateImu(imu, imu[k].t + tau_true, gyro, accel, k, J != nullptr ? &alpha : nullptr);
   const Vec3 omega = gyro - x.b_g;
   const Vec3 v_b = y.R_wb.transpose() * y.v_w;
   const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
@@ -219,15 +275,9 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
     // The correction is additive (phi_bl + dphi): Exp(phi + dphi) = Exp(phi) Exp(J_r(phi) dphi).
     J->block<3, 3>(0, kRot) = skew(v_l) * rightJacobian(x.phi_bl);
     // dv_l/dt = R_bl^T (a_b - omega x v_b + alpha x p_bl), a_b = f - b_a + R^T g (the angular
-    // acceleration alpha from the interpolated gyro), and dv_l/d(dt_l) = -dv_l/dt.
-    constexpr double kStep = 1e-4;  // [s] for alpha
-    Vec3 g_a, g_b, unused;
-    interpolateImu(imu, imu[k].t + tau_true - kStep, g_a, unused);
-    interpolateImu(imu, imu[k].t + tau_true + kStep, g_b, unused);
-    const Vec3 alpha = (g_b - g_a) / (2 * kStep);
-    Vec3 accel_t = accel;
-    if (tau_true == 0) accel_t = imu[k].accel;
-    const Vec3 a_b = accel_t - x.b_a + Rt * kGravityW;
+    // acceleration alpha: the derivative of the interpolated gyro), and
+    // dv_l/d(dt_l) = -dv_l/dt.
+    const Vec3 a_b = accel - x.b_a + Rt * kGravityW;
     J->col(kTime) = -Rlb * (a_b - omega.cross(v_b) + alpha.cross(p_bl_));
   }
   return v_l;
@@ -324,8 +374,8 @@ void DopplerInertialFilter::predict() {
     throw std::logic_error("DopplerInertialFilter::predict: no IMU sample after the node");
   Node n;
   n.k = cur.k + 1;
-  const MatS F = transitionJacobian(cur.x, imu_, cur.k);
-  n.x_pred = propagate(cur.x, imu_, cur.k);
+  MatS F;
+  n.x_pred = propagate(cur.x, imu_, cur.k, &F);
   n.P = propagateCovariance(F, cur.P) + processNoise(imu_[n.k].t - imu_[cur.k].t);
   n.P = 0.5 * (n.P + n.P.transpose()).eval();
   n.x = n.xs = n.x_pred;
@@ -389,16 +439,20 @@ DopplerInertialFilter::PointOutcome DopplerInertialFilter::addPoint(double tau,
   return out;
 }
 
-void DopplerInertialFilter::accumulate(DopplerSums& sums, double s, const Vec3& d, double z) {
-  const Mat3 dd = d * d.transpose();
+void DopplerInertialFilter::accumulate(DopplerSums& sums, double s, const Vec3& d, double z,
+                                       double w) {
+  const Mat3 dd = w * d * d.transpose();
   double sm = 1.0;
   for (int m = 0; m < 5; ++m) {
     sums.S[static_cast<std::size_t>(m)] += sm * dd;
-    if (m < 3) sums.bz[static_cast<std::size_t>(m)] += (sm * z) * d;
+    if (m < 3) sums.bz[static_cast<std::size_t>(m)] += (sm * z * w) * d;
     sm *= s;
   }
-  sums.c += z * z;
-  ++sums.n;
+  sums.c += w * z * z;
+  if (w > 0)
+    ++sums.n;
+  else
+    --sums.n;
 }
 
 void DopplerInertialFilter::buildRows(Node& n) const {
@@ -412,6 +466,21 @@ void DopplerInertialFilter::buildRows(Node& n) const {
     for (int k = 0; k < 3; ++k)
       A.block<3, 3>(3 * m, 3 * k) = n.sums.S[static_cast<std::size_t>(m + k)];
   }
+  const double inv_sigma = 1.0 / params_.doppler_sigma;
+  // Well conditioned (the usual case: returns spread over the view and the interval): the
+  // Cholesky factor, A = L L^T, gives W = L^T / sigma and y0 = L^-1 b / sigma. Otherwise the
+  // eigen-decomposition below keeps the directions the points resolve.
+  const Eigen::LLT<Eigen::Matrix<double, 9, 9>> llt(A);
+  if (llt.info() == Eigen::Success) {
+    const auto L = llt.matrixL();
+    const Vec9 pivots = llt.matrixLLT().diagonal();
+    constexpr double kMinPivotRatio = 1e-4;  // pivot^2 >= 1e-8 of the largest diagonal of A
+    if (pivots.minCoeff() > kMinPivotRatio * std::sqrt(A.diagonal().maxCoeff())) {
+      n.rows.W = Eigen::Matrix<double, 9, 9>(L.transpose()) * inv_sigma;
+      n.rows.y0 = L.solve(b) * inv_sigma;
+      return;
+    }
+  }
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 9, 9>> es(A);
   const double max_ev = es.eigenvalues().maxCoeff();
   int rows = 0;
@@ -419,7 +488,6 @@ void DopplerInertialFilter::buildRows(Node& n) const {
     if (es.eigenvalues()(i) > 1e-10 * max_ev && es.eigenvalues()(i) > 1e-12) ++rows;
   n.rows.W.resize(rows, 9);
   n.rows.y0.resize(rows);
-  const double inv_sigma = 1.0 / params_.doppler_sigma;
   int r = 0;
   for (int i = 0; i < 9; ++i) {
     const double ev = es.eigenvalues()(i);
@@ -445,12 +513,14 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
   Vec9 y0 = Vec9::Zero();
   W.topRows(rows) = n.rows.W;
   y0.head(rows) = n.rows.y0;
-  const Mat9xS H = W * G;
+  // (Coefficient-based products: at these sizes they beat the blocked kernels.)
+  const Mat9xS H = W.lazyProduct(G);
   const Vec9 innovation = -(W * Q + y0) - H * dx_prior;
-  const Mat9xS HP = H * P;
-  Mat9 S = HP * H.transpose();
-  S.diagonal().array() += 1.0;
-  const Eigen::Matrix<double, kStateDim, 9> K = S.ldlt().solve(HP).transpose();
+  const Mat9xS HP = H.lazyProduct(P);
+  Mat9 S = HP.lazyProduct(H.transpose());
+  S.diagonal().array() += 1.0;  // S >= I: the Cholesky factorization cannot fail
+  Eigen::Matrix<double, kStateDim, 9> K = HP.transpose();
+  kalmanGainInPlace(S, K);
   const VecS dx = dx_prior + K * innovation;
   P.noalias() -= K.lazyProduct(HP);
   P = 0.5 * (P + P.transpose()).eval();
@@ -460,24 +530,29 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
 void DopplerInertialFilter::update() {
   Node& n = nodes_.back();
   const MatS P_pred = n.P;
-  // Iterated update from the prediction: re-linearize at the updated state while the correction
+  // Iterated update: re-linearize at the updated state while the correction
   // moves it.
-  auto solve = [&](FilterState& x_out, MatS& P_out) {
+  // moves it by more than the tolerances, from x_start (the prediction, or the first solve's
+  // result when the second gate dropped a few points).
+  auto solve = [&](FilterState& x_out, MatS& P_out, const FilterState& x_start) {
     buildRows(n);
-    x_out = n.x_pred;
     P_out = P_pred;
-    if (n.rows.W.rows() == 0) return;
+    if (n.rows.W.rows() == 0) {
+      x_out = n.x_pred;
+      return;
+    }
+    x_out = x_start;
     for (int it = 0; it < 3; ++it) {
       P_out = P_pred;
       const VecS dx_prior = boxminus(n.x_pred, x_out);
       const VecS dx = dopplerUpdate(n, x_out, dx_prior, P_out);
       x_out = boxplus(x_out, dx);
-      if (dx.norm() < 1e-9) break;
+      if (negligibleStep(dx, params_.convergence)) break;
     }
   };
   FilterState x;
   MatS P;
-  solve(x, P);
+  solve(x, P, n.x_pred);
   // Second gate, against the update: the first one, against the prediction, must be wide where
   // the prediction is uncertain (the first nodes) and lets slow moving objects through; the
   // points are gated again at regate_sigma of their residual's std after the update (no floor,
@@ -539,20 +614,19 @@ void DopplerInertialFilter::update() {
       for (std::size_t j = 0; j < np; ++j)
         if (incoherent[j]) pass[idx[j]] = 0;
     }
-    DopplerSums kept;
+    // The dropped points leave the sums (a small share: taking them out is cheaper than summing
+    // the kept ones again).
     std::size_t dropped = 0;
     for (std::size_t i = 0; i < m; ++i) {
       const OpenPoint& o = open_points_[i];
-      if (!pass[i]) {
-        open_outcomes_[o.outcome].accepted = false;
-        ++dropped;
-        continue;
-      }
-      accumulate(kept, o.s, o.d, o.z);
+      if (pass[i]) continue;
+      open_outcomes_[o.outcome].accepted = false;
+      accumulate(n.sums, o.s, o.d, o.z, -1.0);
+      ++dropped;
     }
     if (dropped > 0) {
-      n.sums = kept;
-      solve(x, P);
+      const FilterState x_first = x;
+      solve(x, P, x_first);
     }
   }
   n.x = n.xs = x;
@@ -618,7 +692,7 @@ void DopplerInertialFilter::cancelRestFrom(double t) {
 int DopplerInertialFilter::smooth() {
   const std::size_t N = nodes_.size();
   if (N == 0) return 0;
-  std::vector<VecS> dx_f(N), dx_p(N);
+  std::vector<VecS> dx_f(N), dx_p(N), dxs(N);
   std::vector<MatS> P_f(N), P_p(N), F(N > 0 ? N - 1 : 0);
   int iterations = 0;
   for (int it = 0; it < params_.max_iterations; ++it) {
@@ -635,31 +709,26 @@ int DopplerInertialFilter::smooth() {
       P_f[k] = P;
       if (k + 1 == N) break;
       const Node& m = nodes_[k + 1];
-      F[k] = transitionJacobian(n.xs, imu_, n.k);
-      dx_p[k + 1] = F[k] * dx_f[k] + boxminus(propagate(n.xs, imu_, n.k), m.xs);
+      const FilterState x_next = propagate(n.xs, imu_, n.k, &F[k]);
+      dx_p[k + 1] = F[k] * dx_f[k] + boxminus(x_next, m.xs);
       P_p[k + 1] = propagateCovariance(F[k], P) + processNoise(imu_[m.k].t - imu_[n.k].t);
     }
-    // Backward: Rauch-Tung-Striebel.
-    VecS dx_s = dx_f[N - 1];
+    // Backward: Rauch-Tung-Striebel, dxs_k = dx_f_k + P_f_k F_k^T P_p_k+1^-1 (dxs_k+1 - dx_p_k+1),
+    // evaluated right to left (one solve with a vector; the smoothed covariances are not needed).
     nodes_[N - 1].P = P_f[N - 1];
-    std::vector<VecS> dxs(N);
-    dxs[N - 1] = dx_s;
+    dxs[N - 1] = dx_f[N - 1];
     for (std::size_t k = N - 1; k-- > 0;) {
-      const Eigen::LDLT<MatS> ldlt(P_p[k + 1]);
-      const MatS C = ldlt.solve(transitionTimes(F[k], P_f[k])).transpose();  // P_f F^T P_p^-1
-      dxs[k] = dx_f[k] + C * (dxs[k + 1] - dx_p[k + 1]);
+      const VecS y = P_p[k + 1].ldlt().solve(VecS(dxs[k + 1] - dx_p[k + 1]));
+      dxs[k] = dx_f[k] + P_f[k] * (F[k].transpose() * y);
       nodes_[k].P = P_f[k];
     }
     // Converged when no node moves by more than the tolerance of its block (scaled).
-    VecS tol;
-    tol << Vec3::Constant(1e-4), Vec3::Constant(1e-3), Vec3::Constant(1e-4), Vec3::Constant(1e-5),
-        Vec3::Constant(1e-3), Vec3::Constant(1e-4), 1e-4;
-    double largest = 0;
+    bool converged = true;
     for (std::size_t k = 0; k < N; ++k) {
       nodes_[k].xs = boxplus(nodes_[k].xs, dxs[k]);
-      largest = std::max(largest, dxs[k].cwiseAbs().cwiseQuotient(tol).maxCoeff());
+      converged = converged && negligibleStep(dxs[k], params_.convergence);
     }
-    if (largest < params_.convergence) break;
+    if (converged) break;
   }
   // The filter can go on from the last node (an early smoothing while the window is received).
   nodes_.back().x = nodes_.back().xs;
@@ -682,8 +751,9 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
     dx = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, n.xs, dx, P), P);
     if (k + 1 == N) break;
     const Node& m = nodes_[k + 1];
-    const MatS F = transitionJacobian(n.xs, imu_, n.k);
-    dx = F * dx + boxminus(propagate(n.xs, imu_, n.k), m.xs);
+    MatS F;
+    const FilterState x_next = propagate(n.xs, imu_, n.k, &F);
+    dx = F * dx + boxminus(x_next, m.xs);
     P = propagateCovariance(F, P) + processNoise(imu_[m.k].t - imu_[n.k].t);
   }
   out.correction = dx;

@@ -196,9 +196,10 @@ class DopplerInertialFilter {
   /// then the biases and the calibration) with respect to x's.
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
                                std::size_t k, double tau, MatS* J = nullptr);
-  /// Nominal propagation of x from sample k to sample k + 1.
+  /// Nominal propagation of x from sample k to sample k + 1; F (if given): its transition
+  /// Jacobian (analytic, first order).
   static FilterState propagate(const FilterState& x, const std::vector<ImuSample>& imu,
-                               std::size_t k);
+                               std::size_t k, MatS* F = nullptr);
   /// LiDAR velocity in l at LiDAR time tau after sample k (true time tau - x.dt_l) from the
   /// state x at sample k, with the corrected extrinsics; with J its Jacobian (3x19).
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
@@ -213,9 +214,11 @@ class DopplerInertialFilter {
   static MatS numericalTransitionJacobian(const FilterState& x,
                                            const std::vector<ImuSample>& imu, std::size_t k);
   /// Gyro and accelerometer at time t by Lagrange interpolation through the (up to four)
-  /// samples of `imu` around it (two on each side where they exist).
+  /// samples of `imu` around it (two on each side where they exist). hint: an index near t
+  /// (found by bisection without); gyro_rate (if given): the interpolant's time derivative.
   static void interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro,
-                             Vec3& accel);
+                             Vec3& accel, std::size_t hint = static_cast<std::size_t>(-1),
+                             Vec3* gyro_rate = nullptr);
 
  private:
   using Mat9 = Eigen::Matrix<double, 9, 9>;
@@ -255,7 +258,8 @@ class DopplerInertialFilter {
     double rest_rate_sigma = 0;      ///< > 0: the node's gyro sample measures the bias
   };
 
-  static void accumulate(DopplerSums& sums, double s, const Vec3& d, double z);
+  /// Adds a point to the sums (w = 1) or takes it out (w = -1).
+  static void accumulate(DopplerSums& sums, double s, const Vec3& d, double z, double w = 1.0);
 
   /// A point of the open node that passed the first gate.
   struct OpenPoint {
