@@ -26,7 +26,7 @@ constexpr double kPi = 3.14159265358979323846;
 /// knowledge of those last nodes is taken back.
 constexpr double kRestBackdating = 0.1;
 /// Share of the window after which what has been received is smoothed once.
-constexpr double kEarlySmoothing = 0.6;
+constexpr double kEarlySmoothing = 0.8;
 
 double wallSeconds() {
   using Clock = std::chrono::steady_clock;
@@ -78,26 +78,33 @@ class RestTracker {
 /// node poses are final.
 class WindowRecorder {
  public:
-  void add(std::size_t node, const Eigen::Vector3f& x_b, float intensity, float residual,
-           bool accepted) {
-    (accepted ? accepted_ : rejected_).push_back({node, x_b, intensity, residual});
+  void reserve(std::size_t n) { points_.reserve(n); }
+  std::size_t size() const { return points_.size(); }
+  /// A point given to the filter's open node (judged once the node is updated).
+  void add(std::size_t node, const Eigen::Vector3f& x_b, float intensity) {
+    points_.push_back({node, x_b, intensity, 0.0f, false});
+  }
+  /// The verdict on the i-th point recorded.
+  void judge(std::size_t i, bool accepted, float residual) {
+    points_[i].accepted = accepted;
+    points_[i].residual = residual;
   }
   /// Maps every point with the final node states.
   void finish(const DopplerInertialFilter& filter, InitResult& r) const {
-    auto map = [&](const std::vector<Point>& in, std::vector<MapPoint>& out) {
-      out.clear();
-      out.reserve(in.size());
-      for (const Point& p : in) {
-        const FilterState& x = filter.state(p.node);
-        MapPoint m;
-        m.p_w = (x.R_wb * p.x_b.cast<double>() + x.p_w).cast<float>();
-        m.intensity = p.intensity;
-        m.residual = p.residual;
-        out.push_back(m);
-      }
-    };
-    map(accepted_, r.static_map);
-    map(rejected_, r.rejected);
+    std::size_t accepted = 0;
+    for (const Point& p : points_) accepted += p.accepted ? 1 : 0;
+    r.static_map.clear();
+    r.rejected.clear();
+    r.static_map.reserve(accepted);
+    r.rejected.reserve(points_.size() - accepted);
+    for (const Point& p : points_) {
+      const FilterState& x = filter.state(p.node);
+      MapPoint m;
+      m.p_w = (x.R_wb * p.x_b.cast<double>() + x.p_w).cast<float>();
+      m.intensity = p.intensity;
+      m.residual = p.residual;
+      (p.accepted ? r.static_map : r.rejected).push_back(m);
+    }
   }
 
  private:
@@ -106,8 +113,9 @@ class WindowRecorder {
     Eigen::Vector3f x_b;
     float intensity;
     float residual;
+    bool accepted;
   };
-  std::vector<Point> accepted_, rejected_;
+  std::vector<Point> points_;
 };
 
 class JointPipeline final : public Pipeline {
@@ -229,6 +237,7 @@ class JointPipeline final : public Pipeline {
     k0_ = k;
     t_ref_ = t_ref;
     stride_ = vp.point_stride > 0 ? vp.point_stride : automaticPointStride(frameList(), vp.max_point_rate);
+    reserveRecorder();
     startFilter(d);
     Vec3 gm = Vec3::Zero(), am = Vec3::Zero();
     for (std::size_t i = k; i <= k1; ++i) {
@@ -243,6 +252,19 @@ class JointPipeline final : public Pipeline {
     cursor_ = c;
     node_open_ = false;
     phase_ = Phase::Running;
+  }
+
+  /// Room in the recorder for the window's returns at the rate of the frames received so far
+  /// (their points over their stamps' span), after the stride: no re-allocation of the largest
+  /// buffer while the window is received.
+  void reserveRecorder() {
+    const auto& frames = seq_.frames();
+    std::size_t points = 0;
+    for (std::size_t i = 0; i + 1 < frames.size(); ++i) points += frames[i].points->size();
+    const double span = frames.size() >= 2 ? frames.back().stamp - frames.front().stamp : 0.0;
+    if (!(span > 0)) return;
+    const double expected = static_cast<double>(points) / span * cfg_.window.duration / stride_;
+    recorder_.reserve(static_cast<std::size_t>(1.05 * expected) + 1024);
   }
 
   /// Frames as the automatic stride wants them (anything with a `points` vector).
@@ -329,17 +351,17 @@ class JointPipeline final : public Pipeline {
           continue;
         }
         const auto out = filter_->addPoint(t - t_k, pt.p_l, pt.doppler);
-        open_.push_back({out.x_b, pt.intensity});
+        recorder_.add(filter_->nodes() - 1, out.x_b, pt.intensity);
       }
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
       filter_->update();
-      for (std::size_t i = 0; i < open_.size(); ++i) {
-        const bool used = filter_->pointAccepted(i);
+      for (std::size_t i = node_first_point_; i < recorder_.size(); ++i) {
+        const std::size_t j = i - node_first_point_;
+        const bool used = filter_->pointAccepted(j);
         (used ? r.diag.points_used : r.diag.points_rejected)++;
-        recorder_.add(filter_->nodes() - 1, open_[i].x_b, open_[i].intensity,
-                      static_cast<float>(filter_->pointResidual(i)), used);
+        recorder_.judge(i, used, static_cast<float>(filter_->pointResidual(j)));
       }
-      open_.clear();
+      node_first_point_ = recorder_.size();
       const bool was_rest = rest_.atRest();
       const bool rest = rest_.update(imu[k]);
       if (was_rest && !rest) {
@@ -581,12 +603,7 @@ class JointPipeline final : public Pipeline {
   bool last_ = false;  ///< the open node is the window's last
   bool early_smoothed_ = false;
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
-  /// The open node's points, for the map once the filter has judged them.
-  struct OpenPoint {
-    Eigen::Vector3f x_b;
-    float intensity;
-  };
-  std::vector<OpenPoint> open_;
+  std::size_t node_first_point_ = 0;  ///< the open node's first point in the recorder
   std::optional<DopplerInertialFilter> filter_;
   RestTracker rest_;
   std::vector<bool> node_rest_;

@@ -223,17 +223,21 @@ class DopplerInertialFilter {
  private:
   using Mat9 = Eigen::Matrix<double, 9, 9>;
 
-  /// The Doppler sums of one node.
+  /// The Doppler sums of one node: for m = 0..4 the upper triangle of sum s^m d d^T (xx, xy, xz,
+  /// yy, yz, zz: one column per m), sum s^m z d (m = 0..2), sum z^2. A point adds one outer
+  /// product of its direction's products with its time's powers (30 + 9 + 1 values).
   struct DopplerSums {
     // Eigen matrices are not zeroed by value-initialization: the constructor does it.
     DopplerSums() {
-      for (Mat3& m : S) m.setZero();
-      for (Vec3& v : bz) v.setZero();
+      S.setZero();
+      bz.setZero();
     }
-    std::array<Mat3, 5> S;   ///< sum s^m d d^T
-    std::array<Vec3, 3> bz;  ///< sum s^m z d
-    double c = 0;            ///< sum z^2
+    Eigen::Matrix<double, 6, 5> S;  ///< column m: upper triangle of sum s^m d d^T
+    Mat3 bz;                        ///< column m: sum s^m z d
+    double c = 0;                   ///< sum z^2
     std::size_t n = 0;
+    /// sum s^m d d^T as a full 3x3 matrix.
+    Mat3 moment(int m) const;
   };
   /// The node's sums as measurement rows: A = U D U^T restricted to D > 0, W = D^(1/2) U^T / sigma
   /// (rows x 9) and y0 = D^(-1/2) U^T b / sigma, so that the cost is |W Q + y0|^2 + const.
@@ -301,6 +305,9 @@ class DopplerInertialFilter {
   // The open node's prediction for gating.
   Vec9 q_open_ = Vec9::Zero();
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction
+  double inv_h_open_ = 1;       ///< [1/s] of the open node's time normalization
+  double gate_speed_open_ = 0;  ///< [m/s] the gate's share of the LiDAR speed
+  Vec3 omega_open_ = Vec3::Zero(), v_b_open_ = Vec3::Zero();  ///< the prediction's body motion
   double before_ = 0, after_ = 0;
   double gate_min2_ = 0, gate_k2_ = 0, r_doppler_ = 0;
 };
