@@ -415,8 +415,6 @@ void DopplerInertialFilter::beginNode(bool last) {
             G0.transpose();
   inv_h_open_ = 1.0 / n.h;
   gate_speed_open_ = params_.gate_rel * q_open_.head<3>().norm();
-  omega_open_ = imu_[n.k].gyro - n.x_pred.b_g;
-  v_b_open_ = n.x_pred.R_wb.transpose() * n.x_pred.v_w;
 }
 
 DopplerInertialFilter::PointOutcome DopplerInertialFilter::addPoint(double tau,
@@ -430,9 +428,6 @@ DopplerInertialFilter::PointOutcome DopplerInertialFilter::addPoint(double tau,
   const Vec3 q = q_open_.segment<3>(0) + s * (q_open_.segment<3>(3) + s * q_open_.segment<3>(6));
   const double r = doppler + d.dot(q);
   out.residual = r;
-  // The point in the node's body frame: the body moved by tau (omega, v_b) since the node.
-  const Vec3 p_b = R_bl_ * p + p_bl_;
-  out.x_b = (p_b + tau * (omega_open_.cross(p_b) + v_b_open_)).cast<float>();
   open_outcomes_.push_back({false, static_cast<float>(r)});
   // The gate: |r| > sqrt(max(gate_min^2, gate_sigma^2 S)) + gate_rel |v_l|, without the root.
   const double S = d.dot(M_open_ * d) + r_doppler_;
@@ -443,6 +438,14 @@ DopplerInertialFilter::PointOutcome DopplerInertialFilter::addPoint(double tau,
   open_points_.push_back({s, d, doppler, open_outcomes_.size() - 1});
   accumulate(n.sums, s, d, doppler);
   return out;
+}
+
+void DopplerInertialFilter::removePoint(std::size_t k, double tau, const Eigen::Vector3f& p_l,
+                                        double doppler) {
+  Node& n = nodes_.at(k);
+  const Vec3 p = p_l.cast<double>();
+  accumulate(n.sums, tau / n.h, p / p.norm(), doppler, -1.0);
+  n.rows_stale = true;
 }
 
 void DopplerInertialFilter::accumulate(DopplerSums& sums, double s, const Vec3& d, double z,
@@ -709,6 +712,11 @@ void DopplerInertialFilter::cancelRestFrom(double t) {
 int DopplerInertialFilter::smooth() {
   const std::size_t N = nodes_.size();
   if (N == 0) return 0;
+  for (Node& n : nodes_)
+    if (n.rows_stale) {
+      buildRows(n);
+      n.rows_stale = false;
+    }
   std::vector<VecS> dx_f(N), dx_p(N), dxs(N);
   std::vector<MatS> P_f(N), P_p(N), F(N > 0 ? N - 1 : 0);
   int iterations = 0;

@@ -10,7 +10,9 @@
 #include <freeinit/rotation.h>
 #include <freeinit/start_detector.h>
 
+#include <algorithm>
 #include <chrono>
+#include <cstdint>
 #include <cmath>
 #include <optional>
 #include <sstream>
@@ -74,23 +76,49 @@ class RestTracker {
   std::size_t n_ = 0;
 };
 
-/// The points of the window in the body frame of their node, mapped into the world once the
-/// node poses are final.
+/// The points of the window as the filter received them, judged once their node is updated and
+/// mapped into the world once the node states are final.
 class WindowRecorder {
  public:
+  struct Point {
+    std::uint32_t node;
+    Eigen::Vector3f p_l;  ///< [m] in the LiDAR frame
+    float intensity;
+    float doppler;        ///< [m/s]
+    float residual;       ///< [m/s] against the node's update
+    float tau;            ///< [s] from the node's time
+    std::uint32_t cell;   ///< direction cell (RestCells) of a point at rest, else kNoCell
+    bool accepted;
+  };
+  static constexpr std::uint32_t kNoCell = 0xffffffffu;
   void reserve(std::size_t n) { points_.reserve(n); }
   std::size_t size() const { return points_.size(); }
-  /// A point given to the filter's open node (judged once the node is updated).
-  void add(std::size_t node, const Eigen::Vector3f& x_b, float intensity) {
-    points_.push_back({node, x_b, intensity, 0.0f, false});
+  const std::vector<Point>& points() const { return points_; }
+  /// A point given to the filter's open node.
+  void add(std::size_t node, double tau, const DopplerPoint& p) {
+    points_.push_back({static_cast<std::uint32_t>(node), p.p_l, p.intensity, p.doppler, 0.0f,
+                       static_cast<float>(tau), kNoCell, false});
   }
+  Point& point(std::size_t i) { return points_[i]; }
   /// The verdict on the i-th point recorded.
   void judge(std::size_t i, bool accepted, float residual) {
     points_[i].accepted = accepted;
     points_[i].residual = residual;
   }
-  /// Maps every point with the final node states.
-  void finish(const DopplerInertialFilter& filter, InitResult& r) const {
+  void reject(std::size_t i) { points_[i].accepted = false; }
+  /// Maps every point with the final node states: the body moved by tau (its angular and linear
+  /// velocity at the node) between the node and the point.
+  void finish(const DopplerInertialFilter& filter, const std::vector<ImuSample>& imu,
+              std::size_t k0, const Extrinsics& ext, InitResult& r) const {
+    struct NodeMotion {
+      Mat3 R;
+      Vec3 p, omega, v_b;
+    };
+    std::vector<NodeMotion> motion(filter.nodes());
+    for (std::size_t k = 0; k < motion.size(); ++k) {
+      const FilterState& x = filter.state(k);
+      motion[k] = {x.R_wb, x.p_w, imu[k0 + k].gyro - x.b_g, x.R_wb.transpose() * x.v_w};
+    }
     std::size_t accepted = 0;
     for (const Point& p : points_) accepted += p.accepted ? 1 : 0;
     r.static_map.clear();
@@ -98,24 +126,73 @@ class WindowRecorder {
     r.static_map.reserve(accepted);
     r.rejected.reserve(points_.size() - accepted);
     for (const Point& p : points_) {
-      const FilterState& x = filter.state(p.node);
-      MapPoint m;
-      m.p_w = (x.R_wb * p.x_b.cast<double>() + x.p_w).cast<float>();
-      m.intensity = p.intensity;
-      m.residual = p.residual;
-      (p.accepted ? r.static_map : r.rejected).push_back(m);
+      const NodeMotion& m = motion[p.node];
+      const Vec3 p_b = ext.R_bl * p.p_l.cast<double>() + ext.p_bl;
+      const Vec3 x_b = p_b + static_cast<double>(p.tau) * (m.omega.cross(p_b) + m.v_b);
+      MapPoint out;
+      out.p_w = (m.R * x_b + m.p).cast<float>();
+      out.intensity = p.intensity;
+      out.residual = p.residual;
+      (p.accepted ? r.static_map : r.rejected).push_back(out);
     }
   }
 
  private:
-  struct Point {
-    std::size_t node;
-    Eigen::Vector3f x_b;
-    float intensity;
-    float residual;
-    bool accepted;
-  };
   std::vector<Point> points_;
+};
+
+/// The residuals of the returns while the sensor stands still, by direction: a standing sensor
+/// sees each part of the world in the same direction all window long, and the world's residuals
+/// there average to zero. A person walking by moves slowly along some lines of sight: each of
+/// those returns passes every gate, yet together, window-long, they bend the velocity by a few
+/// mm/s. Their directions' mean residual is then far from zero.
+/// Cells: an octahedral map of the unit sphere onto a 32 x 32 grid (3-6 deg, no trigonometry),
+/// times 24 range bins.
+class RestCells {
+ public:
+  static constexpr int kSide = 32;
+  static constexpr int kRangeBins = 24;  // 25 % apart from 0.5 m: 0.5-100 m
+  static constexpr float kInvLogStep = 4.4814201f;  // 1 / ln(1.25)
+  RestCells() : sum_(kSide * kSide * kRangeBins, 0.0), count_(kSide * kSide * kRangeBins, 0) {}
+  static std::uint32_t cellOf(const Eigen::Vector3f& p) {
+    const float l1 = std::abs(p.x()) + std::abs(p.y()) + std::abs(p.z());
+    float u = p.x() / l1, v = p.y() / l1;
+    if (p.z() < 0) {
+      const float fu = (1.0f - std::abs(v)) * (u >= 0 ? 1.0f : -1.0f);
+      const float fv = (1.0f - std::abs(u)) * (v >= 0 ? 1.0f : -1.0f);
+      u = fu;
+      v = fv;
+    }
+    auto bin = [](float x) {
+      return static_cast<std::uint32_t>(std::clamp(static_cast<int>((x + 1.0f) * 0.5f * kSide), 0, kSide - 1));
+    };
+    // Range bins: a person and the wall behind share directions, not ranges.
+    const float range = p.norm();
+    const int rb = std::clamp(static_cast<int>(std::log(std::max(range, 0.5f) * 2.0f) * kInvLogStep),
+                              0, kRangeBins - 1);
+    return (bin(u) * kSide + bin(v)) * kRangeBins + static_cast<std::uint32_t>(rb);
+  }
+  void add(std::uint32_t cell, double residual) {
+    sum_[cell] += residual;
+    sumsq_ += residual * residual;
+    ++count_[cell];
+    ++total_;
+  }
+  /// Whether the cell's mean residual is more than `sigmas` of its std from zero (at least
+  /// min_count returns), the std from the Doppler noise or, when larger, the residuals' RMS.
+  bool coherent(std::uint32_t cell, double doppler_sigma, double sigmas, int min_count) const {
+    const std::uint32_t n = count_[cell];
+    if (n < static_cast<std::uint32_t>(min_count) || total_ == 0) return false;
+    const double var = std::max(doppler_sigma * doppler_sigma, sumsq_ / static_cast<double>(total_));
+    return sum_[cell] * sum_[cell] > sigmas * sigmas * var * static_cast<double>(n);
+  }
+  std::size_t total() const { return total_; }
+
+ private:
+  std::vector<double> sum_;
+  std::vector<std::uint32_t> count_;
+  double sumsq_ = 0;
+  std::size_t total_ = 0;
 };
 
 class JointPipeline final : public Pipeline {
@@ -350,18 +427,19 @@ class JointPipeline final : public Pipeline {
           ++r.diag.points_skipped;
           continue;
         }
-        const auto out = filter_->addPoint(t - t_k, pt.p_l, pt.doppler);
-        recorder_.add(filter_->nodes() - 1, out.x_b, pt.intensity);
+        filter_->addPoint(t - t_k, pt.p_l, pt.doppler);
+        recorder_.add(filter_->nodes() - 1, t - t_k, pt);
       }
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
       filter_->update();
-      for (std::size_t i = node_first_point_; i < recorder_.size(); ++i) {
-        const std::size_t j = i - node_first_point_;
+      const std::size_t node_points_begin = node_first_point_, node_points_end = recorder_.size();
+      for (std::size_t i = node_points_begin; i < node_points_end; ++i) {
+        const std::size_t j = i - node_points_begin;
         const bool used = filter_->pointAccepted(j);
         (used ? r.diag.points_used : r.diag.points_rejected)++;
         recorder_.judge(i, used, static_cast<float>(filter_->pointResidual(j)));
       }
-      node_first_point_ = recorder_.size();
+      node_first_point_ = node_points_end;
       const bool was_rest = rest_.atRest();
       const bool rest = rest_.update(imu[k]);
       if (was_rest && !rest) {
@@ -377,6 +455,14 @@ class JointPipeline final : public Pipeline {
                             cfg_.estimator.zero_rate_at_rest ? vp.gyro_sigma : 0.0);
       if (rest) r.diag.static_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
+      if (rest) {
+        for (std::size_t i = node_points_begin; i < node_points_end; ++i) {
+          WindowRecorder::Point& p = recorder_.point(i);
+          if (!p.accepted) continue;
+          p.cell = RestCells::cellOf(p.p_l);
+          rest_cells_.add(p.cell, p.residual);
+        }
+      }
       ++r.diag.gyro_updates;
       node_open_ = false;
       if (last) {
@@ -413,6 +499,7 @@ class JointPipeline final : public Pipeline {
       fail(r, InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
       return;
     }
+    rejectMovingDirections(r);
     diag.iterations = filter_->smooth();
     diag.time_solver += wallSeconds() - t_solve;
     const std::size_t N = filter_->nodes();
@@ -469,8 +556,31 @@ class JointPipeline final : public Pipeline {
       r.velocities.back().sigma_v_b =
           (A * filter_->covariance() * A.transpose()).diagonal().cwiseSqrt();
     }
-    recorder_.finish(*filter_, r);
+    recorder_.finish(*filter_, imu, k0_, cfg_.extrinsics, r);
     addWarnings(r);
+  }
+
+  /// Takes the returns of the directions whose residuals, while the sensor stood still, are
+  /// coherently non-zero (RestCells) out of the estimate, before the final smoothing. Only rest
+  /// nodes: a moving sensor sees the world's parts in changing directions, and there a
+  /// calibration error leaves direction-dependent residuals of the world itself.
+  void rejectMovingDirections(InitResult& r) {
+    if (rest_cells_.total() == 0) return;
+    // ~25k cells, a few thousand occupied: a world cell taken for a moving one in a few windows
+    // of a hundred, which costs its returns and nothing else.
+    constexpr double kSigmas = 4.0;
+    constexpr int kMinCount = 4;
+    const double sigma = cfg_.velocimeter.doppler_sigma;
+    const auto& points = recorder_.points();
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      const WindowRecorder::Point& p = points[i];
+      if (!p.accepted || p.cell == WindowRecorder::kNoCell) continue;
+      if (!rest_cells_.coherent(p.cell, sigma, kSigmas, kMinCount)) continue;
+      filter_->removePoint(p.node, static_cast<double>(p.tau), p.p_l, static_cast<double>(p.doppler));
+      recorder_.reject(i);
+      --r.diag.points_used;
+      ++r.diag.points_rejected;
+    }
   }
 
   /// The verdict on a state: a contradiction of the data beyond what the noise and the priors
@@ -608,6 +718,7 @@ class JointPipeline final : public Pipeline {
   RestTracker rest_;
   std::vector<bool> node_rest_;
   WindowRecorder recorder_;
+  RestCells rest_cells_;
 };
 
 }  // namespace

@@ -138,8 +138,7 @@ class DopplerInertialFilter {
 
   struct PointOutcome {
     bool accepted = false;
-    double residual = 0;                              ///< [m/s] against the prediction
-    Eigen::Vector3f x_b = Eigen::Vector3f::Zero();    ///< [m] in the node's body frame
+    double residual = 0;  ///< [m/s] against the prediction
   };
   /// One Doppler return of the open node: tau [s] from the node time, position in the LiDAR
   /// frame (non-zero), Doppler [m/s]. Gated against the prediction; accepted points enter the
@@ -153,6 +152,9 @@ class DopplerInertialFilter {
   /// residual against the update (against the prediction if the first gate rejected it).
   bool pointAccepted(std::size_t i) const { return open_outcomes_[i].accepted; }
   double pointResidual(std::size_t i) const { return open_outcomes_[i].residual; }
+  /// Takes back an accepted point of node k (as given to addPoint() while it was open), e.g. once
+  /// the whole window shows it on a moving object; smooth() afterwards.
+  void removePoint(std::size_t k, double tau, const Eigen::Vector3f& p_l, double doppler);
   /// Rest knowledge at the open node (the IMU shows rest): zero body velocity with std
   /// `velocity_sigma` [m/s] and zero rotation, the gyro sample then measuring the bias, with std
   /// `rate_sigma` [rad/s] (<= 0: that part is not used). Call after update().
@@ -260,6 +262,7 @@ class DopplerInertialFilter {
     Rows rows;
     double rest_velocity_sigma = 0;  ///< > 0: zero body velocity at the node
     double rest_rate_sigma = 0;      ///< > 0: the node's gyro sample measures the bias
+    bool rows_stale = false;         ///< the sums changed after the rows were built
   };
 
   /// Adds a point to the sums (w = 1) or takes it out (w = -1).
@@ -307,7 +310,6 @@ class DopplerInertialFilter {
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction
   double inv_h_open_ = 1;       ///< [1/s] of the open node's time normalization
   double gate_speed_open_ = 0;  ///< [m/s] the gate's share of the LiDAR speed
-  Vec3 omega_open_ = Vec3::Zero(), v_b_open_ = Vec3::Zero();  ///< the prediction's body motion
   double before_ = 0, after_ = 0;
   double gate_min2_ = 0, gate_k2_ = 0, r_doppler_ = 0;
 };
