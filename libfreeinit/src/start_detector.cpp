@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <random>
 #include <utility>
 
@@ -166,7 +167,8 @@ void residuals(const Rows& rows, const Vec3& v, const Vec3& g, const Vec3& db, R
 }
 
 /// sum of q^2 (a a^T, e a) over the first `rows.size()` entries, q in `wk.q`, the columns from
-/// residuals(): the 9x9 normal matrix and the right-hand side in the last column.
+/// residuals(): the 9x9 normal matrix and the right-hand side in the last row, lower triangle
+/// only (half the products of a full one).
 Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) {
   const Eigen::Index n = rows.size();
   const auto q = wk.q.head(n);
@@ -181,10 +183,30 @@ Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) 
   M.col(7).array() = q * wk.cy.head(n);
   M.col(8).array() = q * wk.cz.head(n);
   M.col(9).array() = q * rows.e;
-  Eigen::Matrix<double, 10, 10> N;
-  N.noalias() = M.transpose() * M;
+  Eigen::Matrix<double, 10, 10> N = Eigen::Matrix<double, 10, 10>::Zero();
+  N.selfadjointView<Eigen::Lower>().rankUpdate(M.transpose());
   return N;
 }
+
+/// The refinements' states after their first, thinned iterations. Two refinements that get there
+/// so close that no return's residual differs by a tenth of the Doppler noise end at the same
+/// hypothesis: the remaining iterations contract their difference (the refinements of one motion
+/// from different RANSAC starts are within 1e-3 m/s of each other at that point and end within
+/// 1e-6 m/s with the same inliers; distinct motions are tenths of m/s apart). The later one would
+/// only be merged into the earlier one's result, so it is stopped there.
+struct EarlyStates {
+  double span = 0;   ///< [s] T
+  double lever = 0;  ///< [m] |p_bl|
+  std::vector<Eigen::Matrix<double, 9, 1>> seen;
+  bool same(const Eigen::Matrix<double, 9, 1>& a, const Eigen::Matrix<double, 9, 1>& b,
+            double doppler_sigma) const {
+    // Largest change of a residual: w^T dv + t w^T dg + c^T ddb, |c| <= |p_bl| + t |v_b|.
+    const double dz = (a.head<3>() - b.head<3>()).norm() +
+                      span * (a.segment<3>(3) - b.segment<3>(3)).norm() +
+                      (lever + span * a.head<3>().norm()) * (a.tail<3>() - b.tail<3>()).norm();
+    return dz < 0.1 * doppler_sigma;
+  }
+};
 
 /// IRLS (Cauchy) refinement of theta = (v_b0, g_b0, db_g) from a start, with a weak gravity
 /// prior and the gyro-bias prior. A gyro-bias error db turns the body-frame velocity by
@@ -196,10 +218,12 @@ Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) 
 /// objects of a static start must not bend either: only the gyro-bias correction is fitted).
 /// `sub`: every third row of `rows` (for the first iterations); `inliers` (if given) receives
 /// which rows the refined motion explains; `g_sigma_max` [m/s^2] caps the gravity prior's std.
-StartHypothesis refine(const Rows& rows, const Rows& sub, const CoverageGrid& grid,
-                       RefineWork& wk, const Vec3& v_start, const Vec3& g_prior, bool at_rest,
-                       const StartDetectorParams& p, std::vector<std::uint8_t>* inliers = nullptr,
-                       double g_sigma_max = 4.0) {
+/// `early` (if given): nothing is returned when the refinement reaches one of its states.
+std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const CoverageGrid& grid,
+                                      RefineWork& wk, const Vec3& v_start, const Vec3& g_prior,
+                                      bool at_rest, const StartDetectorParams& p,
+                                      std::vector<std::uint8_t>* inliers = nullptr,
+                                      double g_sigma_max = 4.0, EarlyStates* early = nullptr) {
   using Vec9 = Eigen::Matrix<double, 9, 1>;
   using Mat9 = Eigen::Matrix<double, 9, 9>;
   Vec3 v = v_start, g = g_prior, db = Vec3::Zero();
@@ -213,6 +237,7 @@ StartHypothesis refine(const Rows& rows, const Rows& sub, const CoverageGrid& gr
   // consistent with the start only along some directions pull the motion towards theirs.
   static constexpr std::array<std::pair<double, double>, 7> schedule = {{
       {0.3, 0.5}, {0.3, 1.0}, {0.2, 4.0}, {0.15, 4.0}, {0.1, 4.0}, {0.1, 4.0}, {0.1, 4.0}}};
+  constexpr std::size_t kEarly = 3;  // the last thinned iteration
   for (std::size_t iteration = 0; iteration < schedule.size(); ++iteration) {
     const auto [c, g_sigma] = schedule[iteration];
     // The first iterations, which only find the inliers, take every third return (weighted
@@ -227,8 +252,9 @@ StartHypothesis refine(const Rows& rows, const Rows& sub, const CoverageGrid& gr
     wk.q.head(r.size()) =
         std::sqrt(step * inv_r) / (1.0 + (wk.res.head(r.size()) * inv_scale).square());
     const Eigen::Matrix<double, 10, 10> N = normalEquations(r, wk);
+    // Lower triangle only (what the solvers below read): the right-hand side is the last row.
     Mat9 A = N.topLeftCorner<9, 9>();
-    Vec9 b = N.col(9).head<9>();
+    Vec9 b = N.row(9).head<9>().transpose();
     A.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_var;
     b.segment<3>(3) += g_prior / g_var;
     A.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_prior_var;
@@ -241,6 +267,11 @@ StartHypothesis refine(const Rows& rows, const Rows& sub, const CoverageGrid& gr
     v = theta.head<3>();
     g = theta.segment<3>(3);
     db = theta.tail<3>();
+    if (early != nullptr && iteration == kEarly) {
+      for (const Vec9& o : early->seen)
+        if (early->same(theta, o, p.doppler_sigma)) return std::nullopt;
+      early->seen.push_back(theta);
+    }
   }
   StartHypothesis h;
   h.v_b0 = v;
@@ -464,6 +495,9 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   }
   // Refine each on the whole span; merge those that converge to the same motion.
   std::vector<std::vector<std::uint8_t>> masks;  // the rows each hypothesis explains
+  EarlyStates early;
+  early.span = T;
+  early.lever = extrinsics.p_bl.norm();
   for (std::size_t i_start = 0; i_start < starts.size(); ++i_start) {
     const Vec3& v0 = starts[i_start];
     // The same motion found again in another slice converges to the same hypothesis: refine it
@@ -474,13 +508,17 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
       seen = seen || (o.v_b0 - v0).norm() < p.gate;
     if (seen) continue;
     std::vector<std::uint8_t> mask;
-    StartHypothesis h = refine(rows, sub, grid, work, v0, g_mean, false, p, &mask);
+    // A refinement that joins an earlier one's path ends as that one did: nothing new.
+    std::optional<StartHypothesis> first =
+        refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 4.0, &early);
+    if (!first) continue;
+    StartHypothesis h = *first;
     // Gravity is what the refinement finds it to be. A fit that needs one far from 9.81 m/s^2
     // is tried again with gravity held near the mean specific force (a motion of the platform
     // cannot need more than its mean acceleration over the span); if that does not fit either,
     // it is not a motion of the platform.
     if (h.v_b0.allFinite() && std::abs(h.g_b0.norm() - kGravity) > p.max_gravity_error)
-      h = refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 0.5);
+      h = *refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 0.5);
     if (h.inliers < 10 || !h.v_b0.allFinite()) continue;
     // Kept either way: an implausible motion is never chosen, but its returns still show that
     // something else moves coherently (a contender, below).
@@ -527,7 +565,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
 
   // The IMU at rest: rest (velocity held at zero) wins if enough of the view supports it.
   if (out.imu_still) {
-    StartHypothesis rest = refine(rows, sub, grid, work, Vec3::Zero(), g_mean, true, p);
+    StartHypothesis rest = *refine(rows, sub, grid, work, Vec3::Zero(), g_mean, true, p);
     rest.rest = true;
     if (rest.inliers >= 10 && rest.coverage >= p.rest_coverage_ratio * best_coverage) {
       out.kind = StartDecision::Kind::Rest;
