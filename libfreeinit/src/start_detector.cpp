@@ -17,9 +17,6 @@
 namespace freeinit {
 namespace {
 
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
-
 /// Chi-square quantile (Wilson-Hilferty) for `dof` degrees of freedom at the standard-normal
 /// quantile z.
 double chi2Quantile(double dof, double z) {
@@ -71,11 +68,6 @@ struct Rows {
     return r;
   }
   Vec3 w(Eigen::Index i) const { return Vec3(wx[i], wy[i], wz[i]); }
-  /// Doppler residual with the gyro bias at its prior (the RANSAC's model).
-  double residual(Eigen::Index i, const Vec3& v, const Vec3& g) const {
-    const Vec3 wi = w(i);
-    return e[i] + wi.dot(v) + t[i] * wi.dot(g);
-  }
 
   Eigen::ArrayXd t, e;              ///< [s] time, [m/s] the equation's left-hand side
   Eigen::ArrayXd wx, wy, wz;        ///< direction in b0
@@ -88,9 +80,12 @@ struct Rows {
 class CoverageGrid {
  public:
   explicit CoverageGrid(const std::vector<Vec3>& d_l) {
+    std::vector<std::pair<double, double>> az_el;  // each direction's, computed once
+    az_el.reserve(d_l.size());
     for (const Vec3& d : d_l) {
       const double az = std::atan2(d.y(), d.x());
       const double el = std::asin(std::clamp(d.z(), -1.0, 1.0));
+      az_el.emplace_back(az, el);
       az_lo_ = std::min(az_lo_, az);
       az_hi_ = std::max(az_hi_, az);
       el_lo_ = std::min(el_lo_, el);
@@ -98,8 +93,8 @@ class CoverageGrid {
     }
     cell_.reserve(d_l.size());
     totals_.fill(0);
-    for (const Vec3& d : d_l) {
-      const int c = cellOf(d);
+    for (const auto& [az, el] : az_el) {
+      const int c = cellOf(az, el);
       cell_.push_back(static_cast<std::uint8_t>(c));
       ++totals_[static_cast<std::size_t>(c)];
     }
@@ -126,9 +121,7 @@ class CoverageGrid {
  private:
   static constexpr int kAz = 16, kEl = 8;
   static constexpr std::size_t kCells = kAz * kEl;
-  int cellOf(const Vec3& d) const {
-    const double az = std::atan2(d.y(), d.x());
-    const double el = std::asin(std::clamp(d.z(), -1.0, 1.0));
+  int cellOf(double az, double el) const {
     const auto bin = [](double x, double lo, double hi, int n) {
       if (!(hi > lo)) return 0;
       return std::clamp(static_cast<int>((x - lo) / (hi - lo) * n), 0, n - 1);
@@ -142,19 +135,20 @@ class CoverageGrid {
 
 /// Buffers of the refinement, kept across its calls (no allocation per iteration).
 struct RefineWork {
-  explicit RefineWork(Eigen::Index n) : sx(n), sy(n), sz(n), cx(n), cy(n), cz(n), res(n), q(n), M(n, 10) {}
-  Eigen::ArrayXd sx, sy, sz, cx, cy, cz, res, q;
+  explicit RefineWork(Eigen::Index n) : sx(n), sy(n), sz(n), res(n), q(n), M(n, 10) {}
+  Eigen::ArrayXd sx, sy, sz, res, q;
   /// The weighted equations: q a^T and q e per return. M^T M holds the normal equations
   /// (sum of w a a^T, w = q^2) and their right-hand side (sum of w e a) at once.
   Eigen::Matrix<double, Eigen::Dynamic, 10> M;
 };
 
-/// Residuals e - a^T theta (in `wk.res`) and gyro-bias columns (in `wk.cx..cz`) of the first
-/// `rows.size()` entries of the buffers.
+/// Residuals e - a^T theta (in `wk.res`) of the first `rows.size()` entries of the buffers, and
+/// the gyro-bias columns c, unweighted, in columns 6..8 of `wk.M` (normalEquations() weighs them).
 void residuals(const Rows& rows, const Vec3& v, const Vec3& g, const Vec3& db, RefineWork& wk) {
   const Eigen::Index n = rows.size();
   auto sx = wk.sx.head(n), sy = wk.sy.head(n), sz = wk.sz.head(n);
-  auto cx = wk.cx.head(n), cy = wk.cy.head(n), cz = wk.cz.head(n);
+  auto cx = wk.M.col(6).head(n).array(), cy = wk.M.col(7).head(n).array(),
+       cz = wk.M.col(8).head(n).array();
   sx = v.x() + rows.t * g.x();
   sy = v.y() + rows.t * g.y();
   sz = v.z() + rows.t * g.z();
@@ -166,7 +160,7 @@ void residuals(const Rows& rows, const Vec3& v, const Vec3& g, const Vec3& db, R
                    (cx * db.x() + cy * db.y() + cz * db.z());
 }
 
-/// sum of q^2 (a a^T, e a) over the first `rows.size()` entries, q in `wk.q`, the columns from
+/// sum of q^2 (a a^T, e a) over the first `rows.size()` entries, q in `wk.q`, the columns c from
 /// residuals(): the 9x9 normal matrix and the right-hand side in the last row, lower triangle
 /// only (half the products of a full one).
 Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) {
@@ -179,9 +173,9 @@ Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) 
   M.col(3).array() = -q * rows.twx;
   M.col(4).array() = -q * rows.twy;
   M.col(5).array() = -q * rows.twz;
-  M.col(6).array() = q * wk.cx.head(n);
-  M.col(7).array() = q * wk.cy.head(n);
-  M.col(8).array() = q * wk.cz.head(n);
+  M.col(6).array() *= q;
+  M.col(7).array() *= q;
+  M.col(8).array() *= q;
   M.col(9).array() = q * rows.e;
   Eigen::Matrix<double, 10, 10> N = Eigen::Matrix<double, 10, 10>::Zero();
   N.selfadjointView<Eigen::Lower>().rankUpdate(M.transpose());
@@ -237,7 +231,7 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   // consistent with the start only along some directions pull the motion towards theirs.
   static constexpr std::array<std::pair<double, double>, 7> schedule = {{
       {0.3, 0.5}, {0.3, 1.0}, {0.2, 4.0}, {0.15, 4.0}, {0.1, 4.0}, {0.1, 4.0}, {0.1, 4.0}}};
-  constexpr std::size_t kEarly = 3;  // the last thinned iteration
+  constexpr std::size_t kEarly = 3;  // the last of the thinned iterations (EarlyStates)
   for (std::size_t iteration = 0; iteration < schedule.size(); ++iteration) {
     const auto [c, g_sigma] = schedule[iteration];
     // The first iterations, which only find the inliers, take every third return (weighted
@@ -280,8 +274,7 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   const Eigen::Index n = rows.size();
   residuals(rows, v, g, db, wk);
   const auto res = wk.res.head(n);
-  // As a comparison the other way round would, a residual that is not a number counts as an inlier.
-  const Eigen::Array<bool, Eigen::Dynamic, 1> inl = !(res.abs() > p.gate);
+  const Eigen::Array<bool, Eigen::Dynamic, 1> inl = !(res.abs() > p.gate);  // within the gate
   h.inliers = static_cast<std::size_t>(inl.count());
   const double ss = inl.select(res.square(), 0.0).sum();
   wk.q.head(n) = inl.select(std::sqrt(inv_r), Eigen::ArrayXd::Zero(n));
@@ -458,7 +451,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
         pwz[k] = rows.wz[j];
         ptg[k] = rows.t[j] * rows.w(j).dot(g_mean);
       }
-      // |residual| < ransac_gate for each of the pool's returns, as Row::residual adds it up.
+      // |residual| < ransac_gate for each of the pool's returns, the gyro bias at its prior.
       const auto within = [&](const Vec3& v) {
         return ((pe.head(m) + (pwx.head(m) * v.x() + pwy.head(m) * v.y() + pwz.head(m) * v.z()) +
                  ptg.head(m))
