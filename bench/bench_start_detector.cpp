@@ -53,7 +53,8 @@ StartInput prepare(const std::string& name) {
   };
   std::vector<Timed> all;
   for (const auto& f : in.rec.frames)
-    for (const auto& p : f.points) all.push_back({f.stamp + static_cast<double>(p.time_offset), &p});
+    for (const auto& p : f.points)
+      all.push_back({f.stamp + static_cast<double>(p.time_offset), &p});
   if (all.empty() || imu.empty()) return in;
   // Window start: the first IMU sample at or after the first LiDAR point.
   std::size_t k = 0;

@@ -50,7 +50,9 @@ struct Rows {
   static Rows every(const Rows& o, Eigen::Index step) {
     using Strided = Eigen::Map<const Eigen::ArrayXd, 0, Eigen::InnerStride<>>;
     const Eigen::Index n = (o.size() + step - 1) / step;
-    const auto take = [&](const double* src) { return Strided(src, n, Eigen::InnerStride<>(step)); };
+    const auto take = [&](const double* src) {
+      return Strided(src, n, Eigen::InnerStride<>(step));
+    };
     Rows r;
     r.resize(n);
     r.t = take(o.t.data());
