@@ -436,7 +436,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   std::vector<Eigen::Index> pool, unexplained;
   pool.reserve(static_cast<std::size_t>(n));
   unexplained.reserve(static_cast<std::size_t>(n));
-  Eigen::ArrayXd pe(n), pwx(n), pwy(n), pwz(n), ptg(n);
+  Eigen::ArrayXd pe(n), pwx(n), pwy(n), pwz(n), ptg(n), pres(n);
   for (int slice = 0; slice < 4; ++slice) {
     const double t_s = T * slice / 4.0;
     pool.clear();
@@ -454,10 +454,12 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
         ptg[k] = rows.t[j] * rows.w(j).dot(g_mean);
       }
       // |residual| < ransac_gate for each of the pool's returns, the gyro bias at its prior.
+      // (The residuals are stored first: a count over the whole expression would not vectorize.)
       const auto within = [&](const Vec3& v) {
-        return ((pe.head(m) + (pwx.head(m) * v.x() + pwy.head(m) * v.y() + pwz.head(m) * v.z()) +
-                 ptg.head(m))
-                    .abs() < ransac_gate);
+        pres.head(m) =
+            pe.head(m) + (pwx.head(m) * v.x() + pwy.head(m) * v.y() + pwz.head(m) * v.z()) +
+            ptg.head(m);
+        return pres.head(m).abs() < ransac_gate;
       };
       std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
       std::size_t best = 0;
