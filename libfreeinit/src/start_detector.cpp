@@ -162,9 +162,15 @@ void residuals(const Rows& rows, const Vec3& v, const Vec3& g, const Vec3& db, R
                    (cx * db.x() + cy * db.y() + cz * db.z());
 }
 
+/// M^T M over the first n rows of `wk.M`, lower triangle only (half the products of a full one).
+Eigen::Matrix<double, 10, 10> gram(const RefineWork& wk, Eigen::Index n) {
+  Eigen::Matrix<double, 10, 10> N = Eigen::Matrix<double, 10, 10>::Zero();
+  N.selfadjointView<Eigen::Lower>().rankUpdate(wk.M.topRows(n).transpose());
+  return N;
+}
+
 /// sum of q^2 (a a^T, e a) over the first `rows.size()` entries, q in `wk.q`, the columns c from
-/// residuals(): the 9x9 normal matrix and the right-hand side in the last row, lower triangle
-/// only (half the products of a full one).
+/// residuals(): the 9x9 normal matrix and the right-hand side in the last row (lower triangle).
 Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) {
   const Eigen::Index n = rows.size();
   const auto q = wk.q.head(n);
@@ -179,9 +185,7 @@ Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) 
   M.col(7).array() *= q;
   M.col(8).array() *= q;
   M.col(9).array() = q * rows.e;
-  Eigen::Matrix<double, 10, 10> N = Eigen::Matrix<double, 10, 10>::Zero();
-  N.selfadjointView<Eigen::Lower>().rankUpdate(M.transpose());
-  return N;
+  return gram(wk, n);
 }
 
 /// The refinements' states after their first, thinned iterations. Two refinements that get there
@@ -272,15 +276,24 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   StartHypothesis h;
   h.v_b0 = v;
   h.g_b0 = g;
-  // The inliers' information (weight 1/sigma^2 each, the others 0).
+  // The inliers' information (weight 1/sigma^2 each), their equations gathered at the top of M:
+  // the motion of a small object explains a few returns of thousands.
   const Eigen::Index n = rows.size();
   residuals(rows, v, g, db, wk);
   const auto res = wk.res.head(n);
   const Eigen::Array<bool, Eigen::Dynamic, 1> inl = !(res.abs() > p.gate);  // within the gate
   h.inliers = static_cast<std::size_t>(inl.count());
   const double ss = inl.select(res.square(), 0.0).sum();
-  wk.q.head(n) = inl.select(std::sqrt(inv_r), Eigen::ArrayXd::Zero(n));
-  Mat9 info = normalEquations(rows, wk).topLeftCorner<9, 9>();
+  const double s = std::sqrt(inv_r);
+  Eigen::Index m = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!inl(i)) continue;
+    const double cx = wk.M(i, 6), cy = wk.M(i, 7), cz = wk.M(i, 8);  // row m <= i is overwritten
+    wk.M.row(m) << -s * rows.wx[i], -s * rows.wy[i], -s * rows.wz[i], -s * rows.twx[i],
+        -s * rows.twy[i], -s * rows.twz[i], s * cx, s * cy, s * cz, s * rows.e[i];
+    ++m;
+  }
+  Mat9 info = gram(wk, m).topLeftCorner<9, 9>();
   info.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_prior_var;
   info.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_prior_var;
   h.residual_rms = h.inliers > 0 ? std::sqrt(ss / static_cast<double>(h.inliers)) : 0.0;
