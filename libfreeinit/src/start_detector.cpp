@@ -162,10 +162,38 @@ void residuals(const Rows& rows, const Vec3& v, const Vec3& g, const Vec3& db, R
                    (cx * db.x() + cy * db.y() + cz * db.z());
 }
 
+/// Column I of the lower triangle of M^T M over rows [0, n2) (n2 even): its 10 - I sums stay in
+/// registers, two rows per vector operation.
+template <int I>
+void gramColumn(const Eigen::Matrix<double, Eigen::Dynamic, 10>& M, Eigen::Index n2,
+                Eigen::Matrix<double, 10, 10>& N) {
+  constexpr int kSums = 10 - I;
+  using Pair = Eigen::Map<const Eigen::Array2d>;
+  const double* col = M.data();
+  const Eigen::Index ld = M.rows();
+  std::array<Eigen::Array2d, kSums> sum;
+  for (Eigen::Array2d& x : sum) x.setZero();
+  for (Eigen::Index r = 0; r < n2; r += 2) {
+    const Eigen::Array2d a = Pair(col + I * ld + r);
+    for (int j = 0; j < kSums; ++j) sum[j] += a * Pair(col + (I + j) * ld + r);
+  }
+  for (int j = 0; j < kSums; ++j) N(I + j, I) = sum[j].sum();
+}
+
+template <std::size_t... I>
+void gramColumns(const Eigen::Matrix<double, Eigen::Dynamic, 10>& M, Eigen::Index n2,
+                 Eigen::Matrix<double, 10, 10>& N, std::index_sequence<I...>) {
+  (gramColumn<static_cast<int>(I)>(M, n2, N), ...);
+}
+
 /// M^T M over the first n rows of `wk.M`, lower triangle only (half the products of a full one).
+/// Column by column: Eigen's rank update first copies both operands into blocks, which for a
+/// matrix this thin costs as much as the products.
 Eigen::Matrix<double, 10, 10> gram(const RefineWork& wk, Eigen::Index n) {
   Eigen::Matrix<double, 10, 10> N = Eigen::Matrix<double, 10, 10>::Zero();
-  N.selfadjointView<Eigen::Lower>().rankUpdate(wk.M.topRows(n).transpose());
+  const Eigen::Index n2 = n - n % 2;
+  gramColumns(wk.M, n2, N, std::make_index_sequence<10>{});
+  if (n2 < n) N.selfadjointView<Eigen::Lower>().rankUpdate(wk.M.row(n2).transpose());
   return N;
 }
 
