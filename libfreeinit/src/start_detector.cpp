@@ -6,15 +6,16 @@
 #include <Eigen/Eigenvalues>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
+#include <optional>
 #include <random>
+#include <utility>
 
 namespace freeinit {
 namespace {
-
-using Vec6 = Eigen::Matrix<double, 6, 1>;
-using Mat6 = Eigen::Matrix<double, 6, 6>;
 
 /// Chi-square quantile (Wilson-Hilferty) for `dof` degrees of freedom at the standard-normal
 /// quantile z.
@@ -24,63 +25,105 @@ double chi2Quantile(double dof, double z) {
 }
 
 
-/// A return as a linear equation in theta = (v_b0, g_b0): e = a^T theta + noise.
-struct Row {
-  Vec3 w = Vec3::Zero();  ///< direction in b0
-  Vec3 u = Vec3::Zero();  ///< direction in b(t)
-  Vec3 pxu = Vec3::Zero();  ///< p_bl x u (lever arm sensitivity to the gyro bias)
-  Mat3 R_t = Mat3::Identity();  ///< R_0t
-  Vec3 C_t = Vec3::Zero();
-  double t = 0;
-  double e = 0;
-  Vec3 d_l = Vec3::Zero();
-  double residual(const Vec3& v, const Vec3& g) const { return e + w.dot(v) + t * w.dot(g); }
-  Vec6 a() const {
-    Vec6 r;
-    r << -w, -t * w;
+/// The returns as linear equations in theta = (v_b0, g_b0, db_g), one array per quantity: the
+/// refinement sweeps them seven times per hypothesis, and Eigen vectorizes sweeps over arrays.
+/// With s = v_b0 + t g_b0 a return of direction w = R_0t u in b0 reads
+///   e = -w^T s + c^T db_g + noise,   c = c0 + K s,
+/// where c = p_bl x u - t v_b(t) x u is the gyro-bias column (refine() says why) and, from
+/// v_b(t) = R_0t^T (s + C(t)) and x x u = -[u]x x,
+///   c0 = p_bl x u - t (R_0t^T C(t)) x u,   K = t [u]x R_0t^T.
+/// The column is linear in s: no rotation is applied per return and iteration.
+struct Rows {
+  Eigen::Index size() const { return t.size(); }
+  void resize(Eigen::Index n) {
+    for (Eigen::ArrayXd* a : {&t, &e, &wx, &wy, &wz, &twx, &twy, &twz, &c0x, &c0y, &c0z})
+      a->resize(n);
+    K.resize(n, 9);
+  }
+  /// Keeps the first n rows.
+  void shrink(Eigen::Index n) {
+    for (Eigen::ArrayXd* a : {&t, &e, &wx, &wy, &wz, &twx, &twy, &twz, &c0x, &c0y, &c0z})
+      a->conservativeResize(n);
+    K.conservativeResize(n, 9);
+  }
+  /// Every `step`-th row of `o`.
+  static Rows every(const Rows& o, Eigen::Index step) {
+    using Strided = Eigen::Map<const Eigen::ArrayXd, 0, Eigen::InnerStride<>>;
+    const Eigen::Index n = (o.size() + step - 1) / step;
+    const auto take = [&](const double* src) {
+      return Strided(src, n, Eigen::InnerStride<>(step));
+    };
+    Rows r;
+    r.resize(n);
+    r.t = take(o.t.data());
+    r.e = take(o.e.data());
+    r.wx = take(o.wx.data());
+    r.wy = take(o.wy.data());
+    r.wz = take(o.wz.data());
+    r.twx = take(o.twx.data());
+    r.twy = take(o.twy.data());
+    r.twz = take(o.twz.data());
+    r.c0x = take(o.c0x.data());
+    r.c0y = take(o.c0y.data());
+    r.c0z = take(o.c0z.data());
+    for (int j = 0; j < 9; ++j) r.K.col(j) = take(o.K.col(j).data());
     return r;
   }
+  Vec3 w(Eigen::Index i) const { return Vec3(wx[i], wy[i], wz[i]); }
+
+  Eigen::ArrayXd t, e;              ///< [s] time, [m/s] the equation's left-hand side
+  Eigen::ArrayXd wx, wy, wz;        ///< direction in b0
+  Eigen::ArrayXd twx, twy, twz;     ///< t w
+  Eigen::ArrayXd c0x, c0y, c0z;     ///< the gyro-bias column at s = 0
+  Eigen::Array<double, Eigen::Dynamic, 9> K;  ///< K row-major per return
 };
 
 /// Field-of-view cells of the returns: a grid over the observed azimuth/elevation extent.
 class CoverageGrid {
  public:
-  explicit CoverageGrid(const std::vector<Row>& rows) {
-    for (const Row& r : rows) {
-      const double az = std::atan2(r.d_l.y(), r.d_l.x());
-      const double el = std::asin(std::clamp(r.d_l.z(), -1.0, 1.0));
+  explicit CoverageGrid(const std::vector<Vec3>& d_l) {
+    std::vector<std::pair<double, double>> az_el;  // each direction's, computed once
+    az_el.reserve(d_l.size());
+    for (const Vec3& d : d_l) {
+      const double az = std::atan2(d.y(), d.x());
+      const double el = std::asin(std::clamp(d.z(), -1.0, 1.0));
+      az_el.emplace_back(az, el);
       az_lo_ = std::min(az_lo_, az);
       az_hi_ = std::max(az_hi_, az);
       el_lo_ = std::min(el_lo_, el);
       el_hi_ = std::max(el_hi_, el);
     }
-    cell_.reserve(rows.size());
-    totals_.assign(kAz * kEl, 0);
-    for (const Row& r : rows) {
-      const int c = cellOf(r.d_l);
-      cell_.push_back(c);
+    cell_.reserve(d_l.size());
+    totals_.fill(0);
+    for (const auto& [az, el] : az_el) {
+      const int c = cellOf(az, el);
+      cell_.push_back(static_cast<std::uint8_t>(c));
       ++totals_[static_cast<std::size_t>(c)];
     }
   }
   /// Share of the occupied cells (at least 2 returns) in which most returns are inliers.
-  double coverage(const std::vector<bool>& inlier) const {
-    std::vector<int> in(totals_.size(), 0);
+  /// `inlier(i)` tells whether return i is one.
+  template <class Inlier>
+  double coverage(const Inlier& inlier) const {
+    std::array<int, kCells> in{};
     for (std::size_t i = 0; i < cell_.size(); ++i)
-      if (inlier[i]) ++in[static_cast<std::size_t>(cell_[i])];
+      if (inlier(i)) ++in[cell_[i]];
     int occupied = 0, supported = 0;
-    for (std::size_t c = 0; c < totals_.size(); ++c) {
+    for (std::size_t c = 0; c < kCells; ++c) {
       if (totals_[c] < 2) continue;
       ++occupied;
       if (2 * in[c] > totals_[c]) ++supported;
     }
     return occupied > 0 ? static_cast<double>(supported) / occupied : 0.0;
   }
+  double coverage(const std::vector<std::uint8_t>& mask) const {
+    return coverage([&](std::size_t i) { return mask[i] != 0; });
+  }
 
  private:
   static constexpr int kAz = 16, kEl = 8;
-  int cellOf(const Vec3& d) const {
-    const double az = std::atan2(d.y(), d.x());
-    const double el = std::asin(std::clamp(d.z(), -1.0, 1.0));
+  static constexpr std::size_t kCells = kAz * kEl;
+  int cellOf(double az, double el) const {
     const auto bin = [](double x, double lo, double hi, int n) {
       if (!(hi > lo)) return 0;
       return std::clamp(static_cast<int>((x - lo) / (hi - lo) * n), 0, n - 1);
@@ -88,8 +131,109 @@ class CoverageGrid {
     return bin(az, az_lo_, az_hi_, kAz) * kEl + bin(el, el_lo_, el_hi_, kEl);
   }
   double az_lo_ = 1e9, az_hi_ = -1e9, el_lo_ = 1e9, el_hi_ = -1e9;
-  std::vector<int> cell_;
-  std::vector<int> totals_;
+  std::vector<std::uint8_t> cell_;
+  std::array<int, kCells> totals_;
+};
+
+/// Buffers of the refinement, kept across its calls (no allocation per iteration).
+struct RefineWork {
+  explicit RefineWork(Eigen::Index n) : sx(n), sy(n), sz(n), res(n), q(n), M(n, 10) {}
+  Eigen::ArrayXd sx, sy, sz, res, q;
+  /// The weighted equations: q a^T and q e per return. M^T M holds the normal equations
+  /// (sum of w a a^T, w = q^2) and their right-hand side (sum of w e a) at once.
+  Eigen::Matrix<double, Eigen::Dynamic, 10> M;
+};
+
+/// Residuals e - a^T theta (in `wk.res`) of the first `rows.size()` entries of the buffers, and
+/// the gyro-bias columns c, unweighted, in columns 6..8 of `wk.M` (normalEquations() weighs them).
+void residuals(const Rows& rows, const Vec3& v, const Vec3& g, const Vec3& db, RefineWork& wk) {
+  const Eigen::Index n = rows.size();
+  auto sx = wk.sx.head(n), sy = wk.sy.head(n), sz = wk.sz.head(n);
+  auto cx = wk.M.col(6).head(n).array(), cy = wk.M.col(7).head(n).array(),
+       cz = wk.M.col(8).head(n).array();
+  sx = v.x() + rows.t * g.x();
+  sy = v.y() + rows.t * g.y();
+  sz = v.z() + rows.t * g.z();
+  const auto& K = rows.K;
+  cx = rows.c0x + K.col(0) * sx + K.col(1) * sy + K.col(2) * sz;
+  cy = rows.c0y + K.col(3) * sx + K.col(4) * sy + K.col(5) * sz;
+  cz = rows.c0z + K.col(6) * sx + K.col(7) * sy + K.col(8) * sz;
+  wk.res.head(n) = rows.e + (rows.wx * sx + rows.wy * sy + rows.wz * sz) -
+                   (cx * db.x() + cy * db.y() + cz * db.z());
+}
+
+/// Column I of the lower triangle of M^T M over rows [0, n2) (n2 even): its 10 - I sums stay in
+/// registers, two rows per vector operation.
+template <int I>
+void gramColumn(const Eigen::Matrix<double, Eigen::Dynamic, 10>& M, Eigen::Index n2,
+                Eigen::Matrix<double, 10, 10>& N) {
+  constexpr int kSums = 10 - I;
+  using Pair = Eigen::Map<const Eigen::Array2d>;
+  const double* col = M.data();
+  const Eigen::Index ld = M.rows();
+  std::array<Eigen::Array2d, kSums> sum;
+  for (Eigen::Array2d& x : sum) x.setZero();
+  for (Eigen::Index r = 0; r < n2; r += 2) {
+    const Eigen::Array2d a = Pair(col + I * ld + r);
+    for (int j = 0; j < kSums; ++j) sum[j] += a * Pair(col + (I + j) * ld + r);
+  }
+  for (int j = 0; j < kSums; ++j) N(I + j, I) = sum[j].sum();
+}
+
+template <std::size_t... I>
+void gramColumns(const Eigen::Matrix<double, Eigen::Dynamic, 10>& M, Eigen::Index n2,
+                 Eigen::Matrix<double, 10, 10>& N, std::index_sequence<I...>) {
+  (gramColumn<static_cast<int>(I)>(M, n2, N), ...);
+}
+
+/// M^T M over the first n rows of `wk.M`, lower triangle only (half the products of a full one).
+/// Column by column: Eigen's rank update first copies both operands into blocks, which for a
+/// matrix this thin costs as much as the products.
+Eigen::Matrix<double, 10, 10> gram(const RefineWork& wk, Eigen::Index n) {
+  Eigen::Matrix<double, 10, 10> N = Eigen::Matrix<double, 10, 10>::Zero();
+  const Eigen::Index n2 = n - n % 2;
+  gramColumns(wk.M, n2, N, std::make_index_sequence<10>{});
+  if (n2 < n) N.selfadjointView<Eigen::Lower>().rankUpdate(wk.M.row(n2).transpose());
+  return N;
+}
+
+/// sum of q^2 (a a^T, e a) over the first `rows.size()` entries, q in `wk.q`, the columns c from
+/// residuals(): the 9x9 normal matrix and the right-hand side in the last row (lower triangle).
+Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) {
+  const Eigen::Index n = rows.size();
+  const auto q = wk.q.head(n);
+  auto M = wk.M.topRows(n);
+  M.col(0).array() = -q * rows.wx;
+  M.col(1).array() = -q * rows.wy;
+  M.col(2).array() = -q * rows.wz;
+  M.col(3).array() = -q * rows.twx;
+  M.col(4).array() = -q * rows.twy;
+  M.col(5).array() = -q * rows.twz;
+  M.col(6).array() *= q;
+  M.col(7).array() *= q;
+  M.col(8).array() *= q;
+  M.col(9).array() = q * rows.e;
+  return gram(wk, n);
+}
+
+/// The refinements' states after their first, thinned iterations. Two refinements that get there
+/// so close that no return's residual differs by a tenth of the Doppler noise end at the same
+/// hypothesis: the remaining iterations contract their difference (the refinements of one motion
+/// from different RANSAC starts are within 1e-3 m/s of each other at that point and end within
+/// 1e-6 m/s with the same inliers; distinct motions are tenths of m/s apart). The later one would
+/// only be merged into the earlier one's result, so it is stopped there.
+struct EarlyStates {
+  double span = 0;   ///< [s] T
+  double lever = 0;  ///< [m] |p_bl|
+  std::vector<Eigen::Matrix<double, 9, 1>> seen;
+  bool same(const Eigen::Matrix<double, 9, 1>& a, const Eigen::Matrix<double, 9, 1>& b,
+            double doppler_sigma) const {
+    // Largest change of a residual: w^T dv + t w^T dg + c^T ddb, |c| <= |p_bl| + t |v_b|.
+    const double dz = (a.head<3>() - b.head<3>()).norm() +
+                      span * (a.segment<3>(3) - b.segment<3>(3)).norm() +
+                      (lever + span * a.head<3>().norm()) * (a.tail<3>() - b.tail<3>()).norm();
+    return dz < 0.1 * doppler_sigma;
+  }
 };
 
 /// IRLS (Cauchy) refinement of theta = (v_b0, g_b0, db_g) from a start, with a weak gravity
@@ -100,11 +244,14 @@ class CoverageGrid {
 /// of so short a span: it must be in its covariance.
 /// `at_rest`: the rest hypothesis, velocity zero and gravity the mean specific force (the moving
 /// objects of a static start must not bend either: only the gyro-bias correction is fitted).
-/// `inliers` (if given) receives which rows the refined motion explains; `g_sigma_max` [m/s^2]
-/// caps the gravity prior's std.
-StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, const Vec3& v_start,
-                       const Vec3& g_prior, bool at_rest, const StartDetectorParams& p,
-                       std::vector<bool>* inliers = nullptr, double g_sigma_max = 4.0) {
+/// `sub`: every third row of `rows` (for the first iterations); `inliers` (if given) receives
+/// which rows the refined motion explains; `g_sigma_max` [m/s^2] caps the gravity prior's std.
+/// `early` (if given): nothing is returned when the refinement reaches one of its states.
+std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const CoverageGrid& grid,
+                                      RefineWork& wk, const Vec3& v_start, const Vec3& g_prior,
+                                      bool at_rest, const StartDetectorParams& p,
+                                      std::vector<std::uint8_t>* inliers = nullptr,
+                                      double g_sigma_max = 4.0, EarlyStates* early = nullptr) {
   using Vec9 = Eigen::Matrix<double, 9, 1>;
   using Mat9 = Eigen::Matrix<double, 9, 9>;
   Vec3 v = v_start, g = g_prior, db = Vec3::Zero();
@@ -113,74 +260,78 @@ StartHypothesis refine(const std::vector<Row>& rows, const CoverageGrid& grid, c
   // motion; at rest it is gravity minus the accelerometer bias, held.
   const double g_prior_var = at_rest ? 1e-12 : g_sigma_max * g_sigma_max;
   const double bg_prior_var = p.gyro_bias_sigma * p.gyro_bias_sigma;
-  auto rowOf = [&](const Row& r, Vec9& a) {
-    const Vec3 v_b = r.R_t.transpose() * (v + r.C_t + g * r.t);
-    a << -r.w, -r.t * r.w, r.pxu - r.t * v_b.cross(r.u);
-  };
-  auto residual = [&](const Row& r, const Vec9& a) {
-    return r.e - a.head<6>().dot((Vec6() << v, g).finished()) - a.tail<3>().dot(db);
-  };
-  Mat9 A = Mat9::Zero();
   // (Cauchy scale [m/s], gravity prior std [m/s^2]) per iteration. Gravity is held near its prior
   // at first: free from the start, it would let the returns of a large moving object that are
   // consistent with the start only along some directions pull the motion towards theirs.
-  const std::vector<std::pair<double, double>> schedule = {
-      {0.3, 0.5}, {0.3, 1.0}, {0.2, 4.0}, {0.15, 4.0}, {0.1, 4.0}, {0.1, 4.0}, {0.1, 4.0}};
-  Vec9 a;
+  static constexpr std::array<std::pair<double, double>, 7> schedule = {{
+      {0.3, 0.5}, {0.3, 1.0}, {0.2, 4.0}, {0.15, 4.0}, {0.1, 4.0}, {0.1, 4.0}, {0.1, 4.0}}};
+  constexpr std::size_t kEarly = 3;  // the last of the thinned iterations (EarlyStates)
   for (std::size_t iteration = 0; iteration < schedule.size(); ++iteration) {
     const auto [c, g_sigma] = schedule[iteration];
     // The first iterations, which only find the inliers, take every third return (weighted
     // three times), the last ones every return.
-    const std::size_t step = iteration + 3 < schedule.size() && rows.size() > 1500 ? 3 : 1;
+    const bool thin = iteration + 3 < schedule.size() && rows.size() > 1500;
+    const Rows& r = thin ? sub : rows;
+    const double step = thin ? 3.0 : 1.0;
     const double g_var = at_rest ? g_prior_var : std::min(g_sigma * g_sigma, g_prior_var);
-    A.setZero();
-    Vec9 b = Vec9::Zero();
-    A.block<3, 3>(3, 3).diagonal().setConstant(1.0 / g_var);
-    b.segment<3>(3) = g_prior / g_var;
-    A.block<3, 3>(6, 6).diagonal().setConstant(1.0 / bg_prior_var);
+    residuals(r, v, g, db, wk);
+    // Cauchy weight w = step / (sigma^2 (1 + u^2)^2), u = residual / scale: its square root.
+    const double inv_scale = 1.0 / std::max(c, 3.0 * p.doppler_sigma);
+    wk.q.head(r.size()) =
+        std::sqrt(step * inv_r) / (1.0 + (wk.res.head(r.size()) * inv_scale).square());
+    const Eigen::Matrix<double, 10, 10> N = normalEquations(r, wk);
+    // Lower triangle only (what the solvers below read): the right-hand side is the last row.
+    Mat9 A = N.topLeftCorner<9, 9>();
+    Vec9 b = N.row(9).head<9>().transpose();
+    A.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_var;
+    b.segment<3>(3) += g_prior / g_var;
+    A.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_prior_var;
     if (at_rest) {
-      A.topLeftCorner<3, 3>().diagonal().setConstant(1e12);
-      b.head<3>() = v_start * 1e12;
-    }
-    for (std::size_t i = 0; i < rows.size(); i += step) {
-      const Row& r = rows[i];
-      rowOf(r, a);
-      const double res = residual(r, a);
-      const double u = res / std::max(c, 3.0 * p.doppler_sigma);
-      const double w = static_cast<double>(step) * inv_r / ((1.0 + u * u) * (1.0 + u * u));
-      A.selfadjointView<Eigen::Lower>().rankUpdate(a, w);
-      // Linear in theta given the row: e = a^T theta (the db column depends on v, g: iterate).
-      b.noalias() += w * r.e * a;
+      A.topLeftCorner<3, 3>().diagonal().array() += 1e12;
+      b.head<3>() += v_start * 1e12;
     }
     const Vec9 theta = A.ldlt().solve(b);
     if (!theta.allFinite()) break;
     v = theta.head<3>();
     g = theta.segment<3>(3);
     db = theta.tail<3>();
+    if (early != nullptr && iteration == kEarly) {
+      for (const Vec9& o : early->seen)
+        if (early->same(theta, o, p.doppler_sigma)) return std::nullopt;
+      early->seen.push_back(theta);
+    }
   }
   StartHypothesis h;
   h.v_b0 = v;
   h.g_b0 = g;
-  std::vector<bool> inl(rows.size(), false);
-  double ss = 0;
-  Mat9 info = Mat9::Zero();
-  info.block<3, 3>(3, 3).diagonal().setConstant(1.0 / g_prior_var);
-  info.block<3, 3>(6, 6).diagonal().setConstant(1.0 / bg_prior_var);
-  for (std::size_t i = 0; i < rows.size(); ++i) {
-    rowOf(rows[i], a);
-    const double res = residual(rows[i], a);
-    if (std::abs(res) > p.gate) continue;
-    inl[i] = true;
-    ++h.inliers;
-    ss += res * res;
-    info.noalias() += inv_r * a * a.transpose();
+  // The inliers' information (weight 1/sigma^2 each), their equations gathered at the top of M:
+  // the motion of a small object explains a few returns of thousands.
+  const Eigen::Index n = rows.size();
+  residuals(rows, v, g, db, wk);
+  const auto res = wk.res.head(n);
+  const Eigen::Array<bool, Eigen::Dynamic, 1> inl = !(res.abs() > p.gate);  // within the gate
+  h.inliers = static_cast<std::size_t>(inl.count());
+  const double ss = inl.select(res.square(), 0.0).sum();
+  const double s = std::sqrt(inv_r);
+  Eigen::Index m = 0;
+  for (Eigen::Index i = 0; i < n; ++i) {
+    if (!inl(i)) continue;
+    const double cx = wk.M(i, 6), cy = wk.M(i, 7), cz = wk.M(i, 8);  // row m <= i is overwritten
+    wk.M.row(m) << -s * rows.wx[i], -s * rows.wy[i], -s * rows.wz[i], -s * rows.twx[i],
+        -s * rows.twy[i], -s * rows.twz[i], s * cx, s * cy, s * cz, s * rows.e[i];
+    ++m;
   }
+  Mat9 info = gram(wk, m).topLeftCorner<9, 9>();
+  info.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_prior_var;
+  info.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_prior_var;
   h.residual_rms = h.inliers > 0 ? std::sqrt(ss / static_cast<double>(h.inliers)) : 0.0;
   const double k = std::max(1.0, h.residual_rms / p.doppler_sigma);
   const Mat9 cov = info.ldlt().solve(Mat9::Identity()) * k * k;
   h.cov = cov.topLeftCorner<6, 6>();
-  h.coverage = grid.coverage(inl);
-  if (inliers != nullptr) *inliers = std::move(inl);
+  std::vector<std::uint8_t> mask(static_cast<std::size_t>(n));
+  for (Eigen::Index i = 0; i < n; ++i) mask[static_cast<std::size_t>(i)] = inl(i) ? 1 : 0;
+  h.coverage = grid.coverage(mask);
+  if (inliers != nullptr) *inliers = std::move(mask);
   h.rest = v.norm() < p.max_speed;
   h.min_info_eigen = Eigen::SelfAdjointEigenSolver<Mat3>(info.topLeftCorner<3, 3>()).eigenvalues()(0);
   return h;
@@ -252,8 +403,11 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   out.imu_still = imuShowsRest(imu, k0, k1 + 1, p.gyro_sigma, p.accel_sigma);
 
   // Every return as a linear equation.
-  std::vector<Row> rows;
-  rows.reserve(points.size());
+  Rows rows;
+  rows.resize(static_cast<Eigen::Index>(points.size()));
+  std::vector<Vec3> d_l;  // the directions in the LiDAR frame, for the coverage grid
+  d_l.reserve(points.size());
+  Eigen::Index n = 0;
   std::size_t i = 0;
   for (const StartPoint& sp : points) {
     if (sp.t < 0 || sp.t > T) continue;
@@ -263,27 +417,38 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
     Vec3 gyro, accel;
     DopplerInertialFilter::interpolateImu(span, t_ref + sp.t, gyro, accel);
     gyro -= b_g_prior;
-    const Mat3 R_t = xt.R_wb;
+    const Mat3& R_t = xt.R_wb;
     const Vec3 C_t = xt.v_w - g_w * sp.t;
-    Row r;
     const Vec3 u = extrinsics.R_bl * sp.d_l;
-    r.u = u;
-    r.pxu = extrinsics.p_bl.cross(u);
-    r.R_t = R_t;
-    r.C_t = C_t;
-    r.w = R_t * u;
-    r.t = sp.t;
-    r.d_l = sp.d_l;
-    r.e = sp.doppler + u.dot(gyro.cross(extrinsics.p_bl)) + r.w.dot(C_t);
-    rows.push_back(r);
+    const Vec3 w = R_t * u;
+    const Vec3 c0 = extrinsics.p_bl.cross(u) - sp.t * (R_t.transpose() * C_t).cross(u);
+    const Mat3 K = sp.t * skew(u) * R_t.transpose();
+    rows.t[n] = sp.t;
+    rows.e[n] = sp.doppler + u.dot(gyro.cross(extrinsics.p_bl)) + w.dot(C_t);
+    rows.wx[n] = w.x();
+    rows.wy[n] = w.y();
+    rows.wz[n] = w.z();
+    rows.twx[n] = sp.t * w.x();
+    rows.twy[n] = sp.t * w.y();
+    rows.twz[n] = sp.t * w.z();
+    rows.c0x[n] = c0.x();
+    rows.c0y[n] = c0.y();
+    rows.c0z[n] = c0.z();
+    for (int j = 0; j < 9; ++j) rows.K(n, j) = K(j / 3, j % 3);
+    d_l.push_back(sp.d_l);
+    ++n;
   }
-  if (rows.size() < 10) {
+  if (n < 10) {
     out.message = "fewer than 10 usable LiDAR returns at the start of the window";
     return out;
   }
+  rows.shrink(n);  // the returns outside the span are not equations
   // The returns' directions must constrain a 3-D velocity at all.
   Mat3 info = Mat3::Zero();
-  for (const Row& r : rows) info.noalias() += r.w * r.w.transpose();
+  for (Eigen::Index j = 0; j < n; ++j) {
+    const Vec3 w = rows.w(j);
+    info.noalias() += w * w.transpose();
+  }
   info /= p.doppler_sigma * p.doppler_sigma;
   const double weakest = Eigen::SelfAdjointEigenSolver<Mat3>(info).eigenvalues()(0);
   if (!(weakest >= p.min_info_eigen)) {
@@ -293,25 +458,50 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
                   " 1/(m/s)^2)";
     return out;
   }
-  const CoverageGrid grid(rows);
+  const CoverageGrid grid(d_l);
+  const Rows sub = Rows::every(rows, 3);
+  RefineWork work(n);
 
   // Hypotheses: RANSAC on short slices of the span (gravity at its mean there; a slice is short
   // enough that the mean acceleration's share of the velocity change within it stays inside the
   // gate), removing the inliers of each hypothesis found. Slices start at the span's beginning
   // and at three later times: a scan pattern sweeps the view, so that what the first instants
   // see may be one large moving object, with the world in view only later.
-  std::mt19937_64 rng(0x5eed ^ rows.size());
+  std::mt19937_64 rng(0x5eed ^ static_cast<std::size_t>(n));
   std::vector<Vec3> starts;
   const double ransac_gate = 2.0 * p.gate;
   constexpr double kSlice = 0.015;  // [s]
   constexpr std::size_t kSlicePoints = 200;
+  // The pool's equations side by side (its candidates are counted 64 times each), with the
+  // gravity term t w^T g_mean, which RANSAC holds, computed once.
+  std::vector<Eigen::Index> pool, unexplained;
+  pool.reserve(static_cast<std::size_t>(n));
+  unexplained.reserve(static_cast<std::size_t>(n));
+  Eigen::ArrayXd pe(n), pwx(n), pwy(n), pwz(n), ptg(n), pres(n);
   for (int slice = 0; slice < 4; ++slice) {
     const double t_s = T * slice / 4.0;
-    std::vector<std::size_t> pool;
-    for (std::size_t j = 0; j < rows.size(); ++j)
-      if (rows[j].t >= t_s && (rows[j].t <= t_s + kSlice || pool.size() < kSlicePoints))
+    pool.clear();
+    for (Eigen::Index j = 0; j < n; ++j)
+      if (rows.t[j] >= t_s && (rows.t[j] <= t_s + kSlice || pool.size() < kSlicePoints))
         pool.push_back(j);
     for (int h = 0; h < p.max_hypotheses && pool.size() >= 10; ++h) {
+      const Eigen::Index m = static_cast<Eigen::Index>(pool.size());
+      for (Eigen::Index k = 0; k < m; ++k) {
+        const Eigen::Index j = pool[static_cast<std::size_t>(k)];
+        pe[k] = rows.e[j];
+        pwx[k] = rows.wx[j];
+        pwy[k] = rows.wy[j];
+        pwz[k] = rows.wz[j];
+        ptg[k] = rows.t[j] * rows.w(j).dot(g_mean);
+      }
+      // |residual| < ransac_gate for each of the pool's returns, the gyro bias at its prior.
+      // (The residuals are stored first: a count over the whole expression would not vectorize.)
+      const auto within = [&](const Vec3& v) {
+        pres.head(m) =
+            pe.head(m) + (pwx.head(m) * v.x() + pwy.head(m) * v.y() + pwz.head(m) * v.z()) +
+            ptg.head(m);
+        return pres.head(m).abs() < ransac_gate;
+      };
       std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
       std::size_t best = 0;
       Vec3 best_v = Vec3::Zero();
@@ -319,15 +509,14 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
         Mat3 W;
         Vec3 e;
         for (int k = 0; k < 3; ++k) {
-          const Row& r = rows[pool[pick(rng)]];
-          W.row(k) = r.w.transpose();
-          e(k) = r.e + r.t * r.w.dot(g_mean);
+          const Eigen::Index j = pool[pick(rng)];
+          const Vec3 w = rows.w(j);
+          W.row(k) = w.transpose();
+          e(k) = rows.e[j] + rows.t[j] * w.dot(g_mean);
         }
         if (std::abs(W.determinant()) < 1e-3) continue;
         const Vec3 v = -W.inverse() * e;
-        std::size_t count = 0;
-        for (std::size_t j : pool)
-          if (std::abs(rows[j].residual(v, g_mean)) < ransac_gate) ++count;
+        const std::size_t count = static_cast<std::size_t>(within(v).count());
         if (count > best) {
           best = count;
           best_v = v;
@@ -335,14 +524,18 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
       }
       if (best < std::max<std::size_t>(10, pool.size() / 20)) break;
       starts.push_back(best_v);
-      std::vector<std::size_t> rest;
-      for (std::size_t j : pool)
-        if (std::abs(rows[j].residual(best_v, g_mean)) >= ransac_gate) rest.push_back(j);
-      pool.swap(rest);
+      const Eigen::Array<bool, Eigen::Dynamic, 1> explained = within(best_v);
+      unexplained.clear();
+      for (Eigen::Index k = 0; k < m; ++k)
+        if (!explained[k]) unexplained.push_back(pool[static_cast<std::size_t>(k)]);
+      pool.swap(unexplained);
     }
   }
   // Refine each on the whole span; merge those that converge to the same motion.
-  std::vector<std::vector<bool>> masks;  // the rows each hypothesis explains
+  std::vector<std::vector<std::uint8_t>> masks;  // the rows each hypothesis explains
+  EarlyStates early;
+  early.span = T;
+  early.lever = extrinsics.p_bl.norm();
   for (std::size_t i_start = 0; i_start < starts.size(); ++i_start) {
     const Vec3& v0 = starts[i_start];
     // The same motion found again in another slice converges to the same hypothesis: refine it
@@ -352,14 +545,18 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
     for (const StartHypothesis& o : out.hypotheses)
       seen = seen || (o.v_b0 - v0).norm() < p.gate;
     if (seen) continue;
-    std::vector<bool> mask;
-    StartHypothesis h = refine(rows, grid, v0, g_mean, false, p, &mask);
+    std::vector<std::uint8_t> mask;
+    // A refinement that joins an earlier one's path ends as that one did: nothing new.
+    std::optional<StartHypothesis> first =
+        refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 4.0, &early);
+    if (!first) continue;
+    StartHypothesis h = *first;
     // Gravity is what the refinement finds it to be. A fit that needs one far from 9.81 m/s^2
     // is tried again with gravity held near the mean specific force (a motion of the platform
     // cannot need more than its mean acceleration over the span); if that does not fit either,
     // it is not a motion of the platform.
     if (h.v_b0.allFinite() && std::abs(h.g_b0.norm() - kGravity) > p.max_gravity_error)
-      h = refine(rows, grid, v0, g_mean, false, p, &mask, 0.5);
+      h = *refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 0.5);
     if (h.inliers < 10 || !h.v_b0.allFinite()) continue;
     // Kept either way: an implausible motion is never chosen, but its returns still show that
     // something else moves coherently (a contender, below).
@@ -388,7 +585,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   });
   {
     std::vector<StartHypothesis> hs;
-    std::vector<std::vector<bool>> ms;
+    std::vector<std::vector<std::uint8_t>> ms;
     for (std::size_t j : order) {
       hs.push_back(out.hypotheses[j]);
       ms.push_back(std::move(masks[j]));
@@ -406,7 +603,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
 
   // The IMU at rest: rest (velocity held at zero) wins if enough of the view supports it.
   if (out.imu_still) {
-    StartHypothesis rest = refine(rows, grid, Vec3::Zero(), g_mean, true, p);
+    StartHypothesis rest = *refine(rows, sub, grid, work, Vec3::Zero(), g_mean, true, p);
     rest.rest = true;
     if (rest.inliers >= 10 && rest.coverage >= p.rest_coverage_ratio * best_coverage) {
       out.kind = StartDecision::Kind::Rest;
@@ -440,9 +637,8 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   std::size_t c = b;
   for (std::size_t j = 0; j < out.hypotheses.size(); ++j) {
     if (j == b) continue;
-    std::vector<bool> own(rows.size());
-    for (std::size_t r = 0; r < rows.size(); ++r) own[r] = masks[j][r] && !masks[b][r];
-    const double cov = grid.coverage(own);
+    const std::vector<std::uint8_t>&mj = masks[j], &mb = masks[b];
+    const double cov = grid.coverage([&](std::size_t r) { return mj[r] != 0 && mb[r] == 0; });
     if (cov > contender) {
       contender = cov;
       c = j;

@@ -1,0 +1,114 @@
+// Speed of the start decision alone, on one core:
+//   BM_DecideStart/<preset>  decideStart over the bootstrap span (the first 0.1 s of the window)
+//                            of each preset at the default configuration, the returns prepared as
+//                            the pipeline prepares them: the window starts at the first IMU sample
+//                            at or after the first LiDAR point, the span's usable returns are
+//                            thinned evenly to bootstrap_points. Time per decision in ms; target
+//                            on dyna_05: <= 2 ms. Counters: points = returns handed to the
+//                            decision, hypotheses = motions it refined and kept, kind = the
+//                            decision (StartDecision::Kind as a number).
+// The recordings are simulated and the returns prepared once, outside the timed loop.
+#include <freeinit/config.h>
+#include <freeinit/sim/simulator.h>
+#include <freeinit/start_detector.h>
+
+#include <benchmark/benchmark.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <string>
+#include <vector>
+
+namespace {
+
+/// The decision's input as the pipeline builds it from a recording.
+struct StartInput {
+  freeinit::sim::Recording rec;
+  std::size_t k0 = 0, k1 = 0;
+  std::vector<freeinit::StartPoint> points;
+  freeinit::StartDetectorParams params;
+};
+
+/// The pipeline's test of a return (finite, within the configured range).
+bool usable(const freeinit::DopplerPoint& p, const freeinit::VelocimeterParams& vp) {
+  if (!p.p_l.allFinite() || !std::isfinite(p.doppler) || !std::isfinite(p.time_offset))
+    return false;
+  const double r = p.p_l.norm();
+  return r > 0 && r >= vp.min_range && r <= vp.max_range;
+}
+
+StartInput prepare(const std::string& name) {
+  StartInput in;
+  freeinit::sim::ScenarioConfig sc = freeinit::sim::preset(name, 1);
+  sc.duration = 0.8;  // as bench_free_init: the window and the bootstrap
+  in.rec = freeinit::sim::simulate(sc);
+  const freeinit::FreeInitConfig cfg;
+  const freeinit::VelocimeterParams& vp = cfg.velocimeter;
+  const auto& imu = in.rec.imu;
+  // Point times in time order (frames are, and their points within them).
+  struct Timed {
+    double t;
+    const freeinit::DopplerPoint* p;
+  };
+  std::vector<Timed> all;
+  for (const auto& f : in.rec.frames)
+    for (const auto& p : f.points)
+      all.push_back({f.stamp + static_cast<double>(p.time_offset), &p});
+  if (all.empty() || imu.empty()) return in;
+  // Window start: the first IMU sample at or after the first LiDAR point.
+  std::size_t k = 0;
+  while (k < imu.size() && imu[k].t < all.front().t) ++k;
+  const double t_ref = imu[k].t;
+  const double span = std::min(cfg.estimator.bootstrap_duration, cfg.window.duration);
+  std::size_t k1 = k;
+  while (k1 + 1 < imu.size() && imu[k1].t < t_ref + span &&
+         imu[k1 + 1].t - t_ref < cfg.window.duration)
+    ++k1;
+  const double t_end = imu[k1].t;
+  std::size_t n_usable = 0;
+  for (const Timed& q : all)
+    if (q.t <= t_end && q.t >= t_ref && usable(*q.p, vp)) ++n_usable;
+  const std::size_t thin = std::max<std::size_t>(
+      1, n_usable / static_cast<std::size_t>(cfg.estimator.bootstrap_points));
+  std::size_t n = 0;
+  for (const Timed& q : all) {
+    if (q.t > t_end) break;
+    if (q.t < t_ref || !usable(*q.p, vp)) continue;
+    if (n++ % thin != 0) continue;
+    in.points.push_back({q.t - t_ref, q.p->p_l.cast<double>().normalized(), q.p->doppler});
+  }
+  in.k0 = k;
+  in.k1 = k1;
+  freeinit::StartDetectorParams& sp = in.params;
+  sp.doppler_sigma = vp.doppler_sigma;
+  sp.gyro_sigma = vp.gyro_sigma;
+  sp.accel_sigma = cfg.gravity.accel_sigma;
+  sp.gyro_bias_sigma = vp.gyro_bias_sigma0;
+  sp.gate = vp.gate_min;
+  sp.max_speed = cfg.static_detector.max_speed;
+  sp.min_info_eigen = cfg.bootstrap.min_info_eigen;
+  return in;
+}
+
+void BM_DecideStart(benchmark::State& state, const std::string& name) {
+  const StartInput in = prepare(name);
+  const freeinit::FreeInitConfig cfg;
+  freeinit::StartDecision d;
+  for (auto _ : state) {
+    d = freeinit::decideStart(in.rec.imu, in.k0, in.k1, in.points, in.rec.extrinsics,
+                              cfg.velocimeter.gyro_bias_prior, in.params);
+    benchmark::DoNotOptimize(d.chosen.v_b0.data());
+  }
+  state.counters["points"] = static_cast<double>(in.points.size());
+  state.counters["hypotheses"] = static_cast<double>(d.hypotheses.size());
+  state.counters["kind"] = static_cast<double>(static_cast<int>(d.kind));
+}
+
+}  // namespace
+
+BENCHMARK_CAPTURE(BM_DecideStart, dyna_05, std::string("dyna_05"))->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecideStart, stat_02, std::string("stat_02"))->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_DecideStart, dyna_01, std::string("dyna_01"))->Unit(benchmark::kMillisecond);
+
+BENCHMARK_MAIN();
