@@ -1,7 +1,8 @@
 // The estimator on randomized scenarios it was not tuned on (a fixed subset of seeds apart from
 // the ranges used while developing it and from the held-out evaluation), with frames capped to
 // 20,000 points to fit CI: no ok state far outside its physical limit, its own covariance
-// consistent with its errors, and a static start among walkers in an open scene at rest.
+// consistent with its errors, a static start among walkers in an open scene at rest, and standing
+// sensors among movers with a consistent velocity.
 #include <freeinit/eval/bound_ratio.h>
 #include <freeinit/free_init.h>
 #include <freeinit/sim/evaluation.h>
@@ -105,6 +106,38 @@ TEST(FreeInitRandomized, StaticStartAmongWalkersInTheOpen) {
     EXPECT_LT(e.vel_b, 0.01) << "seed " << seed;
   }
   EXPECT_EQ(found, 2);
+}
+
+TEST(FreeInitRandomized, StandingSensorAmongMoversHasAConsistentVelocity) {
+  // People or vehicles moving by a standing sensor: each of their returns that moves slowly along
+  // its line of sight passes every gate, and together they bend the velocity by a few mm/s,
+  // several of its sigmas (without the estimator's test of such returns by direction and range,
+  // 3 of these 24 starts have a velocity NEES of 19-56). The first 24 seeds (outside every
+  // evaluation range) that draw a static start with movers in view and a right calibration: a
+  // consistent estimator exceeds the 99.9 % quantile of the NEES (3 dof) in 0.1 % of the runs,
+  // twice or more in 24 with probability 0.03 %.
+  int found = 0, above = 0;
+  for (std::uint64_t seed = 9001; seed < 10000 && found < 24; ++seed) {
+    const sim::RandomScenario sc = sim::drawRandomScenario(seed);
+    if (!sc.info.static_start || sc.info.movers_in_view == 0 || sc.info.calibration_wrong) continue;
+    ++found;
+    const RandomRun r = runSeed(seed);
+    const std::string what = "seed " + std::to_string(seed) + " (" +
+                             sim::platformName(r.scenario.info.platform) + ", " +
+                             r.scenario.info.scene + ")";
+    if (!r.result.state.ok()) {
+      EXPECT_FALSE(r.result.state.message.empty()) << what;
+      continue;
+    }
+    const sim::InitErrors e = sim::evaluate(r.result.state, r.rec);
+    ASSERT_TRUE(e.valid) << what;
+    if (e.nees_vel_b > 16.27) {
+      ++above;
+      std::printf("%s: velocity error %.4f m/s, NEES %.1f\n", what.c_str(), e.vel_b, e.nees_vel_b);
+    }
+  }
+  EXPECT_EQ(found, 24);
+  EXPECT_LE(above, 1);
 }
 
 }  // namespace
