@@ -80,14 +80,7 @@ StartInput prepare(const std::string& name) {
   }
   in.k0 = k;
   in.k1 = k1;
-  freeinit::StartDetectorParams& sp = in.params;
-  sp.doppler_sigma = vp.doppler_sigma;
-  sp.gyro_sigma = vp.gyro_sigma;
-  sp.accel_sigma = cfg.gravity.accel_sigma;
-  sp.gyro_bias_sigma = vp.gyro_bias_sigma0;
-  sp.gate = vp.gate_min;
-  sp.max_speed = cfg.static_detector.max_speed;
-  sp.min_info_eigen = cfg.bootstrap.min_info_eigen;
+  in.params = freeinit::startDetectorParams(cfg);
   return in;
 }
 

@@ -18,6 +18,19 @@ struct Scene {
   std::vector<StartPoint> points;
 };
 
+/// The j-th of 3000 returns over 0.1 s: its time and a direction of a 360 x 34 deg field of view
+/// (elevation -23 to +11 deg), uniform in azimuth; the azimuth [rad, from -pi] as well.
+StartPoint randomReturn(int j, std::mt19937& rng, double* azimuth = nullptr) {
+  std::uniform_real_distribution<double> u01(0, 1);
+  StartPoint p;
+  p.t = 0.1 * j / 3000.0;
+  const double az = -kPi + 2 * kPi * u01(rng);
+  const double el = -0.4 + 0.6 * u01(rng);
+  p.d_l = Vec3(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+  if (azimuth != nullptr) *azimuth = az;
+  return p;
+}
+
 /// 0.1 s at 200 Hz, level, not rotating; `v_world` the LiDAR's velocity relative to the world
 /// at the start, `v_object` relative to the object, which fills the azimuths below
 /// `object_azimuth` [rad] (from -pi). Noise: gyro 0.002 rad/s, accelerometer 0.02 m/s^2, Doppler
@@ -31,7 +44,6 @@ Scene scene(const Vec3& v_world, const Vec3& v_object, double object_azimuth, un
   };
   std::mt19937 rng(seed);
   std::normal_distribution<double> n01;
-  std::uniform_real_distribution<double> u01(0, 1);
   Scene s;
   for (int i = 0; i <= 20; ++i) {
     ImuSample m;
@@ -42,11 +54,8 @@ Scene scene(const Vec3& v_world, const Vec3& v_object, double object_azimuth, un
     s.imu.push_back(m);
   }
   for (int j = 0; j < 3000; ++j) {
-    StartPoint p;
-    p.t = 0.1 * j / 3000.0;
-    const double az = -kPi + 2 * kPi * u01(rng);
-    const double el = -0.4 + 0.6 * u01(rng);
-    p.d_l = Vec3(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+    double az = 0;
+    StartPoint p = randomReturn(j, rng, &az);
     const Vec3 v = (az < object_azimuth ? v_object : v_world) + shake(p.t);
     p.doppler = -p.d_l.dot(v) + 0.03 * n01(rng);
     s.points.push_back(p);
@@ -110,7 +119,6 @@ TEST(StartDetector, TurningWithAGyroBiasAndALeverArm) {
   };
   std::mt19937 rng(5);
   std::normal_distribution<double> n01;
-  std::uniform_real_distribution<double> u01(0, 1);
   std::vector<ImuSample> imu;
   for (int i = 0; i <= 22; ++i) {
     const double t = i / 200.0;
@@ -123,11 +131,7 @@ TEST(StartDetector, TurningWithAGyroBiasAndALeverArm) {
   }
   std::vector<StartPoint> points;
   for (int j = 0; j < 3000; ++j) {
-    StartPoint p;
-    p.t = 0.1 * j / 3000.0;
-    const double az = -kPi + 2 * kPi * u01(rng);
-    const double el = -0.4 + 0.6 * u01(rng);
-    p.d_l = Vec3(std::cos(el) * std::cos(az), std::cos(el) * std::sin(az), std::sin(el));
+    StartPoint p = randomReturn(j, rng);
     const Vec3 v_lidar_b = v_b(p.t) + omega.cross(ext.p_bl);  // LiDAR velocity, body axes
     p.doppler = -(ext.R_bl * p.d_l).dot(v_lidar_b) + 0.03 * n01(rng);
     points.push_back(p);

@@ -289,16 +289,8 @@ class JointPipeline final : public Pipeline {
       if (n++ % thin != 0) continue;
       pts.push_back({t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
     }
-    StartDetectorParams sp;
-    sp.doppler_sigma = vp.doppler_sigma;
-    sp.gyro_sigma = vp.gyro_sigma;
-    sp.accel_sigma = cfg_.gravity.accel_sigma;
-    sp.gyro_bias_sigma = vp.gyro_bias_sigma0;
-    sp.gate = vp.gate_min;
-    sp.max_speed = cfg_.static_detector.max_speed;
-    sp.min_info_eigen = cfg_.bootstrap.min_info_eigen;
-    const StartDecision d =
-        decideStart(imu, k, k1, pts, cfg_.extrinsics, vp.gyro_bias_prior, sp);
+    const StartDecision d = decideStart(imu, k, k1, pts, cfg_.extrinsics, vp.gyro_bias_prior,
+                                        startDetectorParams(cfg_));
     r.diag.imu_at_rest_at_start = d.imu_still;
     switch (d.kind) {
       case StartDecision::Kind::NoData: fail(r, InitStatus::NoDoppler, d.message); return;

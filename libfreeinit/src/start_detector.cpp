@@ -371,6 +371,19 @@ bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::siz
   return sg / (gyro_sigma * gyro_sigma) < limit && sa / (accel_sigma * accel_sigma) < limit;
 }
 
+StartDetectorParams startDetectorParams(const FreeInitConfig& cfg) {
+  const VelocimeterParams& vp = cfg.velocimeter;
+  StartDetectorParams sp;
+  sp.doppler_sigma = vp.doppler_sigma;
+  sp.gyro_sigma = vp.gyro_sigma;
+  sp.accel_sigma = cfg.gravity.accel_sigma;
+  sp.gyro_bias_sigma = vp.gyro_bias_sigma0;
+  sp.gate = vp.gate_min;
+  sp.max_speed = cfg.static_detector.max_speed;
+  sp.min_info_eigen = cfg.bootstrap.min_info_eigen;
+  return sp;
+}
+
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std::size_t k1,
                           const std::vector<StartPoint>& points, const Extrinsics& extrinsics,
                           const Vec3& b_g_prior, const StartDetectorParams& p) {

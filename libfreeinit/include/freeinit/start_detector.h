@@ -18,6 +18,7 @@
 // least squares (Cauchy) in all six unknowns, and scored by inliers and field-of-view coverage.
 #pragma once
 
+#include <freeinit/config.h>
 #include <freeinit/types.h>
 
 #include <string>
@@ -97,6 +98,10 @@ bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::siz
 /// Decides the motion at the window start from the IMU samples `imu[k0..k1]` (times absolute;
 /// imu[k0].t is the window start) and the returns of [imu[k0].t, imu[k1].t] (times relative to
 /// the window start). `b_g_prior` is removed from the gyro. Deterministic.
+/// The start decision's settings from the estimator's configuration (noises, gyro-bias prior,
+/// gate, rest speed, information floor).
+StartDetectorParams startDetectorParams(const FreeInitConfig& cfg);
+
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std::size_t k1,
                           const std::vector<StartPoint>& points, const Extrinsics& extrinsics,
                           const Vec3& b_g_prior, const StartDetectorParams& params);
