@@ -1,4 +1,6 @@
 // Speed and memory of the estimator core (issue 3, "Speed"), on one core:
+//   BM_JointForwardPass    the joint estimator's forward pass alone, with and without the returns
+//                          (their difference: the per-point stage; items_per_second = returns/s).
 //   BM_VelocimeterDoppler  Doppler point updates per second through the velocimeter alone
 //                          (propagate + updateDoppler, gyro updates interleaved at 200 Hz as in the
 //                          real stream). items_per_second = points/s; target >= 3,000,000.
@@ -14,6 +16,7 @@
 // The recordings are simulated once, outside the timed loops.
 // BM_FreeInitRun's updates_per_s_of_data is the velocimeter's output rate: its state updates per
 // second of recording (the paper reports > 10 kHz).
+#include <freeinit/doppler_inertial_filter.h>
 #include <freeinit/free_init.h>
 #include <freeinit/sim/simulator.h>
 #include <freeinit/velocimeter.h>
@@ -211,7 +214,67 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   state.counters["updates_per_s_of_data"] = rate_hz;
 }
 
+/// The joint estimator's forward pass over the 0.5 s window alone (no start decision, no
+/// smoothing), started at the truth: per node beginNode, every return of its interval through
+/// addPoint (gate and sums), update (solve, second gate with the coherence test, solve again),
+/// predict. `with_points` false: the nodes alone, so that the difference of the two is the
+/// per-point stage. items_per_second: returns per second.
+void BM_JointForwardPass(benchmark::State& state, const std::string& name, bool with_points) {
+  const freeinit::sim::Recording& rec = recording(name);
+  const freeinit::FreeInitConfig cfg;
+  const double t0 = rec.imu.front().t;
+  struct Return {
+    double t;
+    Eigen::Vector3f p_l;
+    double doppler;
+  };
+  std::vector<Return> returns;
+  for (const auto& f : rec.frames)
+    for (const auto& p : f.points) {
+      const double r = p.p_l.norm();
+      if (r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range) continue;
+      returns.push_back({f.stamp + p.time_offset, p.p_l, p.doppler});
+    }
+  freeinit::DopplerInertialFilterParams fp;
+  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  std::size_t k_end = 0;
+  while (k_end + 3 < rec.imu.size() && rec.imu[k_end].t - t0 < cfg.window.duration) ++k_end;
+  std::int64_t points = 0;
+  for (auto _ : state) {
+    freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
+    for (std::size_t k = 0; k <= k_end + 2; ++k) filter.addImu(rec.imu[k]);
+    const freeinit::sim::TruthState x = rec.truth(t0);
+    freeinit::FilterState x0;
+    x0.R_wb = x.R_wb;
+    x0.v_w = x.v_w;
+    freeinit::DopplerInertialFilter::StartPrior prior;
+    prior.cov_v_b = freeinit::Mat3::Identity() * 1e-4;
+    filter.start(x0, prior);
+    std::size_t j = 0;
+    while (j < returns.size() && returns[j].t < t0) ++j;
+    for (std::size_t k = 0;; ++k) {
+      const bool last = k == k_end;
+      filter.beginNode(last);
+      const double t_k = rec.imu[k].t, hi = t_k + filter.intervalAfter();
+      for (; with_points && j < returns.size() && (last ? returns[j].t <= t_k : returns[j].t < hi);
+           ++j, ++points)
+        filter.addPoint(returns[j].t - t_k, returns[j].p_l, returns[j].doppler);
+      filter.update();
+      if (last) break;
+      filter.predict();
+    }
+    benchmark::DoNotOptimize(filter.state(filter.nodes() - 1).v_w.data());
+  }
+  state.SetItemsProcessed(points);
+  state.counters["points"] = static_cast<double>(points) / static_cast<double>(state.iterations());
+}
+
 }  // namespace
+
+BENCHMARK_CAPTURE(BM_JointForwardPass, dyna_05_every_point, std::string("dyna_05"), true)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_JointForwardPass, dyna_05_nodes_only, std::string("dyna_05"), false)
+    ->Unit(benchmark::kMillisecond);
 
 BENCHMARK_CAPTURE(BM_VelocimeterDoppler, dyna_05, std::string("dyna_05"))
     ->Unit(benchmark::kMillisecond);
