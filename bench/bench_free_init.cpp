@@ -1,4 +1,4 @@
-// Speed and memory of the estimator core (issue 3, "Speed"), on one core:
+// Speed and memory of the estimator core, on one core:
 //   BM_JointForwardPass    the joint estimator's forward pass alone, with and without the returns
 //                          (their difference: the per-point stage; items_per_second = returns/s).
 //   BM_VelocimeterDoppler  Doppler point updates per second through the velocimeter alone

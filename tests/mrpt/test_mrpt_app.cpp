@@ -142,9 +142,9 @@ bool contains(const std::vector<std::string>& v, const std::vector<std::string>&
 }
 }  // namespace
 
-// Tolerances: issue 3's targets (body velocity <= 0.05 m/s; gravity <= 0.5 deg on a rotational
-// start, where the accelerometer bias is observable). The gyro bias is not checked on dyna_01: in
-// a short moving window it is not observable from Doppler + gyro (DESIGN.md).
+// Tolerances: the project's accuracy targets (body velocity <= 0.05 m/s; gravity <= 0.5 deg on a
+// rotational start, where the accelerometer bias is observable). The gyro bias is not checked on
+// dyna_01: in a short moving window it is not observable from Doppler + gyro.
 TEST(FreeInitAppEndToEnd, DynamicSampleDyna01) {
   const std::string out = outDir("dyna_01");
   auto app = makeApp(kSrc + "/rawlogs/dyna_01.rawlog", out);
