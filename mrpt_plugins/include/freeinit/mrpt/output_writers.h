@@ -34,9 +34,10 @@ StateVerdict verdictOf(const InitResult& r, double doppler_sigma);
 void printVerdict(std::ostream& log, const StateVerdict& v);
 
 /// The initial-state contract (README, "Frames, signs and the output contract"): [initial_state]
-/// status, timestamp, q_wb, p_w, v_w, b_g, b_a, g_w, cov (18x18 row-major, order [dtheta p v b_g b_a g]); with a verdict (ok states)
-/// also sigma_v_b, sigma_tilt_deg, sigma_b_g, sigma_b_a, window_s, window_frames, points_used,
-/// doppler_residual_rms and doppler_sigma; then warnings.
+/// status, timestamp, q_wb, p_w, v_w, b_g, b_a, g_w, cov (18x18 row-major, order
+/// [dtheta p v b_g b_a g]); with a verdict (ok states) also sigma_v_b, sigma_tilt_deg,
+/// sigma_b_g, sigma_b_a, window_s, window_frames, points_used, doppler_residual_rms and
+/// doppler_sigma; then warnings.
 void writeInitialStateIni(const std::string& path, const InitialState& s,
                           const StateVerdict* verdict = nullptr);
 /// TUM: "t x y z qx qy qz qw" per line.
