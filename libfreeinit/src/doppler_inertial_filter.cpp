@@ -269,7 +269,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   const Vec3 v_l = R_bl.transpose() * (v_b + omega.cross(p_bl_));
   if (J != nullptr) {
     // dv_b = R^T dv_w + [v_b]x dtheta;  dv_l = R_bl^T (dv_b + [p_bl]x db_g) + [v_l]x dphi_bl
-    // ((R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T); d/d(dt_l) = -dv_l/dtau (central difference).
+    // ((R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T); d/d(dt_l) = -dv_l/dtau.
     const Mat3 Rt = y.R_wb.transpose();
     const Mat3 Rlb = R_bl.transpose();
     const Eigen::Matrix<double, 3, kStateDim> dvb =
@@ -389,6 +389,7 @@ void DopplerInertialFilter::predict() {
 void DopplerInertialFilter::beginNode(bool last) {
   Node& n = nodes_.back();
   n.last = last;
+  node_open_ = true;
   if (!last && n.k + 1 >= imu_.size())
     throw std::logic_error("DopplerInertialFilter::beginNode: no IMU sample after the node");
   before_ = n.k > 0 ? 0.5 * (imu_[n.k].t - imu_[n.k - 1].t) : 0.0;
@@ -413,7 +414,7 @@ void DopplerInertialFilter::beginNode(bool last) {
   M_open_ = G0 *
             (nodes_.size() == 1 ? priorCovariance(n.x_pred, prior_.gate_velocity_scale) : n.P) *
             G0.transpose();
-  inv_h_open_ = 1.0 / n.h;
+  n.inv_h = 1.0 / n.h;
   gate_speed_open_ = params_.gate_rel * q_open_.head<3>().norm();
 }
 
@@ -424,7 +425,7 @@ DopplerInertialFilter::PointOutcome DopplerInertialFilter::addPoint(double tau,
   PointOutcome out;
   const Vec3 p = p_l.cast<double>();
   const Vec3 d = p / p.norm();
-  const double s = tau * inv_h_open_;
+  const double s = normalizedTime(nodes_.size() - 1, tau);
   const Vec3 q = q_open_.segment<3>(0) + s * (q_open_.segment<3>(3) + s * q_open_.segment<3>(6));
   const double r = doppler + d.dot(q);
   out.residual = r;
@@ -442,9 +443,13 @@ DopplerInertialFilter::PointOutcome DopplerInertialFilter::addPoint(double tau,
 
 void DopplerInertialFilter::removePoint(std::size_t k, double tau, const Eigen::Vector3f& p_l,
                                         double doppler) {
+  if (k + 1 == nodes_.size() && node_open_)
+    throw std::logic_error("DopplerInertialFilter::removePoint: the node is still open");
   Node& n = nodes_.at(k);
+  if (n.sums.n == 0)
+    throw std::logic_error("DopplerInertialFilter::removePoint: the node has no point left");
   const Vec3 p = p_l.cast<double>();
-  accumulate(n.sums, tau / n.h, p / p.norm(), doppler, -1.0);
+  accumulate(n.sums, normalizedTime(k, tau), p / p.norm(), doppler, -1.0);
   n.rows_stale = true;
 }
 
@@ -457,10 +462,11 @@ void DopplerInertialFilter::accumulate(DopplerSums& sums, double s, const Vec3& 
   sums.S.noalias() += dd * powers.transpose();
   sums.bz.noalias() += (z * d) * powers.head<3>().transpose();
   sums.c += w * z * z;
-  if (w > 0)
+  if (w > 0) {
     ++sums.n;
-  else
-    --sums.n;
+  } else if (--sums.n == 0) {
+    sums = DopplerSums{};  // nothing left: no rounding residue either
+  }
 }
 
 Mat3 DopplerInertialFilter::DopplerSums::moment(int m) const {
@@ -550,9 +556,8 @@ void DopplerInertialFilter::update() {
   constexpr int kFirstIt = 2, kSecondIt = 1;
   Node& n = nodes_.back();
   const MatS P_pred = n.P;
-  // Iterated update: re-linearize at the updated state while the correction
-  // moves it.
-  // moves it by more than the tolerances, from x_start (the prediction, or the first solve's
+  // Iterated update: re-linearize at the updated state while the correction moves it by more
+  // than the tolerances, from x_start (the prediction, or the first solve's
   // result when the second gate dropped a few points).
   auto solve = [&](FilterState& x_out, MatS& P_out, const FilterState& x_start, int iterations) {
     buildRows(n);
@@ -651,6 +656,7 @@ void DopplerInertialFilter::update() {
   }
   n.x = n.xs = x;
   n.P = P;
+  node_open_ = false;
 }
 
 DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, const Vec3& gyro,
@@ -774,6 +780,9 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
   CalibrationTest out;
   const std::size_t N = nodes_.size();
   if (N == 0) return out;
+  for (const Node& n : nodes_)
+    if (n.rows_stale)
+      throw std::logic_error("DopplerInertialFilter::testCalibration: removePoint without smooth");
   MatS P = priorCovariance(nodes_[0].xs);
   P.block<3, 3>(kRot, kRot).diagonal().setConstant(rotation_sigma * rotation_sigma);
   P(kTime, kTime) = time_sigma * time_sigma;

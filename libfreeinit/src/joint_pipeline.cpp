@@ -178,6 +178,12 @@ class RestCells {
     ++count_[cell];
     ++total_;
   }
+  void remove(std::uint32_t cell, double residual) {
+    sum_[cell] -= residual;
+    sumsq_ -= residual * residual;
+    --count_[cell];
+    --total_;
+  }
   /// Whether the cell's mean residual is more than `sigmas` of its std from zero (at least
   /// min_count returns), the std from the Doppler noise or, when larger, the residuals' RMS.
   bool coherent(std::uint32_t cell, double doppler_sigma, double sigmas, int min_count) const {
@@ -333,7 +339,10 @@ class JointPipeline final : public Pipeline {
     const double span = frames.size() >= 2 ? frames.back().stamp - frames.front().stamp : 0.0;
     if (!(span > 0)) return;
     const double expected = static_cast<double>(points) / span * cfg_.window.duration / stride_;
-    recorder_.reserve(static_cast<std::size_t>(1.05 * expected) + 1024);
+    // Frames stamped closer than their rate would suggest must not reserve without bound: the
+    // buffer grows as needed beyond this.
+    constexpr double kMostReserved = 4e6;
+    recorder_.reserve(static_cast<std::size_t>(std::min(1.05 * expected, kMostReserved)) + 1024);
   }
 
   /// Frames as the automatic stride wants them (anything with a `points` vector).
@@ -440,6 +449,14 @@ class JointPipeline final : public Pipeline {
         filter_->cancelRestFrom(t_k - kRestBackdating);
         for (std::size_t j = node_rest_.size(); j-- > 0 && imu[k0_ + j].t >= t_k - kRestBackdating;)
           node_rest_[j] = false;
+        // Their returns were not seen from a standing sensor after all: out of the rest cells.
+        for (std::size_t i = recorder_.size(); i-- > 0;) {
+          WindowRecorder::Point& p = recorder_.point(i);
+          if (p.node < node_rest_.size() && node_rest_[p.node]) break;
+          if (p.cell == WindowRecorder::kNoCell) continue;
+          rest_cells_.remove(p.cell, p.residual);
+          p.cell = WindowRecorder::kNoCell;
+        }
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
       }
       if (rest)
@@ -461,7 +478,7 @@ class JointPipeline final : public Pipeline {
         finalize(r);
         return;
       }
-      // Once, past the middle of the window: smooth what has been received, so that the final
+      // Once, at kEarlySmoothing of the window: smooth what has been received, so that the final
       // smoothing (what an online user waits for) starts from a good linearization.
       if (!early_smoothed_ && t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration) {
         const double t0 = wallSeconds();
@@ -477,6 +494,7 @@ class JointPipeline final : public Pipeline {
     phase_ = Phase::Done;
     const double t_solve = wallSeconds();
     Diagnostics& diag = r.diag;
+    rejectMovingDirections(r);  // before the counts below: they are of the returns used
     const auto& imu = seq_.imu();
     const double T = imu[k_end_].t - t_ref_;
     diag.window_duration = T;
@@ -491,7 +509,6 @@ class JointPipeline final : public Pipeline {
       fail(r, InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
       return;
     }
-    rejectMovingDirections(r);
     diag.iterations = filter_->smooth();
     diag.time_solver += wallSeconds() - t_solve;
     const std::size_t N = filter_->nodes();

@@ -28,7 +28,8 @@
 //   A = [S_{m+n}]_{m,n=0..2} with S_m = sum s^m d d^T (m = 0..4), b = [sum s^m z d]_{m=0..2},
 //   c = sum z^2.
 // The node's points are gated one by one against the prediction, then enter as one update with
-// the Jacobian dQ/dx of the node state: points are touched once, and everything after that
+// the Jacobian dQ/dx of the node state: points are touched once (or twice, when the second gate
+// or the caller takes some back out of the sums), and everything after that
 // (updates, smoothing, re-linearization) works on the sums.
 //
 // After the forward pass, an iterated Kalman smoother (Gauss-Newton on the whole window's MAP
@@ -68,7 +69,10 @@ struct DopplerInertialFilterParams {
   int coherence_window = 16;
   double coherence_sigma = 4.0;
   int max_iterations = 6;  ///< Gauss-Newton iterations after the forward pass, at most
-  /// The iterations stop when no node moves by more than this many tolerances, the tolerances
+  /// The smoother's iterations stop when no node moves by more than this many tolerances, or
+  /// when the steps shrink tenfold or more and are within ten of them (Gauss-Newton's
+  /// convergence: the next would be below); the filter's own update iterations stop likewise
+  /// (at most two, and one after the second gate). The tolerances
   /// being 1e-4 rad, 1e-3 m, 1e-4 m/s, 1e-5 rad/s, 1e-3 m/s^2 (for the calibration 1e-4 rad and
   /// 1e-4 s): a twentieth or less of what the data resolve (the bounds of the randomized
   /// scenarios are >= 0.002 m/s, 0.05 deg, 5e-4 rad/s and 0.01 m/s^2).
@@ -152,9 +156,16 @@ class DopplerInertialFilter {
   /// residual against the update (against the prediction if the first gate rejected it).
   bool pointAccepted(std::size_t i) const { return open_outcomes_[i].accepted; }
   double pointResidual(std::size_t i) const { return open_outcomes_[i].residual; }
-  /// Takes back an accepted point of node k (as given to addPoint() while it was open), e.g. once
-  /// the whole window shows it on a moving object; smooth() afterwards.
+  /// Takes back an accepted point of node k, a node already updated (exactly as given to
+  /// addPoint() while it was open: the same tau, position and Doppler), e.g. once the whole window
+  /// shows it on a moving object. smooth() next: it rebuilds the node's rows, which nothing else
+  /// may use until then.
   void removePoint(std::size_t k, double tau, const Eigen::Vector3f& p_l, double doppler);
+  /// The normalized time of a point at tau [s] from node k's time, as addPoint() and
+  /// removePoint() compute it (tau rounded to float: the form in which the caller keeps it).
+  double normalizedTime(std::size_t k, double tau) const {
+    return static_cast<double>(static_cast<float>(tau)) * nodes_[k].inv_h;
+  }
   /// Rest knowledge at the open node (the IMU shows rest): zero body velocity with std
   /// `velocity_sigma` [m/s] and zero rotation, the gyro sample then measuring the bias, with std
   /// `rate_sigma` [rad/s] (<= 0: that part is not used). Call after update().
@@ -241,7 +252,8 @@ class DopplerInertialFilter {
     /// sum s^m d d^T as a full 3x3 matrix.
     Mat3 moment(int m) const;
   };
-  /// The node's sums as measurement rows: A = U D U^T restricted to D > 0, W = D^(1/2) U^T / sigma
+  /// The node's sums as measurement rows: A = L L^T (Cholesky, when well conditioned), W = L^T /
+  /// sigma and y0 = L^-1 b / sigma; otherwise A = U D U^T restricted to D > 0, W = D^(1/2) U^T / sigma
   /// (rows x 9) and y0 = D^(-1/2) U^T b / sigma, so that the cost is |W Q + y0|^2 + const.
   struct Rows {
     Eigen::Matrix<double, Eigen::Dynamic, 9, 0, 9, 9> W;  // at most 9 rows, no heap
@@ -256,6 +268,7 @@ class DopplerInertialFilter {
     std::size_t k = 0;               ///< the node's IMU sample (index in imu_)
     bool last = false;               ///< the window's last node (no points after its time)
     double h = 0;                    ///< [s] time normalization of the interval
+    double inv_h = 1;                ///< [1/s] its inverse
     std::array<double, 3> s_fit{};   ///< normalized instants of the q fit
     Mat3 V_inv = Mat3::Identity();   ///< inverse Vandermonde matrix of s_fit
     DopplerSums sums;
@@ -308,8 +321,8 @@ class DopplerInertialFilter {
   // The open node's prediction for gating.
   Vec9 q_open_ = Vec9::Zero();
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction
-  double inv_h_open_ = 1;       ///< [1/s] of the open node's time normalization
   double gate_speed_open_ = 0;  ///< [m/s] the gate's share of the LiDAR speed
+  bool node_open_ = false;      ///< between beginNode() and update()
   double before_ = 0, after_ = 0;
   double gate_min2_ = 0, gate_k2_ = 0, r_doppler_ = 0;
 };

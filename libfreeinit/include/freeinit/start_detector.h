@@ -95,13 +95,13 @@ struct StartDecision {
 bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
                   double gyro_sigma, double accel_sigma);
 
-/// Decides the motion at the window start from the IMU samples `imu[k0..k1]` (times absolute;
-/// imu[k0].t is the window start) and the returns of [imu[k0].t, imu[k1].t] (times relative to
-/// the window start). `b_g_prior` is removed from the gyro. Deterministic.
 /// The start decision's settings from the estimator's configuration (noises, gyro-bias prior,
 /// gate, rest speed, information floor).
 StartDetectorParams startDetectorParams(const FreeInitConfig& cfg);
 
+/// Decides the motion at the window start from the IMU samples `imu[k0..k1]` (times absolute;
+/// imu[k0].t is the window start) and the returns of [imu[k0].t, imu[k1].t] (times relative to
+/// the window start). `b_g_prior` is removed from the gyro. Deterministic.
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std::size_t k1,
                           const std::vector<StartPoint>& points, const Extrinsics& extrinsics,
                           const Vec3& b_g_prior, const StartDetectorParams& params);
