@@ -110,15 +110,20 @@ class WindowRecorder {
   /// velocity at the node) between the node and the point.
   void finish(const DopplerInertialFilter& filter, const std::vector<ImuSample>& imu,
               std::size_t k0, const Extrinsics& ext, InitResult& r) const {
+    // In float, as the map is kept: at 100 m its rounding is 0.01 mm.
     struct NodeMotion {
-      Mat3 R;
-      Vec3 p, omega, v_b;
+      Eigen::Matrix3f R;
+      Eigen::Vector3f p, omega, v_b;
     };
     std::vector<NodeMotion> motion(filter.nodes());
     for (std::size_t k = 0; k < motion.size(); ++k) {
       const FilterState& x = filter.state(k);
-      motion[k] = {x.R_wb, x.p_w, imu[k0 + k].gyro - x.b_g, x.R_wb.transpose() * x.v_w};
+      motion[k] = {x.R_wb.cast<float>(), x.p_w.cast<float>(),
+                   (imu[k0 + k].gyro - x.b_g).cast<float>(),
+                   (x.R_wb.transpose() * x.v_w).cast<float>()};
     }
+    const Eigen::Matrix3f R_bl = ext.R_bl.cast<float>();
+    const Eigen::Vector3f p_bl = ext.p_bl.cast<float>();
     std::size_t accepted = 0;
     for (const Point& p : points_) accepted += p.accepted ? 1 : 0;
     r.static_map.clear();
@@ -127,10 +132,10 @@ class WindowRecorder {
     r.rejected.reserve(points_.size() - accepted);
     for (const Point& p : points_) {
       const NodeMotion& m = motion[p.node];
-      const Vec3 p_b = ext.R_bl * p.p_l.cast<double>() + ext.p_bl;
-      const Vec3 x_b = p_b + static_cast<double>(p.tau) * (m.omega.cross(p_b) + m.v_b);
+      const Eigen::Vector3f p_b = R_bl * p.p_l + p_bl;
+      const Eigen::Vector3f x_b = p_b + p.tau * (m.omega.cross(p_b) + m.v_b);
       MapPoint out;
-      out.p_w = (m.R * x_b + m.p).cast<float>();
+      out.p_w = m.R * x_b + m.p;
       out.intensity = p.intensity;
       out.residual = p.residual;
       (p.accepted ? r.static_map : r.rejected).push_back(out);
