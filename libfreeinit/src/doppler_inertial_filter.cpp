@@ -31,40 +31,34 @@ Mat3 incrementBiasJacobian(const Vec3& w0, const Vec3& w1, double tau) {
   return -tau * Mat3::Identity() - (tau * tau / 12.0) * skew(Vec3(w0 - w1));
 }
 
-/// F P for a transition F whose rows below the first 9 (attitude, position, velocity) are those of
-/// the identity (the biases and the calibration do not change between samples).
-DopplerInertialFilter::MatS transitionTimes(const DopplerInertialFilter::MatS& F,
-                                            const DopplerInertialFilter::MatS& P) {
-  constexpr int kN = DopplerInertialFilter::kStateDim, kM = kN - 9;
-  DopplerInertialFilter::MatS FP;
-  FP.topRows<9>() = F.topLeftCorner<9, 9>().lazyProduct(P.topRows<9>()) +
-                    F.topRightCorner<9, kM>().lazyProduct(P.bottomRows<kM>());
-  FP.bottomRows<kM>() = P.bottomRows<kM>();
-  return FP;
-}
-
-/// F P F^T for such a transition, symmetric by construction.
+/// F P F^T for a transition F whose rows below the first 9 (attitude, position, velocity) are
+/// those of the identity (the biases and the calibration do not change between samples), on the
+/// first D components of the state: the others are constant and uncorrelated with them (D = 15:
+/// a calibration declared exact) or included (D = 19). Symmetric by construction.
+template <int D>
 DopplerInertialFilter::MatS propagateCovariance(const DopplerInertialFilter::MatS& F,
                                                 const DopplerInertialFilter::MatS& P) {
-  constexpr int kN = DopplerInertialFilter::kStateDim, kM = kN - 9;
-  const DopplerInertialFilter::MatS FP = transitionTimes(F, P);
-  DopplerInertialFilter::MatS out;
-  out.topLeftCorner<9, 9>() =
-      FP.topLeftCorner<9, 9>().lazyProduct(F.topLeftCorner<9, 9>().transpose()) +
-      FP.topRightCorner<9, kM>().lazyProduct(F.topRightCorner<9, kM>().transpose());
-  out.topRightCorner<9, kM>() = FP.topRightCorner<9, kM>();
-  out.bottomLeftCorner<kM, 9>() = FP.topRightCorner<9, kM>().transpose();
-  out.bottomRightCorner<kM, kM>() = P.bottomRightCorner<kM, kM>();
-  return 0.5 * (out + out.transpose());
+  constexpr int kM = D - 9;
+  DopplerInertialFilter::MatS out = P;
+  const Eigen::Matrix<double, 9, D> FP = F.topLeftCorner<9, 9>().lazyProduct(P.topLeftCorner<9, D>()) +
+                                         F.block<9, kM>(0, 9).lazyProduct(P.block<kM, D>(9, 0));
+  const Eigen::Matrix<double, 9, 9> FP_a = FP.template leftCols<9>();
+  const Eigen::Matrix<double, 9, kM> FP_b = FP.template rightCols<kM>();
+  out.topLeftCorner<9, 9>() = FP_a.lazyProduct(F.topLeftCorner<9, 9>().transpose()) +
+                              FP_b.lazyProduct(F.block<9, kM>(0, 9).transpose());
+  out.block<9, kM>(0, 9) = FP_b;
+  out.block<kM, 9>(9, 0) = FP_b.transpose();
+  out.topLeftCorner<D, D>() = 0.5 * (out.topLeftCorner<D, D>() + out.topLeftCorner<D, D>().transpose()).eval();
+  return out;
 }
 
 /// The gain K = B S^-1 of a Kalman update, for S symmetric positive definite (9x9, overwritten by
 /// its Cholesky factor L, S = L L^T) and B = P H^T (n x 9), in place of B: K L = Y with Y L^T = B,
 /// by column operations on B (fixed-size, vectorized; at this size faster than Eigen's blocked
 /// triangular solves).
-template <int N>
-void kalmanGainInPlace(Eigen::Matrix<double, 9, 9>& S, Eigen::Matrix<double, N, 9>& B) {
-  constexpr int n = 9;
+template <int N, int R>
+void kalmanGainInPlace(Eigen::Matrix<double, R, R>& S, Eigen::Matrix<double, N, R>& B) {
+  constexpr int n = R;
   for (int j = 0; j < n; ++j) {  // S = L L^T (lower triangle)
     double d = S(j, j);
     for (int k = 0; k < j; ++k) d -= S(j, k) * S(j, k);
@@ -360,6 +354,9 @@ DopplerInertialFilter::MatS DopplerInertialFilter::priorCovariance(const FilterS
 void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior) {
   if (imu_.empty()) throw std::logic_error("DopplerInertialFilter::start before addImu");
   prior_ = prior;
+  // A calibration declared exact stays at its prior, uncorrelated with the rest: the filter and
+  // the smoother then work on the first 15 components only (the calibration test on all 19).
+  active_ = prior.rotation_sigma > 0 || prior.time_sigma > 0 ? kStateDim : kCoreDim;
   nodes_.clear();
   x0_prior_ = x0;
   x0_prior_.t = imu_.front().t;
@@ -380,7 +377,9 @@ void DopplerInertialFilter::predict() {
   n.k = cur.k + 1;
   MatS F;
   n.x_pred = propagate(cur.x, imu_, cur.k, &F);
-  n.P = propagateCovariance(F, cur.P) + processNoise(imu_[n.k].t - imu_[cur.k].t);
+  n.P = (active_ == kStateDim ? propagateCovariance<kStateDim>(F, cur.P)
+                               : propagateCovariance<kCoreDim>(F, cur.P)) +
+        processNoise(imu_[n.k].t - imu_[cur.k].t);
   n.P = 0.5 * (n.P + n.P.transpose()).eval();
   n.x = n.xs = n.x_pred;
   nodes_.push_back(n);
@@ -520,10 +519,32 @@ void DopplerInertialFilter::buildRows(Node& n) const {
   }
 }
 
+template <int D, int R>
+DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
+    const Eigen::Matrix<double, R, kStateDim>& H_full, const Eigen::Matrix<double, R, 1>& r0,
+    const VecS& dx_prior, MatS& P) {
+  // On the first D components (the others constant, uncorrelated, and without effect here when
+  // D < 19); residual r0 + H dx, unit noise. Coefficient-based products: at these sizes they
+  // beat the blocked kernels.
+  const Eigen::Matrix<double, R, D> H = H_full.template leftCols<D>();
+  const Eigen::Matrix<double, R, 1> innovation = -r0 - H * dx_prior.template head<D>();
+  const Eigen::Matrix<double, R, D> HP = H.lazyProduct(P.template topLeftCorner<D, D>());
+  Eigen::Matrix<double, R, R> S = HP.lazyProduct(H.transpose());
+  S.diagonal().array() += 1.0;  // S >= I: the Cholesky factorization cannot fail
+  Eigen::Matrix<double, D, R> K = HP.transpose();
+  kalmanGainInPlace(S, K);
+  VecS dx = dx_prior;
+  dx.template head<D>() += K * innovation;
+  auto P_d = P.template topLeftCorner<D, D>();
+  P_d.noalias() -= K.lazyProduct(HP);
+  P_d = 0.5 * (P_d + P_d.transpose()).eval();
+  return dx;
+}
+
 DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
                                                                   const FilterState& x_lin,
                                                                   const VecS& dx_prior,
-                                                                  MatS& P) const {
+                                                                  MatS& P, bool full) const {
   const int rows = static_cast<int>(n.rows.W.rows());
   if (rows == 0) return dx_prior;
   Mat9xS G;
@@ -534,18 +555,10 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
   Vec9 y0 = Vec9::Zero();
   W.topRows(rows) = n.rows.W;
   y0.head(rows) = n.rows.y0;
-  // (Coefficient-based products: at these sizes they beat the blocked kernels.)
   const Mat9xS H = W.lazyProduct(G);
-  const Vec9 innovation = -(W * Q + y0) - H * dx_prior;
-  const Mat9xS HP = H.lazyProduct(P);
-  Mat9 S = HP.lazyProduct(H.transpose());
-  S.diagonal().array() += 1.0;  // S >= I: the Cholesky factorization cannot fail
-  Eigen::Matrix<double, kStateDim, 9> K = HP.transpose();
-  kalmanGainInPlace(S, K);
-  const VecS dx = dx_prior + K * innovation;
-  P.noalias() -= K.lazyProduct(HP);
-  P = 0.5 * (P + P.transpose()).eval();
-  return dx;
+  const Vec9 r0 = W * Q + y0;
+  return active_ == kStateDim || full ? kalmanUpdate<kStateDim, 9>(H, r0, dx_prior, P)
+                                      : kalmanUpdate<kCoreDim, 9>(H, r0, dx_prior, P);
 }
 
 void DopplerInertialFilter::update() {
@@ -661,40 +674,32 @@ void DopplerInertialFilter::update() {
 
 DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, const Vec3& gyro,
                                                                const FilterState& x_lin,
-                                                               const VecS& dx, MatS& P) {
+                                                               const VecS& dx, MatS& P,
+                                                               bool full) const {
   if (!(n.rest_velocity_sigma > 0) && !(n.rest_rate_sigma > 0)) return dx;
   // Zero velocity: v_b = R^T v_w = 0, dv_b = R^T dv_w + [v_b]x dtheta. Zero rate: the gyro
-  // sample measures the bias, gyro - b_g = 0 + n, d(.) = -db_g. Stacked, relative to x_lin + dx.
+  // sample measures the bias, gyro - b_g = 0 + n, d(.) = -db_g. Stacked and whitened, relative
+  // to x_lin + dx (a part not used: zero rows, which change nothing).
   Eigen::Matrix<double, 6, kStateDim> H = Eigen::Matrix<double, 6, kStateDim>::Zero();
-  Eigen::Matrix<double, 6, 1> y = Eigen::Matrix<double, 6, 1>::Zero();
   Eigen::Matrix<double, 6, 1> r = Eigen::Matrix<double, 6, 1>::Zero();
   const FilterState x = boxplus(x_lin, dx);
   const Vec3 v_b = x.R_wb.transpose() * x.v_w;
-  int rows = 0;
   if (n.rest_velocity_sigma > 0) {
-    H.block<3, 3>(0, 0) = skew(v_b);
-    H.block<3, 3>(0, 6) = x.R_wb.transpose();
-    y.head<3>() = -v_b;
-    r.head<3>().setConstant(n.rest_velocity_sigma * n.rest_velocity_sigma);
-    rows = 3;
+    const double w = 1.0 / n.rest_velocity_sigma;
+    H.block<3, 3>(0, 0) = w * skew(v_b);
+    H.block<3, 3>(0, 6) = w * x.R_wb.transpose();
+    r.head<3>() = w * v_b;
   }
   if (n.rest_rate_sigma > 0) {
-    H.block<3, 3>(rows, 9) = Mat3::Identity();
-    y.segment<3>(rows) = gyro - x.b_g;
-    r.segment<3>(rows).setConstant(n.rest_rate_sigma * n.rest_rate_sigma);
-    rows += 3;
+    const double w = 1.0 / n.rest_rate_sigma;
+    H.block<3, 3>(3, 9) = w * Mat3::Identity();
+    r.tail<3>() = -w * (gyro - x.b_g);
   }
-  using RowsXS = Eigen::Matrix<double, Eigen::Dynamic, kStateDim, 0, 6, kStateDim>;
-  using RowsXRows = Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, 6, 6>;
-  const RowsXS Hr = H.topRows(rows);
-  RowsXRows S = Hr * P * Hr.transpose();
-  S.diagonal() += r.head(rows);
-  const Eigen::Matrix<double, kStateDim, Eigen::Dynamic, 0, kStateDim, 6> K =
-      S.ldlt().solve(Hr * P).transpose();
-  const VecS out = dx + K * y.head(rows);
-  P.noalias() -= K.lazyProduct(Hr * P);
-  P = 0.5 * (P + P.transpose()).eval();
-  return out;
+  // The step is relative to x_lin + dx: its own prior mean is zero, then it is added to dx.
+  const VecS step = active_ == kStateDim || full
+                        ? kalmanUpdate<kStateDim, 6>(H, r, VecS::Zero(), P)
+                        : kalmanUpdate<kCoreDim, 6>(H, r, VecS::Zero(), P);
+  return dx + step;
 }
 
 void DopplerInertialFilter::updateRest(double velocity_sigma, double rate_sigma) {
@@ -743,15 +748,26 @@ int DopplerInertialFilter::smooth() {
       const Node& m = nodes_[k + 1];
       const FilterState x_next = propagate(n.xs, imu_, n.k, &F[k]);
       dx_p[k + 1] = F[k] * dx_f[k] + boxminus(x_next, m.xs);
-      P_p[k + 1] = propagateCovariance(F[k], P) + processNoise(imu_[m.k].t - imu_[n.k].t);
+      P_p[k + 1] = (active_ == kStateDim ? propagateCovariance<kStateDim>(F[k], P)
+                                         : propagateCovariance<kCoreDim>(F[k], P)) +
+                   processNoise(imu_[m.k].t - imu_[n.k].t);
     }
     // Backward: Rauch-Tung-Striebel, dxs_k = dx_f_k + P_f_k F_k^T P_p_k+1^-1 (dxs_k+1 - dx_p_k+1),
     // evaluated right to left (one solve with a vector; the smoothed covariances are not needed).
     nodes_[N - 1].P = P_f[N - 1];
     dxs[N - 1] = dx_f[N - 1];
     for (std::size_t k = N - 1; k-- > 0;) {
-      const VecS y = P_p[k + 1].ldlt().solve(VecS(dxs[k + 1] - dx_p[k + 1]));
-      dxs[k] = dx_f[k] + P_f[k] * (F[k].transpose() * y);
+      if (active_ == kStateDim) {
+        const VecS y = P_p[k + 1].ldlt().solve(VecS(dxs[k + 1] - dx_p[k + 1]));
+        dxs[k] = dx_f[k] + P_f[k] * (F[k].transpose() * y);
+      } else {  // the calibration is constant: its part of y is zero, its step dx_f's
+        using VecC = Eigen::Matrix<double, kCoreDim, 1>;
+        const VecC y = P_p[k + 1].topLeftCorner<kCoreDim, kCoreDim>().ldlt().solve(
+            VecC((dxs[k + 1] - dx_p[k + 1]).head<kCoreDim>()));
+        dxs[k] = dx_f[k];
+        dxs[k].head<kCoreDim>() += P_f[k].topLeftCorner<kCoreDim, kCoreDim>() *
+                                   (F[k].topLeftCorner<kCoreDim, kCoreDim>().transpose() * y);
+      }
       nodes_[k].P = P_f[k];
     }
     // Converged when no node moves by more than the tolerance of its block (scaled), or when the
@@ -789,13 +805,13 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
   VecS dx = boxminus(x0_prior_, nodes_[0].xs);
   for (std::size_t k = 0; k < N; ++k) {
     const Node& n = nodes_[k];
-    dx = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, n.xs, dx, P), P);
+    dx = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, n.xs, dx, P, true), P, true);
     if (k + 1 == N) break;
     const Node& m = nodes_[k + 1];
     MatS F;
     const FilterState x_next = propagate(n.xs, imu_, n.k, &F);
     dx = F * dx + boxminus(x_next, m.xs);
-    P = propagateCovariance(F, P) + processNoise(imu_[m.k].t - imu_[n.k].t);
+    P = propagateCovariance<kStateDim>(F, P) + processNoise(imu_[m.k].t - imu_[n.k].t);
   }
   out.correction = dx;
   out.covariance = P;

@@ -94,6 +94,8 @@ struct FilterState {
 class DopplerInertialFilter {
  public:
   static constexpr int kStateDim = 19;
+  /// The components before the calibration's (attitude, position, velocity, biases).
+  static constexpr int kCoreDim = 15;
   /// Index of each block in the error state.
   enum Block : int { kTheta = 0, kPos = 3, kVel = 6, kBg = 9, kBa = 12, kRot = 15, kTime = 18 };
   using MatS = Eigen::Matrix<double, kStateDim, kStateDim>;
@@ -298,12 +300,17 @@ class DopplerInertialFilter {
   MatS processNoise(double dt) const;
   void buildRows(Node& n) const;
   /// Kalman update of the error dx (prior mean dx_prior relative to x_lin, covariance P) with
-  /// node n's rows linearized at x_lin. Returns the posterior error relative to x_lin.
-  VecS dopplerUpdate(const Node& n, const FilterState& x_lin, const VecS& dx_prior,
-                      MatS& P) const;
+  /// node n's rows linearized at x_lin. Returns the posterior error relative to x_lin. full: on
+  /// all 19 components even when the calibration is declared exact.
+  VecS dopplerUpdate(const Node& n, const FilterState& x_lin, const VecS& dx_prior, MatS& P,
+                     bool full = false) const;
   /// Rest update of the error dx (relative to x_lin, covariance P) at node n.
-  static VecS restUpdate(const Node& n, const Vec3& gyro, const FilterState& x_lin,
-                          const VecS& dx, MatS& P);
+  VecS restUpdate(const Node& n, const Vec3& gyro, const FilterState& x_lin, const VecS& dx,
+                  MatS& P, bool full = false) const;
+  /// The update of the first D components with R whitened rows r0 + H dx.
+  template <int D, int R>
+  static VecS kalmanUpdate(const Eigen::Matrix<double, R, kStateDim>& H,
+                           const Eigen::Matrix<double, R, 1>& r0, const VecS& dx_prior, MatS& P);
 
   DopplerInertialFilterParams params_;
   Mat3 R_bl_;
@@ -323,6 +330,7 @@ class DopplerInertialFilter {
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction
   double gate_speed_open_ = 0;  ///< [m/s] the gate's share of the LiDAR speed
   bool node_open_ = false;      ///< between beginNode() and update()
+  int active_ = kStateDim;      ///< components the filter and smoother update (15 or 19)
   double before_ = 0, after_ = 0;
   double gate_min2_ = 0, gate_k2_ = 0, r_doppler_ = 0;
 };
