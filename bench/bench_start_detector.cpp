@@ -56,15 +56,10 @@ StartInput prepare(const std::string& name) {
     for (const auto& p : f.points)
       all.push_back({f.stamp + static_cast<double>(p.time_offset), &p});
   if (all.empty() || imu.empty()) return in;
-  // Window start: the first IMU sample at or after the first LiDAR point.
-  std::size_t k = 0;
-  while (k < imu.size() && imu[k].t < all.front().t) ++k;
+  const freeinit::StartSpan start = freeinit::startSpan(imu, all.front().t, cfg);
+  if (!start.valid) return in;
+  const std::size_t k = start.k0, k1 = start.k1;
   const double t_ref = imu[k].t;
-  const double span = std::min(cfg.estimator.bootstrap_duration, cfg.window.duration);
-  std::size_t k1 = k;
-  while (k1 + 1 < imu.size() && imu[k1].t < t_ref + span &&
-         imu[k1 + 1].t - t_ref < cfg.window.duration)
-    ++k1;
   const double t_end = imu[k1].t;
   std::size_t n_usable = 0;
   for (const Timed& q : all)

@@ -94,21 +94,13 @@ class JointPipeline final : public Pipeline {
     const auto& imu = seq_.imu();
     MeasurementSequencer::Cursor c;
     if (!seq_.normalize(c) || imu.empty()) return;
-    // Window start: the first IMU sample at or after the first LiDAR point.
-    const double tp0 = seq_.time(c);
-    std::size_t k = 0;
-    while (k < imu.size() && imu[k].t < tp0) ++k;
-    if (k + 1 >= imu.size()) return;
+    // Window start: the first IMU sample at or after the first LiDAR point; the start
+    // decision's span: bootstrap_duration, within the window.
+    const StartSpan start = startSpan(imu, seq_.time(c), cfg_);
+    if (!start.valid) return;
+    const std::size_t k = start.k0, k1 = start.k1;
     const double t_ref = imu[k].t;
-    // The start decision's span: bootstrap_duration, within the window.
-    const double span = std::min(cfg_.estimator.bootstrap_duration, cfg_.window.duration);
-    std::size_t k1 = k;
-    while (k1 + 1 < imu.size() && imu[k1].t < t_ref + span &&
-           imu[k1 + 1].t - t_ref < cfg_.window.duration)
-      ++k1;
-    const bool span_complete = imu[k1].t >= t_ref + span ||
-                               (k1 + 1 < imu.size() && imu[k1 + 1].t - t_ref >= cfg_.window.duration);
-    if ((!span_complete || !seq_.lidarPassed(imu[k1].t)) && !seq_.finished()) return;
+    if ((!start.complete || !seq_.lidarPassed(imu[k1].t)) && !seq_.finished()) return;
     if (k1 < k + 2) return;  // wait for a few samples at least (finished: not enough data)
     // The decision interpolates the IMU with the two samples after the span: wait for them, so
     // that it does not depend on how far the IMU stream happens to be ahead.

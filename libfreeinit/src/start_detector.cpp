@@ -371,6 +371,25 @@ bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::siz
   return sg / (gyro_sigma * gyro_sigma) < limit && sa / (accel_sigma * accel_sigma) < limit;
 }
 
+StartSpan startSpan(const std::vector<ImuSample>& imu, double t_first, const FreeInitConfig& cfg) {
+  StartSpan out;
+  std::size_t k = 0;
+  while (k < imu.size() && imu[k].t < t_first) ++k;
+  if (k + 1 >= imu.size()) return out;
+  const double t_ref = imu[k].t;
+  const double span = std::min(cfg.estimator.bootstrap_duration, cfg.window.duration);
+  std::size_t k1 = k;
+  while (k1 + 1 < imu.size() && imu[k1].t < t_ref + span &&
+         imu[k1 + 1].t - t_ref < cfg.window.duration)
+    ++k1;
+  out.k0 = k;
+  out.k1 = k1;
+  out.valid = true;
+  out.complete = imu[k1].t >= t_ref + span ||
+                 (k1 + 1 < imu.size() && imu[k1 + 1].t - t_ref >= cfg.window.duration);
+  return out;
+}
+
 StartDetectorParams startDetectorParams(const FreeInitConfig& cfg) {
   const VelocimeterParams& vp = cfg.velocimeter;
   StartDetectorParams sp;

@@ -95,6 +95,17 @@ struct StartDecision {
 bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
                   double gyro_sigma, double accel_sigma);
 
+/// The start decision's span of a window: its first IMU sample k0 (the first at or after t_first,
+/// the window's first LiDAR return) and its last k1, bootstrap_duration later or the last one
+/// inside the window. valid: k0 has a sample after it; complete: the samples given cover the
+/// span (a later one exists, or k1 is the window's last).
+struct StartSpan {
+  std::size_t k0 = 0, k1 = 0;
+  bool valid = false;
+  bool complete = false;
+};
+StartSpan startSpan(const std::vector<ImuSample>& imu, double t_first, const FreeInitConfig& cfg);
+
 /// The start decision's settings from the estimator's configuration (noises, gyro-bias prior,
 /// gate, rest speed, information floor).
 StartDetectorParams startDetectorParams(const FreeInitConfig& cfg);
