@@ -39,55 +39,43 @@ Pass read(const std::string& path, bool salvage) {
   mrpt_glue::AppConfig config;
   mrpt_glue::ObservationDecoder decoder(config.input);
   mrpt_glue::RecordChecker checker(config);
-  std::vector<mrpt_glue::IngestItem> items;
-  std::vector<mrpt_glue::CheckedItem> checked;
   double last_imu = -INFINITY;
-  auto inspect = [&](const std::vector<mrpt_glue::CheckedItem>& out) {
-    for (const auto& c : out) {
-      if (!c.ok()) {
-        ++p.rejected;
-        continue;
+  auto inspect = [&](const mrpt_glue::CheckedItem& c) {
+    if (!c.ok()) {
+      ++p.rejected;
+      return;
+    }
+    const auto& it = c.item;
+    if (it.kind == mrpt_glue::IngestItem::Kind::Imu) {
+      if (!std::isfinite(it.imu.t) || !it.imu.gyro.allFinite() || !it.imu.accel.allFinite())
+        broken("non-finite IMU sample passed the checks");
+      if (!(it.imu.t > last_imu)) broken("IMU stamps passed the checks without increasing");
+      last_imu = it.imu.t;
+      ++p.imu;
+    } else if (it.kind == mrpt_glue::IngestItem::Kind::Frame) {
+      if (!it.frame || it.frame->points.empty()) broken("empty frame passed the checks");
+      for (std::size_t i = 0; i < it.frame->points.size(); ++i) {
+        const DopplerPoint& q = it.frame->points[i];
+        if (!q.p_l.allFinite() || !std::isfinite(q.doppler) || !std::isfinite(q.time_offset))
+          broken("non-finite point passed the checks");
+        if (i > 0 && q.time_offset < it.frame->points[i - 1].time_offset)
+          broken("frame points not sorted by time");
       }
-      const auto& it = c.item;
-      if (it.kind == mrpt_glue::IngestItem::Kind::Imu) {
-        if (!std::isfinite(it.imu.t) || !it.imu.gyro.allFinite() || !it.imu.accel.allFinite())
-          broken("non-finite IMU sample passed the checks");
-        if (!(it.imu.t > last_imu)) broken("IMU stamps passed the checks without increasing");
-        last_imu = it.imu.t;
-        ++p.imu;
-      } else if (it.kind == mrpt_glue::IngestItem::Kind::Frame) {
-        if (!it.frame || it.frame->points.empty()) broken("empty frame passed the checks");
-        for (std::size_t i = 0; i < it.frame->points.size(); ++i) {
-          const DopplerPoint& q = it.frame->points[i];
-          if (!q.p_l.allFinite() || !std::isfinite(q.doppler) || !std::isfinite(q.time_offset))
-            broken("non-finite point passed the checks");
-          if (i > 0 && q.time_offset < it.frame->points[i - 1].time_offset)
-            broken("frame points not sorted by time");
-        }
-        ++p.frames;
-      }
+      ++p.frames;
     }
   };
   try {
     mrpt_glue::RawlogReader reader(path, no_index);
     reader.setMaxRecordBytes(kMaxRecordBytes);
     reader.setSalvage(salvage);
-    mrpt_glue::RawlogObject rec;
-    while (reader.next(rec)) {
-      if (rec.index != p.records) broken("records not numbered in order");
-      ++p.records;
-      items.clear();
-      decoder.decode(rec.index, rec.object, items);
-      rec.object.reset();
-      for (auto& item : items) {
-        checked.clear();
-        checker.push(std::move(item), checked);
-        inspect(checked);
-      }
-    }
-    checked.clear();
-    checker.finish(checked);
-    inspect(checked);
+    // The apps' own loop (what a user's recording goes through), with the record numbering
+    // checked on the way.
+    mrpt_glue::forEachCheckedItem(reader, decoder, checker, inspect,
+                                  [&](const mrpt_glue::RawlogObject& rec) {
+                                    if (rec.index != p.records)
+                                      broken("records not numbered in order");
+                                    ++p.records;
+                                  });
     p.stop = reader.salvageStop();
   } catch (const std::exception& e) {
     p.error = e.what();

@@ -105,4 +105,26 @@ std::optional<IngestItem> itemFromStream(net::StreamEvent&& e, std::size_t recor
   return std::nullopt;
 }
 
+void forEachCheckedItem(RawlogReader& reader, ObservationDecoder& decoder,
+                        RecordChecker& checker, const std::function<void(CheckedItem&)>& take,
+                        const std::function<void(const RawlogObject&)>& on_record) {
+  std::vector<IngestItem> items;
+  std::vector<CheckedItem> checked;
+  RawlogObject rec;
+  while (reader.next(rec)) {
+    if (on_record) on_record(rec);
+    items.clear();
+    decoder.decode(rec.index, rec.object, items);
+    rec.object.reset();
+    for (auto& item : items) {
+      checked.clear();
+      checker.push(std::move(item), checked);
+      for (auto& c : checked) take(c);
+    }
+  }
+  checked.clear();
+  checker.finish(checked);
+  for (auto& c : checked) take(c);
+}
+
 }  // namespace freeinit::mrpt_glue

@@ -42,22 +42,7 @@ ValidatedInput readRecording(const std::string& path, const AppConfig& config,
     }
   };
 
-  std::vector<IngestItem> items;
-  std::vector<CheckedItem> checked;
-  RawlogObject rec;
-  while (reader.next(rec)) {
-    items.clear();
-    decoder.decode(rec.index, rec.object, items);
-    rec.object.reset();
-    for (auto& item : items) {
-      checked.clear();
-      checker.push(std::move(item), checked);
-      for (auto& c : checked) take(c);
-    }
-  }
-  checked.clear();
-  checker.finish(checked);
-  for (auto& c : checked) take(c);
+  forEachCheckedItem(reader, decoder, checker, take);
   reader.saveIndex();
   if (!all_ns) {
     in.imu_stamp_ns.clear();

@@ -4,10 +4,12 @@
 
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/ingest.h>
+#include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/net/stream_receiver.h>
 #include <mrpt/poses/CPose3D.h>
 #include <mrpt/serialization/CSerializable.h>
 
+#include <functional>
 #include <optional>
 #include <vector>
 
@@ -30,6 +32,14 @@ class ObservationDecoder {
   std::optional<mrpt::poses::CPose3D> imu_pose_;
   std::optional<Extrinsics> first_extrinsics_;
 };
+
+/// The whole offline path over a rawlog: every record `reader` gives, decoded and checked, in
+/// order; `take` gets each checked item, the clouds held for the IMU around them at the end
+/// included; `on_record` (if given) sees each record before it is decoded. Errors of the reader
+/// propagate.
+void forEachCheckedItem(RawlogReader& reader, ObservationDecoder& decoder,
+                        RecordChecker& checker, const std::function<void(CheckedItem&)>& take,
+                        const std::function<void(const RawlogObject&)>& on_record = {});
 
 /// An Imu or Frame event of the live stream as an item (`record`: the observation number); its
 /// points are moved out of the event and sorted by time if they are not; the accelerations are
