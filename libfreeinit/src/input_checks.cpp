@@ -185,7 +185,10 @@ std::optional<std::string> zeroDopplerProblem(const std::vector<ImuSample>& imu,
                               : "the Doppler field is zero for every point while the "
                                 "IMU shows motion: " +
                                     *motion;
-  return why + " (an ego-motion-compensated sensor? Free-Init needs the raw range rate)";
+  return why +
+         " (an ego-motion-compensated sensor, or a driver that leaves the field at zero? "
+         "Free-Init needs the raw range rate; a sensor with Doppler bins reads zero when "
+         "moving slowly: declare [input] doppler_resolution)";
 }
 
 }  // namespace freeinit::input

@@ -99,6 +99,10 @@ const config::Section<InputParams>& inputSection() {
                   "slower IMU streams are rejected")
           .flag("drop_invalid_points", &P::drop_invalid_points,
                 "drop NaN/inf points (reported) instead of failing")
+          .number("doppler_resolution", &P::doppler_resolution, "m/s", between(0, 10),
+                  "the sensor's Doppler bin (0: continuous); with bins, a cloud with zero "
+                  "Doppler everywhere is accepted moving too, otherwise only while the IMU "
+                  "shows rest")
           .number("max_record_mb", &P::max_record_mb, "MB", between(1, 65536),
                   "most one rawlog record may allocate while it is read (a 60,000-point cloud "
                   "takes 1.6 MB); a record claiming more is corrupt and refused");
@@ -152,9 +156,9 @@ const config::Section<LidarPoseParams>& extrinsicsPoseSection() {
 }
 
 std::vector<const config::SectionBase*> appSections() {
-  return {&estimatorSection(),   &velocimeterSection(), &bootstrapSection(), &staticDetectorSection(),
-          &windowSection(),      &gravitySection(),   &inputSection(),
-          &outputSection(),      &extrinsicsSection()};
+  return {&estimatorSection(),      &velocimeterSection(), &bootstrapSection(),
+          &staticDetectorSection(), &windowSection(),      &gravitySection(),
+          &inputSection(),          &outputSection(),      &extrinsicsSection()};
 }
 
 Extrinsics extrinsicsOf(const LidarPoseParams& pose, const Checker& keys) {

@@ -3,8 +3,8 @@
 #include <algorithm>
 #include <cmath>
 #include <iomanip>
-#include <sstream>
 #include <limits>
+#include <sstream>
 #include <stdexcept>
 #include <utility>
 
@@ -82,7 +82,8 @@ void RecordChecker::push(IngestItem item, std::vector<CheckedItem>& out) {
     c.end = span.end;
     last_stamp_ = it.frame->stamp;
     last_end_ = span.end;
-    zero_doppler = input::dopplerAllZero(it.frame->points);
+    // Binned Doppler reads zero everywhere at rest and moving slowly: nothing to check then.
+    zero_doppler = !(input_.doppler_resolution > 0) && input::dopplerAllZero(it.frame->points);
   } else if (it.frame && !it.frame->points.empty()) {
     // A bad cloud: its span from the finite time offsets, for telling in or out of a window.
     double lo = 0, hi = 0;
@@ -298,17 +299,16 @@ std::string InitSession::endOfDataReason() const {
     return source_ + ": no CObservationPointCloud with sensorLabel '" + in.lidar_label +
            "' ([input] lidar_label); the input holds only " + std::to_string(imu_count_) +
            (imu_count_ == 1 ? " IMU sample '" : " IMU samples '") + in.imu_label + "'" +
-           (others.empty() ? "" : " and " + others) +
-           plugin_hint;
+           (others.empty() ? "" : " and " + others) + plugin_hint;
   if (imu_count_ < 2)
     return source_ + ": record " + std::to_string(first_imu_record_) + ": a single IMU sample";
   std::ostringstream covered;
-  covered << std::setprecision(3)
-          << (last_t_ && first_frame_t_ ? *last_t_ - *first_frame_t_ : 0.0);
+  covered << std::setprecision(3) << (last_t_ && first_frame_t_ ? *last_t_ - *first_frame_t_ : 0.0);
   std::ostringstream window;
   window << config_.core.window.duration;
-  return source_ + ": " + (from_file_ ? "recording" : "stream") + " shorter than the window: " +
-         covered.str() + " s (" + std::to_string(imu_after_first_frame_) +
+  return source_ + ": " + (from_file_ ? "recording" : "stream") +
+         " shorter than the window: " + covered.str() + " s (" +
+         std::to_string(imu_after_first_frame_) +
          " IMU samples) after the first point cloud (record " +
          std::to_string(first_frame_record_) + "), the window needs " + window.str() +
          " s ([window] duration)";

@@ -446,6 +446,10 @@ TEST(InputValidator, ZeroDopplerIsAcceptedAtRestOnly) {
   expectThrowsWith([&] { validate(zeroed(turning), sensorPoseConfig(), "zero_moving.rawlog"); },
                    "record 0: the Doppler field is zero for every point while the IMU shows "
                    "motion: the gyro varies by");
+  // A sensor with Doppler bins reads zero everywhere when it moves slowly: declared, accepted.
+  AppConfig binned = sensorPoseConfig();
+  binned.input.doppler_resolution = 0.125;
+  EXPECT_EQ(validate(zeroed(turning), binned, "zero_binned.rawlog").frames.size(), 11u);
 }
 
 TEST(RawlogReader, GzipAndPlainReadTheSame) {

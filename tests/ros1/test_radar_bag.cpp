@@ -8,13 +8,13 @@
 // carried by hand, near rest again from ~34 s.
 #include <freeinit/doppler_inertial_filter.h>
 #include <freeinit/free_init.h>
-#include <freeinit/rotation.h>
 #include <freeinit/mrpt/app_config.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <freeinit/ros1/BagImportApp.h>
 #include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/doppler_fit.h>
+#include <freeinit/rotation.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <mrpt/obs/CObservationPointCloud.h>
@@ -173,6 +173,33 @@ TEST(RadarBag, RestMeansMatchTheReadme) {
   EXPECT_GT(rest_points, 4000u);
 }
 
+// The shipped estimator INI declares the radar's Doppler bin ([input] doppler_resolution): every
+// Doppler of the recording is a whole number of bins (float32 values: within 1e-5 of one), moving
+// or not, and many scans read zero everywhere while the rig moves slowly, which the bin makes
+// legitimate (without it, the app refuses them: tests/ros1/CMakeLists.txt runs it along the
+// recording).
+TEST(RadarBag, DopplerIsWholeBinsAsTheIniDeclares) {
+  SKIP_WITHOUT_THE_BAG();
+  const double bin =
+      mrpt_glue::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").input.doppler_resolution;
+  ASSERT_GT(bin, 0);
+  std::size_t nonzero = 0, zero_scans_moving = 0;
+  for (const auto& f : recording().scans) {
+    bool all_zero = true;
+    for (const auto& p : f.points) {
+      const double k = p.doppler / bin;
+      ASSERT_NEAR(k, std::round(k), 1e-4) << "Doppler " << p.doppler << " at " << f.stamp;
+      if (p.doppler != 0.0f) {
+        ++nonzero;
+        all_zero = false;
+      }
+    }
+    if (all_zero && !atRest(f.stamp)) ++zero_scans_moving;
+  }
+  EXPECT_GT(nonzero, 5000u);
+  EXPECT_GT(zero_scans_moving, 20u);
+}
+
 // The per-scan Doppler-only fit at rest: every scan fits, its velocity is zero within its sigma
 // (chi-square, 3 dof, 99.9 %), and the sigma is the quantization floor's (0.036 m/s per point over
 // ~40 directions: 0.005-0.06 m/s per axis; never 0).
@@ -240,6 +267,12 @@ TEST(RadarBag, DopplerFitWhileMovingAgreesWithTheImu) {
   };
   auto omega = [&](double t) { return r.imu[index(t)].gyro - bias; };
 
+  // The shipped estimator INI's doppler_sigma is this test's measurement: with the fits'
+  // covariances scaled by its ratio to their residuals' 0.044 m/s, the chi-square has its mean.
+  const double scale =
+      mrpt_glue::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core.velocimeter.doppler_sigma /
+      0.044;
+  double chi2_scaled = 0;
   std::size_t pairs = 0, agree = 0;
   std::vector<double> change, miss, speed;
   for (std::size_t k = 0; k + 1 < r.scans.size(); ++k) {
@@ -265,6 +298,10 @@ TEST(RadarBag, DopplerFitWhileMovingAgreesWithTheImu) {
     const Vec3 d = v1 - v;
     ++pairs;
     if (d.dot(C.inverse() * d) < 11.34) ++agree;
+    const Mat3 C_scaled =
+        scale * scale * e.R_bl * (r.fits[k].cov + r.fits[k + 1].cov) * e.R_bl.transpose() +
+        0.02 * 0.02 * Mat3::Identity();
+    chi2_scaled += d.dot(C_scaled.inverse() * d);
     change.push_back((v1 - v0).norm());
     miss.push_back(d.norm());
     speed.push_back(r.fits[k].v_l.norm());
@@ -278,6 +315,8 @@ TEST(RadarBag, DopplerFitWhileMovingAgreesWithTheImu) {
       << agree << " of " << pairs << " pairs agree; median change " << median(change)
       << " m/s, median miss " << median(miss) << " m/s";
   EXPECT_LT(median(miss), 0.8 * median(change));
+  // Mean of chi-square with 3 dof (measured: 2.99 at 2.5x); 194 pairs give it a ~10 % spread.
+  EXPECT_NEAR(chi2_scaled / static_cast<double>(pairs), 3.0, 0.5) << "scale " << scale;
   EXPECT_LT(*std::max_element(speed.begin(), speed.end()), 3.0);
   EXPECT_GT(median(speed), 0.3);
 }
@@ -362,7 +401,7 @@ TEST(RadarBag, BagTimeStampsWithADeclaredClockOffset) {
 // samples of the recording, 20 scans) whose seed passes span all of it.
 TEST(RadarBag, EstimatorIniLoads) {
   const auto c = mrpt_glue::loadAppConfig(kSrc + "/ini/freeinit_radar.ini");
-  EXPECT_DOUBLE_EQ(c.core.velocimeter.doppler_sigma, 0.044);
+  EXPECT_DOUBLE_EQ(c.core.velocimeter.doppler_sigma, 0.11);
   EXPECT_EQ(c.core.bootstrap.points, 40);
   EXPECT_DOUBLE_EQ(c.core.window.duration, 2.0);
   EXPECT_DOUBLE_EQ(c.core.window.seed_duration, 0.0);
@@ -471,16 +510,15 @@ TEST(RadarBag, EstimatorWhileMovingAgreesWithTheDopplerFits) {
 // the IMU to the next start's state time (its own biases, the IMU noise as process noise),
 // agrees with that start's state in what does not depend on the world frame (body velocity,
 // gravity direction in the body, both biases) within their covariances, or one of the two says
-// why it could not initialize. Chi-square, 11 dof, 99.9 %: 31.26; the two windows share data,
-// so treating their errors as independent makes the test conservative.
-//
-// Disabled: it does not hold on this recording. 15 of 33 pairs agree, and 4 starts decline (17 of
-// 37 with the calibration estimated in the state, 3 deg and 5 ms). The worst pair is 0.4 m/s
-// apart in body velocity against sigmas of a few cm/s. On simulated recordings the same check
-// passes on every pair (chi-square 8-15). Together with the calibration warnings of every moving
-// start, it says that the radar's model (calibration, scan timing) is off by more than the
-// covariance admits. Run it with --gtest_also_run_disabled_tests.
-TEST(RadarBag, DISABLED_EstimatorAlongTheRecordingIsSelfConsistent) {
+// why it could not initialize. Chi-square, 11 dof, 99.9 %: 31.26, for nine pairs in ten. The two
+// windows share a second of data, so their errors are correlated and the difference varies less
+// than the sum of the covariances says: the test is lenient by that, and it is still the one that
+// tells an honest covariance here. Measured: 35 of 37 pairs agree, no start declines; the worst
+// pair is at chi-square 71. With the Doppler noise of the fits' residuals (0.044 m/s, counting each
+// return of a scan as independent) 15 of 33 agree: the covariance was 2-3x optimistic in sigma,
+// what the scan-to-scan test above measures. On simulated recordings the same check passes on every
+// pair.
+TEST(RadarBag, EstimatorAlongTheRecordingIsSelfConsistent) {
   SKIP_WITHOUT_THE_BAG();
   using F = DopplerInertialFilter;
   const Recording& r = recording();

@@ -19,6 +19,10 @@ struct InputParams {
   bool imu_accel_in_g = false;        ///< accelerations are in g: multiply by 9.81
   double min_imu_rate = 50.0;         ///< [Hz] slower IMU streams are rejected
   bool drop_invalid_points = false;   ///< drop NaN/inf points (reported) instead of failing
+  /// [m/s] the sensor's Doppler bin (0: continuous). With bins, a cloud reads zero on every
+  /// point whenever no return's range rate exceeds half a bin, at rest and moving slowly alike;
+  /// continuous Doppler is exactly zero everywhere only at rest (checked against the IMU)
+  double doppler_resolution = 0;
   /// [MB] most one rawlog record may allocate while it is read (read_budget.h): a record
   /// claiming more (a corrupt length or count) is refused before the allocation
   double max_record_mb = 256;
