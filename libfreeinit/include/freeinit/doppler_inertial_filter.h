@@ -192,6 +192,12 @@ class DopplerInertialFilter {
   CalibrationTest testCalibration(double rotation_sigma, double time_sigma) const;
 
   std::size_t nodes() const { return nodes_.size(); }
+  /// The LiDAR velocity over node k's interval at its smoothed state (after smooth()), as the
+  /// coefficients of 1, s and s^2 (s = normalizedTime(k, tau)): the Doppler of a static return
+  /// in direction d there is -d . v_l.
+  Vec9 lidarVelocityPolynomial(std::size_t k) const {
+    return velocityPolynomial(nodes_[k], nodes_[k].xs, nullptr);
+  }
   /// Smoothed state of node k after smooth(); before, the filtered one.
   const FilterState& state(std::size_t k) const { return nodes_[k].xs; }
   /// Covariance of the last node's state (the filter's of the last pass).
