@@ -441,21 +441,34 @@ class JointPipeline final : public Pipeline {
   bool rejectMovingCells(InitResult& r) {
     constexpr double kSpan = 0.05;  // [s]
     constexpr double kSigmas = 4.0;
-    constexpr int kMinCount = 8;
+    constexpr std::uint32_t kMinCount = 8;
     constexpr std::size_t kMinReturns = 200;
     const double sigma = cfg_.velocimeter.doppler_sigma;
     const auto& imu = seq_.imu();
     const auto& points = recorder_.points();
     std::vector<DopplerInertialFilter::Vec9> q(filter_->nodes());
     std::vector<char> have(filter_->nodes(), 0);
-    std::vector<std::pair<std::size_t, float>> bucket;  // point index, residual
-    std::vector<std::uint32_t> cells;
+    constexpr std::size_t kCells = RestCells::kSide * RestCells::kSide * RestCells::kRangeBins;
+    if (span_sum_.size() != kCells) {
+      span_sum_.assign(kCells, 0.0);
+      span_count_.assign(kCells, 0);
+    }
+    struct Filed {
+      std::size_t point;
+      std::uint32_t cell;
+    };
+    std::vector<Filed> filed;
+    std::vector<std::uint32_t> touched;
     std::vector<std::size_t> coherent;
     std::size_t i = 0;
     while (i < points.size()) {
+      // One span: each accepted return of a moving node, its residual against the smoothed
+      // motion summed into its cell.
       const double t_begin = imu[k0_ + points[i].node].t;
-      bucket.clear();
-      cells.clear();
+      filed.clear();
+      touched.clear();
+      double sumsq = 0;
+      std::size_t total = 0;
       for (; i < points.size() && imu[k0_ + points[i].node].t < t_begin + kSpan; ++i) {
         const WindowRecorder::Point& p = points[i];
         if (!p.accepted || (p.node < node_rest_.size() && node_rest_[p.node])) continue;
@@ -467,16 +480,30 @@ class JointPipeline final : public Pipeline {
         const auto& Q = q[p.node];
         const Vec3 v = Q.segment<3>(0) + s * (Q.segment<3>(3) + s * Q.segment<3>(6));
         const Vec3 d = p.p_l.cast<double>().normalized();
-        const float res = static_cast<float>(static_cast<double>(p.doppler) + d.dot(v));
-        bucket.push_back({i, res});
-        cells.push_back(RestCells::cellOf(p.p_l));
-        moving_cells_.add(cells.back(), res);
+        const double res =
+            static_cast<float>(static_cast<double>(p.doppler) + d.dot(v));  // as recorded
+        const std::uint32_t c = RestCells::cellOf(p.p_l);
+        if (span_count_[c]++ == 0) touched.push_back(c);
+        span_sum_[c] += res;
+        sumsq += res * res;
+        ++total;
+        filed.push_back({i, c});
       }
-      for (std::size_t j = 0; j < bucket.size(); ++j)
-        if (moving_cells_.coherent(cells[j], sigma, kSigmas, kMinCount))
-          coherent.push_back(bucket[j].first);
-      for (std::size_t j = 0; j < bucket.size(); ++j)
-        moving_cells_.remove(cells[j], bucket[j].second);
+      // The test of RestCells::coherent, per span: the std from the Doppler noise or, when
+      // larger, the span's residual RMS.
+      if (total > 0) {
+        const double var = std::max(sigma * sigma, sumsq / static_cast<double>(total));
+        const double k = kSigmas * kSigmas * var;
+        for (const Filed& f : filed) {
+          const std::uint32_t n = span_count_[f.cell];
+          const double sum = span_sum_[f.cell];
+          if (n >= kMinCount && sum * sum > k * static_cast<double>(n)) coherent.push_back(f.point);
+        }
+      }
+      for (const std::uint32_t c : touched) {
+        span_sum_[c] = 0;
+        span_count_[c] = 0;
+      }
     }
     // Cells of the world pass the test by chance now and then (development seeds: none in most
     // windows, tens of returns in some): not worth another smoothing. An object's are thousands.
@@ -675,7 +702,8 @@ class JointPipeline final : public Pipeline {
   std::vector<bool> node_rest_;
   WindowRecorder recorder_;
   RestCells rest_cells_;
-  RestCells moving_cells_;  ///< rejectMovingCells' cells of one span at a time
+  std::vector<double> span_sum_;           ///< rejectMovingCells: residual sums of one span's cells
+  std::vector<std::uint32_t> span_count_;  ///< ... and their counts (zero between spans)
 };
 
 }  // namespace
