@@ -56,16 +56,20 @@ void FreeInit::addImu(const ImuSample& s) {
 void FreeInit::addFrame(const LidarFrame& f) { addFrame(LidarFrame(f)); }
 
 void FreeInit::addFrame(LidarFrame&& f) {
-  impl_->seq.checkFrame(f);
-  if (impl_->done) return;
+  if (impl_->done) {  // checked all the same, but not kept (the sequencer checks what it keeps)
+    impl_->seq.checkFrame(f);
+    return;
+  }
   impl_->seq.addFrame(std::move(f));
   impl_->pump();
 }
 
 void FreeInit::addFrame(std::shared_ptr<const LidarFrame> f) {
   if (!f) throw std::invalid_argument("LiDAR frame: null");
-  impl_->seq.checkFrame(*f);
-  if (impl_->done) return;
+  if (impl_->done) {
+    impl_->seq.checkFrame(*f);
+    return;
+  }
   impl_->seq.addSharedFrame(std::move(f));
   impl_->pump();
 }
