@@ -38,6 +38,18 @@ double wallSeconds() {
   return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
 }
 
+using BodyVelocityJacobian = Eigen::Matrix<double, 3, DopplerInertialFilter::kStateDim>;
+
+/// The body velocity's derivative w.r.t. the filter's error state at x: dv_b = R^T dv_w +
+/// [v_b]x dtheta.
+BodyVelocityJacobian bodyVelocityJacobian(const FilterState& x) {
+  using F = DopplerInertialFilter;
+  BodyVelocityJacobian A = BodyVelocityJacobian::Zero();
+  A.block<3, 3>(0, F::kTheta) = skew(x.R_wb.transpose() * x.v_w);
+  A.block<3, 3>(0, F::kVel) = x.R_wb.transpose();
+  return A;
+}
+
 class JointPipeline final : public Pipeline {
  public:
   JointPipeline(const FreeInitConfig& cfg, const MeasurementSequencer& seq)
@@ -399,13 +411,9 @@ class JointPipeline final : public Pipeline {
       v.stationary = k < node_rest_.size() && node_rest_[k];
       r.velocities.push_back(v);
     }
-    // The last node's velocity sigma from the state covariance (dv_b = R^T dv_w + [v_b]x dtheta).
+    // The last node's velocity sigma from the state covariance.
     {
-      constexpr int kN = DopplerInertialFilter::kStateDim;
-      Eigen::Matrix<double, 3, kN> A = Eigen::Matrix<double, 3, kN>::Zero();
-      const Vec3 v_b = x.R_wb.transpose() * x.v_w;
-      A.block<3, 3>(0, 0) = skew(v_b);
-      A.block<3, 3>(0, 6) = x.R_wb.transpose();
+      const BodyVelocityJacobian A = bodyVelocityJacobian(x);
       r.velocities.back().sigma_v_b =
           (A * filter_->covariance() * A.transpose()).diagonal().cwiseSqrt();
     }
@@ -420,11 +428,8 @@ class JointPipeline final : public Pipeline {
   bool restContradicted() const {
     if (node_rest_.empty() || !node_rest_.back()) return false;
     const FilterState& x = filter_->state(filter_->nodes() - 1);
-    constexpr int kN = DopplerInertialFilter::kStateDim;
-    Eigen::Matrix<double, 3, kN> A = Eigen::Matrix<double, 3, kN>::Zero();
     const Vec3 v_b = x.R_wb.transpose() * x.v_w;
-    A.block<3, 3>(0, 0) = skew(v_b);
-    A.block<3, 3>(0, 6) = x.R_wb.transpose();
+    const BodyVelocityJacobian A = bodyVelocityJacobian(x);
     const Mat3 C = A * filter_->covariance() * A.transpose();
     constexpr double kChi2Quantile999Dof3 = 16.27;
     return v_b.dot(C.ldlt().solve(v_b)) > kChi2Quantile999Dof3;
@@ -665,12 +670,7 @@ class JointPipeline final : public Pipeline {
     }
     // Sensitivity: the body velocity's uncertainty with such calibration errors, against its own.
     const std::size_t N = filter_->nodes();
-    const FilterState& x = filter_->state(N - 1);
-    constexpr int kN = F::kStateDim;
-    Eigen::Matrix<double, 3, kN> A = Eigen::Matrix<double, 3, kN>::Zero();
-    const Vec3 v_b = x.R_wb.transpose() * x.v_w;
-    A.block<3, 3>(0, F::kTheta) = skew(v_b);
-    A.block<3, 3>(0, F::kVel) = x.R_wb.transpose();
+    const BodyVelocityJacobian A = bodyVelocityJacobian(filter_->state(N - 1));
     const double sigma_free = std::sqrt((A * t.covariance * A.transpose()).trace());
     const double sigma_fixed = std::sqrt((A * filter_->covariance() * A.transpose()).trace());
     constexpr double kVelocityFloor = 0.02;  // [m/s] what a user notices
