@@ -283,7 +283,8 @@ class JointPipeline final : public Pipeline {
         const std::size_t j = i - node_points_begin;
         const bool used = filter_->pointAccepted(j);
         (used ? r.diag.points_used : r.diag.points_rejected)++;
-        recorder_.judge(i, used, static_cast<float>(filter_->pointResidual(j)));
+        recorder_.judge(i, used, static_cast<float>(filter_->pointResidual(j)),
+                        used ? RestCells::cellOf(recorder_.point(i).p_l) : WindowRecorder::kNoCell);
       }
       node_first_point_ = node_points_end;
       const bool was_rest = rest_.atRest();
@@ -298,9 +299,9 @@ class JointPipeline final : public Pipeline {
         for (std::size_t i = recorder_.size(); i-- > 0;) {
           WindowRecorder::Point& p = recorder_.point(i);
           if (p.node < node_rest_.size() && node_rest_[p.node]) break;
-          if (p.cell == WindowRecorder::kNoCell) continue;
+          if (!p.in_rest_cells) continue;
           rest_cells_.remove(p.cell, p.residual);
-          p.cell = WindowRecorder::kNoCell;
+          p.in_rest_cells = false;
         }
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
       }
@@ -313,7 +314,7 @@ class JointPipeline final : public Pipeline {
         for (std::size_t i = node_points_begin; i < node_points_end; ++i) {
           WindowRecorder::Point& p = recorder_.point(i);
           if (!p.accepted) continue;
-          p.cell = RestCells::cellOf(p.p_l);
+          p.in_rest_cells = true;
           rest_cells_.add(p.cell, p.residual);
         }
       }
@@ -458,11 +459,7 @@ class JointPipeline final : public Pipeline {
       span_sum_.assign(kCells, 0.0);
       span_count_.assign(kCells, 0);
     }
-    struct Filed {
-      std::size_t point;
-      std::uint32_t cell;
-    };
-    std::vector<Filed> filed;
+    std::vector<std::size_t> filed;  // the span's returns
     std::vector<std::uint32_t> touched;
     std::vector<std::size_t> coherent;
     std::size_t i = 0;
@@ -487,22 +484,22 @@ class JointPipeline final : public Pipeline {
         const Vec3 d = p.p_l.cast<double>().normalized();
         const double res =
             static_cast<float>(static_cast<double>(p.doppler) + d.dot(v));  // as recorded
-        const std::uint32_t c = RestCells::cellOf(p.p_l);
+        const std::uint32_t c = p.cell;
         if (span_count_[c]++ == 0) touched.push_back(c);
         span_sum_[c] += res;
         sumsq += res * res;
         ++total;
-        filed.push_back({i, c});
+        filed.push_back(i);
       }
       // The test of RestCells::coherent, per span: the std from the Doppler noise or, when
       // larger, the span's residual RMS.
       if (total > 0) {
         const double var = std::max(sigma * sigma, sumsq / static_cast<double>(total));
         const double k = kSigmas * kSigmas * var;
-        for (const Filed& f : filed) {
-          const std::uint32_t n = span_count_[f.cell];
-          const double sum = span_sum_[f.cell];
-          if (n >= kMinCount && sum * sum > k * static_cast<double>(n)) coherent.push_back(f.point);
+        for (const std::size_t f : filed) {
+          const std::uint32_t n = span_count_[points[f].cell];
+          const double sum = span_sum_[points[f].cell];
+          if (n >= kMinCount && sum * sum > k * static_cast<double>(n)) coherent.push_back(f);
         }
       }
       for (const std::uint32_t c : touched) {
@@ -538,7 +535,7 @@ class JointPipeline final : public Pipeline {
     const auto& points = recorder_.points();
     for (std::size_t i = 0; i < points.size(); ++i) {
       const WindowRecorder::Point& p = points[i];
-      if (!p.accepted || p.cell == WindowRecorder::kNoCell) continue;
+      if (!p.accepted || !p.in_rest_cells) continue;
       if (!rest_cells_.coherent(p.cell, sigma, kSigmas, kMinCount)) continue;
       filter_->removePoint(p.node, static_cast<double>(p.tau), p.p_l,
                            static_cast<double>(p.doppler));

@@ -67,8 +67,9 @@ class WindowRecorder {
     float doppler;        ///< [m/s]
     float residual;       ///< [m/s] against the node's update
     float tau;            ///< [s] from the node's time
-    std::uint32_t cell;   ///< direction cell (RestCells) of a point at rest, else kNoCell
+    std::uint32_t cell;   ///< direction and range cell (RestCells) of an accepted point
     bool accepted;
+    bool in_rest_cells;   ///< counted in the rest cells (seen from a standing sensor)
   };
   static constexpr std::uint32_t kNoCell = 0xffffffffu;
   void reserve(std::size_t n) { points_.reserve(n); }
@@ -77,13 +78,14 @@ class WindowRecorder {
   /// A point given to the filter's open node.
   void add(std::size_t node, double tau, const DopplerPoint& p) {
     points_.push_back({static_cast<std::uint32_t>(node), p.p_l, p.intensity, p.doppler, 0.0f,
-                       static_cast<float>(tau), kNoCell, false});
+                       static_cast<float>(tau), kNoCell, false, false});
   }
   Point& point(std::size_t i) { return points_[i]; }
-  /// The verdict on the i-th point recorded.
-  void judge(std::size_t i, bool accepted, float residual) {
+  /// The verdict on the i-th point recorded; an accepted point's cell.
+  void judge(std::size_t i, bool accepted, float residual, std::uint32_t cell) {
     points_[i].accepted = accepted;
     points_[i].residual = residual;
+    points_[i].cell = cell;
   }
   void reject(std::size_t i) { points_[i].accepted = false; }
   /// Maps every point with the final node states: the body moved by tau (its angular and linear
