@@ -771,17 +771,17 @@ int DopplerInertialFilter::smooth() {
       nodes_[k].P = P_f[k];
     }
     // Converged when no node moves by more than the tolerance of its block (scaled), or when the
-    // steps shrink as Gauss-Newton's do near the solution (tenfold or more per iteration) and are
-    // within ten tolerances: the next step would be below one. The last node's estimate is this
-    // iteration's (its smoothed and filtered states agree); its covariance was linearized at
-    // most ten tolerances away, where it does not change.
+    // steps shrink as Gauss-Newton's do near the solution (tenfold or more per iteration) and
+    // the next one, at the rate of the last two, would be below one tolerance. The last node's
+    // estimate is this iteration's (its smoothed and filtered states agree); its covariance was
+    // linearized one step away, at most a tenth of the previous one.
     double step = 0;
     for (std::size_t k = 0; k < N; ++k) {
       nodes_[k].xs = boxplus(nodes_[k].xs, dxs[k]);
       step = std::max(step, stepInTolerances(dxs[k]));
     }
     const double c = params_.convergence;
-    if (step < c || (step < 10.0 * c && step < 0.1 * previous_step)) break;
+    if (step < c || (step < 0.1 * previous_step && step * (step / previous_step) < c)) break;
     previous_step = step;
   }
   // The filter can go on from the last node (an early smoothing while the window is received).

@@ -70,9 +70,9 @@ struct DopplerInertialFilterParams {
   double coherence_sigma = 4.0;
   int max_iterations = 6;  ///< Gauss-Newton iterations after the forward pass, at most
   /// The smoother's iterations stop when no node moves by more than this many tolerances, or
-  /// when the steps shrink tenfold or more and are within ten of them (Gauss-Newton's
-  /// convergence: the next would be below); the filter's own update iterations stop likewise
-  /// (at most two, and one after the second gate). The tolerances
+  /// when the steps shrink tenfold or more and the next one, at the rate of the last two, would
+  /// be below (Gauss-Newton's convergence); the filter's own update iterations stop at a step
+  /// below them (at most two, and one after the second gate). The tolerances
   /// being 1e-4 rad, 1e-3 m, 1e-4 m/s, 1e-5 rad/s, 1e-3 m/s^2 (for the calibration 1e-4 rad and
   /// 1e-4 s): a twentieth or less of what the data resolve (the bounds of the randomized
   /// scenarios are >= 0.002 m/s, 0.05 deg, 5e-4 rad/s and 0.01 m/s^2).
