@@ -132,12 +132,15 @@ TEST(FreeInitAccuracy, StaticStarts) {
 
 // Driving straight, the gyro bias is not observable in 0.5 s and at 20 m/s a 0.02 rad/s bias looks
 // like 0.4 m/s^2 of lateral acceleration; with a gyro-bias prior from a static calibration the
-// gravity error is down to what the unobservable horizontal accelerometer bias implies.
+// gravity error is down to what the unobservable horizontal accelerometer bias implies, plus
+// 0.2 deg: four times the rms (0.055 deg) of that remainder over the four driving presets and
+// seeds 1-8 with every point. Without the prior this fails (dyna_05 seed 1: 1.50 deg, where
+// the accelerometer bias implies 0.85).
 TEST(FreeInitAccuracy, DrivingWithCalibratedGyroBias) {
   for (const auto& name : kDriving) {
     for (std::uint64_t s = 1; s <= kSeeds; ++s) {
       const auto& e = outcome(name, s, 0.0005).err;
-      EXPECT_LE(e.gravity_deg, e.gravity_deg_from_bias + 0.1) << tag(name, s);
+      EXPECT_LE(e.gravity_deg, e.gravity_deg_from_bias + 0.2) << tag(name, s);
       EXPECT_LE(e.vel_b, 0.05) << tag(name, s);
       EXPECT_LE(e.accel_bias_vertical, 0.05) << tag(name, s);
     }
