@@ -15,7 +15,9 @@ int main(int argc, char** argv) {
   const auto& ini = cli.positional("config.ini", "INI configuration file (ini/freeinit.ini)");
   const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
   const auto& out = cli.text("o", "out", "output folder", "freeinit_out", "DIR");
-  const auto& quiet = cli.flag("q", "quiet", "no progress bar");
+  const auto& quiet = cli.flag("q", "quiet",
+                                "no progress bar and no listing of the effective configuration "
+                                "(still written to effective_config.ini)");
   const auto& start = cli.number("", "start",
                                  "initialize with the records from T on: seconds after the first "
                                  "record, or a UNIX stamp if T > 1e8",
@@ -44,6 +46,7 @@ int main(int argc, char** argv) {
     app.params.rawlog = rawlog.value;
     app.params.out_dir = out.value;
     app.params.progress = !quiet.value;
+    app.params.echo_config = !quiet.value;
     app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
     if (start.given) app.params.start = start.value;
     app.params.every = every.value;

@@ -175,7 +175,8 @@ int FreeInitApp::run(std::ostream& log) {
   config = loadAppConfig(params.config_file);
   std::ostringstream effective;
   dumpAppConfig(config, effective);
-  log << "Effective configuration (" << params.config_file << "):\n" << effective.str() << "\n";
+  if (params.echo_config)
+    log << "Effective configuration (" << params.config_file << "):\n" << effective.str() << "\n";
 
   // 2. The starts.
   log << "Reading " << params.rawlog << "\n";

@@ -233,6 +233,21 @@ TEST(FreeInitAppEndToEnd, StaticSampleStat01) {
   EXPECT_LE(app.errors_wrt_gt->gravity_deg, bound) << log.str();
 }
 
+// -q leaves the effective configuration to its file: the log keeps the verdict, not the ~80
+// configuration lines.
+TEST(FreeInitAppEndToEnd, QuietLeavesTheConfigurationToItsFile) {
+  for (const bool echo : {true, false}) {
+    const std::string out = outDir(echo ? "config_echoed" : "config_quiet");
+    auto app = makeApp(kStat, out, quickIni());
+    app.params.echo_config = echo;
+    std::ostringstream log;
+    ASSERT_EQ(app.run(log), 0) << log.str();
+    EXPECT_EQ(log.str().find("Effective configuration") != std::string::npos, echo) << log.str();
+    EXPECT_EQ(log.str().find("max_point_rate") != std::string::npos, echo) << log.str();
+    EXPECT_NE(readText(out + "/effective_config.ini").find("max_point_rate"), std::string::npos);
+  }
+}
+
 // A file cut inside the window (the first third of the sample holds it).
 TEST(FreeInitAppEndToEnd, BadInputFailsBeforeAnyOutputIsWritten) {
   const std::string out = outDir("bad");

@@ -40,6 +40,9 @@ struct FreeInitAppParams {
   std::string rawlog;
   std::string out_dir = "freeinit_out";
   bool progress = true;            ///< progress bars on the log stream
+  /// The effective configuration on the log stream too (it is always written to
+  /// effective_config.ini in the outputs).
+  bool echo_config = true;
   bool progress_terminal = false;  ///< the log is a terminal: redraw the bars in place
   std::optional<double> start;     ///< --start (see kUnixStampThreshold)
   double every = 0;                ///< --every [s] (> 0: repeated starts from `start` or 0)
