@@ -616,7 +616,7 @@ class JointPipeline final : public Pipeline {
                            "taken for the world, or [velocimeter] doppler_sigma is set too low "
                            "(the covariance is then optimistic)");
     // Few returns: under ten per IMU sample (2,000 per second at 200 Hz, a fiftieth of what a
-    // 64-line LiDAR gives at the default stride) the state rests on little Doppler.
+    // 64-line LiDAR gives at 120,000 points/s) the state rests on little Doppler.
     const std::size_t nodes = filter_->nodes();
     if (d.points_used < 10 * nodes)
       s.warnings.push_back("only " + std::to_string(d.points_used) +
