@@ -452,8 +452,6 @@ class JointPipeline final : public Pipeline {
     const double sigma = cfg_.velocimeter.doppler_sigma;
     const auto& imu = seq_.imu();
     const auto& points = recorder_.points();
-    std::vector<DopplerInertialFilter::Vec9> q(filter_->nodes());
-    std::vector<char> have(filter_->nodes(), 0);
     constexpr std::size_t kCells = RestCells::kSide * RestCells::kSide * RestCells::kRangeBins;
     if (span_sum_.size() != kCells) {
       span_sum_.assign(kCells, 0.0);
@@ -465,31 +463,37 @@ class JointPipeline final : public Pipeline {
     std::size_t i = 0;
     while (i < points.size()) {
       // One span: each accepted return of a moving node, its residual against the smoothed
-      // motion summed into its cell.
+      // motion summed into its cell. The recorder holds the returns in node order; the residual
+      // is computed in float, as the recorder keeps it.
       const double t_begin = imu[k0_ + points[i].node].t;
       filed.clear();
       touched.clear();
       double sumsq = 0;
       std::size_t total = 0;
-      for (; i < points.size() && imu[k0_ + points[i].node].t < t_begin + kSpan; ++i) {
-        const WindowRecorder::Point& p = points[i];
-        if (!p.accepted || (p.node < node_rest_.size() && node_rest_[p.node])) continue;
-        if (!have[p.node]) {
-          q[p.node] = filter_->lidarVelocityPolynomial(p.node);
-          have[p.node] = 1;
+      while (i < points.size() && imu[k0_ + points[i].node].t < t_begin + kSpan) {
+        const std::uint32_t node = points[i].node;
+        std::size_t end = i;
+        while (end < points.size() && points[end].node == node) ++end;
+        if (node < node_rest_.size() && node_rest_[node]) {
+          i = end;
+          continue;
         }
-        const double s = filter_->normalizedTime(p.node, static_cast<double>(p.tau));
-        const auto& Q = q[p.node];
-        const Vec3 v = Q.segment<3>(0) + s * (Q.segment<3>(3) + s * Q.segment<3>(6));
-        const Vec3 d = p.p_l.cast<double>().normalized();
-        const double res =
-            static_cast<float>(static_cast<double>(p.doppler) + d.dot(v));  // as recorded
-        const std::uint32_t c = p.cell;
-        if (span_count_[c]++ == 0) touched.push_back(c);
-        span_sum_[c] += res;
-        sumsq += res * res;
-        ++total;
-        filed.push_back(i);
+        const Eigen::Matrix<float, 9, 1> Q = filter_->lidarVelocityPolynomial(node).cast<float>();
+        const Eigen::Vector3f q0 = Q.segment<3>(0), q1 = Q.segment<3>(3), q2 = Q.segment<3>(6);
+        const float inv_h = static_cast<float>(filter_->normalizedTime(node, 1.0));
+        for (; i < end; ++i) {
+          const WindowRecorder::Point& p = points[i];
+          if (!p.accepted) continue;
+          const float s = p.tau * inv_h;
+          const Eigen::Vector3f v = q0 + s * (q1 + s * q2);
+          const float res = p.doppler + p.p_l.dot(v) / p.p_l.norm();
+          const std::uint32_t c = p.cell;
+          if (span_count_[c]++ == 0) touched.push_back(c);
+          span_sum_[c] += res;
+          sumsq += static_cast<double>(res) * res;
+          ++total;
+          filed.push_back(i);
+        }
       }
       // The test of RestCells::coherent, per span: the std from the Doppler noise or, when
       // larger, the span's residual RMS.

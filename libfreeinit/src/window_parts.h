@@ -5,6 +5,7 @@
 
 #include <freeinit/doppler_inertial_filter.h>
 #include <freeinit/initial_state.h>
+#include <freeinit/rotation.h>
 #include <freeinit/types.h>
 
 #include <algorithm>
@@ -92,20 +93,23 @@ class WindowRecorder {
   /// velocity at the node) between the node and the point.
   void finish(const DopplerInertialFilter& filter, const std::vector<ImuSample>& imu,
               std::size_t k0, const Extrinsics& ext, InitResult& r) const {
-    // In float, as the map is kept: at 100 m its rounding is 0.01 mm.
-    struct NodeMotion {
-      Eigen::Matrix3f R;
-      Eigen::Vector3f p, omega, v_b;
+    // In float, as the map is kept: at 100 m its rounding is 0.01 mm. A return at tau from its
+    // node is at x_b = p_b + tau (omega x p_b + v_b) in the node's body frame (p_b = R_bl p_l +
+    // p_bl), so in the world p_w = A p_l + a + tau (B p_l + b) with, per node, A = R R_bl,
+    // a = R p_bl + p, B = R [omega]x R_bl and b = R (omega x p_bl + v_b).
+    struct NodeMap {
+      Eigen::Matrix3f A, B;
+      Eigen::Vector3f a, b;
     };
-    std::vector<NodeMotion> motion(filter.nodes());
-    for (std::size_t k = 0; k < motion.size(); ++k) {
+    std::vector<NodeMap> maps(filter.nodes());
+    for (std::size_t k = 0; k < maps.size(); ++k) {
       const FilterState& x = filter.state(k);
-      motion[k] = {x.R_wb.cast<float>(), x.p_w.cast<float>(),
-                   (imu[k0 + k].gyro - x.b_g).cast<float>(),
-                   (x.R_wb.transpose() * x.v_w).cast<float>()};
+      const Vec3 omega = imu[k0 + k].gyro - x.b_g;
+      const Vec3 v_b = x.R_wb.transpose() * x.v_w;
+      maps[k] = {(x.R_wb * ext.R_bl).cast<float>(), (x.R_wb * skew(omega) * ext.R_bl).cast<float>(),
+                 (x.R_wb * ext.p_bl + x.p_w).cast<float>(),
+                 (x.R_wb * (omega.cross(ext.p_bl) + v_b)).cast<float>()};
     }
-    const Eigen::Matrix3f R_bl = ext.R_bl.cast<float>();
-    const Eigen::Vector3f p_bl = ext.p_bl.cast<float>();
     std::size_t accepted = 0;
     for (const Point& p : points_) accepted += p.accepted ? 1 : 0;
     r.static_map.clear();
@@ -113,11 +117,9 @@ class WindowRecorder {
     r.static_map.reserve(accepted);
     r.rejected.reserve(points_.size() - accepted);
     for (const Point& p : points_) {
-      const NodeMotion& m = motion[p.node];
-      const Eigen::Vector3f p_b = R_bl * p.p_l + p_bl;
-      const Eigen::Vector3f x_b = p_b + p.tau * (m.omega.cross(p_b) + m.v_b);
+      const NodeMap& m = maps[p.node];
       MapPoint out;
-      out.p_w = m.R * x_b + m.p;
+      out.p_w = m.A * p.p_l + m.a + p.tau * (m.B * p.p_l + m.b);
       out.intensity = p.intensity;
       out.residual = p.residual;
       (p.accepted ? r.static_map : r.rejected).push_back(out);
