@@ -359,7 +359,28 @@ void writeFigure(const Options& o, const std::vector<EvalCase>& cases,
   std::printf("wrote %s\n", path.c_str());
 }
 
+/// Creates the folders the outputs go to before any run, so that a path that cannot be written
+/// fails at once, naming its option, not after the evaluation.
+void prepareOutputFolders(const Options& o) {
+  namespace fs = std::filesystem;
+  const std::pair<const char*, fs::path> folders[] = {
+      {"--md", fs::path(o.md).parent_path()},
+      {"--csv", fs::path(o.csv).parent_path()},
+      {"--summary-csv", fs::path(o.summary_csv).parent_path()},
+      {"--bounds-md", fs::path(o.bounds_md).parent_path()},
+      {"--plots", fs::path(o.plots)}};
+  for (const auto& [flag, folder] : folders) {
+    if (folder.empty()) continue;
+    std::error_code ec;
+    fs::create_directories(folder, ec);
+    if (ec || !fs::is_directory(folder))
+      throw std::runtime_error(std::string(flag) + ": cannot create the folder " +
+                               folder.string() + (ec ? ": " + ec.message() : ""));
+  }
+}
+
 int run(const Options& o) {
+  prepareOutputFolders(o);
   const std::vector<EvalCase> cases = o.random > 0 ? randomCases(o) : presetCases(o);
   std::vector<JobResult> results(cases.size());
   report::parallelFor(cases.size(), o.jobs, [&](std::size_t i) {
