@@ -340,6 +340,8 @@ class PaperPipeline final : public Pipeline {
     m.p_w = (integrator.q_wb() * p_b + integrator.p_w()).cast<float>();
     m.intensity = pt.intensity;
     m.residual = static_cast<float>(residual);
+    m.doppler = pt.doppler;
+    m.time = static_cast<float>(t);  // from t_ref; from the state's time once that is known
     (accepted ? res->static_map : res->rejected).push_back(m);
   }
 
@@ -515,8 +517,13 @@ void PaperPipeline::finalize() {
 
   // Express everything recorded in the first body frame in the aligned world.
   const Quat q_align(R_align);
-  for (auto& m : res->static_map) m.p_w = (R_align * m.p_w.cast<double>()).cast<float>();
-  for (auto& m : res->rejected) m.p_w = (R_align * m.p_w.cast<double>()).cast<float>();
+  const float t_state = static_cast<float>(s.timestamp - t_ref);
+  for (auto* map : {&res->static_map, &res->rejected}) {
+    for (auto& m : *map) {
+      m.p_w = (R_align * m.p_w.cast<double>()).cast<float>();
+      m.time -= t_state;
+    }
+  }
   for (auto& p : res->trajectory) {
     p.q_wb = (q_align * p.q_wb).normalized();
     p.p_w = R_align * p.p_w;

@@ -102,6 +102,8 @@ class WindowRecorder {
       Eigen::Vector3f a, b;
     };
     std::vector<NodeMap> maps(filter.nodes());
+    std::vector<float> node_time(filter.nodes());  // from the state's time (the last node's)
+    const double t_state = filter.state(filter.nodes() - 1).t;
     for (std::size_t k = 0; k < maps.size(); ++k) {
       const FilterState& x = filter.state(k);
       const Vec3 omega = imu[k0 + k].gyro - x.b_g;
@@ -109,6 +111,7 @@ class WindowRecorder {
       maps[k] = {(x.R_wb * ext.R_bl).cast<float>(), (x.R_wb * skew(omega) * ext.R_bl).cast<float>(),
                  (x.R_wb * ext.p_bl + x.p_w).cast<float>(),
                  (x.R_wb * (omega.cross(ext.p_bl) + v_b)).cast<float>()};
+      node_time[k] = static_cast<float>(x.t - t_state);
     }
     std::size_t accepted = 0;
     for (const Point& p : points_) accepted += p.accepted ? 1 : 0;
@@ -122,6 +125,8 @@ class WindowRecorder {
       out.p_w = m.A * p.p_l + m.a + p.tau * (m.B * p.p_l + m.b);
       out.intensity = p.intensity;
       out.residual = p.residual;
+      out.doppler = p.doppler;
+      out.time = node_time[p.node] + p.tau;
       (p.accepted ? r.static_map : r.rejected).push_back(out);
     }
   }

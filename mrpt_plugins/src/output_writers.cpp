@@ -125,12 +125,14 @@ void writePly(const std::string& path, const std::vector<MapPoint>& points) {
       path,
       [&](std::ostream& o) {
         o << "ply\nformat binary_little_endian 1.0\ncomment Free-Init static map, world frame "
-             "(z up), meters\nelement vertex "
+             "(z up), meters\ncomment doppler: the measured range rate [m/s], negative when "
+             "approaching\ncomment time: the return's time minus the initial state's timestamp "
+             "(initial_state.ini) [s]\nelement vertex "
           << points.size()
           << "\nproperty float x\nproperty float y\nproperty float z\nproperty float "
-             "intensity\nend_header\n";
+             "intensity\nproperty float doppler\nproperty float time\nend_header\n";
         for (const auto& p : points) {
-          const float rec[4] = {p.p_w.x(), p.p_w.y(), p.p_w.z(), p.intensity};
+          const float rec[6] = {p.p_w.x(), p.p_w.y(), p.p_w.z(), p.intensity, p.doppler, p.time};
           o.write(reinterpret_cast<const char*>(rec), sizeof(rec));
         }
       },

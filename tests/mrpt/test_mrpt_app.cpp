@@ -160,6 +160,30 @@ TEST(FreeInitAppEndToEnd, DynamicSampleDyna01) {
   for (const auto& e : fs::directory_iterator(out))
     EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << e.path();
 
+  // The PLY carries each point's Doppler and time next to its position and intensity.
+  {
+    std::ifstream ply(fs::path(out) / "static_map.ply", std::ios::binary);
+    std::string line, properties;
+    std::size_t vertices = 0;
+    while (std::getline(ply, line) && line != "end_header") {
+      if (line.rfind("element vertex ", 0) == 0) vertices = std::stoul(line.substr(15));
+      if (line.rfind("property ", 0) == 0) properties += line.substr(9) + ";";
+    }
+    EXPECT_EQ(properties,
+              "float x;float y;float z;float intensity;float doppler;float time;");
+    ASSERT_EQ(vertices, app.result.static_map.size());
+    std::vector<float> rec(6 * vertices);
+    ply.read(reinterpret_cast<char*>(rec.data()),
+             static_cast<std::streamsize>(rec.size() * sizeof(float)));
+    ASSERT_TRUE(ply);
+    for (std::size_t i = 0; i < vertices; i += vertices / 7 + 1) {
+      const MapPoint& m = app.result.static_map[i];
+      EXPECT_EQ(rec[6 * i], m.p_w.x());
+      EXPECT_EQ(rec[6 * i + 4], m.doppler);
+      EXPECT_EQ(rec[6 * i + 5], m.time);
+    }
+  }
+
   // The simple map holds stock MRPT classes only, so loaders without our plugin can use it.
   mrpt::maps::CSimpleMap map;
   ASSERT_TRUE(map.loadFromFile((fs::path(out) / "static_map.simplemap").string()));

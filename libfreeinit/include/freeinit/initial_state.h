@@ -78,6 +78,8 @@ struct MapPoint {
   Eigen::Vector3f p_w = Eigen::Vector3f::Zero();  ///< [m]
   float intensity = 0;
   float residual = 0;  ///< [m/s] Doppler residual when it was processed
+  float doppler = 0;   ///< [m/s] the return's measured Doppler (radial velocity, sign of types.h)
+  float time = 0;      ///< [s] the return's time minus the state's timestamp (<= 0 in the window)
 };
 
 /// Counters and timings, for users and for tests.

@@ -44,7 +44,8 @@ void writeInitialStateIni(const std::string& path, const InitialState& s,
 void writeTum(const std::string& path, const std::vector<PoseSample>& trajectory);
 /// The velocimeter's time series, CSV with a header line.
 void writeVelocityCsv(const std::string& path, const std::vector<VelocitySample>& v);
-/// Binary little-endian PLY with x y z intensity (float32).
+/// Binary little-endian PLY with x y z intensity doppler time (float32; time from the state's
+/// timestamp).
 void writePly(const std::string& path, const std::vector<MapPoint>& points);
 
 }  // namespace freeinit::mrpt_glue
