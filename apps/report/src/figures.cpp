@@ -64,8 +64,9 @@ cv::Mat velocityErrorPanel(const std::string& title, const std::vector<VelocityT
     }
     p.add(std::move(s));
   }
-  // Errors span 1 mm/s .. tens of m/s: fixed decades keep panels comparable.
-  p.y_min = 1e-3;
+  // Errors span 0.1 mm/s (Free-Init with every point) .. tens of m/s (the static means): fixed
+  // decades keep panels comparable.
+  p.y_min = 1e-4;
   p.y_max = 100;
   return p.render(width, height);
 }
