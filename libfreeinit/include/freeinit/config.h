@@ -51,7 +51,7 @@ struct VelocimeterParams {
   int point_stride = 0;
   /// [points/s] with point_stride = 0, the stride that brings the points used closest to this
   /// rate, from the first frame's density. The default uses every point of the FMCW LiDARs
-  /// there are (an Aeva-like 600k points/s, 2M points/s of 120,000-point frames at 20 Hz) and
+  /// there are (an Aeva-like 600k points/s, 2.4M points/s of 120,000-point frames at 20 Hz) and
   /// halves only beyond 3M points/s: the Doppler-limited errors grow as the square root of the
   /// stride, and at a stride of 6 they exceeded 3x the Cramer-Rao bound of the data (a handheld
   /// start at 700k points/s: gravity 0.54 deg against a 0.16 deg bound; every point: 0.07 deg).
