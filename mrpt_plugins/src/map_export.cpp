@@ -2,7 +2,7 @@
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/map_export.h>
 #include <mrpt/maps/CSimpleMap.h>
-#include <mrpt/maps/CSimplePointsMap.h>
+#include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/serialization/CArchive.h>
@@ -11,9 +11,11 @@
 namespace freeinit::mrpt_glue {
 
 void writeStaticSimplemap(const std::string& path, const InitResult& result) {
-  auto points = mrpt::maps::CSimplePointsMap::Create();
+  // A stock class with intensity (MRPT has none with Doppler or time: those are in the PLY).
+  auto points = mrpt::maps::CPointsMapXYZI::Create();
   points->reserve(result.static_map.size());
-  for (const auto& p : result.static_map) points->insertPointFast(p.p_w.x(), p.p_w.y(), p.p_w.z());
+  for (const auto& p : result.static_map)
+    points->insertPointRGB(p.p_w.x(), p.p_w.y(), p.p_w.z(), p.intensity, 0, 0);
   points->mark_as_modified();
 
   auto obs = mrpt::obs::CObservationPointCloud::Create();

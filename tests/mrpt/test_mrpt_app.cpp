@@ -12,6 +12,7 @@
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFile.h>
+#include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -194,9 +195,12 @@ TEST(FreeInitAppEndToEnd, DynamicSampleDyna01) {
     EXPECT_EQ(std::string(o->GetRuntimeClass()->className).rfind("mrpt::", 0), 0u);
     auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(o);
     ASSERT_TRUE(pc && pc->pointcloud);
-    EXPECT_EQ(std::string(pc->pointcloud->GetRuntimeClass()->className),
-              "mrpt::maps::CSimplePointsMap");
-    EXPECT_EQ(pc->pointcloud->size(), app.result.static_map.size());
+    // Intensity kept, with a stock class.
+    const auto xyzi = std::dynamic_pointer_cast<mrpt::maps::CPointsMapXYZI>(pc->pointcloud);
+    ASSERT_TRUE(xyzi) << pc->pointcloud->GetRuntimeClass()->className;
+    ASSERT_EQ(xyzi->size(), app.result.static_map.size());
+    for (std::size_t i = 0; i < xyzi->size(); i += xyzi->size() / 7 + 1)
+      EXPECT_EQ(xyzi->getPointIntensity(i), app.result.static_map[i].intensity) << i;
   }
 }
 
