@@ -56,6 +56,17 @@ TColor heightColor(float u) {
   return TColor(ch(0), ch(1), ch(2));
 }
 
+// Doppler colormap, u in [-1, 1]: blue (approaching) -> grey (0) -> magenta (receding); apart
+// from the rejected points' red.
+TColor dopplerColor(float u) {
+  u = std::clamp(u, -1.0f, 1.0f);
+  const float neg[3] = {40, 100, 255}, zero[3] = {150, 150, 160}, pos[3] = {235, 70, 215};
+  const float* end = u < 0 ? neg : pos;
+  const float f = std::abs(u);
+  auto ch = [&](int c) { return static_cast<std::uint8_t>((1 - f) * zero[c] + f * end[c]); };
+  return TColor(ch(0), ch(1), ch(2));
+}
+
 mrpt::poses::CPose3D toPose(const Quat& q, const Vec3& p) {
   const Mat3 R = q.toRotationMatrix();
   mrpt::math::CMatrixDouble33 Rm;
@@ -97,6 +108,8 @@ struct ViewStyle {
   float grid_step = 1;   ///< [m] grid spacing
   float marker = 1;      ///< [m] sizes the start sphere, the axes and the gravity arrow
   float point_size = 2;  ///< [px] map points
+  /// [m/s] > 0: the map colored by Doppler over +-doppler_scale instead of by height
+  float doppler_scale = 0;
 };
 
 // A path as a dense chain of large points, one every `step` metres (GL line widths above 1 px are
@@ -118,7 +131,8 @@ mrpt::opengl::CPointCloud::Ptr pathCloud(const std::vector<Vec3>& path, const TC
   return cloud;
 }
 
-// One scene per view: the map colored by height over the range `z`, the rejected points, the
+// One scene per view: the map colored by height over the range `z` (or by Doppler), the rejected
+// points, the
 // trajectory with body axes, the start, and the state's axes with gravity.
 void buildScene(mrpt::opengl::COpenGLScene& scene, const InitResult& result, const Range& z,
                 const ViewStyle& v) {
@@ -131,7 +145,9 @@ void buildScene(mrpt::opengl::COpenGLScene& scene, const InitResult& result, con
   auto cloud = CPointCloudColoured::Create();
   cloud->setPointSize(point_size);
   for (const auto& p : result.static_map) {
-    const TColor c = heightColor((p.p_w.z() - z.lo) / std::max(z.hi - z.lo, 0.1f));
+    const TColor c = v.doppler_scale > 0
+                         ? dopplerColor(p.doppler / v.doppler_scale)
+                         : heightColor((p.p_w.z() - z.lo) / std::max(z.hi - z.lo, 0.1f));
     cloud->push_back(p.p_w.x(), p.p_w.y(), p.p_w.z(), c.R / 255.f, c.G / 255.f, c.B / 255.f);
   }
   scene.insert(cloud);
@@ -203,12 +219,15 @@ void swatch(mrpt::img::CImage& img, int x, int y, const TColor& c, const std::st
 
 void renderMapSnapshot(const std::string& png, const InitResult& result, int width, int height) {
   const auto& s = result.state;
-  std::vector<float> xs, ys, zs;
+  std::vector<float> xs, ys, zs, dopplers;
   for (const auto& p : result.static_map) {
     xs.push_back(p.p_w.x());
     ys.push_back(p.p_w.y());
     zs.push_back(p.p_w.z());
+    dopplers.push_back(std::abs(p.doppler));
   }
+  // The Doppler view's scale: 98 % of the returns within it, at least 0.1 m/s.
+  const float doppler_scale = std::max(quantileRange(dopplers, 0.02).hi, 0.1f);
   const Range zr = quantileRange(zs, 0.02);
   Range xr = quantileRange(xs, 0.05), yr = quantileRange(ys, 0.05);
   const float extent = std::max({xr.hi - xr.lo, yr.hi - yr.lo, 4.0f});
@@ -231,8 +250,11 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   // Look from behind and above the state pose, towards the map's center.
   const float azimuth = static_cast<float>(std::atan2(py - cy, px - cx) * 180.0 / M_PI) + 25.0f;
 
-  mrpt::img::CImage overview, closeup;
-  {
+  // Left the overview by height; right, above, the close-up of the trajectory, and below the
+  // overview again by Doppler (what only these data have).
+  const int closeup_h = view_h / 2, doppler_h = view_h - closeup_h;
+  mrpt::img::CImage overview, closeup, by_doppler;
+  for (const bool doppler : {false, true}) {
     mrpt::opengl::COpenGLScene scene;
     const float pad = 5.0f;
     ViewStyle v;
@@ -241,10 +263,12 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
     v.grid_z = zr.lo;
     v.grid_step = 5.0f;
     v.marker = std::clamp(0.04f * extent, 0.3f, 2.0f);
+    if (doppler) v.doppler_scale = doppler_scale;
     buildScene(scene, result, zr, v);
     const Vec3 target(px + 0.35 * (cx - px), py + 0.35 * (cy - py), s.p_w.z());
-    overview = renderView(scene, left_w, view_h, target, std::clamp(0.7f * extent, 8.0f, 60.0f),
-                          azimuth, 30.0f);
+    (doppler ? by_doppler : overview) =
+        renderView(scene, doppler ? right_w : left_w, doppler ? doppler_h : view_h, target,
+                   std::clamp(0.7f * extent, 8.0f, 60.0f), azimuth, 30.0f);
   }
   {
     mrpt::opengl::COpenGLScene scene;
@@ -258,14 +282,17 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
     v.grid_step = 0.1f;
     v.marker = 0.15f * traj_extent;
     buildScene(scene, result, zr, v);
-    closeup = renderView(scene, right_w, view_h, traj_center, 3.0f * traj_extent, azimuth, 40.0f);
+    closeup =
+        renderView(scene, right_w, closeup_h, traj_center, 3.0f * traj_extent, azimuth, 40.0f);
   }
 
   mrpt::img::CImage img(width, height, mrpt::img::CH_RGB);
   img.filledRectangle(0, 0, width - 1, height - 1, TColor(20, 20, 30));
   img.drawImage(0, header, overview);
   img.drawImage(left_w, header, closeup);
+  img.drawImage(left_w, header + closeup_h, by_doppler);
   img.line(left_w, header, left_w, height - 1, TColor(120, 120, 140), 2);
+  img.line(left_w, header + closeup_h, width - 1, header + closeup_h, TColor(120, 120, 140), 2);
 
   const Vec3 g_b = s.g_b();
   const double tilt_deg =
@@ -302,6 +329,15 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   swatch(img, x, y, kGravity, "gravity");
   img.textOut(12, header + 6, "overview (grid 5 m)", white);
   img.textOut(left_w + 10, header + 6, "close-up of the trajectory (grid 0.1 m)", white);
+  const int dy = header + closeup_h + 6;
+  img.textOut(left_w + 10, dy, "the overview by Doppler", white);
+  for (int k = 0; k <= 10; ++k)
+    img.filledRectangle(left_w + 10 + 4 * k, dy + 23, left_w + 13 + 4 * k, dy + 35,
+                        dopplerColor(static_cast<float>(k - 5) / 5.0f));
+  img.textOut(left_w + 66, dy + 20,
+              "-" + num(doppler_scale, 2) + ".." + num(doppler_scale, 2) +
+                  " m/s, approaching..receding",
+              TColor(230, 230, 230));
   saveAtomically(img, png);
 }
 
