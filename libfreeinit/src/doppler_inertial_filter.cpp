@@ -171,6 +171,12 @@ void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, do
 FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
                                              double tau, MatS* J) {
+  if (tau == 0) {  // what the formulas below give exactly, without their work
+    FilterState y = x;
+    y.t = imu[k].t;
+    if (J != nullptr) J->setIdentity();
+    return y;
+  }
   // Rates at s = 0, tau/4, tau/2, tau (the node's own sample at s = 0).
   const double t = imu[k].t;
   std::array<Vec3, 4> w, f;
