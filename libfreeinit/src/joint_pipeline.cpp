@@ -284,7 +284,7 @@ class JointPipeline final : public Pipeline {
         const bool used = filter_->pointAccepted(j);
         (used ? r.diag.points_used : r.diag.points_rejected)++;
         recorder_.judge(i, used, static_cast<float>(filter_->pointResidual(j)),
-                        used ? RestCells::cellOf(recorder_.point(i).p_l) : WindowRecorder::kNoCell);
+                        used ? RestCells::cellOf(recorder_.lidarPoint(i)) : WindowRecorder::kNoCell);
       }
       node_first_point_ = node_points_end;
       const bool was_rest = rest_.atRest();
@@ -297,10 +297,10 @@ class JointPipeline final : public Pipeline {
           node_rest_[j] = false;
         // Their returns were not seen from a standing sensor after all: out of the rest cells.
         for (std::size_t i = recorder_.size(); i-- > 0;) {
-          WindowRecorder::Point& p = recorder_.point(i);
+          WindowRecorder::Tag& p = recorder_.tag(i);
           if (p.node < node_rest_.size() && node_rest_[p.node]) break;
           if (!p.in_rest_cells) continue;
-          rest_cells_.remove(p.cell, p.residual);
+          rest_cells_.remove(p.cell, recorder_.residual(i));
           p.in_rest_cells = false;
         }
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
@@ -312,10 +312,10 @@ class JointPipeline final : public Pipeline {
       node_rest_.push_back(rest);
       if (rest) {
         for (std::size_t i = node_points_begin; i < node_points_end; ++i) {
-          WindowRecorder::Point& p = recorder_.point(i);
+          WindowRecorder::Tag& p = recorder_.tag(i);
           if (!p.accepted) continue;
           p.in_rest_cells = true;
-          rest_cells_.add(p.cell, p.residual);
+          rest_cells_.add(p.cell, recorder_.residual(i));
         }
       }
       ++r.diag.gyro_updates;
@@ -451,29 +451,29 @@ class JointPipeline final : public Pipeline {
     constexpr std::size_t kMinReturns = 200;
     const double sigma = cfg_.velocimeter.doppler_sigma;
     const auto& imu = seq_.imu();
-    const auto& points = recorder_.points();
-    constexpr std::size_t kCells = RestCells::kSide * RestCells::kSide * RestCells::kRangeBins;
-    if (span_sum_.size() != kCells) {
-      span_sum_.assign(kCells, 0.0);
-      span_count_.assign(kCells, 0);
+    const WindowRecorder& rec = recorder_;
+    const std::size_t count = rec.size();
+    if (span_sum_.size() != RestCells::kCells) {
+      span_sum_.assign(RestCells::kCells, 0.0);
+      span_count_.assign(RestCells::kCells, 0);
     }
     std::vector<std::size_t> filed;  // the span's returns
     std::vector<std::uint32_t> touched;
     std::vector<std::size_t> coherent;
     std::size_t i = 0;
-    while (i < points.size()) {
+    while (i < count) {
       // One span: each accepted return of a moving node, its residual against the smoothed
       // motion summed into its cell. The recorder holds the returns in node order; the residual
       // is computed in float, as the recorder keeps it.
-      const double t_begin = imu[k0_ + points[i].node].t;
+      const double t_begin = imu[k0_ + rec.tag(i).node].t;
       filed.clear();
       touched.clear();
       double sumsq = 0;
       std::size_t total = 0;
-      while (i < points.size() && imu[k0_ + points[i].node].t < t_begin + kSpan) {
-        const std::uint32_t node = points[i].node;
+      while (i < count && imu[k0_ + rec.tag(i).node].t < t_begin + kSpan) {
+        const std::uint32_t node = rec.tag(i).node;
         std::size_t end = i;
-        while (end < points.size() && points[end].node == node) ++end;
+        while (end < count && rec.tag(end).node == node) ++end;
         if (node < node_rest_.size() && node_rest_[node]) {
           i = end;
           continue;
@@ -482,12 +482,12 @@ class JointPipeline final : public Pipeline {
         const Eigen::Vector3f q0 = Q.segment<3>(0), q1 = Q.segment<3>(3), q2 = Q.segment<3>(6);
         const float inv_h = static_cast<float>(filter_->normalizedTime(node, 1.0));
         for (; i < end; ++i) {
-          const WindowRecorder::Point& p = points[i];
-          if (!p.accepted) continue;
-          const float s = p.tau * inv_h;
+          if (!rec.tag(i).accepted) continue;
+          const float s = rec.tau(i) * inv_h;
           const Eigen::Vector3f v = q0 + s * (q1 + s * q2);
-          const float res = p.doppler + p.p_l.dot(v) / p.p_l.norm();
-          const std::uint32_t c = p.cell;
+          const Eigen::Vector3f& p_l = rec.lidarPoint(i);
+          const float res = rec.doppler(i) + p_l.dot(v) / p_l.norm();
+          const std::uint32_t c = rec.tag(i).cell;
           if (span_count_[c]++ == 0) touched.push_back(c);
           span_sum_[c] += res;
           sumsq += static_cast<double>(res) * res;
@@ -501,8 +501,8 @@ class JointPipeline final : public Pipeline {
         const double var = std::max(sigma * sigma, sumsq / static_cast<double>(total));
         const double k = kSigmas * kSigmas * var;
         for (const std::size_t f : filed) {
-          const std::uint32_t n = span_count_[points[f].cell];
-          const double sum = span_sum_[points[f].cell];
+          const std::uint32_t n = span_count_[rec.tag(f).cell];
+          const double sum = span_sum_[rec.tag(f).cell];
           if (n >= kMinCount && sum * sum > k * static_cast<double>(n)) coherent.push_back(f);
         }
       }
@@ -515,14 +515,18 @@ class JointPipeline final : public Pipeline {
     // windows, tens of returns in some): not worth another smoothing. An object's are thousands.
     if (coherent.size() < kMinReturns) return false;
     for (const std::size_t k : coherent) {
-      const WindowRecorder::Point& p = points[k];
-      filter_->removePoint(p.node, static_cast<double>(p.tau), p.p_l,
-                           static_cast<double>(p.doppler));
-      recorder_.reject(k);
-      --r.diag.points_used;
-      ++r.diag.points_rejected;
+      removeReturn(k, r.diag);
     }
     return true;
+  }
+
+  /// Takes the i-th recorded return out of the estimate (its node's sums) and out of the map.
+  void removeReturn(std::size_t i, Diagnostics& diag) {
+    filter_->removePoint(recorder_.tag(i).node, static_cast<double>(recorder_.tau(i)),
+                         recorder_.lidarPoint(i), static_cast<double>(recorder_.doppler(i)));
+    recorder_.reject(i);
+    --diag.points_used;
+    ++diag.points_rejected;
   }
 
   /// Takes the returns of the directions whose residuals, while the sensor stood still, are
@@ -536,16 +540,11 @@ class JointPipeline final : public Pipeline {
     constexpr double kSigmas = 4.0;
     constexpr int kMinCount = 4;
     const double sigma = cfg_.velocimeter.doppler_sigma;
-    const auto& points = recorder_.points();
-    for (std::size_t i = 0; i < points.size(); ++i) {
-      const WindowRecorder::Point& p = points[i];
+    for (std::size_t i = 0; i < recorder_.size(); ++i) {
+      const WindowRecorder::Tag& p = recorder_.tag(i);
       if (!p.accepted || !p.in_rest_cells) continue;
       if (!rest_cells_.coherent(p.cell, sigma, kSigmas, kMinCount)) continue;
-      filter_->removePoint(p.node, static_cast<double>(p.tau), p.p_l,
-                           static_cast<double>(p.doppler));
-      recorder_.reject(i);
-      --r.diag.points_used;
-      ++r.diag.points_rejected;
+      removeReturn(i, r.diag);
     }
   }
 

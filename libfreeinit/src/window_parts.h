@@ -57,42 +57,53 @@ class RestTracker {
   std::size_t n_ = 0;
 };
 
-/// The points of the window as the filter received them, judged once their node is updated and
-/// mapped into the world once the node states are final.
+/// The returns of the window as the filter received them, judged once their node is updated and
+/// mapped into the world once the node states are final. Each return is kept as the MapPoint it
+/// becomes (in the LiDAR frame and at its offset from its node until finish() maps it in place,
+/// so that the window's largest buffer is never held twice), with a small tag beside it.
 class WindowRecorder {
  public:
-  struct Point {
+  struct Tag {
     std::uint32_t node;
-    Eigen::Vector3f p_l;  ///< [m] in the LiDAR frame
-    float intensity;
-    float doppler;        ///< [m/s]
-    float residual;       ///< [m/s] against the node's update
-    float tau;            ///< [s] from the node's time
-    std::uint32_t cell;   ///< direction and range cell (RestCells) of an accepted point
+    std::uint16_t cell;  ///< direction and range cell (RestCells) of an accepted return
     bool accepted;
-    bool in_rest_cells;   ///< counted in the rest cells (seen from a standing sensor)
+    bool in_rest_cells;  ///< counted in the rest cells (seen from a standing sensor)
   };
-  static constexpr std::uint32_t kNoCell = 0xffffffffu;
-  void reserve(std::size_t n) { points_.reserve(n); }
-  std::size_t size() const { return points_.size(); }
-  const std::vector<Point>& points() const { return points_; }
-  /// A point given to the filter's open node.
+  static constexpr std::uint16_t kNoCell = 0xffff;
+  void reserve(std::size_t n) {
+    returns_.reserve(n);
+    tags_.reserve(n);
+  }
+  std::size_t size() const { return returns_.size(); }
+  /// A return given to the filter's open node.
   void add(std::size_t node, double tau, const DopplerPoint& p) {
-    points_.push_back({static_cast<std::uint32_t>(node), p.p_l, p.intensity, p.doppler, 0.0f,
-                       static_cast<float>(tau), kNoCell, false, false});
+    MapPoint m;
+    m.p_w = p.p_l;
+    m.intensity = p.intensity;
+    m.doppler = p.doppler;
+    m.time = static_cast<float>(tau);
+    returns_.push_back(m);
+    tags_.push_back({static_cast<std::uint32_t>(node), kNoCell, false, false});
   }
-  Point& point(std::size_t i) { return points_[i]; }
-  /// The verdict on the i-th point recorded; an accepted point's cell.
+  const Tag& tag(std::size_t i) const { return tags_[i]; }
+  Tag& tag(std::size_t i) { return tags_[i]; }
+  const Eigen::Vector3f& lidarPoint(std::size_t i) const { return returns_[i].p_w; }
+  float tau(std::size_t i) const { return returns_[i].time; }  ///< [s] from its node's time
+  float doppler(std::size_t i) const { return returns_[i].doppler; }
+  float residual(std::size_t i) const { return returns_[i].residual; }
+  /// The verdict on the i-th return recorded; an accepted return's cell.
   void judge(std::size_t i, bool accepted, float residual, std::uint32_t cell) {
-    points_[i].accepted = accepted;
-    points_[i].residual = residual;
-    points_[i].cell = cell;
+    tags_[i].accepted = accepted;
+    returns_[i].residual = residual;
+    tags_[i].cell = static_cast<std::uint16_t>(cell);
   }
-  void reject(std::size_t i) { points_[i].accepted = false; }
-  /// Maps every point with the final node states: the body moved by tau (its angular and linear
-  /// velocity at the node) between the node and the point.
+  void reject(std::size_t i) { tags_[i].accepted = false; }
+  /// Maps every return with the final node states (the body moved by tau, its angular and
+  /// linear velocity at the node, between the node and the return), the accepted ones into
+  /// r.static_map (the recorder's own buffer, moved), the others into r.rejected. The recorder
+  /// is empty afterwards.
   void finish(const DopplerInertialFilter& filter, const std::vector<ImuSample>& imu,
-              std::size_t k0, const Extrinsics& ext, InitResult& r) const {
+              std::size_t k0, const Extrinsics& ext, InitResult& r) {
     // In float, as the map is kept: at 100 m its rounding is 0.01 mm. A return at tau from its
     // node is at x_b = p_b + tau (omega x p_b + v_b) in the node's body frame (p_b = R_bl p_l +
     // p_bl), so in the world p_w = A p_l + a + tau (B p_l + b) with, per node, A = R R_bl,
@@ -100,9 +111,9 @@ class WindowRecorder {
     struct NodeMap {
       Eigen::Matrix3f A, B;
       Eigen::Vector3f a, b;
+      float time;  ///< [s] from the state's time (the last node's)
     };
     std::vector<NodeMap> maps(filter.nodes());
-    std::vector<float> node_time(filter.nodes());  // from the state's time (the last node's)
     const double t_state = filter.state(filter.nodes() - 1).t;
     for (std::size_t k = 0; k < maps.size(); ++k) {
       const FilterState& x = filter.state(k);
@@ -110,29 +121,35 @@ class WindowRecorder {
       const Vec3 v_b = x.R_wb.transpose() * x.v_w;
       maps[k] = {(x.R_wb * ext.R_bl).cast<float>(), (x.R_wb * skew(omega) * ext.R_bl).cast<float>(),
                  (x.R_wb * ext.p_bl + x.p_w).cast<float>(),
-                 (x.R_wb * (omega.cross(ext.p_bl) + v_b)).cast<float>()};
-      node_time[k] = static_cast<float>(x.t - t_state);
+                 (x.R_wb * (omega.cross(ext.p_bl) + v_b)).cast<float>(),
+                 static_cast<float>(x.t - t_state)};
     }
     std::size_t accepted = 0;
-    for (const Point& p : points_) accepted += p.accepted ? 1 : 0;
-    r.static_map.clear();
+    for (const Tag& t : tags_) accepted += t.accepted ? 1 : 0;
     r.rejected.clear();
-    r.static_map.reserve(accepted);
-    r.rejected.reserve(points_.size() - accepted);
-    for (const Point& p : points_) {
-      const NodeMap& m = maps[p.node];
-      MapPoint out;
-      out.p_w = m.A * p.p_l + m.a + p.tau * (m.B * p.p_l + m.b);
-      out.intensity = p.intensity;
-      out.residual = p.residual;
-      out.doppler = p.doppler;
-      out.time = node_time[p.node] + p.tau;
-      (p.accepted ? r.static_map : r.rejected).push_back(out);
+    r.rejected.reserve(returns_.size() - accepted);
+    // The accepted returns close up in place (the write position never passes the read one).
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < returns_.size(); ++i) {
+      MapPoint p = returns_[i];
+      const NodeMap& m = maps[tags_[i].node];
+      const float tau = p.time;
+      p.p_w = m.A * p.p_w + m.a + tau * (m.B * p.p_w + m.b);
+      p.time = m.time + tau;
+      if (tags_[i].accepted)
+        returns_[kept++] = p;
+      else
+        r.rejected.push_back(p);
     }
+    returns_.resize(kept);
+    r.static_map = std::move(returns_);
+    returns_ = {};
+    tags_ = {};
   }
 
  private:
-  std::vector<Point> points_;
+  std::vector<MapPoint> returns_;
+  std::vector<Tag> tags_;
 };
 
 /// The residuals of the returns while the sensor stands still, by direction: a standing sensor
@@ -146,8 +163,21 @@ class RestCells {
  public:
   static constexpr int kSide = 32;
   static constexpr int kRangeBins = 24;  // 25 % apart from 0.5 m: 0.5-100 m
-  static constexpr float kInvLogStep = 4.4814201f;  // 1 / ln(1.25)
-  RestCells() : sum_(kSide * kSide * kRangeBins, 0.0), count_(kSide * kSide * kRangeBins, 0) {}
+  /// Squared inner edges of the range bins, (0.5 m 1.25^b)^2 for b = 1 .. kRangeBins - 1: bin b
+  /// holds ranges in [0.5 m 1.25^b, 0.5 m 1.25^(b+1)), the first one everything nearer, the last
+  /// everything farther.
+  static constexpr std::array<float, kRangeBins - 1> kRangeEdges2 = [] {
+    std::array<float, kRangeBins - 1> e{};
+    double edge = 0.5;
+    for (float& x : e) {
+      edge *= 1.25;
+      x = static_cast<float>(edge * edge);
+    }
+    return e;
+  }();
+  static constexpr std::uint32_t kCells = kSide * kSide * kRangeBins;
+  static_assert(kCells < WindowRecorder::kNoCell, "a cell must fit the recorder's tag");
+  RestCells() : sum_(kCells, 0.0), count_(kCells, 0) {}
   static std::uint32_t cellOf(const Eigen::Vector3f& p) {
     const float l1 = std::abs(p.x()) + std::abs(p.y()) + std::abs(p.z());
     float u = p.x() / l1, v = p.y() / l1;
@@ -160,11 +190,13 @@ class RestCells {
     auto bin = [](float x) {
       return static_cast<std::uint32_t>(std::clamp(static_cast<int>((x + 1.0f) * 0.5f * kSide), 0, kSide - 1));
     };
-    // Range bins: a person and the wall behind share directions, not ranges.
-    const float range = p.norm();
-    const int rb = std::clamp(static_cast<int>(std::log(std::max(range, 0.5f) * 2.0f) * kInvLogStep),
-                              0, kRangeBins - 1);
-    return (bin(u) * kSide + bin(v)) * kRangeBins + static_cast<std::uint32_t>(rb);
+    // Range bins: a person and the wall behind share directions, not ranges. The bin is the
+    // number of bin edges at or below the range, counted on the squared range (no root, no
+    // logarithm; a branch-free count the compiler vectorizes).
+    const float r2 = p.squaredNorm();
+    std::uint32_t rb = 0;
+    for (const float edge2 : kRangeEdges2) rb += r2 >= edge2 ? 1u : 0u;
+    return (bin(u) * kSide + bin(v)) * kRangeBins + rb;
   }
   void add(std::uint32_t cell, double residual) {
     sum_[cell] += residual;
