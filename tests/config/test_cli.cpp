@@ -117,6 +117,27 @@ TEST(CommandLine, Freeinit) {
                    "-o (--out): given twice");
 }
 
+// --plugin-path: the MRPT plugin file for stock tools, on one line, exit 0, nothing else done
+// (no argument needed); the same file from every app.
+TEST(CommandLine, PluginPath) {
+  std::vector<std::string> apps = {FREEINIT_APP, FREEINIT_SIM_APP, FREEINIT_ONLINE_APP,
+                                   FREEINIT_STREAM_APP, FREEINIT_ICP_SLAM_APP};
+#ifdef FREEINIT_IMPORT_BAG_APP
+  apps.push_back(FREEINIT_IMPORT_BAG_APP);
+#endif
+  for (std::size_t i = 0; i < apps.size(); ++i) {
+    SCOPED_TRACE(apps[i]);
+    const Outcome r = run("plugin_path_" + std::to_string(i), apps[i], {"--plugin-path"});
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    ASSERT_EQ(lines(r.out), 1u) << r.out;
+    const std::string path = r.out.substr(0, r.out.size() - 1);
+    EXPECT_TRUE(fs::is_regular_file(path)) << path;
+    EXPECT_EQ(fs::canonical(path), fs::canonical(FREEINIT_PLUGIN_FILE));
+    EXPECT_TRUE(r.left.empty());
+  }
+}
+
 TEST(CommandLine, FreeinitSim) {
   const std::string exe = FREEINIT_SIM_APP;
   expectHelp("sim", exe, {"dyna_01", "1", "0", "<preset>.rawlog"});

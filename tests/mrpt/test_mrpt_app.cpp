@@ -3,12 +3,14 @@
 // reads only what the window needs, initializes anywhere (--start, --every, --starts) with the
 // seek index, and tells bad records inside the window (errors) from those outside (warnings).
 #include <freeinit/free_init.h>
+#include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/mrpt/FreeInitApp.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/SimApp.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/input_validator.h>
 #include <freeinit/mrpt/output_writers.h>
+#include <freeinit/mrpt/plugin_path.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFile.h>
@@ -290,6 +292,29 @@ TEST(FreeInitAppEndToEnd, BadInputFailsBeforeAnyOutputIsWritten) {
   auto missing = makeApp(kSrc + "/rawlogs/nope.rawlog", out);
   EXPECT_THROW(missing.run(log), InputError);
   EXPECT_FALSE(fs::exists(out));
+}
+
+// --plugin-path, on every app's command line, prints the plugin the process has loaded: an
+// existing file, the one this build made (its installed copy after `cmake --install`, checked by
+// the ctest install_prefix_is_usable_and_relocatable), and does nothing else.
+TEST(PluginPath, PrintsTheLoadedPluginFile) {
+  const std::string path = pluginPath();
+  EXPECT_TRUE(fs::path(path).is_absolute()) << path;
+  EXPECT_TRUE(fs::is_regular_file(path)) << path;
+  EXPECT_EQ(fs::path(path).filename(), kPluginFileName);
+  EXPECT_EQ(fs::canonical(path), fs::canonical(FREEINIT_PLUGIN_FILE));
+
+  CommandLine cli("freeinit", "test");
+  const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
+  std::string arg0 = "freeinit", arg1 = "--plugin-path";
+  char* argv[] = {arg0.data(), arg1.data()};
+  testing::internal::CaptureStdout();
+  const auto code = cli.parse(2, argv);
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), path + "\n");
+  ASSERT_TRUE(code);
+  EXPECT_EQ(*code, 0);  // even though <input.rawlog> is missing: nothing is run
+  EXPECT_FALSE(rawlog.given);
+  EXPECT_NE(cli.usage().find("--plugin-path"), std::string::npos);
 }
 
 TEST(SimApp, WritesARawlogWithGroundTruthThatReadsBack) {

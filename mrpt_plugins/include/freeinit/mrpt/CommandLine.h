@@ -1,5 +1,6 @@
-// The command line of every app, with one rule for all of them: --help and --version print and
-// exit 0 doing nothing else; any unknown option, missing or extra argument, missing value,
+// The command line of every app, with one rule for all of them: --help, --version and
+// --plugin-path (the MRPT plugin for stock tools, plugin_path.h) print and exit 0 doing nothing
+// else; any unknown option, missing or extra argument, missing value,
 // malformed or out-of-range value prints one line naming the flag and exits 2, doing nothing
 // else; --help shows each option's default. Parsing is MRPT's bundled TCLAP (whose
 // CmdLine::parse() returns false on --help, --version and errors instead of exiting); values are
