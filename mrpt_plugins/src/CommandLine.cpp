@@ -258,13 +258,14 @@ std::string CommandLine::usage() const {
   return os.str();
 }
 
+int CommandLine::usageError(const std::string& what) const {
+  std::cerr << program_ << ": error: " << what << "; see '" << program_ << " --help'\n";
+  return 2;
+}
+
 std::optional<int> CommandLine::parse(int argc, char** argv) {
   Impl& m = *impl_;
-  const std::string hint = "; see '" + program_ + " --help'";
-  auto bad = [&](const std::string& what) {
-    std::cerr << program_ << ": error: " << what << hint << "\n";
-    return 2;
-  };
+  auto bad = [&](const std::string& what) { return usageError(what); };
   if (!m.cmd.parse(argc, argv)) {
     if (m.output.help) {
       std::cout << usage();
@@ -293,8 +294,16 @@ std::optional<int> CommandLine::parse(int argc, char** argv) {
   const std::vector<std::string>& tokens = m.rest->getValue();
   for (const auto& t : tokens)
     if (t.size() > 1 && t[0] == '-') return bad(t + ": unknown option");
+  std::size_t required = 0;
+  for (const auto& p : m.positionals) required += p.required && !p.many ? 1 : 0;
+  // How many optional positional arguments get a token: those beyond the required ones.
+  std::size_t optional = tokens.size() > required ? tokens.size() - required : 0;
   std::size_t next = 0;
   for (auto& p : m.positionals) {
+    if (!p.many && !p.required) {
+      if (optional == 0) continue;
+      --optional;
+    }
     if (p.many) {
       for (; next < tokens.size(); ++next) p.all->value.push_back(tokens[next]);
       p.all->given = !p.all->value.empty();

@@ -103,14 +103,22 @@ const std::string kRawlog = kSrc + "/rawlogs/stat_01.rawlog";
 
 TEST(CommandLine, Freeinit) {
   const std::string exe = FREEINIT_APP;
-  expectHelp("freeinit", exe, {"freeinit_out"});
+  expectHelp("freeinit", exe,
+             {"freeinit_out; without <config.ini> a new folder for each run, "
+              "freeinit_out/<input>.<time>"});
   const std::string ini = kSrc + "/ini/freeinit.ini";
   expectUsageError("fi_typo_after", exe, {ini, kRawlog, "--ouput", "out/x"},
                    "freeinit: error: --ouput: unknown option; see 'freeinit --help'");
   expectUsageError("fi_typo_before", exe, {"--ouput", "out/x", ini, kRawlog},
                    "freeinit: error: --ouput: unknown option");
-  expectUsageError("fi_nothing", exe, {}, "freeinit: error: missing <config.ini>");
-  expectUsageError("fi_one", exe, {ini}, "freeinit: error: missing <input.rawlog>");
+  expectUsageError("fi_nothing", exe, {}, "freeinit: error: missing <input.rawlog>");
+  // One argument is the rawlog (`freeinit <input.rawlog>`): a configuration alone, or a file
+  // that is neither, is told by its content.
+  expectUsageError(
+      "fi_one", exe, {ini},
+      "freeinit: error: missing <input.rawlog>: '" + ini + "' is an INI configuration file");
+  expectUsageError("fi_neither", exe, {kSrc + "/rawlogs/stat_01.truth.csv"},
+                   "stat_01.truth.csv': not an MRPT rawlog (it is a text file)");
   expectUsageError("fi_three", exe, {ini, kRawlog, "extra"}, "'extra': unexpected argument");
   expectUsageError("fi_no_value", exe, {ini, kRawlog, "-o"}, "-o (--out): missing value");
   expectUsageError("fi_twice", exe, {ini, kRawlog, "-o", "a", "--out", "b"},

@@ -46,6 +46,9 @@ class CommandLine {
   CommandLine& operator=(const CommandLine&) = delete;
 
   /// A positional argument, in the order declared; `name` is its placeholder ("config.ini").
+  /// The tokens go to the required positional arguments first; optional ones get the tokens
+  /// beyond those, in the order declared (so an optional one may come first:
+  /// `[<config.ini>] <input.rawlog>`).
   const Value<std::string>& positional(const std::string& name, const std::string& doc,
                                        bool required = true);
   /// The remaining positional arguments (declare it last).
@@ -80,6 +83,10 @@ class CommandLine {
   /// once: 0 after --help or --version (printed on stdout), 2 after a bad command line (one line
   /// on stderr naming the flag or argument, and how to get help).
   std::optional<int> parse(int argc, char** argv);
+
+  /// A bad command line found after parse() (e.g. from the arguments' content): prints it as
+  /// parse() does (one line naming it, and how to get help) and returns 2.
+  int usageError(const std::string& what) const;
 
   /// What --help prints.
   std::string usage() const;
