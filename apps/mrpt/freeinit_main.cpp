@@ -1,4 +1,4 @@
-// freeinit <config.ini> <input.rawlog> [--out DIR] [--start T | --every S | --starts FILE]
+// freeinit [<config.ini>] <input.rawlog> [--out DIR] [--start T | --every S | --starts FILE]
 // [--check-all] [--salvage] [--no-index]: Free-Init on an MRPT rawlog.
 #include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/mrpt/FreeInitApp.h>
@@ -12,9 +12,16 @@ int main(int argc, char** argv) {
   glue::CommandLine cli("freeinit",
                         "initial state (attitude, velocity, biases, gravity, static map) from the "
                         "first instants of a Doppler LiDAR + IMU rawlog");
-  const auto& ini = cli.positional("config.ini", "INI configuration file (ini/freeinit.ini)");
+  const auto& ini = cli.positional("config.ini",
+                                   "INI configuration file (ini/freeinit.ini documents every key); "
+                                   "without it the defaults, the extrinsics from the rawlog",
+                                   false);
   const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
-  const auto& out = cli.text("o", "out", "output folder", "freeinit_out", "DIR");
+  const auto& out =
+      cli.text("o", "out", "output folder (its earlier outputs are replaced)", "", "DIR",
+               std::string(glue::kDefaultOutDir) +
+                   "; without <config.ini> a new folder for each run, "
+                   "freeinit_out/<input>.<time>");
   const auto& quiet = cli.flag("q", "quiet",
                                 "no progress bar and no listing of the effective configuration "
                                 "(still written to effective_config.ini)");
@@ -40,11 +47,13 @@ int main(int argc, char** argv) {
   const auto& no_index =
       cli.flag("", "no-index", "neither use nor write the seek index <input>.freeinit.idx");
   if (const auto code = cli.parse(argc, argv)) return *code;
+  glue::FreeInitApp app;
+  app.params.config_file = ini.value;
+  app.params.rawlog = rawlog.value;
+  if (const auto problem = app.params.argumentsProblem(); !problem.empty())
+    return cli.usageError(problem);
   return glue::runMain(cli.program(), [&] {
-    glue::FreeInitApp app;
-    app.params.config_file = ini.value;
-    app.params.rawlog = rawlog.value;
-    app.params.out_dir = out.value;
+    app.params.out_dir = out.given ? out.value : ini.given ? glue::kDefaultOutDir : "";
     app.params.progress = !quiet.value;
     app.params.echo_config = !quiet.value;
     app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;

@@ -2,6 +2,7 @@
 // collects the positional tokens) and converted by this class, so that every message has the same
 // form and no value is silently wrapped, truncated or defaulted.
 #include <freeinit/mrpt/CommandLine.h>
+#include <freeinit/mrpt/plugin_path.h>
 #include <freeinit/mrpt/stop_signal.h>
 #include <mrpt/3rdparty/tclap/CmdLine.h>
 
@@ -100,6 +101,7 @@ struct CommandLine::Impl {
   std::deque<Option> options;
   std::vector<Positional> positionals;
   std::unique_ptr<TCLAP::UnlabeledMultiArg<std::string>> rest;
+  std::unique_ptr<TCLAP::SwitchArg> plugin_path;
   std::deque<Value<std::string>> texts;
   std::deque<Value<double>> numbers;
   std::deque<Value<long long>> integers;
@@ -112,6 +114,8 @@ CommandLine::CommandLine(std::string program, std::string description)
   impl_->rest = std::make_unique<TCLAP::UnlabeledMultiArg<std::string>>(
       "arguments", "positional arguments", false, "ARG");
   impl_->cmd.add(impl_->rest.get());
+  impl_->plugin_path = std::make_unique<TCLAP::SwitchArg>("", "plugin-path", "", false);
+  impl_->cmd.add(impl_->plugin_path.get());
 }
 
 CommandLine::~CommandLine() = default;
@@ -248,16 +252,20 @@ std::string CommandLine::usage() const {
                                                        : " (default: " + o.default_text + ")"));
   line("-h, --help", "print this help and exit");
   line("    --version", "print the version and exit");
+  line("    --plugin-path",
+       "print the MRPT plugin file that stock tools load to read our rawlogs and exit "
+       "(rawlog-edit -p, rawlog-grabber -p, RawLogViewer -l)");
   return os.str();
+}
+
+int CommandLine::usageError(const std::string& what) const {
+  std::cerr << program_ << ": error: " << what << "; see '" << program_ << " --help'\n";
+  return 2;
 }
 
 std::optional<int> CommandLine::parse(int argc, char** argv) {
   Impl& m = *impl_;
-  const std::string hint = "; see '" + program_ + " --help'";
-  auto bad = [&](const std::string& what) {
-    std::cerr << program_ << ": error: " << what << hint << "\n";
-    return 2;
-  };
+  auto bad = [&](const std::string& what) { return usageError(what); };
   if (!m.cmd.parse(argc, argv)) {
     if (m.output.help) {
       std::cout << usage();
@@ -268,6 +276,10 @@ std::optional<int> CommandLine::parse(int argc, char** argv) {
       return 0;
     }
     return bad(m.output.error.empty() ? "bad command line" : m.output.error);
+  }
+  if (m.plugin_path->isSet()) {
+    std::cout << pluginPath() << "\n";
+    return 0;
   }
   for (auto& o : m.options) {
     if (!o.is_set()) {
@@ -282,8 +294,16 @@ std::optional<int> CommandLine::parse(int argc, char** argv) {
   const std::vector<std::string>& tokens = m.rest->getValue();
   for (const auto& t : tokens)
     if (t.size() > 1 && t[0] == '-') return bad(t + ": unknown option");
+  std::size_t required = 0;
+  for (const auto& p : m.positionals) required += p.required && !p.many ? 1 : 0;
+  // How many optional positional arguments get a token: those beyond the required ones.
+  std::size_t optional = tokens.size() > required ? tokens.size() - required : 0;
   std::size_t next = 0;
   for (auto& p : m.positionals) {
+    if (!p.many && !p.required) {
+      if (optional == 0) continue;
+      --optional;
+    }
     if (p.many) {
       for (; next < tokens.size(); ++next) p.all->value.push_back(tokens[next]);
       p.all->given = !p.all->value.empty();

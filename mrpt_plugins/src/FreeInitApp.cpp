@@ -1,6 +1,7 @@
 #include <freeinit/input_checks.h>
 #include <freeinit/mrpt/FreeInitApp.h>
 #include <freeinit/mrpt/ProgressBar.h>
+#include <freeinit/mrpt/file_kind.h>
 #include <freeinit/mrpt/ingest.h>
 #include <freeinit/mrpt/ingest_sources.h>
 #include <freeinit/mrpt/map_export.h>
@@ -11,6 +12,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <ctime>
 #include <deque>
 #include <filesystem>
 #include <fstream>
@@ -91,7 +93,60 @@ void writeStateSet(OutputSet& set, const std::string& prefix, const AppConfig& c
   writeResultFiles(set, prefix, config.output, result, truth);
 }
 
+/// Removes the folders it holds at the end of its scope, innermost first, those that are empty
+/// only: a new output folder (and its parent, when made for it) that a failed run left empty.
+class EmptyFolderSweep {
+ public:
+  void add(const fs::path& dir) { dirs_.push_back(dir); }
+  ~EmptyFolderSweep() {
+    for (auto it = dirs_.rbegin(); it != dirs_.rend(); ++it) {
+      std::error_code ec;
+      if (fs::is_empty(*it, ec) && !ec) fs::remove(*it, ec);
+    }
+  }
+
+ private:
+  std::vector<fs::path> dirs_;
+};
+
+std::string localStamp() {
+  const std::time_t now = std::time(nullptr);
+  std::tm tm{};
+  localtime_r(&now, &tm);
+  char buf[32];
+  std::strftime(buf, sizeof(buf), "%Y%m%d-%H%M%S", &tm);
+  return buf;
+}
+
 }  // namespace
+
+std::string createNewOutputFolder(const std::string& root, const std::string& rawlog) {
+  std::string stem = fs::path(rawlog).stem().string();
+  if (stem.empty()) stem = "freeinit";
+  const std::string base = (fs::path(root) / (stem + "." + localStamp())).string();
+  std::error_code ec;
+  fs::create_directories(root, ec);
+  if (ec) throw OutputError(root + ": cannot create the output folder: " + ec.message());
+  for (int n = 1; n <= 1000; ++n) {
+    const std::string dir = n == 1 ? base : base + "-" + std::to_string(n);
+    if (fs::exists(fs::symlink_status(dir, ec))) continue;
+    if (fs::create_directory(dir, ec)) return dir;
+    if (ec) throw OutputError(dir + ": cannot create the output folder: " + ec.message());
+    // Another run took it in between: the next name.
+  }
+  throw OutputError(base + ": cannot create the output folder: 1000 folders of that name exist");
+}
+
+std::string FreeInitAppParams::argumentsProblem() const {
+  if (!config_file.empty()) return "";  // the configuration's and the rawlog's readers check
+  const FileKind input = fileKind(rawlog);
+  if (input == FileKind::Ini)
+    return "missing <input.rawlog>: '" + rawlog + "' is " + describe(input) +
+           " (freeinit [<config.ini>] <input.rawlog>)";
+  if (input == FileKind::Text || input == FileKind::RosBag || input == FileKind::Binary)
+    return "<input.rawlog> '" + rawlog + "': not an MRPT rawlog (it is " + describe(input) + ")";
+  return "";
+}
 
 double startTime(double value, double first) {
   return value > kUnixStampThreshold ? value : first + value;
@@ -163,20 +218,34 @@ int FreeInitApp::run(std::ostream& log) {
   if (params.every > 0 && !params.starts_file.empty())
     throw std::invalid_argument("--every and --starts exclude each other");
   if (params.start && !(*params.start >= 0)) throw std::invalid_argument("--start must be >= 0");
+  if (const std::string problem = params.argumentsProblem(); !problem.empty())
+    throw std::invalid_argument(problem);
   rows.clear();
   warnings.clear();
   result = InitResult{};
   errors_wrt_gt.reset();
+  // A new folder for this run when none is given; removed again if the run fails.
+  EmptyFolderSweep sweep;
+  out_dir = params.out_dir;
+  if (out_dir.empty()) {
+    if (!fs::exists(params.new_out_root)) sweep.add(params.new_out_root);
+    out_dir = createNewOutputFolder(params.new_out_root, params.rawlog);
+    sweep.add(out_dir);
+  }
   // The outputs' set: locked now, installed as a whole at the end; on any failure (an exception
   // through here) the earlier run's outputs are removed with the staging folder.
-  OutputSet set(params.out_dir, "", folderSetOptions(), log);
+  OutputSet set(out_dir, "", folderSetOptions(), log);
 
-  // 1. Configuration, echoed.
-  config = loadAppConfig(params.config_file);
+  // 1. Configuration (the defaults without a file), echoed.
+  config = params.config_file.empty() ? loadAppConfigFromText("", "the defaults")
+                                      : loadAppConfig(params.config_file);
   std::ostringstream effective;
   dumpAppConfig(config, effective);
   if (params.echo_config)
-    log << "Effective configuration (" << params.config_file << "):\n" << effective.str() << "\n";
+    log << "Effective configuration ("
+        << (params.config_file.empty() ? "the defaults: no configuration file" : params.config_file)
+        << "):\n"
+        << effective.str() << "\n";
 
   // 2. The starts.
   log << "Reading " << params.rawlog << "\n";
@@ -217,7 +286,7 @@ int FreeInitApp::run(std::ostream& log) {
   std::vector<IngestItem> items;
   std::vector<CheckedItem> checked;
   ProgressBar bar(log, "  reading", "MB", params.progress_terminal, 1e6);
-  const fs::path out(params.out_dir);
+  const fs::path out(out_dir);
   int exit_code = 0;
 
   auto dispatch = [&](const CheckedItem& c) {

@@ -321,7 +321,8 @@ int BagImportApp::run(std::ostream& log) {
   summary.print(log);
   log << "Wrote " << out << " (" << rawlog.records() << " records: " << rawlog.imuRecords()
       << " IMU, " << rawlog.frameRecords() << " point clouds, " << summary.points << " points) and "
-      << ext << "\nRun: freeinit ini/freeinit.ini " << out << "\n";
+      << ext << "\nRun: freeinit " << out << "   (the default configuration; freeinit <config.ini> "
+      << out << " for another)\n";
   if (summary.imu.skipped() + summary.lidar.skipped() > 0 || summary.invalid_points > 0)
     log << "Warning: " << summary.imu.skipped() + summary.lidar.skipped()
         << " message(s) skipped and " << summary.invalid_points

@@ -103,18 +103,47 @@ const std::string kRawlog = kSrc + "/rawlogs/stat_01.rawlog";
 
 TEST(CommandLine, Freeinit) {
   const std::string exe = FREEINIT_APP;
-  expectHelp("freeinit", exe, {"freeinit_out"});
+  expectHelp("freeinit", exe,
+             {"freeinit_out; without <config.ini> a new folder for each run, "
+              "freeinit_out/<input>.<time>"});
   const std::string ini = kSrc + "/ini/freeinit.ini";
   expectUsageError("fi_typo_after", exe, {ini, kRawlog, "--ouput", "out/x"},
                    "freeinit: error: --ouput: unknown option; see 'freeinit --help'");
   expectUsageError("fi_typo_before", exe, {"--ouput", "out/x", ini, kRawlog},
                    "freeinit: error: --ouput: unknown option");
-  expectUsageError("fi_nothing", exe, {}, "freeinit: error: missing <config.ini>");
-  expectUsageError("fi_one", exe, {ini}, "freeinit: error: missing <input.rawlog>");
+  expectUsageError("fi_nothing", exe, {}, "freeinit: error: missing <input.rawlog>");
+  // One argument is the rawlog (`freeinit <input.rawlog>`): a configuration alone, or a file
+  // that is neither, is told by its content.
+  expectUsageError(
+      "fi_one", exe, {ini},
+      "freeinit: error: missing <input.rawlog>: '" + ini + "' is an INI configuration file");
+  expectUsageError("fi_neither", exe, {kSrc + "/rawlogs/stat_01.truth.csv"},
+                   "stat_01.truth.csv': not an MRPT rawlog (it is a text file)");
   expectUsageError("fi_three", exe, {ini, kRawlog, "extra"}, "'extra': unexpected argument");
   expectUsageError("fi_no_value", exe, {ini, kRawlog, "-o"}, "-o (--out): missing value");
   expectUsageError("fi_twice", exe, {ini, kRawlog, "-o", "a", "--out", "b"},
                    "-o (--out): given twice");
+}
+
+// --plugin-path: the MRPT plugin file for stock tools, on one line, exit 0, nothing else done
+// (no argument needed); the same file from every app.
+TEST(CommandLine, PluginPath) {
+  std::vector<std::string> apps = {FREEINIT_APP, FREEINIT_SIM_APP, FREEINIT_ONLINE_APP,
+                                   FREEINIT_STREAM_APP, FREEINIT_ICP_SLAM_APP};
+#ifdef FREEINIT_IMPORT_BAG_APP
+  apps.push_back(FREEINIT_IMPORT_BAG_APP);
+#endif
+  for (std::size_t i = 0; i < apps.size(); ++i) {
+    SCOPED_TRACE(apps[i]);
+    const Outcome r = run("plugin_path_" + std::to_string(i), apps[i], {"--plugin-path"});
+    EXPECT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    ASSERT_EQ(lines(r.out), 1u) << r.out;
+    const std::string path = r.out.substr(0, r.out.size() - 1);
+    EXPECT_TRUE(fs::is_regular_file(path)) << path;
+    EXPECT_EQ(fs::canonical(path), fs::canonical(FREEINIT_PLUGIN_FILE));
+    EXPECT_TRUE(r.left.empty());
+  }
 }
 
 TEST(CommandLine, FreeinitSim) {

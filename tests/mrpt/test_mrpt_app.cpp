@@ -3,12 +3,15 @@
 // reads only what the window needs, initializes anywhere (--start, --every, --starts) with the
 // seek index, and tells bad records inside the window (errors) from those outside (warnings).
 #include <freeinit/free_init.h>
+#include <freeinit/mrpt/CommandLine.h>
 #include <freeinit/mrpt/FreeInitApp.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/SimApp.h>
 #include <freeinit/mrpt/conversions.h>
+#include <freeinit/mrpt/file_kind.h>
 #include <freeinit/mrpt/input_validator.h>
 #include <freeinit/mrpt/output_writers.h>
+#include <freeinit/mrpt/plugin_path.h>
 #include <freeinit/mrpt/rawlog_reader.h>
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFile.h>
@@ -17,6 +20,7 @@
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CSensoryFrame.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -290,6 +294,138 @@ TEST(FreeInitAppEndToEnd, BadInputFailsBeforeAnyOutputIsWritten) {
   auto missing = makeApp(kSrc + "/rawlogs/nope.rawlog", out);
   EXPECT_THROW(missing.run(log), InputError);
   EXPECT_FALSE(fs::exists(out));
+}
+
+// `freeinit <input.rawlog>`: the documented defaults (ini/freeinit.ini, every key commented out:
+// the same state to the byte, extrinsics from the rawlog), each run into a folder of its own named
+// after the input, holding the whole output set; an earlier run's folder is never touched.
+TEST(FreeInitAppWithoutConfig, DefaultsIntoANewFolderPerRun) {
+  const std::string root = outDir("runs");
+  auto with_ini = makeApp(kDyna, outDir("with_ini"));
+  const std::string expected = stateOf(with_ini);
+  ASSERT_FALSE(expected.empty());
+
+  std::vector<std::string> folders;
+  for (int run = 0; run < 2; ++run) {
+    auto app = makeApp(kDyna, "", "");
+    app.params.new_out_root = root;
+    std::ostringstream log;
+    ASSERT_EQ(app.run(log), 0) << log.str();
+    EXPECT_EQ(fs::path(app.out_dir).parent_path(), fs::path(root));
+    EXPECT_EQ(fs::path(app.out_dir).filename().string().rfind("dyna_01.", 0), 0u) << app.out_dir;
+    EXPECT_NE(log.str().find("Outputs in " + app.out_dir), std::string::npos) << log.str();
+    EXPECT_NE(log.str().find("the defaults: no configuration file"), std::string::npos);
+    EXPECT_NE(log.str().find("Extrinsics from sensorPose"), std::string::npos) << log.str();
+    EXPECT_EQ(readText(app.out_dir + "/initial_state.ini"), expected);
+    EXPECT_EQ(readText(app.out_dir + "/effective_config.ini"),
+              readText(with_ini.params.out_dir + "/effective_config.ini"));
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(app.out_dir))
+      names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    EXPECT_EQ(names, std::vector<std::string>(
+                         {"effective_config.ini", "errors_wrt_gt.ini", "initial_state.ini",
+                          "static_map.ply", "static_map.png", "static_map.simplemap",
+                          "trajectory_tum.txt", "velocimeter.csv", "velocity.png"}));
+    folders.push_back(app.out_dir);
+  }
+  ASSERT_NE(folders[0], folders[1]);
+  EXPECT_EQ(readText(folders[0] + "/initial_state.ini"), expected);  // the first run's, intact
+
+  // A folder of the name the next run would take is skipped, not reused.
+  const std::string next = createNewOutputFolder(root, kDyna);
+  EXPECT_TRUE(fs::is_directory(next));
+  EXPECT_NE(next, folders[0]);
+  EXPECT_NE(next, folders[1]);
+  EXPECT_NE(createNewOutputFolder(root, kDyna), next);
+
+  // A failed run leaves no folder behind, nor the root it made for it.
+  const std::string bad = tmpFile("cut_no_config.rawlog");
+  fs::copy_file(kDyna, bad, fs::copy_options::overwrite_existing);
+  fs::resize_file(bad, fs::file_size(bad) / 5);
+  auto failing = makeApp(bad, "", "");
+  failing.params.new_out_root = (testDir() / "fresh_root").string();
+  fs::remove_all(failing.params.new_out_root);
+  std::ostringstream log;
+  EXPECT_THROW(failing.run(log), InputError);
+  EXPECT_FALSE(fs::exists(failing.params.new_out_root));
+}
+
+// `freeinit <input.rawlog>` by the file's content: a configuration given alone, or a file that is
+// neither, is one line naming the file, and the app refuses to run; with a configuration file both
+// are left to their readers, as before.
+TEST(FreeInitAppWithoutConfig, ArgumentsAreToldApartByContent) {
+  const std::string ini = kSrc + "/ini/freeinit.ini";
+  const std::string csv = kSrc + "/rawlogs/dyna_01.truth.csv";
+  const std::string png = kSrc + "/gui_snapshots/dyna_01_velocity.png";
+  const std::string bag = tmpFile("x.bag");
+  std::ofstream(bag) << "#ROSBAG V2.0\n";
+  const std::string plain = tmpFile("plain.rawlog");  // an uncompressed rawlog
+  {
+    std::ofstream f(plain, std::ios::binary);
+    f << "\x9a"
+      << "mrpt::obs::CObservationIMU" << std::string(8, '\0');
+  }
+  const std::string empty_ini = tmpFile("empty.ini");
+  std::ofstream(empty_ini).flush();
+  EXPECT_EQ(fileKind(kDyna), FileKind::Rawlog);
+  EXPECT_EQ(fileKind(plain), FileKind::Rawlog);
+  EXPECT_EQ(fileKind(ini), FileKind::Ini);
+  EXPECT_EQ(fileKind(csv), FileKind::Text);
+  EXPECT_EQ(fileKind(png), FileKind::Binary);
+  EXPECT_EQ(fileKind(bag), FileKind::RosBag);
+  EXPECT_EQ(fileKind(empty_ini), FileKind::Empty);
+  EXPECT_EQ(fileKind(kSrc + "/nope"), FileKind::Unreadable);
+
+  auto problem = [](const std::string& config, const std::string& rawlog) {
+    FreeInitAppParams p;
+    p.config_file = config;
+    p.rawlog = rawlog;
+    return p.argumentsProblem();
+  };
+  EXPECT_EQ(problem("", kDyna), "");
+  EXPECT_EQ(problem(ini, kDyna), "");
+  EXPECT_EQ(problem(empty_ini, plain), "");
+  EXPECT_EQ(problem("", kSrc + "/nope.rawlog"), "");  // the reader says it is missing
+  EXPECT_EQ(problem("", ini), "missing <input.rawlog>: '" + ini +
+                                  "' is an INI configuration file (freeinit "
+                                  "[<config.ini>] <input.rawlog>)");
+  EXPECT_EQ(problem("", csv),
+            "<input.rawlog> '" + csv + "': not an MRPT rawlog (it is a text file)");
+  EXPECT_EQ(problem("", png), "<input.rawlog> '" + png +
+                                  "': not an MRPT rawlog (it is binary data, neither gzip nor an "
+                                  "MRPT archive)");
+  EXPECT_NE(problem("", bag).find("freeinit-import-bag"), std::string::npos);
+  EXPECT_EQ(problem(kDyna, ini), "");  // swapped: the INI reader names the binary file
+  EXPECT_EQ(problem(ini, png), "");
+
+  auto app = makeApp(ini, outDir("refused"), "");
+  std::ostringstream log;
+  EXPECT_THROW(app.run(log), std::invalid_argument);
+  EXPECT_FALSE(fs::exists(app.params.out_dir));
+}
+
+// --plugin-path, on every app's command line, prints the plugin the process has loaded: an
+// existing file, the one this build made (its installed copy after `cmake --install`, checked by
+// the ctest install_prefix_is_usable_and_relocatable), and does nothing else.
+TEST(PluginPath, PrintsTheLoadedPluginFile) {
+  const std::string path = pluginPath();
+  EXPECT_TRUE(fs::path(path).is_absolute()) << path;
+  EXPECT_TRUE(fs::is_regular_file(path)) << path;
+  EXPECT_EQ(fs::path(path).filename(), kPluginFileName);
+  EXPECT_EQ(fs::canonical(path), fs::canonical(FREEINIT_PLUGIN_FILE));
+
+  CommandLine cli("freeinit", "test");
+  const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
+  std::string arg0 = "freeinit", arg1 = "--plugin-path";
+  char* argv[] = {arg0.data(), arg1.data()};
+  testing::internal::CaptureStdout();
+  const auto code = cli.parse(2, argv);
+  EXPECT_EQ(testing::internal::GetCapturedStdout(), path + "\n");
+  ASSERT_TRUE(code);
+  EXPECT_EQ(*code, 0);  // even though <input.rawlog> is missing: nothing is run
+  EXPECT_FALSE(rawlog.given);
+  EXPECT_NE(cli.usage().find("--plugin-path"), std::string::npos);
 }
 
 TEST(SimApp, WritesARawlogWithGroundTruthThatReadsBack) {

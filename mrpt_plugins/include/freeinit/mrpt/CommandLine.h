@@ -1,5 +1,6 @@
-// The command line of every app, with one rule for all of them: --help and --version print and
-// exit 0 doing nothing else; any unknown option, missing or extra argument, missing value,
+// The command line of every app, with one rule for all of them: --help, --version and
+// --plugin-path (the MRPT plugin for stock tools, plugin_path.h) print and exit 0 doing nothing
+// else; any unknown option, missing or extra argument, missing value,
 // malformed or out-of-range value prints one line naming the flag and exits 2, doing nothing
 // else; --help shows each option's default. Parsing is MRPT's bundled TCLAP (whose
 // CmdLine::parse() returns false on --help, --version and errors instead of exiting); values are
@@ -45,6 +46,9 @@ class CommandLine {
   CommandLine& operator=(const CommandLine&) = delete;
 
   /// A positional argument, in the order declared; `name` is its placeholder ("config.ini").
+  /// The tokens go to the required positional arguments first; optional ones get the tokens
+  /// beyond those, in the order declared (so an optional one may come first:
+  /// `[<config.ini>] <input.rawlog>`).
   const Value<std::string>& positional(const std::string& name, const std::string& doc,
                                        bool required = true);
   /// The remaining positional arguments (declare it last).
@@ -79,6 +83,10 @@ class CommandLine {
   /// once: 0 after --help or --version (printed on stdout), 2 after a bad command line (one line
   /// on stderr naming the flag or argument, and how to get help).
   std::optional<int> parse(int argc, char** argv);
+
+  /// A bad command line found after parse() (e.g. from the arguments' content): prints it as
+  /// parse() does (one line naming it, and how to get help) and returns 2.
+  int usageError(const std::string& what) const;
 
   /// What --help prints.
   std::string usage() const;

@@ -1,4 +1,4 @@
-// The main application: `freeinit <config.ini> <input.rawlog> [--out DIR]`. Streams the rawlog
+// The main application: `freeinit [<config.ini>] <input.rawlog> [--out DIR]`. Streams the rawlog
 // through the ingest path (ingest.h) into the estimator and stops reading once the state is
 // ready; writes the outputs (each complete or absent) and compares with the ground truth when
 // "<input>.truth.csv" sits beside the rawlog.
@@ -9,8 +9,11 @@
 // one pass, several estimators side by side when windows overlap: each start's outputs go to its
 // own folder, with one table of all starts (starts.csv, starts.md) and a plot (starts.png).
 //
-// Whatever the mode, the outputs are one set (output_set.h): staged while the run goes on and
-// installed as a whole when it is complete, replacing the earlier run's.
+// Without a configuration file the defaults apply (those ini/freeinit.ini documents: extrinsics
+// from the observations' sensorPose). Whatever the mode, the outputs are one set (output_set.h):
+// staged while the run goes on and installed as a whole when it is complete, replacing the earlier
+// run's in --out; without --out, `freeinit <input.rawlog>` writes a new folder every run
+// (freeinit_out/<input>.<time>/), so that no earlier result is replaced.
 #pragma once
 
 #include <freeinit/initial_state.h>
@@ -35,10 +38,20 @@ double startTime(double value, double first);
 /// order. Throws InputError naming the file and line.
 std::vector<double> readStartsFile(const std::string& path);
 
+/// The output folder of `freeinit <config.ini> <input.rawlog>` without --out.
+inline constexpr const char* kDefaultOutDir = "freeinit_out";
+
+/// A new output folder for `rawlog` under `root`, created empty (so that no other run takes it):
+/// <root>/<rawlog's name without extension>.<local time YYYYmmdd-HHMMSS>, with -2, -3, ...
+/// appended when a folder of that name exists. Throws OutputError when it cannot be created.
+std::string createNewOutputFolder(const std::string& root, const std::string& rawlog);
+
 struct FreeInitAppParams {
-  std::string config_file;
+  std::string config_file;  ///< "" for the defaults (those ini/freeinit.ini documents)
   std::string rawlog;
-  std::string out_dir = "freeinit_out";
+  /// --out; "": a new folder under new_out_root (createNewOutputFolder), never an earlier one.
+  std::string out_dir = kDefaultOutDir;
+  std::string new_out_root = kDefaultOutDir;  ///< where out_dir = "" makes its folder
   bool progress = true;            ///< progress bars on the log stream
   /// The effective configuration on the log stream too (it is always written to
   /// effective_config.ini in the outputs).
@@ -51,6 +64,13 @@ struct FreeInitAppParams {
   bool salvage = false;  ///< --salvage: a file cut short is read up to its last whole record
   RawlogIndexPolicy index;         ///< --no-index: use = false
   std::string command;             ///< the command line, for the table's header
+
+  /// `freeinit <input.rawlog>` (config_file ""): one line naming the file when, by its content
+  /// (file_kind.h), it is no rawlog (a configuration given alone, a ROS1 bag, a file that is
+  /// neither), else "". With a configuration file "": its reader and the rawlog's check both,
+  /// as they always have (a swapped pair: the INI reader names the binary file). A file that
+  /// cannot be read passes: its reader says why.
+  std::string argumentsProblem() const;
 };
 
 class OutputSet;
@@ -69,14 +89,16 @@ class FreeInitApp {
   FreeInitAppParams params;
 
   /// Runs the whole job. The outputs are one set (output_set.h): staged, installed at the end;
-  /// bad input or configuration throws (InputError / std::invalid_argument), a stop request
-  /// Interrupted, and --out then holds no output of ours. Returns the process exit code: 0 initialized, 3 not
+  /// bad input or configuration throws (InputError / std::invalid_argument, also for an
+  /// argumentsProblem()), a stop request Interrupted, and --out then holds no output of ours (a
+  /// new folder is removed). Returns the process exit code: 0 initialized, 3 not
   /// initialized (the reason is in initial_state.ini); with several starts 0 if every start
   /// whose window the recording covers initialized, else 3 (the table says why; starts the
   /// recording ends too early for are listed as not_enough_data).
   int run(std::ostream& log);
 
   // Filled by run(), for callers and tests.
+  std::string out_dir;  ///< where the outputs went (params.out_dir, or the new folder)
   AppConfig config;
   InitResult result;  ///< one start
   std::optional<TruthErrors> errors_wrt_gt;
