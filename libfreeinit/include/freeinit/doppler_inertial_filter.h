@@ -131,6 +131,8 @@ class DopplerInertialFilter {
   void start(const FilterState& x0, const StartPrior& prior);
   /// The prior covariance of node 0 expressed at state x (velocity block scaled by v_scale).
   MatS priorCovariance(const FilterState& x, double v_scale = 1.0) const;
+  /// The start's prior as the mean of an error at x (what priorCovariance(x) is the covariance of).
+  VecS priorMean(const FilterState& x) const;
 
   /// Predicts the next node from the current one, which must have been updated.
   void predict();
