@@ -151,6 +151,41 @@ TEST(FreeInitBehaviour, StreamingOrderDoesNotChangeTheResult) {
   }
 }
 
+// The state is out before the map: at ready() everything but the map is final; the first
+// result() builds the map, the same as the batch run's, point for point.
+TEST(FreeInitBehaviour, TheStateComesBeforeTheMap) {
+  const sim::Recording rec = simulatePreset("dyna_04", 0.7, 10000);
+  const FreeInitConfig cfg = configFor(rec);
+  const InitResult batch = FreeInit::run(cfg, rec.imu, rec.frames);
+  ASSERT_TRUE(batch.state.ok());
+  ASSERT_GT(batch.static_map.size(), 1000u);
+  FreeInit fi(cfg);
+  std::size_t k = 0;
+  for (const auto& f : rec.frames) {
+    while (k < rec.imu.size() && rec.imu[k].t <= f.stamp + f.points.back().time_offset)
+      fi.addImu(rec.imu[k++]);
+    if (fi.ready()) break;
+    fi.addFrame(f);
+    if (fi.ready()) break;
+  }
+  while (k < rec.imu.size() && !fi.ready()) fi.addImu(rec.imu[k++]);
+  ASSERT_TRUE(fi.ready());
+  const InitResult& early = fi.resultBeforeMap();
+  EXPECT_TRUE(early.static_map.empty());
+  EXPECT_TRUE(early.rejected.empty());
+  EXPECT_EQ(early.state.v_w, batch.state.v_w);
+  EXPECT_EQ(early.state.cov, batch.state.cov);
+  EXPECT_EQ(early.trajectory.size(), batch.trajectory.size());
+  const InitResult& full = fi.result();
+  ASSERT_EQ(full.static_map.size(), batch.static_map.size());
+  EXPECT_EQ(full.rejected.size(), batch.rejected.size());
+  for (std::size_t i = 0; i < full.static_map.size(); i += 97)
+    EXPECT_EQ(full.static_map[i].p_w, batch.static_map[i].p_w) << "map point " << i;
+  EXPECT_GT(full.diag.time_map, 0.0);
+  EXPECT_EQ(&fi.result(), &full);  // built once
+  EXPECT_EQ(fi.result().static_map.size(), batch.static_map.size());
+}
+
 TEST(FreeInitBehaviour, TimeGoingBackwardsIsAnError) {
   const sim::Recording rec = simulatePreset("dyna_01", 0.7, 2000);
   FreeInit fi(configFor(rec));

@@ -34,11 +34,20 @@ struct FreeInit::Impl {
     if (done) result.diag.time_to_result = wallSeconds() - t0;
   }
 
+  void completeMap() {
+    if (!done || mapped) return;
+    mapped = true;
+    const double t0 = wallSeconds();
+    pipeline->completeMap(result);
+    result.diag.time_map = wallSeconds() - t0;
+  }
+
   FreeInitConfig cfg;
   detail::MeasurementSequencer seq;
   std::unique_ptr<detail::Pipeline> pipeline;
   InitResult result;
   bool done = false;
+  bool mapped = false;  ///< result's map is complete (completeMap)
 };
 
 FreeInit::FreeInit(const FreeInitConfig& config) : impl_(std::make_unique<Impl>(config)) {}
@@ -80,7 +89,11 @@ void FreeInit::finish() {
 }
 
 bool FreeInit::ready() const { return impl_->done; }
-const InitResult& FreeInit::result() const { return impl_->result; }
+const InitResult& FreeInit::result() const {
+  impl_->completeMap();
+  return impl_->result;
+}
+const InitResult& FreeInit::resultBeforeMap() const { return impl_->result; }
 
 InitResult FreeInit::run(const FreeInitConfig& config, const std::vector<ImuSample>& imu,
                          const std::vector<LidarFrame>& frames) {
@@ -90,13 +103,14 @@ InitResult FreeInit::run(const FreeInitConfig& config, const std::vector<ImuSamp
   for (const auto& f : frames) {
     const double t_last = f.points.empty() ? f.stamp : f.stamp + f.points.back().time_offset;
     while (k < imu.size() && imu[k].t <= t_last) fi.addImu(imu[k++]);
-    if (fi.ready()) return std::move(fi.impl_->result);
+    if (fi.ready()) break;
     fi.impl_->seq.addBorrowedFrame(f);  // `frames` outlives fi: no copy
     fi.impl_->pump();
-    if (fi.ready()) return std::move(fi.impl_->result);
+    if (fi.ready()) break;
   }
   while (k < imu.size() && !fi.ready()) fi.addImu(imu[k++]);
-  fi.finish();
+  if (!fi.ready()) fi.finish();
+  fi.impl_->completeMap();
   return std::move(fi.impl_->result);
 }
 

@@ -418,8 +418,14 @@ class JointPipeline final : public Pipeline {
       r.velocities.back().sigma_v_b =
           (A * filter_->covariance() * A.transpose()).diagonal().cwiseSqrt();
     }
-    recorder_.finish(*filter_, imu, k0_, cfg_.extrinsics, r);
     addWarnings(r);
+    map_pending_ = true;  // completeMap(): the state does not wait for the map
+  }
+
+  void completeMap(InitResult& r) override {
+    if (!map_pending_) return;
+    map_pending_ = false;
+    recorder_.finish(*filter_, seq_.imu(), k0_, cfg_.extrinsics, r);
   }
 
   /// Whether the returns contradict the rest the IMU showed up to the window's last node: the
@@ -695,6 +701,7 @@ class JointPipeline final : public Pipeline {
   bool last_ = false;  ///< the open node is the window's last
   bool early_smoothed_ = false;
   bool rest_withdrawn_ = false;  ///< the returns contradicted the IMU's rest (restContradicted)
+  bool map_pending_ = false;     ///< a state is out, its map not yet (completeMap)
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
   std::size_t node_first_point_ = 0;  ///< the open node's first point in the recorder
   std::optional<DopplerInertialFilter> filter_;

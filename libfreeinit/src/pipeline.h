@@ -18,6 +18,9 @@ class Pipeline {
  public:
   virtual ~Pipeline() = default;
   virtual bool pump(InitResult& result) = 0;
+  /// Fills result.static_map and result.rejected once pump() returned true, if pump() left them
+  /// for later (the state does not wait for the map); called once.
+  virtual void completeMap(InitResult& /*result*/) {}
 };
 
 /// The joint window estimator (EstimatorParams::Method::Joint).

@@ -194,11 +194,12 @@ int FreeInitOnlineApp::run(std::ostream& log) {
       return;
     }
     const auto t_processed = Clock::now();
+    // The state goes out before the map is built (the map is for the outputs at the end).
+    const InitResult& r = session.resultBeforeMap();
     set.write(kStateFile,
               [&](const std::string& p) {
-                const StateVerdict v =
-                    verdictOf(session.result(), config.core.velocimeter.doppler_sigma);
-                writeInitialStateIni(p, session.result().state, &v);
+                const StateVerdict v = verdictOf(r, config.core.velocimeter.doppler_sigma);
+                writeInitialStateIni(p, r.state, &v);
               });
     set.install({kStateFile});
     const auto t_written = Clock::now();

@@ -134,6 +134,9 @@ InitSession::InitSession(const AppConfig& config, std::string source, bool from_
 }
 
 const InitResult& InitSession::result() const { return estimator_ ? estimator_->result() : empty_; }
+const InitResult& InitSession::resultBeforeMap() const {
+  return estimator_ ? estimator_->resultBeforeMap() : empty_;
+}
 
 void InitSession::checkImu() {
   const auto& in = config_.input;
@@ -218,7 +221,7 @@ void InitSession::push(const CheckedItem& c) {
 }
 
 std::pair<double, double> InitSession::window() const {
-  const InitResult& r = result();
+  const InitResult& r = resultBeforeMap();
   if (ready() && r.state.ok() && !r.trajectory.empty())
     return {r.trajectory.front().t, r.state.timestamp};
   if (first_t_) return {*first_t_, *last_t_};

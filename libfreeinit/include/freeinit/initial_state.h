@@ -101,9 +101,12 @@ struct Diagnostics {
   int iterations = 0;                ///< smoother iterations (joint estimator)
   double time_velocimeter = 0;       ///< [s] wall time
   double time_solver = 0;            ///< [s] wall time
-  /// [s] wall time of the add*() / finish() call that made the result final: the latency from
-  /// the last measurement the window needed to the result (what an online user waits for).
+  /// [s] wall time of the add*() / finish() call that made the state final: the latency from
+  /// the last measurement the window needed to the state (what an online user waits for; the
+  /// joint estimator's map comes after it, time_map).
   double time_to_result = 0;
+  /// [s] wall time of the static map, built after the state (FreeInit::result()).
+  double time_map = 0;
   std::string solver_report;
 };
 

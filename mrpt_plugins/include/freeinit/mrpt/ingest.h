@@ -105,8 +105,10 @@ class InitSession {
   bool done() const { return failed_ || ready(); }
   bool ready() const { return estimator_ && estimator_->ready(); }
   bool failed() const { return failed_; }
-  /// The result; status NotEnoughData until ready().
+  /// The result; status NotEnoughData until ready(). The first call after ready() builds the map.
   const InitResult& result() const;
+  /// The result without its map (FreeInit::resultBeforeMap): final at ready().
+  const InitResult& resultBeforeMap() const;
   /// The extrinsics in use (from the INI or, once a cloud arrived, from its declared pose).
   const Extrinsics& extrinsics() const { return config_.core.extrinsics; }
 
