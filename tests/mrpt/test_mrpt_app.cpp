@@ -28,6 +28,7 @@
 #include <functional>
 #include <limits>
 #include <sstream>
+#include <stdexcept>
 
 using namespace freeinit;
 using namespace freeinit::mrpt_glue;
@@ -114,19 +115,22 @@ std::string stateOf(FreeInitApp& app, int expected_exit = 0) {
 /// Sets NaN on one point of the cloud nearest to `t` [s after the first record]; its record.
 std::size_t nanCloudNear(std::vector<RawlogRecord>& records, double t) {
   const double t0 = toUnix(records.front().obs->timestamp);
-  std::size_t best = 0;
+  mrpt::obs::CObservationPointCloud* best = nullptr;
+  std::size_t best_index = 0;
   double best_dt = 1e9;
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    if (!IS_CLASS(*records[i].obs, mrpt::obs::CObservationPointCloud)) continue;
-    const double dt = std::abs(toUnix(records[i].obs->timestamp) - t0 - t);
+  for (const auto& r : records) {
+    auto* pc = dynamic_cast<mrpt::obs::CObservationPointCloud*>(r.obs.get());
+    if (pc == nullptr || !pc->pointcloud) continue;
+    const double dt = std::abs(toUnix(pc->timestamp) - t0 - t);
     if (dt < best_dt) {
       best_dt = dt;
-      best = i;
+      best = pc;
+      best_index = r.index;
     }
   }
-  auto pc = std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(records[best].obs);
-  pc->pointcloud->setPoint(7, std::numeric_limits<float>::quiet_NaN(), 0, 0);
-  return records[best].index;
+  if (best == nullptr) throw std::invalid_argument("nanCloudNear: the records hold no point cloud");
+  best->pointcloud->setPoint(7, std::numeric_limits<float>::quiet_NaN(), 0, 0);
+  return best_index;
 }
 
 std::string writeRecords(const std::vector<RawlogRecord>& records, const std::string& name) {
