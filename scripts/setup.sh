@@ -26,5 +26,6 @@ export CCACHE_DIR=${CCACHE_DIR:-$HOME/.ccache}
 # Hash paths relative to the checkout, so a fresh clone elsewhere (CI) reuses the cache.
 export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
 export CCACHE_NOHASHDIR=1
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release >/dev/null
+# FREEINIT_CMAKE_ARGS: more configure options (CI: -DFREEINIT_WERROR=ON).
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release ${FREEINIT_CMAKE_ARGS:-} >/dev/null
 cmake --build "$BUILD_DIR" -j"$JOBS"

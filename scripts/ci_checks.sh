@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# The checks CI runs after the test suite (./scripts/run_tests.sh, built there with -Werror):
+#   format     every tracked C++ file formatted as .clang-format says (scripts/check_format.sh)
+#   core-asan  the core-only configuration (-DFREEINIT_WITH_MRPT=OFF, no ROS1 bag, no
+#              benchmarks) built with -Werror, AddressSanitizer and UndefinedBehaviorSanitizer,
+#              and its ctests: the core, simulator, evaluation, report and live-stream tests.
+#              UB stops the test (-fno-sanitize-recover), so a finding fails it; leaks fail too.
+# Every check runs even when one before it failed; the exit status is 1 if any failed.
+# Usage: scripts/ci_checks.sh [format|core-asan]...   (default: all)
+set -uo pipefail
+cd "$(dirname "$0")/.."
+JOBS=${JOBS:-2}
+export CCACHE_DIR=${CCACHE_DIR:-$HOME/.ccache}
+export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
+export CCACHE_NOHASHDIR=1
+
+check_format() {
+  if ! command -v clang-format-14 >/dev/null; then
+    SUDO=""; [ "$(id -u)" -ne 0 ] && SUDO="sudo"
+    $SUDO apt-get update -qq && DEBIAN_FRONTEND=noninteractive $SUDO apt-get install -y -qq \
+      clang-format-14 >/dev/null
+  fi
+  ./scripts/check_format.sh
+}
+
+check_core_asan() {
+  local dir=${SAN_BUILD_DIR:-build-core-asan}
+  local san="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+  # -O1 -g: the reports' stack traces with lines, at a usable speed; assertions stay on (no
+  # NDEBUG), so Eigen checks its indices too.
+  cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g" \
+        -DCMAKE_CXX_FLAGS="$san" -DCMAKE_EXE_LINKER_FLAGS="$san" \
+        -DCMAKE_SHARED_LINKER_FLAGS="$san" -DFREEINIT_WITH_MRPT=OFF -DFREEINIT_WITH_ROSBAG=OFF \
+        -DFREEINIT_BUILD_BENCHMARKS=OFF -DFREEINIT_WERROR=ON >/dev/null &&
+    cmake --build "$dir" -j"$JOBS" &&
+    ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:check_initialization_order=1 \
+    UBSAN_OPTIONS=print_stacktrace=1 \
+      ctest --test-dir "$dir" --output-on-failure -j"$JOBS"
+}
+
+checks=("$@")
+[ ${#checks[@]} -eq 0 ] && checks=(format core-asan)
+failed=()
+summary=()
+for c in "${checks[@]}"; do
+  echo "[ci] ---- $c"
+  t0=$(date +%s)
+  case $c in
+    format) check_format ;;
+    core-asan) check_core_asan ;;
+    *) echo "[ci] unknown check: $c (format, core-asan)"; false ;;
+  esac
+  rc=$?
+  t=$(( $(date +%s) - t0 ))
+  if [ $rc -eq 0 ]; then summary+=("$c: ok (${t} s)"); else summary+=("$c: FAILED (${t} s)"); failed+=("$c"); fi
+done
+for s in "${summary[@]}"; do echo "[ci] $s"; done
+[ ${#failed[@]} -eq 0 ]
