@@ -26,6 +26,9 @@ check_format() {
 check_core_asan() {
   local dir=${SAN_BUILD_DIR:-build-core-asan}
   local san="-fsanitize=address,undefined -fno-sanitize-recover=undefined -fno-omit-frame-pointer"
+  # Left out here: a wall-clock budget meant for the optimized build (the instrumented -O1 build
+  # is several times slower by design; the suite's own run checks it).
+  local san_skip='^GravityEstimator\.SolveTime100Samples$'
   # -O1 -g: the reports' stack traces with lines, at a usable speed; assertions stay on (no
   # NDEBUG), so Eigen checks its indices too.
   cmake -S . -B "$dir" -DCMAKE_BUILD_TYPE=Sanitize -DCMAKE_CXX_FLAGS_SANITIZE="-O1 -g" \
@@ -35,7 +38,7 @@ check_core_asan() {
     cmake --build "$dir" -j"$JOBS" &&
     ASAN_OPTIONS=detect_leaks=1:strict_string_checks=1:check_initialization_order=1 \
     UBSAN_OPTIONS=print_stacktrace=1 \
-      ctest --test-dir "$dir" --output-on-failure -j"$JOBS"
+      ctest --test-dir "$dir" --output-on-failure -j"$JOBS" -E "$san_skip"
 }
 
 checks=("$@")
