@@ -130,7 +130,8 @@ Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::Velocimet
   for (const auto& e : pts) {
     if (e.t > t_last) break;
     while (k < rec.imu.size() && rec.imu[k].t - t0 < e.t) {
-      s.events.push_back({rec.imu[k].t - t0, static_cast<std::int32_t>(k), {}, 0});
+      s.events.push_back(
+          {rec.imu[k].t - t0, static_cast<std::int32_t>(k), Eigen::Vector3f::Zero(), 0});
       ++k;
     }
     s.events.push_back(e);
