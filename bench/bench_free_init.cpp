@@ -17,12 +17,11 @@
 // The recordings are simulated once, outside the timed loops.
 // BM_FreeInitRun's updates_per_s_of_data is the velocimeter's output rate: its state updates per
 // second of recording (the paper reports > 10 kHz).
+#include <benchmark/benchmark.h>
 #include <freeinit/doppler_inertial_filter.h>
 #include <freeinit/free_init.h>
 #include <freeinit/sim/simulator.h>
 #include <freeinit/velocimeter.h>
-
-#include <benchmark/benchmark.h>
 #include <malloc.h>
 
 #include <algorithm>
@@ -104,7 +103,7 @@ const freeinit::sim::Recording& recording(const std::string& name) {
 /// The velocimeter's input as one time-ordered stream: points in range and gyro samples.
 struct Stream {
   struct Event {
-    double t = 0;        ///< [s] relative to the first IMU sample
+    double t = 0;           ///< [s] relative to the first IMU sample
     std::int32_t imu = -1;  ///< IMU index for a gyro event, -1 for a point
     Eigen::Vector3f p_l = Eigen::Vector3f::Zero();
     double doppler = 0;

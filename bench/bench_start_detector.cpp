@@ -8,11 +8,10 @@
 //                            decision, hypotheses = motions it refined and kept, kind = the
 //                            decision (StartDecision::Kind as a number).
 // The recordings are simulated and the returns prepared once, outside the timed loop.
+#include <benchmark/benchmark.h>
 #include <freeinit/config.h>
 #include <freeinit/sim/simulator.h>
 #include <freeinit/start_detector.h>
-
-#include <benchmark/benchmark.h>
 
 #include <algorithm>
 #include <cmath>
@@ -64,8 +63,8 @@ StartInput prepare(const std::string& name) {
   std::size_t n_usable = 0;
   for (const Timed& q : all)
     if (q.t <= t_end && q.t >= t_ref && usable(*q.p, vp)) ++n_usable;
-  const std::size_t thin = std::max<std::size_t>(
-      1, n_usable / static_cast<std::size_t>(cfg.estimator.bootstrap_points));
+  const std::size_t thin =
+      std::max<std::size_t>(1, n_usable / static_cast<std::size_t>(cfg.estimator.bootstrap_points));
   std::size_t n = 0;
   for (const Timed& q : all) {
     if (q.t > t_end) break;

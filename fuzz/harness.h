@@ -7,14 +7,14 @@
 //     the command line (the committed corpora and the findings, as ctests).
 #pragma once
 
+#include <unistd.h>
+
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <string>
-
-#include <unistd.h>
 
 namespace freeinit::fuzz {
 

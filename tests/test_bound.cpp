@@ -12,15 +12,14 @@
 #include <cmath>
 #include <random>
 
-#include "test_stats.h"
 #include "bound_trajectories.h"
+#include "test_stats.h"
 
 namespace freeinit::eval {
 namespace {
 
 const Vec3 kG(0, 0, -kGravity);
 using test::movingTrajectory;
-
 
 std::vector<KinematicTruth> nodesOf(const sim::Trajectory& traj, double t0, int intervals,
                                     double rate) {

@@ -20,7 +20,6 @@ using Vec12 = Eigen::Matrix<double, 12, 1>;
 const Vec3 kG(0, 0, -kGravity);
 using test::movingTrajectory;
 
-
 KinematicTruth kinematics(const sim::Trajectory& traj, double t) {
   const sim::TruthState s = traj.at(t);
   return {t, s.R_wb, s.v_w, s.a_w, s.omega_b};

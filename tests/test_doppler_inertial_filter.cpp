@@ -194,8 +194,7 @@ Returns returnsOf(const test::AnalyticMotion& m, double t_end, std::size_t n, do
   for (double t_true : times) {
     const Vec3 d = Vec3(n01(rng), n01(rng), n01(rng)).normalized();
     const test::MotionState s = m.at(t_true - kT0);
-    const Vec3 v_l = e.R_bl.transpose() *
-                     (s.R_wb.transpose() * s.v_w + s.omega_b.cross(e.p_bl));
+    const Vec3 v_l = e.R_bl.transpose() * (s.R_wb.transpose() * s.v_w + s.omega_b.cross(e.p_bl));
     r.t.push_back(t_true + time_offset);
     r.p_l.push_back((d * (5.0 + 20.0 * u01(rng))).cast<float>());
     r.z.push_back(-d.dot(v_l) + sigma * n01(rng));

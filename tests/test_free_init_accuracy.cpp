@@ -7,18 +7,16 @@
 #include <freeinit/free_init.h>
 #include <freeinit/sim/evaluation.h>
 #include <freeinit/sim/simulator.h>
-
 #include <gtest/gtest.h>
 
-#include "test_stats.h"
-
 #include <Eigen/Eigenvalues>
-
 #include <cmath>
 #include <map>
 #include <random>
 #include <string>
 #include <vector>
+
+#include "test_stats.h"
 
 namespace freeinit {
 namespace {
@@ -179,8 +177,8 @@ TEST(FreeInitAccuracy, CovarianceIsConsistentOverPresetsAndSeeds) {
   // where that estimate is good the velocity is better than the random walk says (mean NEES about
   // 1 for 3 dof). Never overconfident (upper bound), at most 4x conservative in variance.
   EXPECT_LE(v, chi2Quantile(n_moving * 3.0, 3.29)) << "body velocity mean NEES " << v / n_moving;
-  EXPECT_GE(v, chi2Quantile(n_moving * 3.0, -3.29) / 4) << "body velocity mean NEES "
-                                                         << v / n_moving;
+  EXPECT_GE(v, chi2Quantile(n_moving * 3.0, -3.29) / 4)
+      << "body velocity mean NEES " << v / n_moving;
   check("tilt", tilt, n, 2);
   check("gyro bias", bg, n, 3);
   check("accel bias", ba, n, 3);

@@ -127,7 +127,7 @@ TEST(GravityEstimator, NoiselessDifferentiatedIsExact) {
   c.samples = 1000;
   const Window w = makeWindow(c);
   auto p = paramsFor(GravityEstimator::Formulation::Differentiated, c);
-  p.lowpass_cutoff_hz = 0;  // no filter: central differences only, error O(dt^2)
+  p.lowpass_cutoff_hz = 0;         // no filter: central differences only, error O(dt^2)
   p.accel_bias_prior_sigma = 1e3;  // exactness: no pull of the bias prior
   const GravityEstimate e = GravityEstimator(p).estimate(w.samples, w.extrinsics);
   ASSERT_TRUE(e.ok) << e.message;

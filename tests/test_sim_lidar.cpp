@@ -4,11 +4,9 @@
 // matches the true one.
 #include <freeinit/sim/presets.h>
 #include <freeinit/sim/scene.h>
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
-
 #include <cmath>
 
 namespace freeinit::sim {
@@ -66,11 +64,11 @@ void checkDoppler(const Recording& rec) {
       }
     }
   }
-  std::printf("%s: %ld points, static residual mean %.2e std %.5f, outliers %.4f, dynamic %.3f "
-              "(%.2f of them > 5 sigma)\n",
-              rec.config.name.c_str(), n_all, st.mean(), st.std(),
-              static_cast<double>(n_outlier) / n_all, static_cast<double>(n_dyn) / n_all,
-              static_cast<double>(n_dyn_large) / std::max(n_dyn, 1L));
+  std::printf(
+      "%s: %ld points, static residual mean %.2e std %.5f, outliers %.4f, dynamic %.3f "
+      "(%.2f of them > 5 sigma)\n",
+      rec.config.name.c_str(), n_all, st.mean(), st.std(), static_cast<double>(n_outlier) / n_all,
+      static_cast<double>(n_dyn) / n_all, static_cast<double>(n_dyn_large) / std::max(n_dyn, 1L));
   ASSERT_GT(st.n, 50000);
   // Sample std of N Gaussian samples: relative standard error 1/sqrt(2N) < 0.3 %; 10 % is ~30x.
   EXPECT_NEAR(st.std(), sigma, 0.1 * sigma);
@@ -101,7 +99,8 @@ TEST(SimLidar, DynamicPointsDoNotFitTheStaticModel) {
       ++n_dyn;
       const DopplerPoint& pt = rec.frames[f].points[i];
       const double t = rec.frames[f].stamp + static_cast<double>(pt.time_offset);
-      const double r = pt.doppler + pt.p_l.cast<double>().normalized().dot(trueLidarVelocity(rec, t));
+      const double r =
+          pt.doppler + pt.p_l.cast<double>().normalized().dot(trueLidarVelocity(rec, t));
       if (std::abs(r) > 1.0) ++n_large;  // > 30 sigma
     }
   }

@@ -146,7 +146,8 @@ TEST(SimTrajectory, PresetMotionFeatures) {
     const ScenarioConfig c = preset(name, 1);
     const auto traj = makePresetTrajectory(c);
     double w = 0;
-    for (double tau = 0; tau <= 0.5; tau += 0.001) w = std::max(w, traj->at(c.t0 + tau).omega_b.norm());
+    for (double tau = 0; tau <= 0.5; tau += 0.001)
+      w = std::max(w, traj->at(c.t0 + tau).omega_b.norm());
     return w;
   };
   EXPECT_GE(peak_omega("dyna_04"), 9.0);

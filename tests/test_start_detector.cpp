@@ -39,7 +39,7 @@ StartPoint randomReturn(int j, std::mt19937& rng, double* azimuth = nullptr) {
 Scene scene(const Vec3& v_world, const Vec3& v_object, double object_azimuth, unsigned seed,
             double vibration = 0.3) {
   constexpr double kOmega = 2 * 3.14159265358979323846 * 12;  // [rad/s]
-  auto shake = [&](double t) -> Vec3 {  // velocity change since t = 0
+  auto shake = [&](double t) -> Vec3 {                        // velocity change since t = 0
     return Vec3(vibration / kOmega * (1 - std::cos(kOmega * t)), 0, 0);
   };
   std::mt19937 rng(seed);
@@ -125,8 +125,8 @@ TEST(StartDetector, TurningWithAGyroBiasAndALeverArm) {
     ImuSample m;
     m.t = 50.0 + t;
     m.gyro = omega + b_g + 0.002 * Vec3(n01(rng), n01(rng), n01(rng));
-    m.accel = Vec3(kVib * std::sin(kOmega * t), 0, 0) + omega.cross(v_b(t)) +
-              Vec3(0, 0, kGravity) + 0.02 * Vec3(n01(rng), n01(rng), n01(rng));
+    m.accel = Vec3(kVib * std::sin(kOmega * t), 0, 0) + omega.cross(v_b(t)) + Vec3(0, 0, kGravity) +
+              0.02 * Vec3(n01(rng), n01(rng), n01(rng));
     imu.push_back(m);
   }
   std::vector<StartPoint> points;
@@ -136,8 +136,7 @@ TEST(StartDetector, TurningWithAGyroBiasAndALeverArm) {
     p.doppler = -(ext.R_bl * p.d_l).dot(v_lidar_b) + 0.03 * n01(rng);
     points.push_back(p);
   }
-  const StartDecision d =
-      decideStart(imu, 0, 20, points, ext, Vec3::Zero(), StartDetectorParams{});
+  const StartDecision d = decideStart(imu, 0, 20, points, ext, Vec3::Zero(), StartDetectorParams{});
   ASSERT_EQ(d.kind, StartDecision::Kind::Moving) << d.message;
   // Within 4 of the decision's own sigmas per axis (its covariance carries the bias).
   for (int k = 0; k < 3; ++k)

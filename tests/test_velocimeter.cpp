@@ -6,14 +6,14 @@
 #include <freeinit/velocimeter.h>
 #include <gtest/gtest.h>
 
-#include "test_stats.h"
-
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <random>
 #include <utility>
+
+#include "test_stats.h"
 
 namespace freeinit {
 namespace {

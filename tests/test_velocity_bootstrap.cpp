@@ -3,12 +3,12 @@
 #include <freeinit/velocity_bootstrap.h>
 #include <gtest/gtest.h>
 
-#include "test_stats.h"
-
 #include <Eigen/Cholesky>
 #include <cmath>
 #include <random>
 #include <vector>
+
+#include "test_stats.h"
 
 namespace freeinit {
 namespace {

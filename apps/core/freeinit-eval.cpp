@@ -39,7 +39,8 @@ namespace sim = freeinit::sim;
 const char* const kUsage =
     "Usage: freeinit-eval [options] [preset ...]   (default: every preset)\n"
     "  --seeds N            seeds 1..N per preset (3)\n"
-    "  --random N           N randomized scenarios instead of the presets (seeds from --seed-base;\n"
+    "  --random N           N randomized scenarios instead of the presets (seeds from "
+    "--seed-base;\n"
     "                       the estimator is given the declared calibration and the datasheet\n"
     "                       noise, as a user would)\n"
     "  --seed-base S        first seed of --random (1)\n"
@@ -77,8 +78,8 @@ struct UsageError : std::invalid_argument {
 
 struct Options {
   int seeds = 3;
-  int random = 0;                ///< > 0: this many randomized scenarios instead of the presets
-  long long seed_base = 1;       ///< first seed of the randomized scenarios
+  int random = 0;           ///< > 0: this many randomized scenarios instead of the presets
+  long long seed_base = 1;  ///< first seed of the randomized scenarios
   double calibration_sigma = -1, time_offset_sigma = -1;  ///< < 0: the configuration default
   unsigned jobs = 0;
   std::string md, csv, summary_csv, bounds_md, plots;
@@ -317,10 +318,11 @@ JobResult runCase(const Options& o, const EvalCase& c) {
             row.nees_tilt, row.nees_gyro_bias, row.nees_accel_bias, m.time_ms);
     const std::string wrong = row.confidentlyWrong();
     if (m.method == "free-init")
-      appendf(out.log, "  rms/sigma=%.3f used=%.2f",
-              m.result.diag.doppler_residual_rms / cfg.velocimeter.doppler_sigma,
-              static_cast<double>(m.result.diag.points_used) /
-                  std::max<std::size_t>(1, m.result.diag.points_used + m.result.diag.points_rejected));
+      appendf(
+          out.log, "  rms/sigma=%.3f used=%.2f",
+          m.result.diag.doppler_residual_rms / cfg.velocimeter.doppler_sigma,
+          static_cast<double>(m.result.diag.points_used) /
+              std::max<std::size_t>(1, m.result.diag.points_used + m.result.diag.points_rejected));
     if (!m.result.state.warnings.empty())
       appendf(out.log, "  %zu warning(s)", m.result.state.warnings.size());
     if (c.wrong_calibration) out.log += "  [wrong calibration]";
@@ -374,8 +376,8 @@ void prepareOutputFolders(const Options& o) {
     std::error_code ec;
     fs::create_directories(folder, ec);
     if (ec || !fs::is_directory(folder))
-      throw std::runtime_error(std::string(flag) + ": cannot create the folder " +
-                               folder.string() + (ec ? ": " + ec.message() : ""));
+      throw std::runtime_error(std::string(flag) + ": cannot create the folder " + folder.string() +
+                               (ec ? ": " + ec.message() : ""));
   }
 }
 

@@ -23,8 +23,8 @@ int main(int argc, char** argv) {
                    "; without <config.ini> a new folder for each run, "
                    "freeinit_out/<input>.<time>");
   const auto& quiet = cli.flag("q", "quiet",
-                                "no progress bar and no listing of the effective configuration "
-                                "(still written to effective_config.ini)");
+                               "no progress bar and no listing of the effective configuration "
+                               "(still written to effective_config.ini)");
   const auto& start = cli.number("", "start",
                                  "initialize with the records from T on: seconds after the first "
                                  "record, or a UNIX stamp if T > 1e8",

@@ -45,8 +45,7 @@ int main(int argc, char** argv) {
     app.params.random = random.given;
     app.params.duration = duration.value;
     app.params.points_per_frame = static_cast<int>(points.value);
-    const std::string base = random.given ? "random_" + std::to_string(random.value)
-                                          : preset.value;
+    const std::string base = random.given ? "random_" + std::to_string(random.value) : preset.value;
     app.params.output = out.given ? out.value : base + ".rawlog";
     app.params.accel_in_g = in_g.value;
     app.params.scenario_file = scenario.value;

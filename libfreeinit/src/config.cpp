@@ -22,7 +22,8 @@ const config::Section<EstimatorParams>& estimatorSection() {
   using P = EstimatorParams;
   using M = EstimatorParams::Method;
   static const auto s =
-      config::Section<P>("estimator", "which estimator solves the window, and the joint one's settings")
+      config::Section<P>("estimator",
+                         "which estimator solves the window, and the joint one's settings")
           .choice("method", &P::method, {{"joint", M::Joint}, {"paper", M::Paper}},
                   "joint (one filter and smoother over the window) or paper (velocimeter, then "
                   "gravity solve)")
@@ -234,8 +235,8 @@ void FreeInitConfig::dump(std::ostream& out) const {
 }
 
 std::vector<std::string> FreeInitConfig::sectionNames() {
-  return {estimatorSection().name(), velocimeterSection().name(), bootstrapSection().name(), staticDetectorSection().name(),
-          windowSection().name(), gravitySection().name()};
+  return {estimatorSection().name(),      velocimeterSection().name(), bootstrapSection().name(),
+          staticDetectorSection().name(), windowSection().name(),      gravitySection().name()};
 }
 
 WindowSample windowSample(double t_first, double t_prev, double t, double duration) {

@@ -3,7 +3,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
@@ -40,15 +39,17 @@ DopplerInertialFilter::MatS propagateCovariance(const DopplerInertialFilter::Mat
                                                 const DopplerInertialFilter::MatS& P) {
   constexpr int kM = D - 9;
   DopplerInertialFilter::MatS out = P;
-  const Eigen::Matrix<double, 9, D> FP = F.topLeftCorner<9, 9>().lazyProduct(P.topLeftCorner<9, D>()) +
-                                         F.block<9, kM>(0, 9).lazyProduct(P.block<kM, D>(9, 0));
+  const Eigen::Matrix<double, 9, D> FP =
+      F.topLeftCorner<9, 9>().lazyProduct(P.topLeftCorner<9, D>()) +
+      F.block<9, kM>(0, 9).lazyProduct(P.block<kM, D>(9, 0));
   const Eigen::Matrix<double, 9, 9> FP_a = FP.template leftCols<9>();
   const Eigen::Matrix<double, 9, kM> FP_b = FP.template rightCols<kM>();
   out.topLeftCorner<9, 9>() = FP_a.lazyProduct(F.topLeftCorner<9, 9>().transpose()) +
                               FP_b.lazyProduct(F.block<9, kM>(0, 9).transpose());
   out.block<9, kM>(0, 9) = FP_b;
   out.block<kM, 9>(9, 0) = FP_b.transpose();
-  out.topLeftCorner<D, D>() = 0.5 * (out.topLeftCorner<D, D>() + out.topLeftCorner<D, D>().transpose()).eval();
+  out.topLeftCorner<D, D>() =
+      0.5 * (out.topLeftCorner<D, D>() + out.topLeftCorner<D, D>().transpose()).eval();
   return out;
 }
 
@@ -116,7 +117,7 @@ FilterState DopplerInertialFilter::boxplus(const FilterState& x, const VecS& dx)
 }
 
 DopplerInertialFilter::VecS DopplerInertialFilter::boxminus(const FilterState& a,
-                                                             const FilterState& b) {
+                                                            const FilterState& b) {
   VecS d;
   d.segment<3>(0) = Log(b.R_wb.transpose() * a.R_wb);
   d.segment<3>(3) = a.p_w - b.p_w;
@@ -128,9 +129,8 @@ DopplerInertialFilter::VecS DopplerInertialFilter::boxminus(const FilterState& a
   return d;
 }
 
-void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, double t,
-                                           Vec3& gyro, Vec3& accel, std::size_t hint,
-                                           Vec3* gyro_rate) {
+void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro,
+                                           Vec3& accel, std::size_t hint, Vec3* gyro_rate) {
   // The interval of samples that holds t, then up to one more sample on each side.
   const std::size_t n = imu.size();
   std::size_t j = 0;  // imu[j].t <= t < imu[j + 1].t (clamped)
@@ -195,7 +195,8 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
   const Vec3 phi = (tau / 6.0) * (w[0] + 4.0 * w[2] + w[3]) + w[0].cross(w[3]) * (tau * tau / 12.0);
   const Mat3 E_h = Exp(phi_h), E = Exp(phi);
   const Mat3 R_h = x.R_wb * E_h, R_1 = x.R_wb * E;
-  const Vec3 a0 = x.R_wb * f[0] + kGravityW, ah = R_h * f[2] + kGravityW, a1 = R_1 * f[3] + kGravityW;
+  const Vec3 a0 = x.R_wb * f[0] + kGravityW, ah = R_h * f[2] + kGravityW,
+             a1 = R_1 * f[3] + kGravityW;
   FilterState y = x;
   y.t = t + tau;
   y.R_wb = R_1;
@@ -227,7 +228,8 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
 }
 
 FilterState DopplerInertialFilter::propagate(const FilterState& x,
-                                             const std::vector<ImuSample>& imu, std::size_t k, MatS* F) {
+                                             const std::vector<ImuSample>& imu, std::size_t k,
+                                             MatS* F) {
   FilterState y = integrate(x, imu, k, imu[k + 1].t - imu[k].t, F);
   y.t = imu[k + 1].t;
   return y;
@@ -288,8 +290,8 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
 }
 
 DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node& n,
-                                                                       const FilterState& x,
-                                                                       Mat9xS* G) const {
+                                                                      const FilterState& x,
+                                                                      Mat9xS* G) const {
   // Values at the three fit instants, then the quadratic through them: Q_m = sum_i Vinv(m, i) v_i.
   const Mat3& Vinv = n.V_inv;
   Vec9 Q = Vec9::Zero();
@@ -329,7 +331,7 @@ void DopplerInertialFilter::addImu(const ImuSample& s) {
 }
 
 DopplerInertialFilter::MatS DopplerInertialFilter::priorCovariance(const FilterState& x,
-                                                                  double v_scale) const {
+                                                                   double v_scale) const {
   const StartPrior& p = prior_;
   // (dtheta, dv_b): roll and pitch in the world, yaw held (the gauge); the body velocity.
   Mat3 tilt_w = Mat3::Zero();
@@ -397,7 +399,7 @@ void DopplerInertialFilter::predict() {
   MatS F;
   n.x_pred = propagate(cur.x, imu_, cur.k, &F);
   n.P = (active_ == kStateDim ? propagateCovariance<kStateDim>(F, cur.P)
-                               : propagateCovariance<kCoreDim>(F, cur.P)) +
+                              : propagateCovariance<kCoreDim>(F, cur.P)) +
         processNoise(imu_[n.k].t - imu_[cur.k].t);
   n.P = 0.5 * (n.P + n.P.transpose()).eval();
   n.x = n.xs = n.x_pred;
@@ -502,8 +504,7 @@ void DopplerInertialFilter::buildRows(Node& n) const {
   Vec9 b;
   for (int m = 0; m < 3; ++m) {
     b.segment<3>(3 * m) = n.sums.bz.col(m);
-    for (int k = 0; k < 3; ++k)
-      A.block<3, 3>(3 * m, 3 * k) = n.sums.moment(m + k);
+    for (int k = 0; k < 3; ++k) A.block<3, 3>(3 * m, 3 * k) = n.sums.moment(m + k);
   }
   const double inv_sigma = 1.0 / params_.doppler_sigma;
   // Well conditioned (the usual case: returns spread over the view and the interval): the
@@ -561,9 +562,9 @@ DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
 }
 
 DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
-                                                                  const FilterState& x_lin,
-                                                                  const VecS& dx_prior,
-                                                                  MatS& P, bool full) const {
+                                                                 const FilterState& x_lin,
+                                                                 const VecS& dx_prior, MatS& P,
+                                                                 bool full) const {
   const int rows = static_cast<int>(n.rows.W.rows());
   if (rows == 0) return dx_prior;
   Mat9xS G;
@@ -692,9 +693,9 @@ void DopplerInertialFilter::update() {
 }
 
 DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, const Vec3& gyro,
-                                                               const FilterState& x_lin,
-                                                               const VecS& dx, MatS& P,
-                                                               bool full) const {
+                                                              const FilterState& x_lin,
+                                                              const VecS& dx, MatS& P,
+                                                              bool full) const {
   if (!(n.rest_velocity_sigma > 0) && !(n.rest_rate_sigma > 0)) return dx;
   // Zero velocity: v_b = R^T v_w = 0, dv_b = R^T dv_w + [v_b]x dtheta. Zero rate: the gyro
   // sample measures the bias, gyro - b_g = 0 + n, d(.) = -db_g. Stacked and whitened, relative
@@ -715,9 +716,8 @@ DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, con
     r.tail<3>() = -w * (gyro - x.b_g);
   }
   // The step is relative to x_lin + dx: its own prior mean is zero, then it is added to dx.
-  const VecS step = active_ == kStateDim || full
-                        ? kalmanUpdate<kStateDim, 6>(H, r, VecS::Zero(), P)
-                        : kalmanUpdate<kCoreDim, 6>(H, r, VecS::Zero(), P);
+  const VecS step = active_ == kStateDim || full ? kalmanUpdate<kStateDim, 6>(H, r, VecS::Zero(), P)
+                                                 : kalmanUpdate<kCoreDim, 6>(H, r, VecS::Zero(), P);
   return dx + step;
 }
 
@@ -860,8 +860,7 @@ double DopplerInertialFilter::residualSumOfSquares() const {
     for (int m = 0; m < 3; ++m) {
       lin += n.sums.bz.col(m).dot(Q.segment<3>(3 * m));
       for (int k = 0; k < 3; ++k)
-        quad += Q.segment<3>(3 * m).dot(n.sums.moment(m + k) *
-                                        Q.segment<3>(3 * k));
+        quad += Q.segment<3>(3 * m).dot(n.sums.moment(m + k) * Q.segment<3>(3 * k));
     }
     rss += n.sums.c + 2.0 * lin + quad;
   }

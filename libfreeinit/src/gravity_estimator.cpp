@@ -271,11 +271,12 @@ std::pair<double, double> filteredNoiseGains(double dt, double cutoff_hz) {
 /// innovations is the exact generalized least squares of this model. The filter gains depend on
 /// the covariances only, so the innovations are affine in x: the filter is run on a_k and on each
 /// column of B_k.
-void addWhitenedResiduals(const std::vector<Vec3>& a, const std::vector<Eigen::Matrix<double, 3, 12>>& B,
+void addWhitenedResiduals(const std::vector<Vec3>& a,
+                          const std::vector<Eigen::Matrix<double, 3, 12>>& B,
                           const std::vector<Mat3>& C, const std::vector<KinematicSample>& samples,
-                          double phi, double var_acc_rate, double weight,
-                          ceres::LossFunction* loss, double* g_w, double* b_a, double* v0_w,
-                          double* db_g, ceres::Problem& problem) {
+                          double phi, double var_acc_rate, double weight, ceres::LossFunction* loss,
+                          double* g_w, double* b_a, double* v0_w, double* db_g,
+                          ceres::Problem& problem) {
   using Mat36 = Eigen::Matrix<double, 3, 6>;
   using Cols = Eigen::Matrix<double, 6, 13>;  // state estimate of the noise for a and B's columns
   const std::size_t n = a.size();
@@ -314,8 +315,7 @@ void addWhitenedResiduals(const std::vector<Vec3>& a, const std::vector<Eigen::M
 }  // namespace
 
 GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& samples,
-                                           const Extrinsics& extrinsics,
-                                           const Mat3& gyro_bias_cov,
+                                           const Extrinsics& extrinsics, const Mat3& gyro_bias_cov,
                                            const GravityEstimate* start) const {
   const GravityParams& P = params_;
   if (!P.use_body_equation && !P.use_lidar_equation)

@@ -283,8 +283,9 @@ class JointPipeline final : public Pipeline {
         const std::size_t j = i - node_points_begin;
         const bool used = filter_->pointAccepted(j);
         (used ? r.diag.points_used : r.diag.points_rejected)++;
-        recorder_.judge(i, used, static_cast<float>(filter_->pointResidual(j)),
-                        used ? RestCells::cellOf(recorder_.lidarPoint(i)) : WindowRecorder::kNoCell);
+        recorder_.judge(
+            i, used, static_cast<float>(filter_->pointResidual(j)),
+            used ? RestCells::cellOf(recorder_.lidarPoint(i)) : WindowRecorder::kNoCell);
       }
       node_first_point_ = node_points_end;
       const bool was_rest = rest_.atRest();

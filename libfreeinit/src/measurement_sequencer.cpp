@@ -23,8 +23,7 @@ void MeasurementSequencer::checkFrame(const LidarFrame& f) const {
   const double end = lidarCoveredUntil();
   if (end > -std::numeric_limits<double>::infinity()) previous_end = end;
   if (const auto problem = input::frameOrderProblem(f, previous_stamp, previous_end))
-    throw std::invalid_argument("LiDAR frame at " + input::formatStamp(f.stamp) + ": " +
-                                *problem);
+    throw std::invalid_argument("LiDAR frame at " + input::formatStamp(f.stamp) + ": " + *problem);
 }
 
 void MeasurementSequencer::addFrame(LidarFrame&& f) {

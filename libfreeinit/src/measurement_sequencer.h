@@ -72,7 +72,7 @@ class MeasurementSequencer {
   std::vector<ImuSample> imu_;
   std::deque<LidarFrame> owned_;  ///< frames handed to addFrame (stable addresses)
   std::vector<std::shared_ptr<const LidarFrame>> shared_;  ///< frames shared with the caller
-  std::vector<FrameRef> frames_;  ///< all frames in time order
+  std::vector<FrameRef> frames_;                           ///< all frames in time order
   bool finished_ = false;
 };
 

@@ -102,8 +102,7 @@ class PaperPipeline final : public Pipeline {
   /// Time of the last buffered point (relative), or -inf.
   double lidarCoveredUntil() const {
     for (std::size_t f = seq.frames().size(); f-- > 0;)
-      if (!pts(f).empty())
-        return (stampOf(f) - t_ref) + pts(f).back().time_offset;
+      if (!pts(f).empty()) return (stampOf(f) - t_ref) + pts(f).back().time_offset;
     return -std::numeric_limits<double>::infinity();
   }
 
@@ -221,8 +220,7 @@ class PaperPipeline final : public Pipeline {
   /// Aided passes: the body acceleration a_b = f - b_a + R_w0b^T g_w0 at sample k and its slope to
   /// sample k + 1 (gravity in b turns as dg_b/dt = -omega x g_b).
   void setAcceleration(std::size_t k) {
-    setAidedAcceleration(*div, imu, k, gravity.b_a,
-                                 integrator.R_wb().transpose() * gravity.g_w);
+    setAidedAcceleration(*div, imu, k, gravity.b_a, integrator.R_wb().transpose() * gravity.g_w);
   }
 
   void run() {
@@ -529,7 +527,6 @@ void PaperPipeline::finalize() {
     p.p_w = R_align * p.p_w;
   }
 }
-
 
 }  // namespace
 

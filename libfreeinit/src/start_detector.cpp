@@ -4,7 +4,6 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -23,7 +22,6 @@ double chi2Quantile(double dof, double z) {
   const double a = 2.0 / (9.0 * dof);
   return dof * std::pow(1.0 - a + z * std::sqrt(a), 3);
 }
-
 
 /// The returns as linear equations in theta = (v_b0, g_b0, db_g), one array per quantity: the
 /// refinement sweeps them seven times per hypothesis, and Eigen vectorizes sweeps over arrays.
@@ -71,10 +69,10 @@ struct Rows {
   }
   Vec3 w(Eigen::Index i) const { return Vec3(wx[i], wy[i], wz[i]); }
 
-  Eigen::ArrayXd t, e;              ///< [s] time, [m/s] the equation's left-hand side
-  Eigen::ArrayXd wx, wy, wz;        ///< direction in b0
-  Eigen::ArrayXd twx, twy, twz;     ///< t w
-  Eigen::ArrayXd c0x, c0y, c0z;     ///< the gyro-bias column at s = 0
+  Eigen::ArrayXd t, e;                        ///< [s] time, [m/s] the equation's left-hand side
+  Eigen::ArrayXd wx, wy, wz;                  ///< direction in b0
+  Eigen::ArrayXd twx, twy, twz;               ///< t w
+  Eigen::ArrayXd c0x, c0y, c0z;               ///< the gyro-bias column at s = 0
   Eigen::Array<double, Eigen::Dynamic, 9> K;  ///< K row-major per return
 };
 
@@ -263,8 +261,8 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   // (Cauchy scale [m/s], gravity prior std [m/s^2]) per iteration. Gravity is held near its prior
   // at first: free from the start, it would let the returns of a large moving object that are
   // consistent with the start only along some directions pull the motion towards theirs.
-  static constexpr std::array<std::pair<double, double>, 7> schedule = {{
-      {0.3, 0.5}, {0.3, 1.0}, {0.2, 4.0}, {0.15, 4.0}, {0.1, 4.0}, {0.1, 4.0}, {0.1, 4.0}}};
+  static constexpr std::array<std::pair<double, double>, 7> schedule = {
+      {{0.3, 0.5}, {0.3, 1.0}, {0.2, 4.0}, {0.15, 4.0}, {0.1, 4.0}, {0.1, 4.0}, {0.1, 4.0}}};
   constexpr std::size_t kEarly = 3;  // the last of the thinned iterations (EarlyStates)
   for (std::size_t iteration = 0; iteration < schedule.size(); ++iteration) {
     const auto [c, g_sigma] = schedule[iteration];
@@ -333,7 +331,8 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   h.coverage = grid.coverage(mask);
   if (inliers != nullptr) *inliers = std::move(mask);
   h.rest = v.norm() < p.max_speed;
-  h.min_info_eigen = Eigen::SelfAdjointEigenSolver<Mat3>(info.topLeftCorner<3, 3>()).eigenvalues()(0);
+  h.min_info_eigen =
+      Eigen::SelfAdjointEigenSolver<Mat3>(info.topLeftCorner<3, 3>()).eigenvalues()(0);
   return h;
 }
 
@@ -416,9 +415,9 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   // interpolation of the IMU and Simpson's rule: a vibrating platform needs them). It integrates
   // with a gravity, so with the world w = b0 and a start at rest the velocity it gives is
   // v(t) = C(t) + g_w t, from which C(t) follows.
-  const std::vector<ImuSample> span(imu.begin() + static_cast<std::ptrdiff_t>(k0 > 0 ? k0 - 1 : k0),
-                                    imu.begin() + static_cast<std::ptrdiff_t>(
-                                                      std::min(imu.size(), k1 + 3)));
+  const std::vector<ImuSample> span(
+      imu.begin() + static_cast<std::ptrdiff_t>(k0 > 0 ? k0 - 1 : k0),
+      imu.begin() + static_cast<std::ptrdiff_t>(std::min(imu.size(), k1 + 3)));
   const std::size_t j0 = k0 > 0 ? 1 : 0;  // the window start in `span`
   const Vec3 g_w(0, 0, -kGravity);
   const double T = imu[k1].t - t_ref;
@@ -431,7 +430,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   for (std::size_t i = 1; i <= k1 - k0; ++i)
     at.push_back(DopplerInertialFilter::propagate(at.back(), span, j0 + i - 1));
   const Vec3 g_mean = -(at.back().v_w - g_w * T) / T;  // exact at rest, off by the mean
-                                                        // acceleration otherwise
+                                                       // acceleration otherwise
   out.imu_still = imuShowsRest(imu, k0, k1 + 1, p.gyro_sigma, p.accel_sigma);
 
   // Every return as a linear equation.
@@ -529,9 +528,9 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
       // |residual| < ransac_gate for each of the pool's returns, the gyro bias at its prior.
       // (The residuals are stored first: a count over the whole expression would not vectorize.)
       const auto within = [&](const Vec3& v) {
-        pres.head(m) =
-            pe.head(m) + (pwx.head(m) * v.x() + pwy.head(m) * v.y() + pwz.head(m) * v.z()) +
-            ptg.head(m);
+        pres.head(m) = pe.head(m) +
+                       (pwx.head(m) * v.x() + pwy.head(m) * v.y() + pwz.head(m) * v.z()) +
+                       ptg.head(m);
         return pres.head(m).abs() < ransac_gate;
       };
       std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
@@ -574,8 +573,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
     // once (slices see one motion within the mean acceleration times their spacing).
     bool seen = false;
     for (std::size_t j = 0; j < i_start && !seen; ++j) seen = (starts[j] - v0).norm() < p.gate;
-    for (const StartHypothesis& o : out.hypotheses)
-      seen = seen || (o.v_b0 - v0).norm() < p.gate;
+    for (const StartHypothesis& o : out.hypotheses) seen = seen || (o.v_b0 - v0).norm() < p.gate;
     if (seen) continue;
     std::vector<std::uint8_t> mask;
     // A refinement that joins an earlier one's path ends as that one did: nothing new.
@@ -646,9 +644,9 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
     out.message = out.hypotheses.empty()
                       ? std::string("the IMU shows rest but few LiDAR returns agree with it")
                       : "the IMU shows rest but the Doppler of the returns shows motion (" +
-                            speed(out.hypotheses.front()) + " m/s over " +
-                            percent(best_coverage) + " % of the view, rest over " +
-                            percent(rest.coverage) + " %): a moving object may fill the view";
+                            speed(out.hypotheses.front()) + " m/s over " + percent(best_coverage) +
+                            " % of the view, rest over " + percent(rest.coverage) +
+                            " %): a moving object may fill the view";
     return out;
   }
   if (out.hypotheses.empty()) {
@@ -660,8 +658,9 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   std::size_t b = 0;
   while (b < out.hypotheses.size() && !out.hypotheses[b].plausible_gravity) ++b;
   if (b == out.hypotheses.size()) {
-    out.message = "no motion with a plausible gravity is consistent with the LiDAR returns at "
-                  "the start of the window";
+    out.message =
+        "no motion with a plausible gravity is consistent with the LiDAR returns at "
+        "the start of the window";
     return out;
   }
   const StartHypothesis& best = out.hypotheses[b];

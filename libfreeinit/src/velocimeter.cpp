@@ -96,7 +96,7 @@ void Velocimeter::applyTransition() {
   P_l_ = 0.5 * (P_l_ + P_l_.transpose()).eval();  // the Doppler downdates keep what this gives
   Mat9 F = Mat9::Identity();
   F.block<3, 3>(0, 0) -= skew(omega_b_) * dt;  // d(v x w)/dv = -[w]x
-  F.block<3, 3>(0, 3) = skew(v_b_) * dt;        // d(v x w)/dw = [v]x
+  F.block<3, 3>(0, 3) = skew(v_b_) * dt;       // d(v x w)/dw = [v]x
   F.block<3, 3>(6, 6) *= decay;
   P_b_ = (F * P_b_ * F.transpose()).eval();
   P_b_ = 0.5 * (P_b_ + P_b_.transpose()).eval();
@@ -115,8 +115,8 @@ Velocimeter::DopplerOutcome Velocimeter::updateDoppler(const Eigen::Vector3f& p_
   const double S_b = h.dot(PH.head<6>()) + r_doppler_;
   out.residual = r_b;
   // Gate: dynamic points and gross outliers disagree with the current velocity.
-  const double gate = std::sqrt(std::max(gate_min2_, gate_k2_ * S_b)) +
-                      params_.gate_rel * v_l_.norm();
+  const double gate =
+      std::sqrt(std::max(gate_min2_, gate_k2_ * S_b)) + params_.gate_rel * v_l_.norm();
   if (std::abs(r_b) > gate) return out;
   out.accepted = true;
   const double inv_S = 1.0 / S_b;
@@ -137,8 +137,8 @@ Velocimeter::DopplerOutcome Velocimeter::updateDoppler(const Eigen::Vector3f& p_
   const double r_l = doppler + d.dot(v_l_);
   const Vec3 PHl = -(P_l_ * d);
   const double S_l = -d.dot(PHl) + r_doppler_;  // d^T P_l d, with PHl = -P_l d
-  const double gate_l = std::sqrt(std::max(gate_min2_, gate_k2_ * S_l)) +
-                        params_.gate_rel * v_l_.norm();
+  const double gate_l =
+      std::sqrt(std::max(gate_min2_, gate_k2_ * S_l)) + params_.gate_rel * v_l_.norm();
   if (std::abs(r_l) <= gate_l) {
     v_l_ += PHl * (r_l / S_l);
     P_l_.noalias() -= PHl * PHl.transpose() / S_l;

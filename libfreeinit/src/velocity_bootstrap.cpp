@@ -1,7 +1,6 @@
 #include <freeinit/velocity_bootstrap.h>
 
 #include <Eigen/Eigenvalues>
-
 #include <algorithm>
 #include <cmath>
 

@@ -188,7 +188,8 @@ class RestCells {
       v = fv;
     }
     auto bin = [](float x) {
-      return static_cast<std::uint32_t>(std::clamp(static_cast<int>((x + 1.0f) * 0.5f * kSide), 0, kSide - 1));
+      return static_cast<std::uint32_t>(
+          std::clamp(static_cast<int>((x + 1.0f) * 0.5f * kSide), 0, kSide - 1));
     };
     // Range bins: a person and the wall behind share directions, not ranges. The bin is the
     // number of bin edges at or below the range, counted on the squared range (no root, no
@@ -215,7 +216,8 @@ class RestCells {
   bool coherent(std::uint32_t cell, double doppler_sigma, double sigmas, int min_count) const {
     const std::uint32_t n = count_[cell];
     if (n < static_cast<std::uint32_t>(min_count) || total_ == 0) return false;
-    const double var = std::max(doppler_sigma * doppler_sigma, sumsq_ / static_cast<double>(total_));
+    const double var =
+        std::max(doppler_sigma * doppler_sigma, sumsq_ / static_cast<double>(total_));
     return sum_[cell] * sum_[cell] > sigmas * sigmas * var * static_cast<double>(n);
   }
   std::size_t total() const { return total_; }

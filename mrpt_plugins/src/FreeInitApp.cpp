@@ -188,8 +188,7 @@ void writeResultFiles(OutputSet& set, const std::string& prefix, const OutputPar
                       const InitResult& result, const std::vector<TruthSample>& truth) {
   auto file = [&](const char* name) { return prefix + name; };
   if (output.simplemap)
-    set.write(file(kSimplemapFile),
-              [&](const std::string& p) { writeStaticSimplemap(p, result); });
+    set.write(file(kSimplemapFile), [&](const std::string& p) { writeStaticSimplemap(p, result); });
   if (output.ply)
     set.write(file(kPlyFile), [&](const std::string& p) { writePly(p, result.static_map); });
   if (output.trajectory)
@@ -446,11 +445,10 @@ int FreeInitApp::run(std::ostream& log) {
   for (auto& s : active) finalize(s, !read_error);
   active.clear();
   if (!multi && plan.peek())
-    throw InputError(params.rawlog + ": no record at or after the start " +
-                     input::formatStamp(*plan.peek()) +
-                     (first ? " (" + std::to_string(*plan.peek() - *first) +
-                                  " s after the first record)"
-                            : std::string()));
+    throw InputError(
+        params.rawlog + ": no record at or after the start " + input::formatStamp(*plan.peek()) +
+        (first ? " (" + std::to_string(*plan.peek() - *first) + " s after the first record)"
+               : std::string()));
   if (multi) {
     // Starts the file does not reach.
     std::size_t k = plan.index();

@@ -196,11 +196,10 @@ int FreeInitOnlineApp::run(std::ostream& log) {
     const auto t_processed = Clock::now();
     // The state goes out before the map is built (the map is for the outputs at the end).
     const InitResult& r = session.resultBeforeMap();
-    set.write(kStateFile,
-              [&](const std::string& p) {
-                const StateVerdict v = verdictOf(r, config.core.velocimeter.doppler_sigma);
-                writeInitialStateIni(p, r.state, &v);
-              });
+    set.write(kStateFile, [&](const std::string& p) {
+      const StateVerdict v = verdictOf(r, config.core.velocimeter.doppler_sigma);
+      writeInitialStateIni(p, r.state, &v);
+    });
     set.install({kStateFile});
     const auto t_written = Clock::now();
     latency.queue = secondsBetween(e.received, t_fed);
@@ -323,7 +322,8 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   set.write(kStatsFile, [&](const std::string& p) {
     writeFileAtomically(p, [&](std::ostream& o) {
       o << "[stream]\n" << st.str() << "recorded            = " << recorded << "\n";
-      if (stopped_by_signal != 0) o << "stopped_by          = " << signalName(stopped_by_signal) << "\n";
+      if (stopped_by_signal != 0)
+        o << "stopped_by          = " << signalName(stopped_by_signal) << "\n";
       if (ready_live)
         o << std::setprecision(6) << "latency_total_ms    = " << 1e3 * latency.total
           << "\nlatency_queue_ms    = " << 1e3 * latency.queue
@@ -354,12 +354,10 @@ int FreeInitOnlineApp::run(std::ostream& log) {
       throw InputError(session.errors().front());
     }
     if (!session.ready()) throw InputError(session.endOfDataReason());
-    set.write(kStateFile,
-              [&](const std::string& p) {
-                const StateVerdict v =
-                    verdictOf(session.result(), config.core.velocimeter.doppler_sigma);
-                writeInitialStateIni(p, session.result().state, &v);
-              });
+    set.write(kStateFile, [&](const std::string& p) {
+      const StateVerdict v = verdictOf(session.result(), config.core.velocimeter.doppler_sigma);
+      writeInitialStateIni(p, session.result().state, &v);
+    });
   }
   for (const auto& w : session.warnings()) log << "Warning: " << w << "\n";
   if (session.ready() && session.result().state.ok()) {

@@ -174,8 +174,8 @@ void renderRuns(const std::string& png, const std::string& title,
     std::ostringstream t;
     t << "icp-slam " << toString(r.mode) << ":  " << r.keyframes << " keyframes";
     if (r.errors)
-      t << ", ATE " << std::fixed << std::setprecision(2) << r.errors->ate_rmse
-        << " m, end-point " << r.errors->end_point << " m";
+      t << ", ATE " << std::fixed << std::setprecision(2) << r.errors->ate_rmse << " m, end-point "
+        << r.errors->end_point << " m";
     p.title = t.str();
     for (std::size_t k = 0; k < r.map_x.size(); ++k) {
       const auto q = A + mrpt::poses::CPoint2D(r.map_x[k], r.map_y[k]);

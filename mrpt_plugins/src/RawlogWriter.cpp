@@ -43,7 +43,8 @@ class GzFileOut : public mrpt::io::CStream {
     const int rc = gzclose(file_);
     file_ = nullptr;
     if (rc != Z_OK && error_.empty())
-      error_ = rc == Z_ERRNO && errno != 0 ? std::strerror(errno) : "gzip error " + std::to_string(rc);
+      error_ =
+          rc == Z_ERRNO && errno != 0 ? std::strerror(errno) : "gzip error " + std::to_string(rc);
     return rc == Z_OK && error_.empty();
   }
   /// Why writing failed ("" if it did not), e.g. "No space left on device".
@@ -100,8 +101,7 @@ RawlogWriter::RawlogWriter(std::string path, const Extrinsics& extrinsics, std::
   if (const auto dir = std::filesystem::path(path_).parent_path(); !dir.empty())
     std::filesystem::create_directories(dir);
   if (!stream_->file.open(path_ + ".tmp"))
-    throw std::runtime_error(path_ + ": cannot create " + path_ + ".tmp: " +
-                             stream_->file.error());
+    throw std::runtime_error(path_ + ": cannot create " + path_ + ".tmp: " + stream_->file.error());
   stream_->archive = mrpt::serialization::archiveUniquePtrFrom(stream_->file);
 }
 

@@ -45,9 +45,12 @@ void SimApp::run(std::ostream& log) {
   if (base.empty() || rawlog_name.empty())
     throw std::invalid_argument(out + ": the output must name a file");
   OutputSetOptions set_options;
-  set_options.owned = {rawlog_name,          base + ".truth.csv",
-                       base + ".truth_tum.txt", base + ".extrinsics.ini",
-                       base + ".truth_extrinsics.ini", base + ".scenario.ini"};
+  set_options.owned = {rawlog_name,
+                       base + ".truth.csv",
+                       base + ".truth_tum.txt",
+                       base + ".extrinsics.ini",
+                       base + ".truth_extrinsics.ini",
+                       base + ".scenario.ini"};
   set_options.install_last = {rawlog_name};
   OutputSet set(stem_path.parent_path().string(), base, set_options, log);
   sim::ScenarioConfig sc;
@@ -127,13 +130,13 @@ void SimApp::run(std::ostream& log) {
     });
   });
   set.write(base + ".extrinsics.ini", [&](const std::string& p) {
-    writeExtrinsicsIni(p, rec.declared_extrinsics,
-                       declared_true ? "true extrinsics of " + out +
-                                           " (also in each point cloud's sensorPose)"
-                                     : "declared (not the true) extrinsics of " + out +
-                                           " (also in each point cloud's sensorPose); the truth "
-                                           "is in " +
-                                           stem + ".truth_extrinsics.ini");
+    writeExtrinsicsIni(
+        p, rec.declared_extrinsics,
+        declared_true ? "true extrinsics of " + out + " (also in each point cloud's sensorPose)"
+                      : "declared (not the true) extrinsics of " + out +
+                            " (also in each point cloud's sensorPose); the truth "
+                            "is in " +
+                            stem + ".truth_extrinsics.ini");
   });
   std::ostringstream clock;
   clock << std::setprecision(17) << rec.lidar_time_offset;

@@ -35,8 +35,8 @@ Messages fromRawlog(const StreamAppParams& p) {
   cfg.input.imu_label = p.imu_label;
   cfg.input.lidar_label = p.lidar_label;
   cfg.input.imu_accel_in_g = p.imu_accel_in_g;
-  cfg.input.min_imu_rate = 0;       // the receiver judges the rate
-  cfg.core.window.duration = 0;     // any length can be streamed
+  cfg.input.min_imu_rate = 0;    // the receiver judges the rate
+  cfg.core.window.duration = 0;  // any length can be streamed
   ValidatedInput in = readRecording(p.rawlog, cfg);
   if (in.imu_stamp_ns.size() != in.imu.size() || in.frame_stamp_ns.size() != in.frames.size())
     throw InputError(p.rawlog + ": timestamps outside the stream's range 1970 .. 2116");

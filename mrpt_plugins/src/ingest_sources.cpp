@@ -105,8 +105,8 @@ std::optional<IngestItem> itemFromStream(net::StreamEvent&& e, std::size_t recor
   return std::nullopt;
 }
 
-void forEachCheckedItem(RawlogReader& reader, ObservationDecoder& decoder,
-                        RecordChecker& checker, const std::function<void(CheckedItem&)>& take,
+void forEachCheckedItem(RawlogReader& reader, ObservationDecoder& decoder, RecordChecker& checker,
+                        const std::function<void(CheckedItem&)>& take,
                         const std::function<void(const RawlogObject&)>& on_record) {
   std::vector<IngestItem> items;
   std::vector<CheckedItem> checked;

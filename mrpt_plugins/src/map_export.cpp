@@ -1,12 +1,11 @@
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/conversions.h>
 #include <freeinit/mrpt/map_export.h>
-#include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
+#include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/serialization/CArchive.h>
-
 
 namespace freeinit::mrpt_glue {
 

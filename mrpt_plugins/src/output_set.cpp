@@ -80,9 +80,9 @@ std::pair<std::string, std::string> splitExtension(const std::string& name) {
 
 std::vector<std::string> folderOutputNames() {
   return {// freeinit (one start, and several: start folders and their table)
-          "initial_state.ini", "effective_config.ini", "errors_wrt_gt.ini",
-          "static_map.simplemap", "static_map.ply", "trajectory_tum.txt", "velocimeter.csv",
-          "static_map.png", "velocity.png", "starts.csv", "starts.md", "starts.png", "start_*/",
+          "initial_state.ini", "effective_config.ini", "errors_wrt_gt.ini", "static_map.simplemap",
+          "static_map.ply", "trajectory_tum.txt", "velocimeter.csv", "static_map.png",
+          "velocity.png", "starts.csv", "starts.md", "starts.png", "start_*/",
           // freeinit-online
           "stream_stats.ini",
           // freeinit-icp-slam, its export and freeinit-eval-rawlog --plots
@@ -98,8 +98,7 @@ OutputSetOptions folderSetOptions() {
   return o;
 }
 
-OutputSet::OutputSet(std::string dir, std::string name, OutputSetOptions options,
-                     std::ostream& log)
+OutputSet::OutputSet(std::string dir, std::string name, OutputSetOptions options, std::ostream& log)
     : dir_(dir.empty() ? std::string(".") : std::move(dir)),
       name_(std::move(name)),
       options_(std::move(options)),
@@ -155,7 +154,8 @@ void OutputSet::lock() {
     }
     // The file may have been removed by its previous holder between open() and flock(): then
     // this lock is on a file nobody else will see; take the one at the path.
-    struct stat a {}, b {};
+    struct stat a {
+    }, b{};
     if (::fstat(lock_fd_, &a) == 0 && ::stat(lock_path_.c_str(), &b) == 0 && a.st_ino == b.st_ino &&
         a.st_dev == b.st_dev)
       break;
@@ -286,8 +286,8 @@ std::vector<OutputSet::Step> OutputSet::replacementSteps(
       if (!options_.recording_companion.empty() &&
           fs::is_regular_file(dir / options_.recording_companion, ec)) {
         const auto [stem, ext] = splitExtension(kept);
-        steps.push_back(
-            {Step::Rename, options_.recording_companion, stem + "." + options_.recording_companion});
+        steps.push_back({Step::Rename, options_.recording_companion,
+                         stem + "." + options_.recording_companion});
         companion_renamed = true;
       }
     }
@@ -318,7 +318,9 @@ void OutputSet::run(const std::vector<Step>& steps) {
     {
       std::ofstream f(tmp, std::ios::trunc);
       for (const auto& s : steps)
-        f << (s.kind == Step::Rename ? "rename" : s.kind == Step::Remove ? "remove" : "install")
+        f << (s.kind == Step::Rename   ? "rename"
+              : s.kind == Step::Remove ? "remove"
+                                       : "install")
           << "\t" << s.from << "\t" << s.to << "\n";
       f.flush();
       if (!f) {

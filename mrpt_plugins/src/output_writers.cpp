@@ -40,8 +40,8 @@ void printVerdict(std::ostream& log, const StateVerdict& v) {
   log << std::setprecision(2) << std::scientific << "  sigma: v_b " << v.sigma_v_b.x() << " "
       << v.sigma_v_b.y() << " " << v.sigma_v_b.z() << " m/s, b_g " << v.sigma_b_g.x() << " "
       << v.sigma_b_g.y() << " " << v.sigma_b_g.z() << " rad/s, b_a " << v.sigma_b_a.x() << " "
-      << v.sigma_b_a.y() << " " << v.sigma_b_a.z() << " m/s^2, gravity direction "
-      << std::fixed << v.sigma_tilt_deg << " deg\n"
+      << v.sigma_b_a.y() << " " << v.sigma_b_a.z() << " m/s^2, gravity direction " << std::fixed
+      << v.sigma_tilt_deg << " deg\n"
       << std::setprecision(3) << "  window: " << v.window_s << " s, " << v.window_frames
       << " frames; Doppler residual RMS " << std::setprecision(4) << v.residual_rms
       << " m/s (configured noise " << v.doppler_sigma << " m/s)\n";

@@ -7,7 +7,6 @@
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/serialization/CArchive.h>
-
 #include <unistd.h>
 
 #include <algorithm>

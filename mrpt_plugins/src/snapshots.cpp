@@ -334,10 +334,10 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   for (int k = 0; k <= 10; ++k)
     img.filledRectangle(left_w + 10 + 4 * k, dy + 23, left_w + 13 + 4 * k, dy + 35,
                         dopplerColor(static_cast<float>(k - 5) / 5.0f));
-  img.textOut(left_w + 66, dy + 20,
-              "-" + num(doppler_scale, 2) + ".." + num(doppler_scale, 2) +
-                  " m/s, approaching..receding",
-              TColor(230, 230, 230));
+  img.textOut(
+      left_w + 66, dy + 20,
+      "-" + num(doppler_scale, 2) + ".." + num(doppler_scale, 2) + " m/s, approaching..receding",
+      TColor(230, 230, 230));
   saveAtomically(img, png);
 }
 

@@ -178,8 +178,7 @@ TEST(FreeInitAppEndToEnd, DynamicSampleDyna01) {
       if (line.rfind("element vertex ", 0) == 0) vertices = std::stoul(line.substr(15));
       if (line.rfind("property ", 0) == 0) properties += line.substr(9) + ";";
     }
-    EXPECT_EQ(properties,
-              "float x;float y;float z;float intensity;float doppler;float time;");
+    EXPECT_EQ(properties, "float x;float y;float z;float intensity;float doppler;float time;");
     ASSERT_EQ(vertices, app.result.static_map.size());
     std::vector<float> rec(6 * vertices);
     ply.read(reinterpret_cast<char*>(rec.data()),

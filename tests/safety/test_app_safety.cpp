@@ -1,16 +1,16 @@
 // The apps as a user runs them, as processes: stopped by SIGINT / SIGTERM, two runs on one
 // output, a full disk, live recordings across runs, a recording cut short, and the messages of
 // bad inputs. Each case asserts the exit status, the message and what is left on disk.
+#include <fcntl.h>
 #include <freeinit/mrpt/RawlogWriter.h>
 #include <freeinit/mrpt/rawlog_reader.h>
-#include <mrpt/obs/CObservationIMU.h>
 #include <gtest/gtest.h>
+#include <mrpt/obs/CObservationIMU.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <chrono>
-#include <fcntl.h>
 #include <filesystem>
 #include <fstream>
 #include <optional>
@@ -197,9 +197,9 @@ TEST(StopSignals, FreeinitLeavesNoOutputOfOursAndNoTemporaryFile) {
 
 TEST(StopSignals, SimulatorLeavesNoFile) {
   const fs::path d = freshDir("sim_sigterm");
-  expectStoppedCleanly(
-      {FREEINIT_SIM_APP, "-p", "dyna_05", "-d", "3", "-n", "20000", "-o", (d / "x.rawlog").string()},
-      d, d / ".x.freeinit.staging", SIGTERM, {}, "freeinit-sim");
+  expectStoppedCleanly({FREEINIT_SIM_APP, "-p", "dyna_05", "-d", "3", "-n", "20000", "-o",
+                        (d / "x.rawlog").string()},
+                       d, d / ".x.freeinit.staging", SIGTERM, {}, "freeinit-sim");
 }
 
 TEST(StopSignals, IcpSlamLeavesNoFile) {
@@ -224,16 +224,17 @@ TEST(OutputLock, ASecondRunOnTheSameOutputIsRefused) {
   for (int attempt = 0;; ++attempt) {
     ASSERT_LT(attempt, 5) << "the first run always ended before the second started";
     Process first({FREEINIT_APP, kIni, kSample, "-q", "--out", out.string()}, d, "first");
-    ASSERT_TRUE(waitUntil([&] { return fs::exists(out / ".freeinit.staging") || !first.running(); }));
+    ASSERT_TRUE(
+        waitUntil([&] { return fs::exists(out / ".freeinit.staging") || !first.running(); }));
     first.signal(SIGSTOP);
     if (!fs::exists(out / ".freeinit.staging")) {
       first.signal(SIGCONT);
       first.wait();
       continue;
     }
-    Process second({FREEINIT_APP, kIni, kSrc + "/rawlogs/stat_01.rawlog", "-q", "--out",
-                    out.string()},
-                   d, "second");
+    Process second(
+        {FREEINIT_APP, kIni, kSrc + "/rawlogs/stat_01.rawlog", "-q", "--out", out.string()}, d,
+        "second");
     const int st = second.wait();
     first.signal(SIGCONT);
     EXPECT_EQ(exitCode(st), 1);
@@ -336,7 +337,8 @@ TEST(LiveRecordings, StoppedWhileStreamingTheRecordingIsReadableAndTheEarlierOne
     const int st = online.wait();
     stream.wait();
     EXPECT_TRUE(exitCode(st) == 0 || exitCode(st) == 3) << st << online.err();
-    EXPECT_CONTAINS(online.out(), std::string("Stopped by ") + (sig == SIGINT ? "SIGINT" : "SIGTERM"));
+    EXPECT_CONTAINS(online.out(),
+                    std::string("Stopped by ") + (sig == SIGINT ? "SIGINT" : "SIGTERM"));
     EXPECT_GT(readableRecords((out / "live.rawlog").string()), 0u);
     EXPECT_CONTAINS(readText(out / "stream_stats.ini"),
                     std::string("stopped_by          = ") + (sig == SIGINT ? "SIGINT" : "SIGTERM"));
@@ -366,8 +368,9 @@ TEST(LiveRecordings, NoDataTheEarlierRecordingIsKept) {
   Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-w", "0.3"}, d,
                  "online");
   EXPECT_EQ(exitCode(online.wait()), 1);
-  EXPECT_EQ(online.err(),
-            "freeinit-online: error: live stream: no data received within 0.3 s; nothing written\n");
+  EXPECT_EQ(
+      online.err(),
+      "freeinit-online: error: live stream: no data received within 0.3 s; nothing written\n");
   const auto left = listing(out);
   ASSERT_EQ(left.size(), 1u);
   EXPECT_TRUE(std::regex_match(*left.begin(), std::regex("live\\.[0-9]{8}-[0-9]{6}\\.rawlog")));
@@ -383,8 +386,8 @@ TEST(LiveRecordings, ARecordingOfARunThatDiedIsKeptByTheNextRun) {
                    "online");
     const int port = listeningPort(online);
     ASSERT_GT(port, 0);
-    Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port), "-x", "0.5"},
-                   d, "stream");
+    Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port), "-x", "0.5"}, d,
+                   "stream");
     const fs::path staged = out / ".freeinit.staging" / "live.rawlog.tmp";
     ASSERT_TRUE(waitUntil([&] { return fs::exists(staged) && fs::file_size(staged) > 200000; }));
     online.signal(SIGKILL);
@@ -396,7 +399,8 @@ TEST(LiveRecordings, ARecordingOfARunThatDiedIsKeptByTheNextRun) {
   std::smatch m;
   const std::string log = next.out();
   ASSERT_TRUE(std::regex_search(
-      log, m, std::regex("Kept the recording of an interrupted run as (\\S+live\\.[0-9-]+\\.rawlog)")))
+      log, m,
+      std::regex("Kept the recording of an interrupted run as (\\S+live\\.[0-9-]+\\.rawlog)")))
       << log;
   const std::string kept = m[1];
   EXPECT_TRUE(fs::exists(kept));
@@ -417,9 +421,9 @@ TEST(Salvage, ACutRecordingIsReadUpToItsLastWholeRecord) {
   const fs::path cut = d / "cut.rawlog";
   fs::copy_file(kSample, cut);
   fs::resize_file(cut, fs::file_size(cut) * 6 / 10);
-  Process strict({FREEINIT_APP, kIni, cut.string(), "-q", "--every", "0.3", "--out",
-                  (d / "strict").string()},
-                 d, "strict");
+  Process strict(
+      {FREEINIT_APP, kIni, cut.string(), "-q", "--every", "0.3", "--out", (d / "strict").string()},
+      d, "strict");
   EXPECT_EQ(exitCode(strict.wait()), 3);
   EXPECT_TRUE(std::regex_search(
       strict.out(), std::regex("Start 2 at 0\\.600 s: input_error \\(\\S+cut\\.rawlog: record "
@@ -530,10 +534,12 @@ TEST(Messages, StampsHaveTheDigitsToDiffer) {
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(lineCount(r.err), 1u) << r.err;
   EXPECT_TRUE(std::regex_search(
-      r.err, std::regex("back\\.rawlog: record [0-9]+: .*goes backwards \\(([0-9.]+) after ([0-9.]+)\\)")))
+      r.err,
+      std::regex("back\\.rawlog: record [0-9]+: .*goes backwards \\(([0-9.]+) after ([0-9.]+)\\)")))
       << r.err;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.err, m, std::regex("goes backwards \\(([0-9.]+) after ([0-9.]+)\\)")));
+  ASSERT_TRUE(
+      std::regex_search(r.err, m, std::regex("goes backwards \\(([0-9.]+) after ([0-9.]+)\\)")));
   EXPECT_NE(m[1].str(), m[2].str());
 }
 

@@ -75,7 +75,8 @@ TEST(OutputSet, ReplacesTheEarlierSetAsAWholeAndKeepsWhatIsNotOurs) {
     EXPECT_FALSE(fs::exists(d / "static_map.ply"));
     set.commit();
   }
-  EXPECT_EQ(listing(d), (std::set<std::string>{"initial_state.ini", "static_map.ply", "notes.txt"}));
+  EXPECT_EQ(listing(d),
+            (std::set<std::string>{"initial_state.ini", "static_map.ply", "notes.txt"}));
   EXPECT_EQ(get(d / "initial_state.ini"), "new\n");
 }
 
@@ -198,7 +199,8 @@ TEST(OutputSet, TheStateCanBeInstalledBeforeTheRestNeverBesideAnEarlierRunsOutpu
                                                "initial_state.ini", "notes.txt"}));
   writeText(set, "static_map.ply", "new\n");
   set.commit();
-  EXPECT_EQ(listing(d), (std::set<std::string>{"initial_state.ini", "static_map.ply", "notes.txt"}));
+  EXPECT_EQ(listing(d),
+            (std::set<std::string>{"initial_state.ini", "static_map.ply", "notes.txt"}));
 }
 
 TEST(OutputSet, AnInstallCutByAPowerLossIsFinishedByTheNextRun) {
@@ -214,9 +216,9 @@ TEST(OutputSet, AnInstallCutByAPowerLossIsFinishedByTheNextRun) {
       "install\tinitial_state.ini\tinitial_state.ini\n");
   std::ostringstream log;
   OutputSet set(d.string(), "", folderSetOptions(), log);
-  EXPECT_NE(log.str().find("Finished installing the outputs of an interrupted run in " +
-                           d.string()),
-            std::string::npos)
+  EXPECT_NE(
+      log.str().find("Finished installing the outputs of an interrupted run in " + d.string()),
+      std::string::npos)
       << log.str();
   EXPECT_EQ(get(d / "initial_state.ini"), "staged\n");
   EXPECT_EQ(get(d / "static_map.ply"), "installed\n");

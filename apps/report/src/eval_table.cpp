@@ -469,9 +469,9 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
          "plain ok.\n\n| method | runs | ok | wrong, flagged | wrong, plain ok |\n"
          "|---|---|---|---|---|\n";
     for (const auto& m : summaries)
-      o << "| " << m.method << " | " << m.wrong_calibration_runs << " | "
-        << m.wrong_calibration_ok << " | " << m.wrong_calibration_flagged << " | "
-        << m.wrong_calibration_plain_wrong << " |\n";
+      o << "| " << m.method << " | " << m.wrong_calibration_runs << " | " << m.wrong_calibration_ok
+        << " | " << m.wrong_calibration_flagged << " | " << m.wrong_calibration_plain_wrong
+        << " |\n";
   }
   // The bound itself per input (median over the seeds), for the first method's windows.
   if (!rows.empty()) {

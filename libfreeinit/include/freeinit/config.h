@@ -29,24 +29,24 @@ class Section;
 
 /// The Doppler-inertial velocimeter (paper Sec. III-B). INI section [velocimeter].
 struct VelocimeterParams {
-  double doppler_sigma = 0.03;        ///< [m/s] Doppler noise std
-  double gyro_sigma = 0.002;          ///< [rad/s] gyro white noise per sample
-  double vel_random_walk = 10.0;      ///< [m/s^2/sqrt(Hz)] v_l, v_b random walk density
-  double omega_random_walk = 1.0;     ///< [rad/s^2/sqrt(Hz)] omega_b random walk density
+  double doppler_sigma = 0.03;     ///< [m/s] Doppler noise std
+  double gyro_sigma = 0.002;       ///< [rad/s] gyro white noise per sample
+  double vel_random_walk = 10.0;   ///< [m/s^2/sqrt(Hz)] v_l, v_b random walk density
+  double omega_random_walk = 1.0;  ///< [rad/s^2/sqrt(Hz)] omega_b random walk density
   /// [m/s^2/sqrt(Hz)] v_l, v_b random walk density in the accelerometer-aided refinement passes
   double aided_vel_random_walk = 0.03;
   double gyro_bias_random_walk = 1e-4;  ///< [rad/s/sqrt(s)] Gauss-Markov driving noise
-  double gyro_bias_tau = 1000.0;      ///< [s] Gauss-Markov correlation time
-  double gyro_bias_sigma0 = 0.015;    ///< [rad/s] initial gyro bias std (typical MEMS)
+  double gyro_bias_tau = 1000.0;        ///< [s] Gauss-Markov correlation time
+  double gyro_bias_sigma0 = 0.015;      ///< [rad/s] initial gyro bias std (typical MEMS)
   Vec3 gyro_bias_prior = Vec3::Zero();  ///< [rad/s] initial gyro bias (e.g. from a calibration)
-  bool kinematic_propagation = true;  ///< add -omega x v and the gyro slope to the propagation
+  bool kinematic_propagation = true;    ///< add -omega x v and the gyro slope to the propagation
   /// Let the Doppler update omega_b and b_g through the lever arm (the paper's full update).
   /// Off: they are Schmidt "consider" states of the Doppler update (their uncertainty enters the
   /// gain, their estimates come from the gyro and the gravity solve), so velocity-model errors at
   /// speed cannot bend the attitude or the gyro bias through a few cm of lever arm.
   bool doppler_updates_omega = false;
-  double min_range = 1.0;             ///< [m] closer points are skipped
-  double max_range = 150.0;           ///< [m]
+  double min_range = 1.0;    ///< [m] closer points are skipped
+  double max_range = 150.0;  ///< [m]
   /// Use one point in N (1: every point; 0: automatic, from max_point_rate).
   int point_stride = 0;
   /// [points/s] with point_stride = 0, the stride that brings the points used closest to this
@@ -57,28 +57,28 @@ struct VelocimeterParams {
   /// start at 700k points/s: gravity 0.54 deg against a 0.16 deg bound; every point: 0.07 deg).
   double max_point_rate = 2.0e6;
   // Gating of dynamic points and gross outliers, on the Doppler residual.
-  double gate_sigma = 4.0;            ///< [-] reject |r| > gate_sigma * sqrt(S) ...
-  double gate_min = 0.15;             ///< [m/s] ... but never below this
-  double gate_rel = 0.01;             ///< [-] ... plus this fraction of the LiDAR speed
+  double gate_sigma = 4.0;               ///< [-] reject |r| > gate_sigma * sqrt(S) ...
+  double gate_min = 0.15;                ///< [m/s] ... but never below this
+  double gate_rel = 0.01;                ///< [-] ... plus this fraction of the LiDAR speed
   bool doppler_ego_compensated = false;  ///< input Doppler already has the ego motion removed
 };
 
 /// Robust start of the LiDAR velocity from the first points. INI section [bootstrap].
 struct BootstrapParams {
-  int points = 4000;                  ///< number of first points used
-  int iterations = 10;                ///< IRLS iterations
-  double cauchy_scale = 0.1;          ///< [m/s] IRLS Cauchy scale
-  double prior_sigma = 40.0;          ///< [m/s] weak prior on each velocity axis
-  double min_info_eigen = 100.0;      ///< [1/(m/s)^2] below: DegenerateGeometry
+  int points = 4000;              ///< number of first points used
+  int iterations = 10;            ///< IRLS iterations
+  double cauchy_scale = 0.1;      ///< [m/s] IRLS Cauchy scale
+  double prior_sigma = 40.0;      ///< [m/s] weak prior on each velocity axis
+  double min_info_eigen = 100.0;  ///< [1/(m/s)^2] below: DegenerateGeometry
 };
 
 /// Static-start detection and zero-velocity mode. INI section [static_detector].
 struct StaticParams {
   bool enabled = true;
-  double max_speed = 0.05;            ///< [m/s] LiDAR speed below which the platform is at rest
-  double max_gyro_dev = 0.03;         ///< [rad/s] gyro deviation from its mean at rest
-  double zupt_sigma = 0.002;          ///< [m/s], [rad/s] zero-velocity pseudo-measurement std
-  double check_period = 0.025;        ///< [s] how often motion is checked
+  double max_speed = 0.05;      ///< [m/s] LiDAR speed below which the platform is at rest
+  double max_gyro_dev = 0.03;   ///< [rad/s] gyro deviation from its mean at rest
+  double zupt_sigma = 0.002;    ///< [m/s], [rad/s] zero-velocity pseudo-measurement std
+  double check_period = 0.025;  ///< [s] how often motion is checked
 };
 
 /// The initialization window. INI section [window].
@@ -117,12 +117,12 @@ struct EstimatorParams {
     Paper,
   };
   Method method = Method::Joint;
-  double bootstrap_duration = 0.1;   ///< [s] span of the start decision (what moves)
-  int bootstrap_points = 3000;       ///< returns of that span used (evenly spread), at most
+  double bootstrap_duration = 0.1;  ///< [s] span of the start decision (what moves)
+  int bootstrap_points = 3000;      ///< returns of that span used (evenly spread), at most
   /// [rad] std of roll and pitch at the window start, about the start decision's gravity: large,
   /// so that the tilt comes from the window's data (the yaw is the world's gauge).
   double initial_tilt_sigma = 0.2;
-  int max_iterations = 6;            ///< smoother (Gauss-Newton) iterations, at most
+  int max_iterations = 6;  ///< smoother (Gauss-Newton) iterations, at most
   /// While the IMU shows rest, the platform does not rotate: the gyro then measures its bias.
   bool zero_rate_at_rest = true;
   /// [m/s] std of the zero body velocity while the IMU shows rest (gentle: the Doppler measures

@@ -83,10 +83,10 @@ struct DopplerInertialFilterParams {
 struct FilterState {
   double t = 0;  ///< [s] time of the node (the caller's time base)
   Mat3 R_wb = Mat3::Identity();
-  Vec3 p_w = Vec3::Zero();  ///< [m]
-  Vec3 v_w = Vec3::Zero();  ///< [m/s]
-  Vec3 b_g = Vec3::Zero();  ///< [rad/s]
-  Vec3 b_a = Vec3::Zero();  ///< [m/s^2]
+  Vec3 p_w = Vec3::Zero();     ///< [m]
+  Vec3 v_w = Vec3::Zero();     ///< [m/s]
+  Vec3 b_g = Vec3::Zero();     ///< [rad/s]
+  Vec3 b_a = Vec3::Zero();     ///< [m/s^2]
   Vec3 phi_bl = Vec3::Zero();  ///< [rad] correction of the declared R_bl
   double dt_l = 0;             ///< [s] LiDAR clock minus IMU clock
 };
@@ -122,10 +122,10 @@ class DopplerInertialFilter {
     /// Node 0's points are gated with cov_v_b times this (a prior that is wide on purpose, so as
     /// not to count the start decision's returns twice, would let moving objects through).
     double gate_velocity_scale = 1.0;
-    double gyro_bias_sigma = 0.015;   ///< [rad/s] about x0.b_g
-    double accel_bias_sigma = 0.1;    ///< [m/s^2] about x0.b_a
-    double rotation_sigma = 0;        ///< [rad] calibration rotation, per axis
-    double time_sigma = 0;            ///< [s] LiDAR clock offset
+    double gyro_bias_sigma = 0.015;  ///< [rad/s] about x0.b_g
+    double accel_bias_sigma = 0.1;   ///< [m/s^2] about x0.b_a
+    double rotation_sigma = 0;       ///< [rad] calibration rotation, per axis
+    double time_sigma = 0;           ///< [s] LiDAR clock offset
   };
   /// Starts with node 0 at the first IMU sample (x0.t is set to its time) with the prior mean x0.
   void start(const FilterState& x0, const StartPrior& prior);
@@ -232,15 +232,15 @@ class DopplerInertialFilter {
   static VecS boxminus(const FilterState& a, const FilterState& b);
   /// Transition Jacobian of propagate() at x (analytic, first order).
   static MatS transitionJacobian(const FilterState& x, const std::vector<ImuSample>& imu,
-                                  std::size_t k);
+                                 std::size_t k);
   /// The same by central differences (for tests).
-  static MatS numericalTransitionJacobian(const FilterState& x,
-                                           const std::vector<ImuSample>& imu, std::size_t k);
+  static MatS numericalTransitionJacobian(const FilterState& x, const std::vector<ImuSample>& imu,
+                                          std::size_t k);
   /// Gyro and accelerometer at time t by Lagrange interpolation through the (up to four)
   /// samples of `imu` around it (two on each side where they exist). hint: an index near t
   /// (found by bisection without); gyro_rate (if given): the interpolant's time derivative.
-  static void interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro,
-                             Vec3& accel, std::size_t hint = static_cast<std::size_t>(-1),
+  static void interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro, Vec3& accel,
+                             std::size_t hint = static_cast<std::size_t>(-1),
                              Vec3* gyro_rate = nullptr);
 
  private:
@@ -263,8 +263,8 @@ class DopplerInertialFilter {
     Mat3 moment(int m) const;
   };
   /// The node's sums as measurement rows: A = L L^T (Cholesky, when well conditioned), W = L^T /
-  /// sigma and y0 = L^-1 b / sigma; otherwise A = U D U^T restricted to D > 0, W = D^(1/2) U^T / sigma
-  /// (rows x 9) and y0 = D^(-1/2) U^T b / sigma, so that the cost is |W Q + y0|^2 + const.
+  /// sigma and y0 = L^-1 b / sigma; otherwise A = U D U^T restricted to D > 0, W = D^(1/2) U^T /
+  /// sigma (rows x 9) and y0 = D^(-1/2) U^T b / sigma, so that the cost is |W Q + y0|^2 + const.
   struct Rows {
     Eigen::Matrix<double, Eigen::Dynamic, 9, 0, 9, 9> W;  // at most 9 rows, no heap
     Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 9, 1> y0;
@@ -275,12 +275,12 @@ class DopplerInertialFilter {
     FilterState xs;      ///< smoothed
     FilterState x_pred;  ///< predicted (first pass)
     MatS P = MatS::Identity();
-    std::size_t k = 0;               ///< the node's IMU sample (index in imu_)
-    bool last = false;               ///< the window's last node (no points after its time)
-    double h = 0;                    ///< [s] time normalization of the interval
-    double inv_h = 1;                ///< [1/s] its inverse
-    std::array<double, 3> s_fit{};   ///< normalized instants of the q fit
-    Mat3 V_inv = Mat3::Identity();   ///< inverse Vandermonde matrix of s_fit
+    std::size_t k = 0;              ///< the node's IMU sample (index in imu_)
+    bool last = false;              ///< the window's last node (no points after its time)
+    double h = 0;                   ///< [s] time normalization of the interval
+    double inv_h = 1;               ///< [1/s] its inverse
+    std::array<double, 3> s_fit{};  ///< normalized instants of the q fit
+    Mat3 V_inv = Mat3::Identity();  ///< inverse Vandermonde matrix of s_fit
     DopplerSums sums;
     Rows rows;
     double rest_velocity_sigma = 0;  ///< > 0: zero body velocity at the node

@@ -12,22 +12,22 @@ namespace freeinit {
 /// The velocimeter's and integrator's estimates at one IMU sample of the window.
 /// Frame w here is the first body frame of the window (not yet gravity-aligned).
 struct KinematicSample {
-  double t = 0;                       ///< [s] time since the window start
-  Mat3 R_wb = Mat3::Identity();       ///< integrated attitude
-  Vec3 v_b = Vec3::Zero();            ///< [m/s] body velocity in b
-  Mat3 cov_v_b = Mat3::Identity();    ///< [(m/s)^2]
-  Vec3 v_l = Vec3::Zero();            ///< [m/s] LiDAR velocity in l
-  Mat3 cov_v_l = Mat3::Identity();    ///< [(m/s)^2]
-  Vec3 omega_b = Vec3::Zero();        ///< [rad/s] bias-free angular velocity
-  Vec3 accel = Vec3::Zero();          ///< [m/s^2] measured specific force (with bias)
+  double t = 0;                     ///< [s] time since the window start
+  Mat3 R_wb = Mat3::Identity();     ///< integrated attitude
+  Vec3 v_b = Vec3::Zero();          ///< [m/s] body velocity in b
+  Mat3 cov_v_b = Mat3::Identity();  ///< [(m/s)^2]
+  Vec3 v_l = Vec3::Zero();          ///< [m/s] LiDAR velocity in l
+  Mat3 cov_v_l = Mat3::Identity();  ///< [(m/s)^2]
+  Vec3 omega_b = Vec3::Zero();      ///< [rad/s] bias-free angular velocity
+  Vec3 accel = Vec3::Zero();        ///< [m/s^2] measured specific force (with bias)
 };
 
 /// Result of the accelerometer bias / gravity estimation.
 struct GravityEstimate {
   bool ok = false;
-  std::string message;                  ///< reason when !ok, else the solver summary line
-  Vec3 g_w = Vec3(0, 0, -kGravity);     ///< gravity in the first body frame, |g_w| = 9.81
-  Vec3 b_a = Vec3::Zero();              ///< [m/s^2]
+  std::string message;               ///< reason when !ok, else the solver summary line
+  Vec3 g_w = Vec3(0, 0, -kGravity);  ///< gravity in the first body frame, |g_w| = 9.81
+  Vec3 b_a = Vec3::Zero();           ///< [m/s^2]
   /// Covariance of [g_w (3, rank 2: tangent to the sphere), b_a (3)], ambient coordinates.
   Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Identity();
   /// Correction of the gyro bias used to integrate R_wb (integrated formulation with a gyro-bias

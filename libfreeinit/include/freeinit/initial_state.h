@@ -35,13 +35,13 @@ using Cov18 = Eigen::Matrix<double, 18, 18>;
 /// R_true = R_wb * Exp(dtheta).
 struct InitialState {
   InitStatus status = InitStatus::NotEnoughData;
-  std::string message;           ///< human-readable reason when status != Ok
-  double timestamp = 0;          ///< [s] UNIX time the state refers to (window end)
+  std::string message;   ///< human-readable reason when status != Ok
+  double timestamp = 0;  ///< [s] UNIX time the state refers to (window end)
   Quat q_wb = Quat::Identity();
-  Vec3 p_w = Vec3::Zero();       ///< [m]
-  Vec3 v_w = Vec3::Zero();       ///< [m/s] body (IMU origin) velocity in w
-  Vec3 b_g = Vec3::Zero();       ///< [rad/s]
-  Vec3 b_a = Vec3::Zero();       ///< [m/s^2]
+  Vec3 p_w = Vec3::Zero();           ///< [m]
+  Vec3 v_w = Vec3::Zero();           ///< [m/s] body (IMU origin) velocity in w
+  Vec3 b_g = Vec3::Zero();           ///< [rad/s]
+  Vec3 b_a = Vec3::Zero();           ///< [m/s^2]
   Vec3 g_w = Vec3(0, 0, -kGravity);  ///< [m/s^2]
   Cov18 cov = Cov18::Identity();
   /// What a user must know about an Ok state (e.g. a bias at its bound, residuals larger than the
@@ -84,23 +84,23 @@ struct MapPoint {
 
 /// Counters and timings, for users and for tests.
 struct Diagnostics {
-  std::size_t points_seen = 0;       ///< points inside the window
-  std::size_t points_used = 0;       ///< points that passed the gate (at rest: consistent with
-                                     ///< zero velocity) and are in the static map
-  std::size_t points_skipped = 0;    ///< by decimation or range limits
-  std::size_t points_rejected = 0;   ///< gated out as dynamic or outlier
+  std::size_t points_seen = 0;      ///< points inside the window
+  std::size_t points_used = 0;      ///< points that passed the gate (at rest: consistent with
+                                    ///< zero velocity) and are in the static map
+  std::size_t points_skipped = 0;   ///< by decimation or range limits
+  std::size_t points_rejected = 0;  ///< gated out as dynamic or outlier
   std::size_t gyro_updates = 0;
-  double update_rate_hz = 0;         ///< velocimeter updates per second of data
-  bool static_start = false;         ///< the window started at rest
-  double static_duration = 0;        ///< [s] time spent in zero-velocity mode
-  double doppler_residual_rms = 0;   ///< [m/s] RMS of the used points' Doppler residuals at the
-                                     ///< estimate (compare with the configured Doppler noise)
-  double window_duration = 0;        ///< [s] from the window start to the state time
-  std::size_t frames_in_window = 0;  ///< LiDAR frames with points in the window
-  bool imu_at_rest_at_start = false; ///< the IMU showed only noise over the start decision's span
-  int iterations = 0;                ///< smoother iterations (joint estimator)
-  double time_velocimeter = 0;       ///< [s] wall time
-  double time_solver = 0;            ///< [s] wall time
+  double update_rate_hz = 0;          ///< velocimeter updates per second of data
+  bool static_start = false;          ///< the window started at rest
+  double static_duration = 0;         ///< [s] time spent in zero-velocity mode
+  double doppler_residual_rms = 0;    ///< [m/s] RMS of the used points' Doppler residuals at the
+                                      ///< estimate (compare with the configured Doppler noise)
+  double window_duration = 0;         ///< [s] from the window start to the state time
+  std::size_t frames_in_window = 0;   ///< LiDAR frames with points in the window
+  bool imu_at_rest_at_start = false;  ///< the IMU showed only noise over the start decision's span
+  int iterations = 0;                 ///< smoother iterations (joint estimator)
+  double time_velocimeter = 0;        ///< [s] wall time
+  double time_solver = 0;             ///< [s] wall time
   /// [s] wall time of the add*() / finish() call that made the state final: the latency from
   /// the last measurement the window needed to the state (what an online user waits for; the
   /// joint estimator's map comes after it, time_map).

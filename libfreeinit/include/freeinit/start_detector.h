@@ -12,7 +12,8 @@
 // R_0t the body rotation since t = 0 from the gyro (prior bias removed), f the specific force.
 // b_a is not separated from gravity over so short a span (g_b0 carries g_b0 - b_a). A return of
 // direction d at time t, u = R_bl d, w = R_0t u, measures
-//   z = -u^T (v_b(t) + omega(t) x p_bl)   <=>   z + u^T (omega x p_bl) + w^T C = -w^T v_b0 - t w^T g_b0,
+//   z = -u^T (v_b(t) + omega(t) x p_bl)   <=>   z + u^T (omega x p_bl) + w^T C = -w^T v_b0 - t w^T
+//   g_b0,
 // linear in (v_b0, g_b0). Hypotheses are drawn by RANSAC on the first part of the span (gravity
 // fixed at the mean specific force there), refined on the whole span by iteratively reweighted
 // least squares (Cauchy) in all six unknowns, and scored by inliers and field-of-view coverage.
@@ -28,12 +29,12 @@ namespace freeinit {
 
 /// Settings of the start decision.
 struct StartDetectorParams {
-  double doppler_sigma = 0.03;    ///< [m/s]
-  double gyro_sigma = 0.002;      ///< [rad/s] per sample
-  double accel_sigma = 0.02;      ///< [m/s^2] per sample
-  double gyro_bias_sigma = 0.015; ///< [rad/s] prior std of the gyro bias (about b_g_prior)
-  double gate = 0.15;             ///< [m/s] inlier threshold on the Doppler residual
-  double max_speed = 0.05;        ///< [m/s] a refined speed below this is rest
+  double doppler_sigma = 0.03;     ///< [m/s]
+  double gyro_sigma = 0.002;       ///< [rad/s] per sample
+  double accel_sigma = 0.02;       ///< [m/s^2] per sample
+  double gyro_bias_sigma = 0.015;  ///< [rad/s] prior std of the gyro bias (about b_g_prior)
+  double gate = 0.15;              ///< [m/s] inlier threshold on the Doppler residual
+  double max_speed = 0.05;         ///< [m/s] a refined speed below this is rest
   /// A rest hypothesis supported by at least this fraction of the best hypothesis' coverage wins
   /// when the IMU shows rest.
   double rest_coverage_ratio = 0.1;
@@ -55,9 +56,9 @@ struct StartDetectorParams {
 
 /// One Doppler return of the bootstrap span.
 struct StartPoint {
-  double t = 0;              ///< [s] from the window start
-  Vec3 d_l = Vec3::Zero();   ///< unit direction in the LiDAR frame
-  double doppler = 0;        ///< [m/s]
+  double t = 0;             ///< [s] from the window start
+  Vec3 d_l = Vec3::Zero();  ///< unit direction in the LiDAR frame
+  double doppler = 0;       ///< [m/s]
 };
 
 /// A motion the returns support.
@@ -67,18 +68,19 @@ struct StartHypothesis {
   /// Covariance of (v_b0, g_b0), the gyro-bias uncertainty marginalized.
   Eigen::Matrix<double, 6, 6> cov = Eigen::Matrix<double, 6, 6>::Identity();
   std::size_t inliers = 0;
-  double coverage = 0;       ///< [0, 1] share of the occupied direction cells that support it
-  double residual_rms = 0;   ///< [m/s] of the inliers
-  double min_info_eigen = 0; ///< [1/(m/s)^2] weakest direction of the inliers' velocity information
-  bool rest = false;         ///< |v_b0| below max_speed
+  double coverage = 0;      ///< [0, 1] share of the occupied direction cells that support it
+  double residual_rms = 0;  ///< [m/s] of the inliers
+  double min_info_eigen =
+      0;              ///< [1/(m/s)^2] weakest direction of the inliers' velocity information
+  bool rest = false;  ///< |v_b0| below max_speed
   /// |g_b0| within max_gravity_error of 9.81 m/s^2: only such a motion can be the platform's.
   bool plausible_gravity = true;
 };
 
 struct StartDecision {
   enum class Kind {
-    Moving,     ///< the platform moves: `chosen`
-    Rest,       ///< the platform stands: `chosen` (v_b0 ~ 0)
+    Moving,      ///< the platform moves: `chosen`
+    Rest,        ///< the platform stands: `chosen` (v_b0 ~ 0)
     Ambiguous,   ///< the data cannot decide what moves (message says why)
     NoData,      ///< too few returns (message says why)
     Degenerate,  ///< the returns' directions do not constrain the velocity

@@ -7,7 +7,6 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
-
 #include <cstdint>
 #include <vector>
 
@@ -19,7 +18,7 @@ using Quat = Eigen::Quaterniond;
 
 /// One IMU sample, body frame.
 struct ImuSample {
-  double t = 0;         ///< [s] UNIX time
+  double t = 0;               ///< [s] UNIX time
   Vec3 gyro = Vec3::Zero();   ///< [rad/s] measured angular rate
   Vec3 accel = Vec3::Zero();  ///< [m/s^2] measured specific force
 };
@@ -27,10 +26,10 @@ struct ImuSample {
 /// One Doppler LiDAR return, in the LiDAR frame at its own measurement time.
 struct DopplerPoint {
   Eigen::Vector3f p_l = Eigen::Vector3f::Zero();  ///< [m] position w.r.t. the LiDAR at time t
-  float doppler = 0;      ///< [m/s] range rate (raw, not ego-compensated)
-  float time_offset = 0;  ///< [s] point time minus the frame stamp
-  float intensity = 0;    ///< [-] return intensity
-  std::uint16_t line = 0; ///< scan line index
+  float doppler = 0;                              ///< [m/s] range rate (raw, not ego-compensated)
+  float time_offset = 0;                          ///< [s] point time minus the frame stamp
+  float intensity = 0;                            ///< [-] return intensity
+  std::uint16_t line = 0;                         ///< scan line index
 };
 
 /// One LiDAR frame. Points are sorted by time_offset (non-decreasing).

@@ -57,8 +57,8 @@ class Velocimeter {
   /// Sets the angular acceleration the propagation uses until the next gyro update [rad/s^2].
   void setOmegaSlope(const Vec3& slope) { omega_slope_ = slope; }
 
-  /// Accelerometer-aided propagation (refinement passes): from now on dv_b/dt = a_b(t) - omega x v_b
-  /// with a_b(t) = a_b + a_b_slope (t - now), the body acceleration in b from the accelerometer
+  /// Accelerometer-aided propagation (refinement passes): from now on dv_b/dt = a_b(t) - omega x
+  /// v_b with a_b(t) = a_b + a_b_slope (t - now), the body acceleration in b from the accelerometer
   /// once b_a and gravity are known, and the velocity random walk density becomes
   /// `aided_vel_random_walk`, which only has to absorb the errors of that acceleration.
   void setAcceleration(const Vec3& a_b, const Vec3& a_b_slope);
@@ -92,9 +92,9 @@ class Velocimeter {
   Vec3 b_g_ = Vec3::Zero();
   Vec3 omega_slope_ = Vec3::Zero();  ///< [rad/s^2] gyro slope used by the propagation
   bool aided_ = false;
-  Vec3 a_b_ = Vec3::Zero();          ///< [m/s^2] body acceleration input (aided mode)
-  Vec3 a_b_slope_ = Vec3::Zero();    ///< [m/s^3]
-  double t_acc_ = 0;                 ///< time of a_b_
+  Vec3 a_b_ = Vec3::Zero();        ///< [m/s^2] body acceleration input (aided mode)
+  Vec3 a_b_slope_ = Vec3::Zero();  ///< [m/s^3]
+  double t_acc_ = 0;               ///< time of a_b_
   Mat3 P_l_ = Mat3::Identity();
   Mat9 P_b_ = Mat9::Identity();
   double pending_dt_ = 0;  ///< time since the covariance transition was last applied

@@ -82,8 +82,8 @@ Scene makeStreetScene(const StreetOptions& opt, std::mt19937_64& rng) {
     // Opposite lane: spread so that they pass the platform during the recording.
     const double v_opp = uniform(rng, 9.0, 15.0);
     const double x_opp = xa + uniform(rng, 0.0, span_x + v_opp * opt.duration);
-    scene.add(makeBox(Vec3(x_opp, 2.5, 0.5 * h), half, 0, reflect(rng, 0.4, 0.95),
-                      Vec3(-v_opp, 0, 0)));
+    scene.add(
+        makeBox(Vec3(x_opp, 2.5, 0.5 * h), half, 0, reflect(rng, 0.4, 0.95), Vec3(-v_opp, 0, 0)));
     double x_own = xa + uniform(rng, 0.0, span_x);
     double v_own = uniform(rng, 8.0, 13.0);
     if (opt.ego_lane_speed > 0) {
@@ -226,8 +226,8 @@ Scene makeOpenScene(const OpenOptions& opt, std::mt19937_64& rng) {
     const double x = opt.x_min + uniform(rng, -40.0, opt.x_max - opt.x_min + 100.0);
     const double y = (i % 2 == 0 ? 1.0 : -1.0) * uniform(rng, 15.0, 60.0);
     const double h = uniform(rng, 4.0, 14.0);
-    scene.add(makeCylinder(Vec3(x, y, 0.5 * h), uniform(rng, 0.3, 3.0), 0.5 * h,
-                           reflect(rng, 0.2, 0.7)));
+    scene.add(
+        makeCylinder(Vec3(x, y, 0.5 * h), uniform(rng, 0.3, 3.0), 0.5 * h, reflect(rng, 0.2, 0.7)));
   }
   for (int i = 0; i < opt.pedestrians; ++i) {
     const double y = (i % 2 == 0 ? 1.0 : -1.0) * uniform(rng, 8.0, 14.0);

@@ -80,15 +80,15 @@ void simulateImu(const ScenarioConfig& c, Recording& rec) {
 }
 
 /// Indices of primitives that may be hit by any ray of the frame (range culling).
-std::vector<int> frameCandidates(const Scene& scene, const ScenarioConfig& c,
-                                 const LidarState& mid, double path_radius, double tau_mid,
-                                 double half_period) {
+std::vector<int> frameCandidates(const Scene& scene, const ScenarioConfig& c, const LidarState& mid,
+                                 double path_radius, double tau_mid, double half_period) {
   std::vector<int> out;
   const auto& prims = scene.primitives();
   for (std::size_t i = 0; i < prims.size(); ++i) {
     const Primitive& p = prims[i];
     const double r = p.boundingRadius() + p.v_w.norm() * half_period + path_radius;
-    if ((p.centerAt(tau_mid) - mid.p_wl).norm() - r < c.max_range) out.push_back(static_cast<int>(i));
+    if ((p.centerAt(tau_mid) - mid.p_wl).norm() - r < c.max_range)
+      out.push_back(static_cast<int>(i));
   }
   return out;
 }
@@ -96,9 +96,10 @@ std::vector<int> frameCandidates(const Scene& scene, const ScenarioConfig& c,
 /// Indices of primitives whose bounding sphere can meet the fan of rays of one line.
 /// A direction of elevation e is at least |e - e_c| away from a direction of elevation e_c, and
 /// every ray of the line is within acos(cos e cos(hfov/2)) of the LiDAR x axis.
-void lineCandidates(const Scene& scene, const std::vector<int>& frame_cands, const ScenarioConfig& c,
-                    const LidarState& mid, double elevation, double ang_margin, double pos_margin,
-                    double tau_mid, double half_dt, std::vector<int>& out) {
+void lineCandidates(const Scene& scene, const std::vector<int>& frame_cands,
+                    const ScenarioConfig& c, const LidarState& mid, double elevation,
+                    double ang_margin, double pos_margin, double tau_mid, double half_dt,
+                    std::vector<int>& out) {
   out.clear();
   const double fan = std::acos(std::cos(elevation) * std::cos(0.5 * c.hfov_deg * kDeg));
   const auto& prims = scene.primitives();

@@ -52,7 +52,7 @@ struct FreeInitAppParams {
   /// --out; "": a new folder under new_out_root (createNewOutputFolder), never an earlier one.
   std::string out_dir = kDefaultOutDir;
   std::string new_out_root = kDefaultOutDir;  ///< where out_dir = "" makes its folder
-  bool progress = true;            ///< progress bars on the log stream
+  bool progress = true;                       ///< progress bars on the log stream
   /// The effective configuration on the log stream too (it is always written to
   /// effective_config.ini in the outputs).
   bool echo_config = true;
@@ -61,9 +61,9 @@ struct FreeInitAppParams {
   double every = 0;                ///< --every [s] (> 0: repeated starts from `start` or 0)
   std::string starts_file;         ///< --starts FILE
   bool check_all = false;          ///< --check-all: read and check the whole file
-  bool salvage = false;  ///< --salvage: a file cut short is read up to its last whole record
-  RawlogIndexPolicy index;         ///< --no-index: use = false
-  std::string command;             ///< the command line, for the table's header
+  bool salvage = false;     ///< --salvage: a file cut short is read up to its last whole record
+  RawlogIndexPolicy index;  ///< --no-index: use = false
+  std::string command;      ///< the command line, for the table's header
 
   /// `freeinit <input.rawlog>` (config_file ""): one line naming the file when, by its content
   /// (file_kind.h), it is no rawlog (a configuration given alone, a ROS1 bag, a file that is

@@ -32,9 +32,10 @@ mrpt::obs::CObservationPointCloud::Ptr frameToObservation(const LidarFrame& f,
                                                           const Extrinsics& extrinsics,
                                                           const std::string& label);
 /// The same from a frame's stamp [UNIX s] and points, without copying them into a LidarFrame.
-mrpt::obs::CObservationPointCloud::Ptr frameToObservation(
-    double stamp, const std::vector<DopplerPoint>& points, const Extrinsics& extrinsics,
-    const std::string& label);
+mrpt::obs::CObservationPointCloud::Ptr frameToObservation(double stamp,
+                                                          const std::vector<DopplerPoint>& points,
+                                                          const Extrinsics& extrinsics,
+                                                          const std::string& label);
 
 Extrinsics extrinsicsFromPose(const mrpt::poses::CPose3D& pose_bl);
 mrpt::poses::CPose3D poseFromExtrinsics(const Extrinsics& e);

@@ -37,8 +37,8 @@ class ObservationDecoder {
 /// order; `take` gets each checked item, the clouds held for the IMU around them at the end
 /// included; `on_record` (if given) sees each record before it is decoded. Errors of the reader
 /// propagate.
-void forEachCheckedItem(RawlogReader& reader, ObservationDecoder& decoder,
-                        RecordChecker& checker, const std::function<void(CheckedItem&)>& take,
+void forEachCheckedItem(RawlogReader& reader, ObservationDecoder& decoder, RecordChecker& checker,
+                        const std::function<void(CheckedItem&)>& take,
                         const std::function<void(const RawlogObject&)>& on_record = {});
 
 /// An Imu or Frame event of the live stream as an item (`record`: the observation number); its

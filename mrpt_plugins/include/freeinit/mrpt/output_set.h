@@ -1,12 +1,12 @@
 // A run's outputs as one set, the same way in every app.
 //
-// Staging: every output is written into a staging folder beside its place (`<dir>/.freeinit.staging/`
-// for an output folder, `<dir>/.<name>.freeinit.staging/` for a set of files named after one
-// output, e.g. freeinit-sim's <name>.rawlog, <name>.truth.csv, ...) and installed when the run is
-// complete: the earlier run's outputs of ours are removed and the staged entries renamed into
-// place (renames within one file system: nothing is copied). Before the first rename a journal
-// listing every step is written into the staging folder, so that a run that finds it (the
-// machine lost power while installing) finishes the install first. Signals cannot split an
+// Staging: every output is written into a staging folder beside its place
+// (`<dir>/.freeinit.staging/` for an output folder, `<dir>/.<name>.freeinit.staging/` for a set of
+// files named after one output, e.g. freeinit-sim's <name>.rawlog, <name>.truth.csv, ...) and
+// installed when the run is complete: the earlier run's outputs of ours are removed and the staged
+// entries renamed into place (renames within one file system: nothing is copied). Before the first
+// rename a journal listing every step is written into the staging folder, so that a run that finds
+// it (the machine lost power while installing) finishes the install first. Signals cannot split an
 // install: the apps' handlers only record them (stop_signal.h).
 //
 // The rule users can rely on: after a run, the folder holds the complete outputs of that run, or

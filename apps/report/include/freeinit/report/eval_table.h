@@ -107,8 +107,8 @@ struct MethodSummary {
   int confident_wrong = 0;  ///< ok runs with a correct calibration and a confident wrong quantity
   // The runs handed a wrong calibration (not in the ratios, NEES shares or confident_wrong above):
   int wrong_calibration_runs = 0;
-  int wrong_calibration_ok = 0;       ///< of which status ok
-  int wrong_calibration_flagged = 0;  ///< ok with a warning, and confidently wrong
+  int wrong_calibration_ok = 0;           ///< of which status ok
+  int wrong_calibration_flagged = 0;      ///< ok with a warning, and confidently wrong
   int wrong_calibration_plain_wrong = 0;  ///< ok without a warning and confidently wrong
 };
 

@@ -45,16 +45,16 @@ struct ScalarSignal {
 
 /// Everything that defines an AnalyticTrajectory.
 struct TrajectoryParams {
-  double t0 = 0;                     ///< [s] UNIX time of tau = 0
-  Vec3 p_start_w = Vec3::Zero();     ///< [m] position at tau = tau_s
-  Vec3 rpy_start = Vec3::Zero();     ///< [rad] roll, pitch, yaw at tau = tau_s
-  std::array<ScalarSignal, 3> pos;   ///< x, y, z motion signals [m]
-  std::array<ScalarSignal, 3> rpy;   ///< roll, pitch, yaw motion signals [rad]
-  double still_until = 0;            ///< [s] tau_s: motion (re)starts here, relative to t0
-  double blend_duration = 0;         ///< [s] smoothstep length; <= 0 means no standstill at all
-  bool ramp_poly = false;            ///< the polynomial parts enter through their rates (above)
-  Mat3 R_rb = Mat3::Identity();      ///< IMU (body) mounting on the rig
-  double heading = 0;                ///< [rad] yaw of the path frame in the world
+  double t0 = 0;                    ///< [s] UNIX time of tau = 0
+  Vec3 p_start_w = Vec3::Zero();    ///< [m] position at tau = tau_s
+  Vec3 rpy_start = Vec3::Zero();    ///< [rad] roll, pitch, yaw at tau = tau_s
+  std::array<ScalarSignal, 3> pos;  ///< x, y, z motion signals [m]
+  std::array<ScalarSignal, 3> rpy;  ///< roll, pitch, yaw motion signals [rad]
+  double still_until = 0;           ///< [s] tau_s: motion (re)starts here, relative to t0
+  double blend_duration = 0;        ///< [s] smoothstep length; <= 0 means no standstill at all
+  bool ramp_poly = false;           ///< the polynomial parts enter through their rates (above)
+  Mat3 R_rb = Mat3::Identity();     ///< IMU (body) mounting on the rig
+  double heading = 0;               ///< [rad] yaw of the path frame in the world
 };
 
 /// The analytic trajectory of every simulated scenario.

@@ -16,11 +16,11 @@ enum class PrimitiveType : std::uint8_t {
 /// One analytic primitive.
 struct Primitive {
   PrimitiveType type = PrimitiveType::Box;
-  Vec3 center_w = Vec3::Zero();     ///< [m] center at tau = 0 (time of the recording start)
-  Mat3 R_wo = Mat3::Identity();     ///< orientation (ignored by Cylinder)
-  Vec3 half_size = Vec3::Ones();    ///< [m] see PrimitiveType
-  Vec3 v_w = Vec3::Zero();          ///< [m/s] constant velocity; nonzero means a dynamic object
-  float reflectivity = 0.5f;        ///< [-] in [0, 1]
+  Vec3 center_w = Vec3::Zero();   ///< [m] center at tau = 0 (time of the recording start)
+  Mat3 R_wo = Mat3::Identity();   ///< orientation (ignored by Cylinder)
+  Vec3 half_size = Vec3::Ones();  ///< [m] see PrimitiveType
+  Vec3 v_w = Vec3::Zero();        ///< [m/s] constant velocity; nonzero means a dynamic object
+  float reflectivity = 0.5f;      ///< [-] in [0, 1]
 
   bool isDynamic() const { return !v_w.isZero(0.0); }
   /// [m] radius of a sphere around the center that encloses the primitive.

@@ -10,9 +10,9 @@ namespace freeinit::sim {
 
 /// Result of a ray cast.
 struct RayHit {
-  double range = 0;           ///< [m] distance along the unit ray
-  Vec3 n_w = Vec3::Zero();    ///< unit surface normal facing the ray origin
-  int primitive = -1;         ///< index into Scene::primitives()
+  double range = 0;         ///< [m] distance along the unit ray
+  Vec3 n_w = Vec3::Zero();  ///< unit surface normal facing the ray origin
+  int primitive = -1;       ///< index into Scene::primitives()
 };
 
 /// A set of analytic primitives (static or moving with constant velocity).

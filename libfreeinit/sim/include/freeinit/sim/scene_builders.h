@@ -32,11 +32,11 @@ Scene makeStreetScene(const StreetOptions& opt, std::mt19937_64& rng);
 /// Corridor: floor, ceiling, walls at |y| = half_width, end walls, pillars and cabinets along the
 /// walls, ceiling lamps, optionally people walking at |y| = 0.75.
 struct CorridorOptions {
-  double x_min = 0;          ///< [m]
-  double x_max = 20;         ///< [m]
-  double half_width = 1.3;   ///< [m]
-  double height = 3.0;       ///< [m]
-  int pedestrians = 0;       ///< moving people
+  double x_min = 0;                 ///< [m]
+  double x_max = 20;                ///< [m]
+  double half_width = 1.3;          ///< [m]
+  double height = 3.0;              ///< [m]
+  int pedestrians = 0;              ///< moving people
   double pedestrian_offset = 0.75;  ///< [m] |y| of the people's paths
 };
 Scene makeCorridorScene(const CorridorOptions& opt, std::mt19937_64& rng);
@@ -44,10 +44,10 @@ Scene makeCorridorScene(const CorridorOptions& opt, std::mt19937_64& rng);
 /// Tunnel: floor, ceiling and two walls, long and featureless along x (the degenerate case), with
 /// optional features: ceiling lights, wall niches and signs.
 struct TunnelOptions {
-  double x_min = 0;          ///< [m]
-  double x_max = 100;        ///< [m]
-  double half_width = 5;     ///< [m]
-  double height = 6;         ///< [m]
+  double x_min = 0;              ///< [m]
+  double x_max = 100;            ///< [m]
+  double half_width = 5;         ///< [m]
+  double height = 6;             ///< [m]
   double features_per_100m = 0;  ///< lights / niches / signs per 100 m (0: featureless)
 };
 Scene makeTunnelScene(const TunnelOptions& opt, std::mt19937_64& rng);
@@ -55,8 +55,8 @@ Scene makeTunnelScene(const TunnelOptions& opt, std::mt19937_64& rng);
 /// Open field: a large ground plane and a few far objects (buildings, silos, trees), plus a few
 /// pedestrians at |y| >= 8.
 struct OpenOptions {
-  double x_min = 0;          ///< [m]
-  double x_max = 20;         ///< [m]
+  double x_min = 0;   ///< [m]
+  double x_max = 20;  ///< [m]
   int pedestrians = 2;
 };
 Scene makeOpenScene(const OpenOptions& opt, std::mt19937_64& rng);

@@ -29,11 +29,11 @@ struct Recording {
   /// [s] true LiDAR clock minus IMU clock: frames[f].stamp = true frame start + this. The points'
   /// true (IMU-clock) time is stamp - lidar_time_offset + time_offset.
   double lidar_time_offset = 0;
-  Vec3 b_g = Vec3::Zero();                      ///< [rad/s] true constant gyro bias
-  Vec3 b_a = Vec3::Zero();                      ///< [m/s^2] true constant accel bias
-  Vec3 g_w = Vec3(0, 0, -kGravity);             ///< gravity in the simulator world (z up)
-  std::shared_ptr<const Trajectory> trajectory; ///< exact body trajectory
-  std::shared_ptr<const Scene> scene;           ///< the scene that was ray cast (scene.h)
+  Vec3 b_g = Vec3::Zero();                       ///< [rad/s] true constant gyro bias
+  Vec3 b_a = Vec3::Zero();                       ///< [m/s^2] true constant accel bias
+  Vec3 g_w = Vec3(0, 0, -kGravity);              ///< gravity in the simulator world (z up)
+  std::shared_ptr<const Trajectory> trajectory;  ///< exact body trajectory
+  std::shared_ptr<const Scene> scene;            ///< the scene that was ray cast (scene.h)
   TruthState truth(double t) const { return trajectory->at(t); }
   /// [s] true (IMU-clock) time of a point of frame `frame`.
   double pointTime(const LidarFrame& frame, const DopplerPoint& p) const {
