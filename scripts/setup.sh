@@ -26,6 +26,9 @@ export CCACHE_DIR=${CCACHE_DIR:-$HOME/.ccache}
 # Hash paths relative to the checkout, so a fresh clone elsewhere (CI) reuses the cache.
 export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$PWD}
 export CCACHE_NOHASHDIR=1
-# FREEINIT_CMAKE_ARGS: more configure options (CI: -DFREEINIT_WERROR=ON).
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release ${FREEINIT_CMAKE_ARGS:-} >/dev/null
+# Warnings are errors here: this is the compiler (Debian bookworm's GCC 12) the code is checked
+# with, and the demo, the tests and CI then share one configuration (and one compiler cache).
+# FREEINIT_CMAKE_ARGS: more configure options.
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DFREEINIT_WERROR=ON ${FREEINIT_CMAKE_ARGS:-} \
+  >/dev/null
 cmake --build "$BUILD_DIR" -j"$JOBS"
