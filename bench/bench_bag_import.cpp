@@ -8,8 +8,8 @@
 // length (compare the two lengths). BM_CheckBagFile: the structure check readBag runs before
 // librosbag opens the bag (bag_guard.h), alone; bytes/s of the bag.
 #include <benchmark/benchmark.h>
-#include <freeinit/ros1/BagImportApp.h>
 #include <freeinit/ros1/bag_guard.h>
+#include <freeinit/ros1/bag_import_app.h>
 #include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/bag_writer.h>
 #include <freeinit/sim/simulator.h>
@@ -97,7 +97,7 @@ void BM_ImportBag(benchmark::State& state) {
     const pid_t pid = fork();
     if (pid == 0) {
       close(fd[0]);
-      freeinit::mrpt_glue::BagImportApp app;
+      freeinit::mrpt_plugins::BagImportApp app;
       app.params.bag = bag;
       app.params.config_file = ini;
       app.params.output = (dir / "out.rawlog").string();

@@ -8,7 +8,7 @@
 //                          mapping, solve, all passes) over 0.8 s of each preset at the default
 //                          60,000 points per frame; the window is the default 0.5 s (100 IMU
 //                          samples); the default uses every point. Time per initialization in
-//                          ms (README, Performance: the targets and where the time goes).
+//                          ms (docs/performance.md: the targets and where the time goes).
 //                          Counters: peak_heap_bytes = peak extra heap during one run (including
 //                          the returned result), result_bytes = heap the result still holds,
 //                          allocs = allocations per run, ms_to_result = the time the call that

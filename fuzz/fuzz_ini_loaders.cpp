@@ -9,9 +9,9 @@
 // again to the same echo.
 #include <freeinit/config_section.h>
 #include <freeinit/ini_file.h>
-#include <freeinit/mrpt/app_config.h>
-#include <freeinit/mrpt/icp_slam_bridge.h>
-#include <freeinit/ros1/BagImportApp.h>
+#include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/icp_slam_bridge.h>
+#include <freeinit/ros1/bag_import_app.h>
 #include <freeinit/sim/scenario_ini.h>
 #include <unistd.h>
 
@@ -33,31 +33,31 @@ bool save(const std::string& path, const std::uint8_t* data, std::size_t size) {
   return ok;
 }
 
-std::string echo(const mrpt_glue::AppConfig& c) {
+std::string echo(const mrpt_plugins::AppConfig& c) {
   std::ostringstream os;
-  mrpt_glue::dumpAppConfig(c, os);
+  mrpt_plugins::dumpAppConfig(c, os);
   return os.str();
 }
 
 std::string load(int loader, const std::string& path, const std::uint8_t* data, std::size_t size) {
   switch (loader) {
     case 0: {
-      const std::string first = echo(mrpt_glue::loadAppConfig(path));
+      const std::string first = echo(mrpt_plugins::loadAppConfig(path));
       const std::string again_path = path + ".echo.ini";
       save(again_path, reinterpret_cast<const std::uint8_t*>(first.data()), first.size());
-      if (echo(mrpt_glue::loadAppConfig(again_path)) != first)
+      if (echo(mrpt_plugins::loadAppConfig(again_path)) != first)
         broken("the echoed configuration does not load back to itself");
       return "ok: freeinit configuration";
     }
     case 1:
-      mrpt_glue::loadBagImportSettings(path);
+      mrpt_plugins::loadBagImportSettings(path);
       return "ok: bag import settings";
     case 2: {
       const sim::ScenarioConfig sc = sim::loadScenarioIni(path);
       return "ok: scenario " + sc.name;
     }
     case 3:
-      mrpt_glue::loadScanSliceParams(path);
+      mrpt_plugins::loadScanSliceParams(path);
       return "ok: scan slice";
     default: {
       const config::IniFile ini =

@@ -6,10 +6,10 @@
 // what passes the checks is finite, IMU stamps increase, a frame's points are sorted by time;
 // salvage reads exactly the records the strict reader read before its error, and reports where it
 // stopped.
-#include <freeinit/mrpt/app_config.h>
-#include <freeinit/mrpt/ingest.h>
-#include <freeinit/mrpt/ingest_sources.h>
-#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/ingest.h>
+#include <freeinit/mrpt_plugins/ingest_sources.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <unistd.h>
 
 #include <cmath>
@@ -33,26 +33,26 @@ struct Pass {
 };
 
 Pass read(const std::string& path, bool salvage) {
-  mrpt_glue::RawlogIndexPolicy no_index;
+  mrpt_plugins::RawlogIndexPolicy no_index;
   no_index.use = false;
   Pass p;
-  mrpt_glue::AppConfig config;
-  mrpt_glue::ObservationDecoder decoder(config.input);
-  mrpt_glue::RecordChecker checker(config);
+  mrpt_plugins::AppConfig config;
+  mrpt_plugins::ObservationDecoder decoder(config.input);
+  mrpt_plugins::RecordChecker checker(config);
   double last_imu = -INFINITY;
-  auto inspect = [&](const mrpt_glue::CheckedItem& c) {
+  auto inspect = [&](const mrpt_plugins::CheckedItem& c) {
     if (!c.ok()) {
       ++p.rejected;
       return;
     }
     const auto& it = c.item;
-    if (it.kind == mrpt_glue::IngestItem::Kind::Imu) {
+    if (it.kind == mrpt_plugins::IngestItem::Kind::Imu) {
       if (!std::isfinite(it.imu.t) || !it.imu.gyro.allFinite() || !it.imu.accel.allFinite())
         broken("non-finite IMU sample passed the checks");
       if (!(it.imu.t > last_imu)) broken("IMU stamps passed the checks without increasing");
       last_imu = it.imu.t;
       ++p.imu;
-    } else if (it.kind == mrpt_glue::IngestItem::Kind::Frame) {
+    } else if (it.kind == mrpt_plugins::IngestItem::Kind::Frame) {
       if (!it.frame || it.frame->points.empty()) broken("empty frame passed the checks");
       for (std::size_t i = 0; i < it.frame->points.size(); ++i) {
         const DopplerPoint& q = it.frame->points[i];
@@ -65,17 +65,17 @@ Pass read(const std::string& path, bool salvage) {
     }
   };
   try {
-    mrpt_glue::RawlogReader reader(path, no_index);
+    mrpt_plugins::RawlogReader reader(path, no_index);
     reader.setMaxRecordBytes(kMaxRecordBytes);
     reader.setSalvage(salvage);
     // The apps' own loop (what a user's recording goes through), with the record numbering
     // checked on the way.
-    mrpt_glue::forEachCheckedItem(reader, decoder, checker, inspect,
-                                  [&](const mrpt_glue::RawlogObject& rec) {
-                                    if (rec.index != p.records)
-                                      broken("records not numbered in order");
-                                    ++p.records;
-                                  });
+    mrpt_plugins::forEachCheckedItem(reader, decoder, checker, inspect,
+                                     [&](const mrpt_plugins::RawlogObject& rec) {
+                                       if (rec.index != p.records)
+                                         broken("records not numbered in order");
+                                       ++p.records;
+                                     });
     p.stop = reader.salvageStop();
   } catch (const std::exception& e) {
     p.error = e.what();

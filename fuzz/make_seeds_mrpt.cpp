@@ -2,9 +2,9 @@
 // fuzz/corpus/ini_loaders/): small valid rawlogs of every form the reader takes, and the shipped
 // configuration files behind their loader's selector byte.
 //   freeinit-fuzz-make-seeds-mrpt <corpus folder> <source folder>
-#include <freeinit/mrpt/RawlogWriter.h>
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/register.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/rawlog_writer.h>
+#include <freeinit/mrpt_plugins/register.h>
 #include <mrpt/io/CFileOutputStream.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CActionCollection.h>
@@ -54,15 +54,15 @@ std::vector<mrpt::obs::CObservation::Ptr> observations() {
   std::vector<mrpt::obs::CObservation::Ptr> out;
   const Extrinsics e;
   for (int k = 0; k < 20; ++k) {
-    out.push_back(mrpt_glue::imuToObservation(imu(k), "IMU"));
+    out.push_back(mrpt_plugins::imuToObservation(imu(k), "IMU"));
     if (k == 4 || k == 14)
-      out.push_back(mrpt_glue::frameToObservation(frame(imu(k).t + 0.001, 8), e, "LIDAR"));
+      out.push_back(mrpt_plugins::frameToObservation(frame(imu(k).t + 0.001, 8), e, "LIDAR"));
   }
   return out;
 }
 
 void gz(const fs::path& p, const std::vector<mrpt::obs::CObservation::Ptr>& obs) {
-  mrpt_glue::RawlogWriter w(p.string());
+  mrpt_plugins::RawlogWriter w(p.string());
   for (const auto& o : obs) w.write(*o);
   w.commit();
 }
@@ -87,7 +87,7 @@ int main(int argc, char** argv) {
     std::cerr << "usage: freeinit-fuzz-make-seeds-mrpt <corpus folder> <source folder>\n";
     return 2;
   }
-  mrpt_glue::registerClasses();
+  mrpt_plugins::registerClasses();
   const fs::path root(argv[1]), src(argv[2]);
   const fs::path rawlogs = root / "rawlog_reader", inis = root / "ini_loaders";
   fs::create_directories(rawlogs);
@@ -111,16 +111,16 @@ int main(int argc, char** argv) {
   {
     auto odo = mrpt::obs::CObservationOdometry::Create();
     odo->sensorLabel = "ODOMETRY";
-    odo->timestamp = mrpt_glue::fromUnix(kT0 + 0.002);
+    odo->timestamp = mrpt_plugins::fromUnix(kT0 + 0.002);
     auto scan = mrpt::obs::CObservation2DRangeScan::Create();
     scan->sensorLabel = "SCAN";
-    scan->timestamp = mrpt_glue::fromUnix(kT0 + 0.003);
+    scan->timestamp = mrpt_plugins::fromUnix(kT0 + 0.003);
     scan->resizeScan(5);
     for (int i = 0; i < 5; ++i)
       scan->setScanRange(i, 1.0f + i), scan->setScanRangeValidity(i, true);
     auto stock = mrpt::obs::CObservationPointCloud::Create();
     stock->sensorLabel = "LIDAR";
-    stock->timestamp = mrpt_glue::fromUnix(kT0 + 0.004);
+    stock->timestamp = mrpt_plugins::fromUnix(kT0 + 0.004);
     auto pts = mrpt::maps::CSimplePointsMap::Create();
     pts->insertPoint(1, 2, 3);
     stock->pointcloud = pts;

@@ -26,7 +26,7 @@ port=${3:-}
 [ -z "$port" ] || [[ "$port" =~ ^[0-9]+$ ]] || die "PORT must be a number, not '$port'"
 
 BUILD_DIR=${BUILD_DIR:-build}
-plugin=$BUILD_DIR/mrpt_plugins/libfreeinit_mrpt.so
+plugin=$BUILD_DIR/mrpt_plugins/libfreeinit_mrpt_plugins.so
 ini=${INI:-ini/rawlog_grabber_doppler_udp.ini}
 [ -f "$plugin" ] || die "$plugin not found: build first (./scripts/setup.sh)"
 [ -f "$ini" ] || die "$ini not found"

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Re-measures the README's Results: runs freeinit-eval over every preset x 3 seeds (the exact
+# Re-measures docs/results.md: runs freeinit-eval over every preset x 3 seeds (the exact
 # command the README gives) and writes
 #   gui_snapshots/eval_presets.{md,csv}  the full report and every run
 #   gui_snapshots/eval_summary.csv       one row per method: statuses, error / bound, NEES
@@ -13,9 +13,9 @@
 # 8000001-8000300, 9000001-9000300 and 10000001-10000300 once each) and writes
 #   gui_snapshots/eval_random.csv        every run
 #   gui_snapshots/results_random.md      error / bound, NEES, statuses, wrong-calibration runs
-# and copies each results_*.md into README.md between its markers (results-table,
+# and copies each results_*.md into docs/results.md between its markers (results-table,
 # results-bounds, results-random: "<!-- NAME:begin -->" ... "<!-- NAME:end -->"), for the
-# markers README.md has.
+# markers docs/results.md has.
 #
 #   ./scripts/update_results.sh [--no-readme]   (--no-readme: write the files only)
 #
@@ -48,19 +48,19 @@ echo "[results] wrote $out/eval_presets.{md,csv}, $out/eval_summary.csv, $out/ev
   "$out/results_{table,bounds,random}.md and the figures"
 [ "$readme" -eq 1 ] || exit 0
 
-# Copy each table file into README.md between its markers.
+# Copy each table file into docs/results.md between its markers.
 for name in results-table results-bounds results-random; do
   file=$out/${name/-/_}.md
-  if ! grep -q "^<!-- $name:begin -->$" README.md || ! grep -q "^<!-- $name:end -->$" README.md; then
-    echo "[results] README.md has no <!-- $name:begin/end --> markers: $file not copied"
+  if ! grep -q "^<!-- $name:begin -->$" docs/results.md || ! grep -q "^<!-- $name:end -->$" docs/results.md; then
+    echo "[results] docs/results.md has no <!-- $name:begin/end --> markers: $file not copied"
     continue
   fi
-  tmp=README.md.tmp
+  tmp=docs/results.md.tmp
   awk -v file="$file" -v name="$name" '
     $0 == "<!-- " name ":begin -->" { print; while ((getline line < file) > 0) print line; skip = 1; next }
     $0 == "<!-- " name ":end -->" { skip = 0 }
-    !skip' README.md > "$tmp"
-  mv "$tmp" README.md
-  echo "[results] README.md: $name updated from $file"
+    !skip' docs/results.md > "$tmp"
+  mv "$tmp" docs/results.md
+  echo "[results] docs/results.md: $name updated from $file"
 done
 echo "[results] check the prose around the tables against the new numbers"

@@ -48,7 +48,7 @@ TEST_P(DopplerInertialOdometryTest, FollowsTheTruthAfterTheInitialState) {
   const OdometrySample& b = r.odo.back();
   const sim::TruthState ta = r.rec.truth(a.t), tb = r.rec.truth(b.t);
   // Velocity: still measured by the Doppler at the end, to the initializer's own target
-  // (0.05 m/s; README accuracy table: <= 0.03 m/s on these presets).
+  // (0.05 m/s; docs/results.md accuracy table: <= 0.03 m/s on these presets).
   EXPECT_LT((b.v_b - tb.R_wb.transpose() * tb.v_w).norm(), 0.05) << GetParam();
   // Displacement over the 2 s, in the body frame at the state time (frame-independent: the
   // initial yaw is a convention).

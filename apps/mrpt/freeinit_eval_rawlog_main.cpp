@@ -3,13 +3,13 @@
 // with the same tables and figures as freeinit-eval. Each rawlog is read with the validated
 // reader (no silent truncation) and is one independent job; reading is serialized, the
 // initializations run in parallel.
-#include <freeinit/mrpt/CommandLine.h>
-#include <freeinit/mrpt/app_config.h>
-#include <freeinit/mrpt/ground_truth.h>
-#include <freeinit/mrpt/input_validator.h>
-#include <freeinit/mrpt/output_set.h>
-#include <freeinit/mrpt/rawlog_reader.h>
-#include <freeinit/mrpt/stop_signal.h>
+#include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/command_line.h>
+#include <freeinit/mrpt_plugins/ground_truth.h>
+#include <freeinit/mrpt_plugins/input_validator.h>
+#include <freeinit/mrpt_plugins/output_set.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/stop_signal.h>
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/figures.h>
 #include <freeinit/report/methods.h>
@@ -23,7 +23,7 @@
 
 namespace {
 
-namespace glue = freeinit::mrpt_glue;
+namespace plugins = freeinit::mrpt_plugins;
 namespace report = freeinit::report;
 using freeinit::Vec3;
 
@@ -32,19 +32,19 @@ struct JobResult {
   std::vector<report::VelocityTrack> tracks;
 };
 
-JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlog,
+JobResult evaluateRawlog(const plugins::AppConfig& config, const std::string& rawlog,
                          const report::MethodOptions& options) {
-  const std::string truth_file = glue::truthPathFor(rawlog);
+  const std::string truth_file = plugins::truthPathFor(rawlog);
   if (!std::filesystem::is_regular_file(truth_file))
     throw std::runtime_error(rawlog + ": no ground truth (expected " + truth_file + ")");
-  const auto truth = glue::readTruthCsv(truth_file);
+  const auto truth = plugins::readTruthCsv(truth_file);
   // Reading is one job at a time: MRPT does not document its class registry and deserialization
   // as thread-safe. The initializations then run in parallel on plain data.
   static std::mutex mrpt_mutex;
-  glue::ValidatedInput in;
+  plugins::ValidatedInput in;
   {
     const std::lock_guard<std::mutex> lock(mrpt_mutex);
-    in = glue::readRecording(rawlog, config);
+    in = plugins::readRecording(rawlog, config);
   }
   const freeinit::Extrinsics extrinsics =
       config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics ? *in.sensor_pose_extrinsics
@@ -53,7 +53,7 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
 
   // No point labels in a rawlog: the rows have the errors and the NEES, no bound.
   const report::TruthFn at = [&](double t) {
-    const auto s = glue::truthAt(truth, t);
+    const auto s = plugins::truthAt(truth, t);
     if (!s) throw std::runtime_error(truth_file + ": does not cover t = " + std::to_string(t));
     return *s;
   };
@@ -65,24 +65,24 @@ JobResult evaluateRawlog(const glue::AppConfig& config, const std::string& rawlo
 }
 
 /// One output file of the run, as a set of its own (output_set.h): locked now, installed last.
-std::unique_ptr<glue::OutputSet> fileSet(const std::string& file, std::ostream& log) {
+std::unique_ptr<plugins::OutputSet> fileSet(const std::string& file, std::ostream& log) {
   if (file.empty()) return nullptr;
   const std::filesystem::path p(file);
   const std::string name = p.filename().string();
   if (name.empty() || std::filesystem::is_directory(p))
     throw std::invalid_argument(file + ": a file name is needed (this is a folder)");
-  glue::OutputSetOptions options;
+  plugins::OutputSetOptions options;
   options.owned = {name};
-  return std::make_unique<glue::OutputSet>(p.parent_path().string(), name, options, log);
+  return std::make_unique<plugins::OutputSet>(p.parent_path().string(), name, options, log);
 }
 
 }  // namespace
 
 int main(int argc, char** argv) {
   namespace range = freeinit::config;
-  glue::CommandLine cli("freeinit-eval-rawlog",
-                        "Free-Init and the baseline initializers on rawlogs with ground truth "
-                        "(<name>.truth.csv beside each), as Markdown/CSV tables and figures");
+  plugins::CommandLine cli("freeinit-eval-rawlog",
+                           "Free-Init and the baseline initializers on rawlogs with ground truth "
+                           "(<name>.truth.csv beside each), as Markdown/CSV tables and figures");
   const auto& ini = cli.positional("config.ini", "INI configuration file (ini/freeinit.ini)");
   const auto& rawlogs = cli.positionals("input.rawlog", "input rawlogs, each with its truth");
   const auto& md = cli.text("", "md", "Markdown report", "", "FILE", "none");
@@ -98,21 +98,21 @@ int main(int argc, char** argv) {
                                 range::aboveUpTo(0, 3600), "S");
   const auto& no_baselines = cli.flag("", "no-baselines", "Free-Init only");
   if (const auto code = cli.parse(argc, argv)) return *code;
-  return glue::runMain(cli.program(), [&] {
+  return plugins::runMain(cli.program(), [&] {
     std::string command = "freeinit-eval-rawlog";
     for (int i = 1; i < argc; ++i) command += std::string(" ") + argv[i];
     // Each output is a set of its own (its staging beside it), all installed once every table
     // and figure is ready.
     auto csv_set = fileSet(csv.value, std::cout);
     auto md_set = fileSet(md.value, std::cout);
-    std::unique_ptr<glue::OutputSet> plots_set;
+    std::unique_ptr<plugins::OutputSet> plots_set;
     if (!plots.value.empty()) {
-      glue::OutputSetOptions options;
+      plugins::OutputSetOptions options;
       options.owned = {"velocity_error.png"};
       plots_set =
-          std::make_unique<glue::OutputSet>(plots.value, "velocity_error", options, std::cout);
+          std::make_unique<plugins::OutputSet>(plots.value, "velocity_error", options, std::cout);
     }
-    const glue::AppConfig config = glue::loadAppConfig(ini.value);
+    const plugins::AppConfig config = plugins::loadAppConfig(ini.value);
     report::MethodOptions options;
     options.baselines = !no_baselines.value;
     options.dlio_duration = dlio.value;
@@ -121,10 +121,10 @@ int main(int argc, char** argv) {
     const auto& files = rawlogs.value;
     std::vector<JobResult> results(files.size());
     report::parallelFor(files.size(), static_cast<unsigned>(jobs.value), [&](std::size_t i) {
-      glue::throwIfStopRequested();
+      plugins::throwIfStopRequested();
       results[i] = evaluateRawlog(config, files[i], options);
     });
-    glue::throwIfStopRequested();
+    plugins::throwIfStopRequested();
     std::vector<report::EvalRow> rows;
     for (const auto& r : results) rows.insert(rows.end(), r.rows.begin(), r.rows.end());
     report::markFailures(rows, thresholds);

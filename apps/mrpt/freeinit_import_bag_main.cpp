@@ -1,16 +1,16 @@
 // freeinit-import-bag <bag> -c <config.ini> [-o out.rawlog] [--doppler-fit-csv FILE]: a ROS1 bag
 // to a typed rawlog.
-#include <freeinit/mrpt/CommandLine.h>
-#include <freeinit/ros1/BagImportApp.h>
+#include <freeinit/mrpt_plugins/command_line.h>
+#include <freeinit/ros1/bag_import_app.h>
 #include <unistd.h>
 
 #include <iostream>
 
 int main(int argc, char** argv) {
-  namespace glue = freeinit::mrpt_glue;
-  glue::CommandLine cli("freeinit-import-bag",
-                        "a ROS1 bag (sensor_msgs/Imu + sensor_msgs/PointCloud2 with per-point "
-                        "Doppler and time) to a rawlog for freeinit");
+  namespace plugins = freeinit::mrpt_plugins;
+  plugins::CommandLine cli("freeinit-import-bag",
+                           "a ROS1 bag (sensor_msgs/Imu + sensor_msgs/PointCloud2 with per-point "
+                           "Doppler and time) to a rawlog for freeinit");
   const auto& bag = cli.positional("input.bag", "input ROS1 bag");
   const auto& config = cli.requiredText(
       "c", "config",
@@ -23,8 +23,8 @@ int main(int argc, char** argv) {
                                  "", "FILE", "none");
   const auto& quiet = cli.flag("q", "quiet", "no progress bar");
   if (const auto code = cli.parse(argc, argv)) return *code;
-  return glue::runMain(cli.program(), [&] {
-    glue::BagImportApp app;
+  return plugins::runMain(cli.program(), [&] {
+    plugins::BagImportApp app;
     app.params.bag = bag.value;
     app.params.config_file = config.value;
     app.params.output = out.value;

@@ -1,17 +1,18 @@
 // freeinit [<config.ini>] <input.rawlog> [--out DIR] [--start T | --every S | --starts FILE]
 // [--check-all] [--salvage] [--no-index]: Free-Init on an MRPT rawlog.
-#include <freeinit/mrpt/CommandLine.h>
-#include <freeinit/mrpt/FreeInitApp.h>
+#include <freeinit/mrpt_plugins/command_line.h>
+#include <freeinit/mrpt_plugins/free_init_app.h>
 #include <unistd.h>
 
 #include <iostream>
 
 int main(int argc, char** argv) {
-  namespace glue = freeinit::mrpt_glue;
+  namespace plugins = freeinit::mrpt_plugins;
   namespace config = freeinit::config;
-  glue::CommandLine cli("freeinit",
-                        "initial state (attitude, velocity, biases, gravity, static map) from the "
-                        "first instants of a Doppler LiDAR + IMU rawlog");
+  plugins::CommandLine cli(
+      "freeinit",
+      "initial state (attitude, velocity, biases, gravity, static map) from the "
+      "first instants of a Doppler LiDAR + IMU rawlog");
   const auto& ini = cli.positional("config.ini",
                                    "INI configuration file (ini/freeinit.ini documents every key); "
                                    "without it the defaults, the extrinsics from the rawlog",
@@ -19,7 +20,7 @@ int main(int argc, char** argv) {
   const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
   const auto& out =
       cli.text("o", "out", "output folder (its earlier outputs are replaced)", "", "DIR",
-               std::string(glue::kDefaultOutDir) +
+               std::string(plugins::kDefaultOutDir) +
                    "; without <config.ini> a new folder for each run, "
                    "freeinit_out/<input>.<time>");
   const auto& quiet = cli.flag("q", "quiet",
@@ -47,13 +48,13 @@ int main(int argc, char** argv) {
   const auto& no_index =
       cli.flag("", "no-index", "neither use nor write the seek index <input>.freeinit.idx");
   if (const auto code = cli.parse(argc, argv)) return *code;
-  glue::FreeInitApp app;
+  plugins::FreeInitApp app;
   app.params.config_file = ini.value;
   app.params.rawlog = rawlog.value;
   if (const auto problem = app.params.argumentsProblem(); !problem.empty())
     return cli.usageError(problem);
-  return glue::runMain(cli.program(), [&] {
-    app.params.out_dir = out.given ? out.value : ini.given ? glue::kDefaultOutDir : "";
+  return plugins::runMain(cli.program(), [&] {
+    app.params.out_dir = out.given ? out.value : ini.given ? plugins::kDefaultOutDir : "";
     app.params.progress = !quiet.value;
     app.params.echo_config = !quiet.value;
     app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;

@@ -1,17 +1,17 @@
 // freeinit-online <config.ini> [--port N] [--out DIR]: Free-Init on a live Doppler LiDAR + IMU
 // stream (docs/wire_format.md); writes initial_state.ini the moment the window closes.
-#include <freeinit/mrpt/CommandLine.h>
-#include <freeinit/mrpt/FreeInitOnlineApp.h>
+#include <freeinit/mrpt_plugins/command_line.h>
+#include <freeinit/mrpt_plugins/free_init_online_app.h>
 
 #include <iostream>
 
 int main(int argc, char** argv) {
-  namespace glue = freeinit::mrpt_glue;
+  namespace plugins = freeinit::mrpt_plugins;
   namespace config = freeinit::config;
-  glue::CommandLine cli("freeinit-online",
-                        "initial state from a live Doppler LiDAR + IMU UDP stream, written as "
-                        "soon as the initialization window closes; the stream is recorded as a "
-                        "rawlog");
+  plugins::CommandLine cli("freeinit-online",
+                           "initial state from a live Doppler LiDAR + IMU UDP stream, written as "
+                           "soon as the initialization window closes; the stream is recorded as a "
+                           "rawlog");
   const auto& ini = cli.positional("config.ini", "INI configuration file (ini/freeinit.ini)");
   const auto& out = cli.text("o", "out", "output folder", "freeinit_online_out", "DIR");
   const auto& record =
@@ -30,8 +30,8 @@ int main(int argc, char** argv) {
   const auto& ignore_end =
       cli.flag("", "ignore-end-marker", "keep listening after the sender's end-of-stream marker");
   if (const auto code = cli.parse(argc, argv)) return *code;
-  return glue::runMain(cli.program(), [&] {
-    glue::FreeInitOnlineApp app;
+  return plugins::runMain(cli.program(), [&] {
+    plugins::FreeInitOnlineApp app;
     app.params.config_file = ini.value;
     app.params.out_dir = out.value;
     app.params.record = record.value;

@@ -1,6 +1,6 @@
 // freeinit-sim: writes a simulated preset or random scenario as a rawlog plus its ground truth.
-#include <freeinit/mrpt/CommandLine.h>
-#include <freeinit/mrpt/SimApp.h>
+#include <freeinit/mrpt_plugins/command_line.h>
+#include <freeinit/mrpt_plugins/sim_app.h>
 #include <freeinit/sim/simulator.h>
 
 #include <cstdint>
@@ -8,10 +8,10 @@
 #include <stdexcept>
 
 int main(int argc, char** argv) {
-  namespace glue = freeinit::mrpt_glue;
+  namespace plugins = freeinit::mrpt_plugins;
   namespace config = freeinit::config;
-  glue::CommandLine cli("freeinit-sim",
-                        "Doppler LiDAR + IMU recording with ground truth, as a rawlog");
+  plugins::CommandLine cli("freeinit-sim",
+                           "Doppler LiDAR + IMU recording with ground truth, as a rawlog");
   const auto& preset =
       cli.choice("p", "preset", "simulator preset", "dyna_01", freeinit::sim::presetNames());
   const auto& seed = cli.integer("s", "seed", "random seed", 1, 0, 4294967295LL, "N");
@@ -32,14 +32,14 @@ int main(int argc, char** argv) {
   const auto& keys = cli.flag("", "scenario-keys", "print the [scenario] keys and exit");
   const auto& in_g = cli.flag("", "accel-in-g", "write accelerations in g");
   if (const auto code = cli.parse(argc, argv)) return *code;
-  return glue::runMain(cli.program(), [&] {
+  return plugins::runMain(cli.program(), [&] {
     if (keys.value) {
-      std::cout << glue::SimApp::scenarioKeys();
+      std::cout << plugins::SimApp::scenarioKeys();
       return 0;
     }
     if (random.given && (seed.given || preset.given || scenario.given))
       throw std::invalid_argument("--random: not with --seed, --preset or --scenario");
-    glue::SimApp app;
+    plugins::SimApp app;
     app.params.preset = preset.value;
     app.params.seed = static_cast<std::uint64_t>(random.given ? random.value : seed.value);
     app.params.random = random.given;

@@ -1,19 +1,19 @@
 // freeinit-stream: plays a simulator preset or a rawlog as a live Doppler LiDAR + IMU UDP stream.
-#include <freeinit/mrpt/CommandLine.h>
-#include <freeinit/mrpt/StreamApp.h>
+#include <freeinit/mrpt_plugins/command_line.h>
+#include <freeinit/mrpt_plugins/stream_app.h>
 #include <freeinit/net/wire_format.h>
 #include <freeinit/sim/simulator.h>
 
 #include <iostream>
 
 int main(int argc, char** argv) {
-  namespace glue = freeinit::mrpt_glue;
+  namespace plugins = freeinit::mrpt_plugins;
   namespace config = freeinit::config;
   using config::between;
-  glue::CommandLine cli("freeinit-stream",
-                        "plays a simulator preset or a rawlog as a live Doppler LiDAR + IMU "
-                        "stream (docs/wire_format.md) over UDP, in real time or faster, with "
-                        "optional faults");
+  plugins::CommandLine cli("freeinit-stream",
+                           "plays a simulator preset or a rawlog as a live Doppler LiDAR + IMU "
+                           "stream (docs/wire_format.md) over UDP, in real time or faster, with "
+                           "optional faults");
   const auto& rawlog = cli.text("i", "rawlog", "rawlog to play", "", "FILE", "none: simulate");
   const auto& preset =
       cli.choice("P", "preset", "simulator preset", "dyna_01", freeinit::sim::presetNames());
@@ -50,8 +50,8 @@ int main(int argc, char** argv) {
   const auto& in_g =
       cli.flag("", "imu-accel-in-g", "the rawlog's accelerations are in g (sent as m/s^2)");
   if (const auto code = cli.parse(argc, argv)) return *code;
-  return glue::runMain(cli.program(), [&] {
-    glue::StreamApp app;
+  return plugins::runMain(cli.program(), [&] {
+    plugins::StreamApp app;
     auto& p = app.params;
     p.rawlog = rawlog.value;
     p.preset = preset.value;

@@ -7,7 +7,7 @@
 //
 // Linked into every executable that reads rawlogs (the apps, the tests, the fuzz harness):
 // target_link_libraries(<exe> PRIVATE freeinit_alloc_guard).
-#include <freeinit/mrpt/read_budget.h>
+#include <freeinit/mrpt_plugins/read_budget.h>
 
 #include <cstdlib>
 #include <cstring>
@@ -15,7 +15,7 @@
 
 namespace {
 
-using freeinit::mrpt_glue::ReadBudget;
+using freeinit::mrpt_plugins::ReadBudget;
 
 [[maybe_unused]] const bool g_marked = [] {
   ReadBudget::markEnforced();

@@ -2,14 +2,14 @@
 // accepted values, docs); that declaration drives loading, validation and the dump, so that the
 // documented INI and the loader cannot drift apart.
 #include <freeinit/config_section.h>
-#include <freeinit/mrpt/app_config.h>
+#include <freeinit/mrpt_plugins/app_config.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
 #include <ostream>
 #include <sstream>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 using config::between;
@@ -224,4 +224,4 @@ void dumpAppConfig(const AppConfig& c, std::ostream& out) {
   sec.dumpKey(x, "p_bl", out, x.from_sensor_pose);
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

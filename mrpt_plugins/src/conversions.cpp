@@ -1,6 +1,6 @@
 #include <freeinit/input_checks.h>
-#include <freeinit/mrpt/CPointsMapDoppler.h>
-#include <freeinit/mrpt/conversions.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/points_map_doppler.h>
 #include <mrpt/math/CMatrixFixed.h>
 
 #include <algorithm>
@@ -9,7 +9,7 @@
 #include <numeric>
 #include <stdexcept>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 
 using mrpt::obs::CObservationIMU;
 using mrpt::obs::CObservationPointCloud;
@@ -67,7 +67,7 @@ LidarFrame frameFromObservation(const CObservationPointCloud& obs) {
     throw std::invalid_argument("CObservationPointCloud '" + obs.sensorLabel + "' holds a " +
                                 obs.pointcloud->GetRuntimeClass()->className +
                                 ", which has no per-point Doppler: expected a "
-                                "freeinit::mrpt_glue::CPointsMapDoppler");
+                                "freeinit::mrpt_plugins::CPointsMapDoppler");
   LidarFrame f;
   f.stamp = toUnix(obs.timestamp);
   const std::size_t n = map->size();
@@ -126,4 +126,4 @@ mrpt::poses::CPose3D poseFromExtrinsics(const Extrinsics& e) {
       R, mrpt::math::TVector3D(e.p_bl.x(), e.p_bl.y(), e.p_bl.z()));
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

@@ -1,11 +1,11 @@
-#include <freeinit/mrpt/file_kind.h>
+#include <freeinit/mrpt_plugins/file_kind.h>
 
 #include <algorithm>
 #include <cctype>
 #include <fstream>
 #include <string_view>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 bool isClassNameChar(unsigned char c) { return std::isalnum(c) != 0 || c == '_' || c == ':'; }
@@ -75,4 +75,4 @@ std::string describe(FileKind kind) {
   return "?";
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

@@ -1,13 +1,13 @@
 #include <freeinit/eval/state_errors.h>
 #include <freeinit/eval/truth_file.h>
-#include <freeinit/mrpt/ground_truth.h>
-#include <freeinit/mrpt/output_writers.h>
+#include <freeinit/mrpt_plugins/ground_truth.h>
+#include <freeinit/mrpt_plugins/output_writers.h>
 
 #include <iomanip>
 #include <sstream>
 #include <stdexcept>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 
 std::string truthPathFor(const std::string& rawlog_path) {
   std::string p = rawlog_path;
@@ -67,4 +67,4 @@ void writeTruthErrors(const std::string& path, const TruthErrors& e) {
   });
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

@@ -5,7 +5,7 @@
 #include <cstring>
 #include <stdexcept>
 
-namespace freeinit::mrpt_glue::detail {
+namespace freeinit::mrpt_plugins::detail {
 namespace {
 constexpr std::size_t kInChunk = 1 << 20;
 constexpr std::size_t kOutChunk = 1 << 20;
@@ -225,4 +225,4 @@ std::uint64_t GzInput::Seek(std::int64_t, CStream::TSeekOrigin) {
   throw std::logic_error("GzInput cannot seek (use resume)");
 }
 
-}  // namespace freeinit::mrpt_glue::detail
+}  // namespace freeinit::mrpt_plugins::detail

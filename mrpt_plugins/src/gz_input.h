@@ -5,7 +5,7 @@
 // to the reader (rawlog_reader.cpp).
 #pragma once
 
-#include <freeinit/mrpt/rawlog_index.h>
+#include <freeinit/mrpt_plugins/rawlog_index.h>
 #include <mrpt/io/CStream.h>
 #include <zlib.h>
 
@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-namespace freeinit::mrpt_glue::detail {
+namespace freeinit::mrpt_plugins::detail {
 
 class GzInput : public mrpt::io::CStream {
  public:
@@ -91,4 +91,4 @@ class GzInput : public mrpt::io::CStream {
   std::uint64_t spacing_ = 0;
 };
 
-}  // namespace freeinit::mrpt_glue::detail
+}  // namespace freeinit::mrpt_plugins::detail

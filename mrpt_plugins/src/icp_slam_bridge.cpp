@@ -1,6 +1,6 @@
 #include <freeinit/config_section.h>
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/icp_slam_bridge.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/icp_slam_bridge.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/obs/CObservationOdometry.h>
 #include <mrpt/obs/CObservationPointCloud.h>
@@ -13,7 +13,7 @@
 #include <limits>
 #include <stdexcept>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 double yawOf(const Mat3& R) { return std::atan2(R(1, 0), R(0, 0)); }
@@ -255,4 +255,4 @@ PathErrors comparePathWithTruth(const std::vector<PlanarPathSample>& path,
   return e;
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

@@ -1,4 +1,4 @@
-#include <freeinit/mrpt/ingest.h>
+#include <freeinit/mrpt_plugins/ingest.h>
 
 #include <algorithm>
 #include <cmath>
@@ -8,7 +8,7 @@
 #include <stdexcept>
 #include <utility>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 
 // ---------------------------------------------------------------------------------------------
 // RecordChecker
@@ -286,7 +286,7 @@ std::string InitSession::endOfDataReason() const {
   const std::string plugin_hint =
       from_file_ ? " (a rawlog copied by an MRPT tool without the freeinit plugin keeps only the "
                    "records before the first Doppler cloud: give the tool -p "
-                   "libfreeinit_mrpt.so)"
+                   "libfreeinit_mrpt_plugins.so)"
                  : "";
   if (imu_count_ == 0 && frame_count_ == 0)
     return source_ + ": neither a CObservationIMU '" + in.imu_label +
@@ -317,4 +317,4 @@ std::string InitSession::endOfDataReason() const {
          " s ([window] duration)";
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

@@ -1,6 +1,6 @@
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/ingest_sources.h>
-#include <freeinit/mrpt/stream_conversions.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/ingest_sources.h>
+#include <freeinit/mrpt_plugins/stream_conversions.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <mrpt/obs/CObservationPointCloud.h>
@@ -9,7 +9,7 @@
 #include <limits>
 #include <utility>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 bool labelMatches(const std::string& wanted, const std::string& label) {
@@ -127,4 +127,4 @@ void forEachCheckedItem(RawlogReader& reader, ObservationDecoder& decoder, Recor
   for (auto& c : checked) take(c);
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

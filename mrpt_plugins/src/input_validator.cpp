@@ -1,12 +1,12 @@
 #include <freeinit/input_checks.h>
-#include <freeinit/mrpt/ingest.h>
-#include <freeinit/mrpt/ingest_sources.h>
-#include <freeinit/mrpt/input_validator.h>
+#include <freeinit/mrpt_plugins/ingest.h>
+#include <freeinit/mrpt_plugins/ingest_sources.h>
+#include <freeinit/mrpt_plugins/input_validator.h>
 
 #include <algorithm>
 #include <map>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 
 ValidatedInput readRecording(const std::string& path, const AppConfig& config,
                              const RawlogIndexPolicy& index) {
@@ -88,4 +88,4 @@ ValidatedInput readRecording(const std::string& path, const AppConfig& config,
   return in;
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

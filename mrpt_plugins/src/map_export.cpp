@@ -1,13 +1,13 @@
-#include <freeinit/mrpt/RawlogWriter.h>
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/map_export.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/map_export.h>
+#include <freeinit/mrpt_plugins/rawlog_writer.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
 #include <mrpt/poses/CPose3DPDFGaussian.h>
 #include <mrpt/serialization/CArchive.h>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 
 void writeStaticSimplemap(const std::string& path, const InitResult& result) {
   // A stock class with intensity (MRPT has none with Doppler or time: those are in the PLY).
@@ -44,4 +44,4 @@ void writeObservationRawlog(const std::string& path,
   w.commit();
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

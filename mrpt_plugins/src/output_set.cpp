@@ -1,7 +1,7 @@
 #include <fcntl.h>
 #include <fnmatch.h>
-#include <freeinit/mrpt/output_set.h>
-#include <freeinit/mrpt/stop_signal.h>
+#include <freeinit/mrpt_plugins/output_set.h>
+#include <freeinit/mrpt_plugins/stop_signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -16,7 +16,7 @@
 #include <ostream>
 #include <sstream>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 namespace fs = std::filesystem;
@@ -411,4 +411,4 @@ void OutputSet::abandon() noexcept {
   for (const auto& d : created_dirs_) fs::remove(d, ec);  // only empty ones go
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

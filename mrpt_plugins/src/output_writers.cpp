@@ -1,10 +1,10 @@
-#include <freeinit/mrpt/output_writers.h>
+#include <freeinit/mrpt_plugins/output_writers.h>
 #include <freeinit/rotation.h>
 
 #include <cmath>
 #include <iomanip>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 
 namespace {
 void vec(std::ostream& o, const Vec3& v) { o << v.x() << " " << v.y() << " " << v.z(); }
@@ -139,4 +139,4 @@ void writePly(const std::string& path, const std::vector<MapPoint>& points) {
       true);
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

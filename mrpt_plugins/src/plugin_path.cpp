@@ -2,7 +2,7 @@
 // plugin, so its path is exactly what stock tools must load to know our classes, in the build tree
 // and after an install (relocated or not) alike.
 #include <dlfcn.h>
-#include <freeinit/mrpt/plugin_path.h>
+#include <freeinit/mrpt_plugins/plugin_path.h>
 
 #include <filesystem>
 
@@ -10,7 +10,7 @@
 #error "FREEINIT_PLUGIN_INSTALL_PATH (the configured install path of the plugin) must be defined"
 #endif
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 // An address inside this library that nothing can interpose (internal linkage).
 const char kAnchor = 0;
@@ -26,4 +26,4 @@ std::string pluginPath() {
   return FREEINIT_PLUGIN_INSTALL_PATH;
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

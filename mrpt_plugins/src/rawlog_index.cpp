@@ -1,5 +1,5 @@
 #include <freeinit/atomic_file.h>
-#include <freeinit/mrpt/rawlog_index.h>
+#include <freeinit/mrpt_plugins/rawlog_index.h>
 #include <sys/stat.h>
 #include <zlib.h>
 
@@ -14,7 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'I', 'I', 'D', 'X', '0', '0', '1'};
@@ -216,4 +216,4 @@ void saveRawlogIndex(const std::string& path, const RawlogIndex& index) {
       true);
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

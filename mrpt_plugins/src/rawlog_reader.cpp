@@ -1,6 +1,6 @@
-#include <freeinit/mrpt/rawlog_reader.h>
-#include <freeinit/mrpt/read_budget.h>
-#include <freeinit/mrpt/register.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/read_budget.h>
+#include <freeinit/mrpt_plugins/register.h>
 #include <mrpt/core/Clock.h>
 #include <mrpt/obs/CActionCollection.h>
 #include <mrpt/obs/CObservationIMU.h>
@@ -19,7 +19,7 @@
 
 #include "gz_input.h"
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 constexpr std::int64_t kNoTime = std::numeric_limits<std::int64_t>::min();
@@ -211,10 +211,11 @@ struct RawlogReader::Impl {
         fail(start,
              "the file ends inside the gzip stream (truncated file; " + wholeRecords() + ")");
       if (next == 0)
-        throw InputError(path + ": no rawlog record in the file (" +
-                         (in.gzip() ? "an empty gzip stream" : "no data") +
-                         "; an MRPT tool that did not load the freeinit plugin writes such a file "
-                         "from a rawlog with Doppler clouds: give it -p libfreeinit_mrpt.so)");
+        throw InputError(
+            path + ": no rawlog record in the file (" +
+            (in.gzip() ? "an empty gzip stream" : "no data") +
+            "; an MRPT tool that did not load the freeinit plugin writes such a file "
+            "from a rawlog with Doppler clouds: give it -p libfreeinit_mrpt_plugins.so)");
       if (next == index.records.size()) index.complete = true;
       at_end = true;
       return false;
@@ -264,8 +265,9 @@ struct RawlogReader::Impl {
                    wholeRecords() + ")");
         const MrptCause cause = mrptCause(e);
         if (cause.innermost.find("not registered") != std::string::npos)
-          fail(start, "cannot be read: " + cause.line() +
-                          " (rawlogs with Doppler clouds need the freeinit_mrpt plugin)");
+          fail(start,
+               "cannot be read: " + cause.line() +
+                   " (rawlogs with Doppler clouds need the freeinit_mrpt_plugins_apps plugin)");
         if (cause.innermost.find("Cannot read requested number of bytes") != std::string::npos)
           fail(start,
                "cannot be read: corrupted data (a length or count beyond the record's "
@@ -488,4 +490,4 @@ std::vector<RawlogRecord> readRawlog(const std::string& path) {
   return out;
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

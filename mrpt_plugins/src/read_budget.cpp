@@ -1,8 +1,8 @@
-#include <freeinit/mrpt/read_budget.h>
+#include <freeinit/mrpt_plugins/read_budget.h>
 
 #include <atomic>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 struct State {
@@ -46,4 +46,4 @@ bool ReadBudget::charge(std::size_t bytes) noexcept {
 bool ReadBudget::enforced() noexcept { return g_enforced.load(std::memory_order_relaxed); }
 void ReadBudget::markEnforced() noexcept { g_enforced.store(true, std::memory_order_relaxed); }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

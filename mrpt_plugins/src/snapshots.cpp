@@ -1,4 +1,4 @@
-#include <freeinit/mrpt/snapshots.h>
+#include <freeinit/mrpt_plugins/snapshots.h>
 #include <freeinit/report/plot.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CArrow.h>
@@ -22,7 +22,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 using mrpt::img::TColor;
@@ -94,7 +94,7 @@ Range quantileRange(std::vector<float> v, double q) {
 const TColor kRejected(235, 40, 40);
 const TColor kTrajectory(255, 150, 20);
 const TColor kStart(255, 255, 255);
-const TColor kGravity(120, 235, 255);
+const TColor kGravityColour(120, 235, 255);
 
 mrpt::img::TColorf colorf(const TColor& c) {
   return mrpt::img::TColorf(static_cast<float>(c.R) / 255.f, static_cast<float>(c.G) / 255.f,
@@ -189,7 +189,7 @@ void buildScene(mrpt::opengl::COpenGLScene& scene, const InitResult& result, con
                               static_cast<float>(s.p_w.z()), static_cast<float>(tip.x()),
                               static_cast<float>(tip.y()), static_cast<float>(tip.z()), 0.25f,
                               0.06f * marker, 0.18f * marker);
-  arrow->setColor(colorf(kGravity));
+  arrow->setColor(colorf(kGravityColour));
   scene.insert(arrow);
   auto vp = scene.getViewport();
   vp->setCustomBackgroundColor(mrpt::img::TColorf(0.08f, 0.08f, 0.12f));
@@ -326,7 +326,7 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   x += 175;
   swatch(img, x, y, kStart, "start");
   x += 70;
-  swatch(img, x, y, kGravity, "gravity");
+  swatch(img, x, y, kGravityColour, "gravity");
   img.textOut(12, header + 6, "overview (grid 5 m)", white);
   img.textOut(left_w + 10, header + 6, "close-up of the trajectory (grid 0.1 m)", white);
   const int dy = header + closeup_h + 6;
@@ -480,9 +480,9 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
   saveAtomically(img, png);
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 
 void renderTopViewPanels(const std::string& png, const std::string& title,
                          const std::vector<TopViewPanel>& panels, int width, int height) {
@@ -558,4 +558,4 @@ void renderTopViewPanels(const std::string& png, const std::string& title,
   saveAtomically(img, png);
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

@@ -1,5 +1,5 @@
 #include <freeinit/atomic_file.h>
-#include <freeinit/mrpt/start_table.h>
+#include <freeinit/mrpt_plugins/start_table.h>
 #include <freeinit/report/plot.h>
 #include <freeinit/rotation.h>
 
@@ -11,7 +11,7 @@
 #include <sstream>
 #include <stdexcept>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
@@ -211,4 +211,4 @@ void renderStartPlot(const std::string& png, const std::vector<StartRow>& rows, 
   report::savePng(png, report::tile(panels, 2));
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

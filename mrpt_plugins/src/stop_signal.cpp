@@ -1,9 +1,9 @@
-#include <freeinit/mrpt/stop_signal.h>
+#include <freeinit/mrpt_plugins/stop_signal.h>
 
 #include <atomic>
 #include <csignal>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 
 // Written by the handler: a lock-free atomic int is async-signal-safe.
@@ -54,4 +54,4 @@ std::string signalName(int signal) {
   }
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

@@ -1,11 +1,11 @@
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/stream_conversions.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/stream_conversions.h>
 #include <mrpt/system/datetime.h>
 
 #include <stdexcept>
 #include <string>
 
-namespace freeinit::mrpt_glue {
+namespace freeinit::mrpt_plugins {
 namespace {
 // mrpt::Clock counts 100 ns ticks from 1601-01-01; this many ticks lie before the UNIX epoch.
 constexpr std::int64_t kUnixEpochTicks = 116444736000000000LL;
@@ -70,4 +70,4 @@ mrpt::obs::CObservation::Ptr toObservation(const net::StreamEvent& e, const Stre
   return nullptr;
 }
 
-}  // namespace freeinit::mrpt_glue
+}  // namespace freeinit::mrpt_plugins

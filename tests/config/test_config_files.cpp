@@ -4,14 +4,14 @@
 // it shows a default (a line ";key = value") that default is the code's.
 #include <freeinit/config_section.h>
 #include <freeinit/ini_file.h>
-#include <freeinit/mrpt/CDopplerLidarImuUdp.h>
-#include <freeinit/mrpt/app_config.h>
-#include <freeinit/mrpt/icp_slam_bridge.h>
+#include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/doppler_lidar_imu_udp.h>
+#include <freeinit/mrpt_plugins/icp_slam_bridge.h>
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #ifdef FREEINIT_WITH_BAG_IMPORT
-#include <freeinit/ros1/BagImportApp.h>
+#include <freeinit/ros1/bag_import_app.h>
 #endif
 
 #include <cmath>
@@ -24,7 +24,7 @@
 #include <sstream>
 
 using namespace freeinit;
-using namespace freeinit::mrpt_glue;
+using namespace freeinit::mrpt_plugins;
 using config::ConfigError;
 namespace fs = std::filesystem;
 

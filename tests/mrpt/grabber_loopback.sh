@@ -12,7 +12,7 @@ cd "$src"
   sleep 1.5; echo ) | BUILD_DIR=$build ./scripts/grab_live.sh - "$out" "$port" > "$out/grab.log" 2>&1 ||
   { cat "$out/grab.log"; exit 1; }
 rawlog=$(tail -1 "$out/grab.log")
-info=$(rawlog-edit -p "$build/mrpt_plugins/libfreeinit_mrpt.so" --info -i "$rawlog" 2>&1)
+info=$(rawlog-edit -p "$build/mrpt_plugins/libfreeinit_mrpt_plugins.so" --info -i "$rawlog" 2>&1)
 echo "$info" | grep -E "IMU|LIDAR"
 echo "$info" | grep -qE "LIDAR */ *15 " || { echo "expected the 15 clouds"; exit 1; }
 imu=$(echo "$info" | sed -nE 's/.* IMU *\/ *([0-9]+) .*/\1/p')

@@ -22,7 +22,7 @@ done
 
 plugin=$("$p/bin/freeinit" --plugin-path)
 case "$plugin" in
-  "$p"/*/freeinit/libfreeinit_mrpt.so) ;;
+  "$p"/*/freeinit/libfreeinit_mrpt_plugins.so) ;;
   *) fail "freeinit --plugin-path printed '$plugin', not the plugin in $p" ;;
 esac
 [ -f "$plugin" ] || fail "$plugin does not exist"

@@ -1,10 +1,10 @@
 // MRPT icp-slam started plain, seeded by Free-Init, and fed with Doppler-inertial odometry, on
 // moving starts of the wheeled and vehicular presets (street and tunnel), against the simulator's
 // ground truth; and the export that the stock icp-slam app runs on.
-#include <freeinit/mrpt/IcpSlamApp.h>
-#include <freeinit/mrpt/SimApp.h>
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/icp_slam_app.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/sim_app.h>
 #include <gtest/gtest.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -18,7 +18,7 @@
 #include <sstream>
 
 using namespace freeinit;
-using namespace freeinit::mrpt_glue;
+using namespace freeinit::mrpt_plugins;
 namespace fs = std::filesystem;
 
 namespace {
@@ -116,7 +116,7 @@ TEST_P(IcpSlamMovingStart, FedWithOdometryBeatsPlainByAClearMargin) {
 // in the tunnel, where ICP has no grip along the axis and its matches at the end of the mapped
 // walls pull it back (measured: ratio 3.9 on tunnel_wheeled, 20-120 elsewhere). Margin asserted:
 // at most half the plain run's ATE. (After that second icp-slam has no motion prior any more and
-// falls behind like the plain run: README.)
+// falls behind like the plain run: docs/icp_slam.md.)
 TEST_P(IcpSlamMovingStart, SeedCarriesTheFirstSecond) {
   const PresetRun& r = run(GetParam());
   ASSERT_EQ(r.rc, 0) << r.log;

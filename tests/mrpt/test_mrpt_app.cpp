@@ -3,16 +3,16 @@
 // reads only what the window needs, initializes anywhere (--start, --every, --starts) with the
 // seek index, and tells bad records inside the window (errors) from those outside (warnings).
 #include <freeinit/free_init.h>
-#include <freeinit/mrpt/CommandLine.h>
-#include <freeinit/mrpt/FreeInitApp.h>
-#include <freeinit/mrpt/RawlogWriter.h>
-#include <freeinit/mrpt/SimApp.h>
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/file_kind.h>
-#include <freeinit/mrpt/input_validator.h>
-#include <freeinit/mrpt/output_writers.h>
-#include <freeinit/mrpt/plugin_path.h>
-#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/command_line.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/file_kind.h>
+#include <freeinit/mrpt_plugins/free_init_app.h>
+#include <freeinit/mrpt_plugins/input_validator.h>
+#include <freeinit/mrpt_plugins/output_writers.h>
+#include <freeinit/mrpt_plugins/plugin_path.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/rawlog_writer.h>
+#include <freeinit/mrpt_plugins/sim_app.h>
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
@@ -31,7 +31,7 @@
 #include <stdexcept>
 
 using namespace freeinit;
-using namespace freeinit::mrpt_glue;
+using namespace freeinit::mrpt_plugins;
 namespace fs = std::filesystem;
 
 namespace {

@@ -2,12 +2,12 @@
 // (read_budget.h, with the program's allocation guard linked in as in the apps), the point count
 // of a Doppler cloud, the IMU presence flags, and the INI MRPT parses for freeinit-icp-slam.
 // Each error is one line naming the file and the record (or key).
-#include <freeinit/mrpt/IcpSlamApp.h>
-#include <freeinit/mrpt/RawlogWriter.h>
-#include <freeinit/mrpt/app_config.h>
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/rawlog_reader.h>
-#include <freeinit/mrpt/read_budget.h>
+#include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/icp_slam_app.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/rawlog_writer.h>
+#include <freeinit/mrpt_plugins/read_budget.h>
 #include <gtest/gtest.h>
 #include <mrpt/core/exceptions.h>
 #include <mrpt/io/CMemoryStream.h>
@@ -24,7 +24,7 @@
 #include <vector>
 
 using namespace freeinit;
-using namespace freeinit::mrpt_glue;
+using namespace freeinit::mrpt_plugins;
 namespace fs = std::filesystem;
 
 namespace {

@@ -2,15 +2,15 @@
 // app and to the rawlog-grabber driver. What is recorded must be what was sent, object by object;
 // the live initial state must equal the offline app's on the recording; faults must be counted
 // and survived.
-#include <freeinit/mrpt/CDopplerLidarImuUdp.h>
-#include <freeinit/mrpt/FreeInitApp.h>
-#include <freeinit/mrpt/FreeInitOnlineApp.h>
-#include <freeinit/mrpt/RawlogWriter.h>
-#include <freeinit/mrpt/SimApp.h>
-#include <freeinit/mrpt/StreamApp.h>
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/rawlog_reader.h>
-#include <freeinit/mrpt/stream_conversions.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/doppler_lidar_imu_udp.h>
+#include <freeinit/mrpt_plugins/free_init_app.h>
+#include <freeinit/mrpt_plugins/free_init_online_app.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/rawlog_writer.h>
+#include <freeinit/mrpt_plugins/sim_app.h>
+#include <freeinit/mrpt_plugins/stream_app.h>
+#include <freeinit/mrpt_plugins/stream_conversions.h>
 #include <freeinit/net/stream_source.h>
 #include <freeinit/net/udp_socket.h>
 #include <gtest/gtest.h>
@@ -25,7 +25,7 @@
 #include <thread>
 
 using namespace freeinit;
-using namespace freeinit::mrpt_glue;
+using namespace freeinit::mrpt_plugins;
 namespace fs = std::filesystem;
 
 namespace {

@@ -3,12 +3,12 @@
 // rawlog freeinit-sim writes for the same scenario; Free-Init on the import must meet the same
 // accuracy. Then every kind of bad bag: each must fail with a clear error or be counted, never
 // import silently wrong.
-#include <freeinit/mrpt/CPointsMapDoppler.h>
-#include <freeinit/mrpt/FreeInitApp.h>
-#include <freeinit/mrpt/SimApp.h>
-#include <freeinit/mrpt/conversions.h>
-#include <freeinit/mrpt/rawlog_reader.h>
-#include <freeinit/ros1/BagImportApp.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/free_init_app.h>
+#include <freeinit/mrpt_plugins/points_map_doppler.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/sim_app.h>
+#include <freeinit/ros1/bag_import_app.h>
 #include <freeinit/ros1/bag_writer.h>
 #include <freeinit/ros1/cloud_codec.h>
 #include <freeinit/sim/simulator.h>
@@ -25,7 +25,7 @@
 #include <sstream>
 
 using namespace freeinit;
-using namespace freeinit::mrpt_glue;
+using namespace freeinit::mrpt_plugins;
 namespace fs = std::filesystem;
 
 namespace {

@@ -2,8 +2,8 @@
 // output, a full disk, live recordings across runs, a recording cut short, and the messages of
 // bad inputs. Each case asserts the exit status, the message and what is left on disk.
 #include <fcntl.h>
-#include <freeinit/mrpt/RawlogWriter.h>
-#include <freeinit/mrpt/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/rawlog_writer.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
 #include <signal.h>
@@ -310,7 +310,7 @@ int listeningPort(Process& online) {
 }
 
 std::size_t readableRecords(const std::string& rawlog) {
-  return freeinit::mrpt_glue::readRawlog(rawlog).size();
+  return freeinit::mrpt_plugins::readRawlog(rawlog).size();
 }
 
 // Stopping freeinit-online with Ctrl-C or SIGTERM (the normal way to stop a live tool) while the
@@ -482,18 +482,18 @@ TEST(Messages, ARawlogEmptiedByAStockToolHintsAtThePlugin) {
   const fs::path empty = d / "empty.rawlog";
   {
     // rawlog-edit without -p, keeping the clouds only: an empty gzip stream.
-    freeinit::mrpt_glue::RawlogWriter w(empty.string());
+    freeinit::mrpt_plugins::RawlogWriter w(empty.string());
     w.commit();
   }
   auto r = runFreeinit(d, kIni, empty.string());
   EXPECT_EQ(r.code, 1);
   EXPECT_EQ(lineCount(r.err), 1u) << r.err;
   EXPECT_CONTAINS(r.err, empty.string() + ": no rawlog record in the file");
-  EXPECT_CONTAINS(r.err, "-p libfreeinit_mrpt.so");
+  EXPECT_CONTAINS(r.err, "-p libfreeinit_mrpt_plugins.so");
 
   const fs::path imu_only = d / "imu_only.rawlog";
   {
-    freeinit::mrpt_glue::RawlogWriter w(imu_only.string());
+    freeinit::mrpt_plugins::RawlogWriter w(imu_only.string());
     for (int i = 0; i < 301; ++i) {
       freeinit::ImuSample s;
       s.t = 1700000000.0 + 0.005 * i;
@@ -508,7 +508,7 @@ TEST(Messages, ARawlogEmptiedByAStockToolHintsAtThePlugin) {
   EXPECT_CONTAINS(r.err, imu_only.string() +
                              ": no CObservationPointCloud with sensorLabel 'LIDAR' ([input] "
                              "lidar_label); the input holds only 301 IMU samples 'IMU'");
-  EXPECT_CONTAINS(r.err, "-p libfreeinit_mrpt.so");
+  EXPECT_CONTAINS(r.err, "-p libfreeinit_mrpt_plugins.so");
 }
 
 // Stamps 200 ns apart print differently: one IMU stamp of the sample moved just before the
@@ -517,8 +517,8 @@ TEST(Messages, StampsHaveTheDigitsToDiffer) {
   const fs::path d = freshDir("msg_stamps");
   const fs::path f = d / "back.rawlog";
   {
-    auto records = freeinit::mrpt_glue::readRawlog(kSample);
-    freeinit::mrpt_glue::RawlogWriter w(f.string());
+    auto records = freeinit::mrpt_plugins::readRawlog(kSample);
+    freeinit::mrpt_plugins::RawlogWriter w(f.string());
     std::optional<mrpt::Clock::time_point> previous_imu;
     int imu = 0;
     for (auto& r : records) {

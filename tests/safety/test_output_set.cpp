@@ -1,8 +1,8 @@
 // The output set (output_set.h): a run's outputs appear whole or not at all, replace the earlier
 // run's as a whole, never touch what is not ours, never delete a recording, and two sets on one
 // folder exclude each other.
-#include <freeinit/mrpt/output_set.h>
-#include <freeinit/mrpt/stop_signal.h>
+#include <freeinit/mrpt_plugins/output_set.h>
+#include <freeinit/mrpt_plugins/stop_signal.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -15,11 +15,11 @@
 namespace {
 
 namespace fs = std::filesystem;
-using freeinit::mrpt_glue::folderSetOptions;
-using freeinit::mrpt_glue::OutputBusy;
-using freeinit::mrpt_glue::OutputError;
-using freeinit::mrpt_glue::OutputSet;
-using freeinit::mrpt_glue::OutputSetOptions;
+using freeinit::mrpt_plugins::folderSetOptions;
+using freeinit::mrpt_plugins::OutputBusy;
+using freeinit::mrpt_plugins::OutputError;
+using freeinit::mrpt_plugins::OutputSet;
+using freeinit::mrpt_plugins::OutputSetOptions;
 
 fs::path freshDir(const std::string& name) {
   const fs::path d = fs::current_path() / "output_set" / name;
@@ -262,9 +262,9 @@ TEST(OutputSet, AStopRequestStopsTheNextWrite) {
   const fs::path d = freshDir("stop");
   std::ostringstream log;
   OutputSet set(d.string(), "", folderSetOptions(), log);
-  freeinit::mrpt_glue::requestStop(SIGTERM);
-  EXPECT_THROW(writeText(set, "initial_state.ini", "x"), freeinit::mrpt_glue::Interrupted);
-  freeinit::mrpt_glue::clearStopRequest();
+  freeinit::mrpt_plugins::requestStop(SIGTERM);
+  EXPECT_THROW(writeText(set, "initial_state.ini", "x"), freeinit::mrpt_plugins::Interrupted);
+  freeinit::mrpt_plugins::clearStopRequest();
 }
 
 TEST(OutputSet, RefusesAFileAsTheFolder) {

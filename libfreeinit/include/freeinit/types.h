@@ -1,4 +1,5 @@
-// Free-Init core types. Conventions (see README, "Frames and signs"):
+// Free-Init core types. Conventions (see docs/architecture.md, "Frames, signs and the output
+// contract"):
 //   w world, b body (= IMU), l LiDAR. R_ab rotates b-vectors into a; p_ab is the position of b's
 //   origin in a. Doppler is the range rate: for a static point, doppler = -d_l^T v_l (negative when
 //   approaching), d_l the unit direction from the LiDAR to the point in frame l.

@@ -7,8 +7,8 @@
 // interval, per-sample standard deviations gyro_sigma, accel_sigma). The Doppler of a static
 // point of unit direction d_l (LiDAR frame) at time t is
 //   y = -d_l^T R_bl^T (v_b + omega x p_bl) + noise,   v_b = R_wb^T v_w
-// with the true extrinsics R_bl, p_bl (the Doppler sign: README, "Frames, signs and the output
-// contract").
+// with the true extrinsics R_bl, p_bl (the Doppler sign: docs/architecture.md, "Frames, signs and
+// the output contract").
 //
 // Error state (right attitude perturbation, as InitialState): R = R_true Exp(dtheta),
 // v_w = v_w,true + dv, b = b_true + db, so x = [dtheta, dv, db_g, db_a] (12) and over an interval

@@ -1,0 +1,98 @@
+// The whole configuration of the Free-Init MRPT application, loaded from an INI file: one
+// [section] per core parameter struct plus [input], [extrinsics] and [output]. Every section is
+// declared once (freeinit/config_section.h); the file is read by the project's strict parser
+// (freeinit/ini_file.h), not by MRPT's.
+#pragma once
+
+#include <freeinit/config.h>
+
+#include <iosfwd>
+#include <string>
+#include <vector>
+
+namespace freeinit::mrpt_plugins {
+
+/// How observations are picked from the rawlog. INI section [input].
+struct InputParams {
+  std::string imu_label = "IMU";      ///< sensorLabel of the CObservationIMU to use ("" = any)
+  std::string lidar_label = "LIDAR";  ///< sensorLabel of the CObservationPointCloud ("" = any)
+  bool imu_accel_in_g = false;        ///< accelerations are in g: multiply by 9.81
+  double min_imu_rate = 50.0;         ///< [Hz] slower IMU streams are rejected
+  bool drop_invalid_points = false;   ///< drop NaN/inf points (reported) instead of failing
+  /// [m/s] the sensor's Doppler bin (0: continuous). With bins, a cloud reads zero on every
+  /// point whenever no return's range rate exceeds half a bin, at rest and moving slowly alike;
+  /// continuous Doppler is exactly zero everywhere only at rest (checked against the IMU)
+  double doppler_resolution = 0;
+  /// [MB] most one rawlog record may allocate while it is read (read_budget.h): a record
+  /// claiming more (a corrupt length or count) is refused before the allocation
+  double max_record_mb = 256;
+};
+
+/// Where the LiDAR-IMU extrinsics come from. INI section [extrinsics] (with R_bl, p_bl).
+struct ExtrinsicsParams {
+  /// Take R_bl, p_bl from the observations' sensorPose (the LiDAR pose relative to the IMU
+  /// pose, as freeinit-sim and freeinit-import-bag write it), the default; false: from the INI
+  /// keys R_bl (or roll_deg, pitch_deg, yaw_deg) and p_bl, which are refused otherwise.
+  bool from_sensor_pose = true;
+  bool given_in_ini = false;  ///< set by the loader: the INI gave R_bl, roll/pitch/yaw or p_bl
+};
+
+/// What the app writes to its output folder. INI section [output].
+struct OutputParams {
+  bool simplemap = true;      ///< static_map.simplemap (stock MRPT classes only)
+  bool ply = true;            ///< static_map.ply
+  bool trajectory = true;     ///< trajectory_tum.txt
+  bool velocities = true;     ///< velocimeter.csv
+  bool snapshots = true;      ///< PNGs rendered offscreen
+  int snapshot_width = 1280;  ///< [px]
+  int snapshot_height = 800;  ///< [px]
+};
+
+struct AppConfig {
+  FreeInitConfig core;
+  InputParams input;
+  ExtrinsicsParams extrinsics;
+  OutputParams output;
+};
+
+/// The LiDAR pose in the body frame as an [extrinsics] section writes it: R_bl (row-major) or
+/// roll_deg, pitch_deg, yaw_deg (R_bl = Rz(yaw) Ry(pitch) Rx(roll), as mrpt::poses::CPose3D),
+/// and p_bl. Shared by the app and the bag importer.
+struct LidarPoseParams {
+  Mat3 R_bl = Mat3::Identity();  ///< [-]
+  double roll_deg = 0, pitch_deg = 0, yaw_deg = 0;
+  Vec3 p_bl = Vec3::Zero();  ///< [m]
+};
+/// [extrinsics] as the app reads it: from_sensor_pose, or the pose keys.
+struct ExtrinsicsIniParams {
+  bool from_sensor_pose = ExtrinsicsParams{}.from_sensor_pose;
+  LidarPoseParams pose;
+};
+
+/// The sections' declarations.
+const config::Section<InputParams>& inputSection();
+const config::Section<OutputParams>& outputSection();
+const config::Section<ExtrinsicsIniParams>& extrinsicsSection();
+/// [extrinsics] as the bag importer reads it: the pose keys only (a bag has no sensor poses).
+const config::Section<LidarPoseParams>& extrinsicsPoseSection();
+/// Every section of the app's INI file, in the order of the echo.
+std::vector<const config::SectionBase*> appSections();
+
+/// The extrinsics an [extrinsics] section's pose keys give: R_bl, or the rotation of the angles
+/// when one of them is given (`keys` tells which were), and p_bl. Throws config::ConfigError
+/// when both R_bl and an angle are given.
+Extrinsics extrinsicsOf(const LidarPoseParams& pose, const config::Checker& keys);
+/// The first pose key given (R_bl, roll_deg, pitch_deg, yaw_deg, p_bl), or "".
+std::string firstPoseKey(const config::Checker& keys);
+
+/// Loads and validates an INI file. Missing keys keep their defaults; unknown sections, unknown
+/// and duplicated keys, malformed or out-of-range values throw config::ConfigError (a
+/// std::invalid_argument) naming the file, the line, the section and the key.
+AppConfig loadAppConfig(const std::string& ini_file);
+AppConfig loadAppConfig(const config::IniFile& ini);
+/// Same from INI text (tests); `source` names it in messages.
+AppConfig loadAppConfigFromText(const std::string& ini_text, const std::string& source);
+/// Writes the effective configuration as a documented INI (units in comments) that loads back.
+void dumpAppConfig(const AppConfig& config, std::ostream& out);
+
+}  // namespace freeinit::mrpt_plugins

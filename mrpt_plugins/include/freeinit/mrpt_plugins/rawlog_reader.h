@@ -1,0 +1,116 @@
+// Reading rawlogs record by record without MRPT's silent truncation: stock tools stop quietly at
+// the first object whose class is not registered (or at a cut-off file) and still succeed. This
+// reader streams the file (gzip or plain), deserializes one top-level record at a time and
+// requires the data to end exactly at the end of a record and of the gzip stream; anything else
+// is an error naming the file and the record index. Memory is that of one record, and a record
+// may allocate no more than its budget (setMaxRecordBytes, read_budget.h): what the rest of the
+// file can hold, at most 256 MB.
+//
+// Seeking: rawlog_index.h. A reader loads the rawlog's index when there is one, extends it as it
+// reads past what it covers, and saveIndex() writes it for rawlogs large enough to need it.
+#pragma once
+
+#include <freeinit/mrpt_plugins/rawlog_index.h>
+#include <mrpt/obs/CObservation.h>
+#include <mrpt/serialization/CSerializable.h>
+
+#include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace freeinit::mrpt_plugins {
+
+/// A bad input file: the message names the file, the record index and what is wrong.
+class InputError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
+/// Where a reader keeps a rawlog's seek index and when it writes one.
+struct RawlogIndexPolicy {
+  bool use = true;                           ///< read an index, write a new or longer one
+  std::uint64_t min_file_bytes = 64u << 20;  ///< [bytes] only for rawlogs at least this large
+  std::string cache_dir;  ///< when the rawlog's folder is not writable ("" = the user's cache)
+  std::uint64_t spacing = RawlogIndex::kDefaultSpacing;  ///< [bytes] of a new index
+};
+
+/// One top-level record of a rawlog.
+struct RawlogObject {
+  std::size_t index = 0;    ///< record number, from 0
+  std::optional<double> t;  ///< [UNIX s] its timestamp (a sensory frame: its latest), if any
+  mrpt::serialization::CSerializable::Ptr object;
+};
+
+class RawlogReader {
+ public:
+  /// Opens the rawlog (registering the classes first) and loads its index if it has a valid one.
+  /// Throws InputError if the file is missing, empty or cannot be opened.
+  explicit RawlogReader(std::string path, RawlogIndexPolicy policy = {});
+  ~RawlogReader();
+  RawlogReader(const RawlogReader&) = delete;
+  RawlogReader& operator=(const RawlogReader&) = delete;
+
+  const std::string& path() const;
+
+  /// The next record; false at the end of the data, which must be the end of a record and of
+  /// the gzip stream. Throws InputError naming the file and the record on a truncated file,
+  /// corrupt data or a class that is not registered.
+  bool next(RawlogObject& out);
+
+  /// Positions the reader so that next() returns the first record from the current one on whose
+  /// timestamp is >= t [UNIX s]. Records the index covers are skipped without decompressing more
+  /// than the index's spacing or deserializing anything; beyond it they are read and dropped.
+  /// False if no later record has such a timestamp (the reader is then at the end).
+  bool seekToTime(double t);
+
+  /// Timestamp of the first record that has one (read if the index does not know it).
+  std::optional<double> firstTime();
+
+  std::uint64_t fileBytes() const;
+  std::uint64_t bytesRead() const;  ///< [bytes] of the file consumed so far (progress)
+  std::size_t recordsDeserialized() const;
+  std::size_t nextRecord() const;  ///< number of the record next() returns
+  bool atEnd() const;              ///< next() returned false: the whole file was read
+  bool indexLoaded() const;        ///< a valid index was found when opening
+  const RawlogIndex& index() const;
+
+  /// Most one record may allocate while it is deserialized (read_budget.h; 256 MB by default).
+  /// The budget of a record is also bounded by what the rest of the file can hold; a record
+  /// over it is an error naming the record ("a corrupt length or count").
+  void setMaxRecordBytes(std::size_t bytes);
+
+  /// Salvage mode, for a file cut short (a power loss while recording): next() returns false at
+  /// the first record that cannot be read whole (the file ends inside it, or the data are
+  /// corrupt from there on) instead of throwing; salvageStop() then says where and why.
+  void setSalvage(bool on);
+  /// In salvage mode, after next() returned false on a bad tail: "<file>: read up to record
+  /// N-1, the last whole one; record N (byte B of the decompressed stream, byte C of the file):
+  /// why" ("" when the file ended cleanly).
+  const std::string& salvageStop() const;
+
+  /// Writes the index if it grew and the policy allows it, beside the rawlog or else in the
+  /// cache folder. Returns the path written, or "" (with the reason in `why` if it failed).
+  std::string saveIndex(std::string* why = nullptr);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+/// One observation and the index of the top-level rawlog record it came from.
+struct RawlogRecord {
+  std::size_t index = 0;
+  mrpt::obs::CObservation::Ptr obs;
+};
+
+/// Every observation of a rawlog in either format (observations only, or CSensoryFrame /
+/// CActionCollection: sensory frames are flattened, actions skipped), through RawlogReader.
+/// For tools and tests; the apps read through the ingest path (ingest.h). Throws InputError as
+/// RawlogReader does, and for a record of a class that is neither.
+std::vector<RawlogRecord> readRawlog(const std::string& path);
+
+}  // namespace freeinit::mrpt_plugins

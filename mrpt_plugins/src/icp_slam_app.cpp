@@ -1,0 +1,423 @@
+#include <freeinit/doppler_inertial_odometry.h>
+#include <freeinit/free_init.h>
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/icp_slam_app.h>
+#include <freeinit/mrpt_plugins/input_validator.h>
+#include <freeinit/mrpt_plugins/map_export.h>
+#include <freeinit/mrpt_plugins/output_set.h>
+#include <freeinit/mrpt_plugins/output_writers.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/mrpt_plugins/snapshots.h>
+#include <freeinit/mrpt_plugins/stop_signal.h>
+#include <mrpt/config/CConfigFileMemory.h>
+#include <mrpt/io/vector_loadsave.h>
+#include <mrpt/maps/CPointsMap.h>
+#include <mrpt/obs/CObservationOdometry.h>
+#include <mrpt/poses/CPoint2D.h>
+#include <mrpt/slam/CMetricMapBuilderICP.h>
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <iomanip>
+#include <ostream>
+#include <sstream>
+
+namespace freeinit::mrpt_plugins {
+namespace {
+
+// The files this app writes: in <out>, in <out>/<mode>/ and in the export folder (<mode>.*).
+constexpr const char* kSeedIniFile = "icp_slam_seed.ini";
+constexpr const char* kOdometryAloneFile = "odometry_alone_tum.txt";
+constexpr const char* kResultsFile = "results.txt";
+constexpr const char* kPictureFile = "trajectories.png";
+constexpr const char* kMapFile = "_finalmap_.simplemap";
+constexpr const char* kStepLogFile = "log_estimated_path.txt";
+constexpr const char* kPathFile = "estimated_path_tum.txt";
+constexpr const char* kErrorsFile = "errors_wrt_gt.ini";
+
+const char* kMappingSection = "MappingApplication";
+
+/// Whether one odometry reading at the seed pose would stop icp-slam from ever correcting: after
+/// an odometry reading, CMetricMapBuilderICP 2.5.8 skips ICP until the odometry shows
+/// min(localization, insertion) distance or angle since the last correction (at the origin, at
+/// first), and a lone reading never shows more than the seed pose itself.
+bool seedReadingBlocksIcp(const IcpSeed& seed,
+                          const mrpt::slam::CMetricMapBuilderICP::TConfigParams& o) {
+  const auto& m = seed.pose.mean;
+  return std::hypot(m.x(), m.y()) < std::min(o.localizationLinDistance, o.insertionLinDistance) &&
+         std::abs(m.phi()) < std::min(o.localizationAngDistance, o.insertionAngDistance);
+}
+
+/// The observations icp-slam processes in a mode, in time order, after the static map. Seeded:
+/// one odometry reading with the seed pose in w and its velocity (icp-slam extrapolates each
+/// scan's first guess from it, for up to 1 s) unless `seed_reading` is false, then the scans
+/// after the state time. Odometry: a reading at the state time and one at every scan.
+std::vector<mrpt::obs::CObservation::Ptr> icpSlamObservations(
+    IcpSeedMode mode, const std::vector<mrpt::obs::CObservation2DRangeScan::Ptr>& scans,
+    const IcpSeed* seed, const std::vector<OdometrySample>& odometry, bool seed_reading) {
+  std::vector<mrpt::obs::CObservation::Ptr> out;
+  if (mode == IcpSeedMode::Plain) {
+    out.assign(scans.begin(), scans.end());
+    return out;
+  }
+  const double t0 = seed->timestamp;
+  if (mode == IcpSeedMode::Odometry) {
+    out.push_back(odometryAt(odometry, t0, mrpt::math::TPose2D()));
+  } else if (seed_reading) {
+    auto first = mrpt::obs::CObservationOdometry::Create();
+    first->sensorLabel = "FREEINIT_ODOMETRY";
+    first->timestamp = fromUnix(t0);
+    first->odometry = seed->pose.mean;
+    first->hasVelocities = true;
+    first->velocityLocal = seed->velocity_local;
+    out.push_back(first);
+  }
+  for (const auto& s : scans) {
+    const double t = toUnix(s->timestamp);
+    if (t <= t0) continue;
+    if (mode == IcpSeedMode::Odometry) {
+      if (t > odometry.back().t) break;  // the odometry ends with the IMU data
+      out.push_back(odometryAt(odometry, t, mrpt::math::TPose2D()));
+    }
+    out.push_back(s);
+  }
+  return out;
+}
+
+struct BuilderOutput {
+  std::vector<PlanarPathSample> path;
+  mrpt::maps::CSimpleMap map;
+  std::vector<float> map_x, map_y;
+  std::string step_log;  ///< the stock app's log_estimated_path.txt: "step x y yaw"
+};
+
+/// CMetricMapBuilderICP configured exactly as the stock app configures it, initialized with the
+/// seed's map (if any) and the pose prior (if given).
+BuilderOutput runBuilder(const mrpt::config::CConfigFileBase& ini, const IcpSeed* seed,
+                         const mrpt::poses::CPosePDFGaussian* prior,
+                         const std::vector<mrpt::obs::CObservation::Ptr>& observations) {
+  mrpt::slam::CMetricMapBuilderICP builder;
+  builder.setVerbosityLevel(mrpt::system::LVL_ERROR);
+  builder.ICP_options.loadFromConfigFile(ini, kMappingSection);
+  builder.ICP_params.loadFromConfigFile(ini, "ICP");
+  builder.initialize(seed ? seed->map : mrpt::maps::CSimpleMap(), prior);
+  builder.options.alwaysInsertByClass.fromString(
+      ini.read_string(kMappingSection, "alwaysInsertByClass", ""));
+  BuilderOutput out;
+  std::ostringstream steps;
+  int step = 0;
+  for (const auto& obs : observations) {
+    throwIfStopRequested();
+    builder.processObservation(obs);
+    const auto pose = builder.getCurrentPoseEstimation()->getMeanVal();
+    steps << step++ << " " << std::fixed << std::setprecision(6) << pose.x() << " " << pose.y()
+          << " " << pose.yaw() << "\n";
+    if (IS_CLASS(*obs, mrpt::obs::CObservation2DRangeScan))
+      out.path.push_back(
+          {toUnix(obs->timestamp), mrpt::math::TPose2D(pose.x(), pose.y(), pose.yaw())});
+  }
+  out.step_log = steps.str();
+  builder.getCurrentlyBuiltMap(out.map);
+  if (auto pts = builder.getCurrentlyBuiltMetricMap()->mapByClass<mrpt::maps::CPointsMap>())
+    pts->getAllPoints(out.map_x, out.map_y);
+  return out;
+}
+
+void writeTumPlanar(const std::string& path, const std::vector<PlanarPathSample>& samples) {
+  writeFileAtomically(path, [&](std::ostream& o) {
+    o << "# icp-slam path: timestamp x y z qx qy qz qw (robot = body, planar)\n"
+      << std::fixed << std::setprecision(6);
+    for (const auto& s : samples)
+      o << s.t << " " << s.pose.x << " " << s.pose.y << " 0 0 0 " << std::sin(0.5 * s.pose.phi)
+        << " " << std::cos(0.5 * s.pose.phi) << "\n";
+  });
+}
+
+/// The prior as handed over, with its covariance (CMetricMapBuilderICP 2.5.8 keeps the mean only).
+void writeSeedIni(const std::string& path, const IcpSeed& seed) {
+  writeFileAtomically(path, [&](std::ostream& o) {
+    const auto& m = seed.pose.mean;
+    o << "; Free-Init's initial state as icp-slam's prior: SE(2) pose of the body in w, its\n"
+         "; covariance (x, y, yaw marginal of the 18x18 state covariance) and the velocity\n"
+         "[icp_slam_seed]\n"
+      << std::setprecision(17) << "timestamp = " << seed.timestamp << "   ; [s] UNIX\n"
+      << std::setprecision(9) << "pose = " << m.x() << " " << m.y() << " " << m.phi()
+      << "   ; x [m], y [m], yaw [rad]\ncov = ";
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) o << seed.pose.cov(r, c) << (r * 3 + c < 8 ? " " : "");
+    o << "   ; 3x3 row-major\nvelocity_local = " << seed.velocity_local.vx << " "
+      << seed.velocity_local.vy << " " << seed.velocity_local.omega
+      << "   ; vx [m/s], vy [m/s], omega [rad/s] in the robot frame\nstatic_map_points = "
+      << seed.map_points << "\n";
+  });
+}
+
+/// One panel per run: its map and path in the truth frame, anchored where the comparison starts.
+void renderRuns(const std::string& png, const std::string& title,
+                const std::vector<IcpSlamRun>& runs, const std::vector<TruthSample>& truth,
+                double t_state, int width, int height) {
+  std::vector<TopViewPanel> panels;
+  for (const auto& r : runs) {
+    // With the truth, everything in its frame, anchored where the comparison starts (the first
+    // scan after the state time): the picture shows how each run leaves the truth from a common
+    // start. (The ATE uses the best alignment over the whole path instead.) Without it, in w.
+    mrpt::poses::CPose2D A;
+    for (const auto& ps : r.path) {
+      const auto gt = ps.t >= t_state ? truthAt(truth, ps.t) : std::nullopt;
+      if (!gt) continue;
+      A = mrpt::poses::CPose2D(planarPose(gt->q_wb, gt->p_w)) +
+          (mrpt::poses::CPose2D() - mrpt::poses::CPose2D(ps.pose));
+      break;
+    }
+    TopViewPanel p;
+    std::ostringstream t;
+    t << "icp-slam " << toString(r.mode) << ":  " << r.keyframes << " keyframes";
+    if (r.errors)
+      t << ", ATE " << std::fixed << std::setprecision(2) << r.errors->ate_rmse << " m, end-point "
+        << r.errors->end_point << " m";
+    p.title = t.str();
+    for (std::size_t k = 0; k < r.map_x.size(); ++k) {
+      const auto q = A + mrpt::poses::CPoint2D(r.map_x[k], r.map_y[k]);
+      p.map_x.push_back(static_cast<float>(q.x()));
+      p.map_y.push_back(static_cast<float>(q.y()));
+    }
+    for (const auto& ps : r.path) {
+      const auto q = A + mrpt::poses::CPoint2D(ps.pose.x, ps.pose.y);
+      p.path.emplace_back(q.x(), q.y(), 0.0);
+      if (const auto gt = truthAt(truth, ps.t)) p.truth.push_back(gt->p_w);
+    }
+    panels.push_back(std::move(p));
+  }
+  renderTopViewPanels(png, title, panels, width, height);
+}
+
+}  // namespace
+
+int IcpSlamApp::run(std::ostream& log) {
+  // 0. The outputs are one set per folder (output_set.h), installed when the run is complete; a
+  // run that fails leaves no output of ours in either folder, nor one of an earlier run.
+  OutputSet set(params.out_dir, "", folderSetOptions(), log);
+  std::optional<OutputSet> own_export_set;
+  const bool exporting = !params.export_dir.empty();
+  if (exporting && std::filesystem::weakly_canonical(params.export_dir) !=
+                       std::filesystem::weakly_canonical(params.out_dir))
+    own_export_set.emplace(params.export_dir, "", folderSetOptions(), log);
+  OutputSet* export_set = own_export_set ? &*own_export_set : exporting ? &set : nullptr;
+  // 1. Configuration (both files), then the input: everything is checked before any output.
+  if (!std::filesystem::is_regular_file(params.icp_ini))
+    throw std::invalid_argument(params.icp_ini + ": no such file");
+  const std::string ini_text = mrpt::io::file_get_contents(params.icp_ini);
+  // MRPT's own parser reads the stock app's sections ([MappingApplication], [ICP]); its errors
+  // name neither the file nor the line's text, and carry a backtrace.
+  mrpt::config::CConfigFileMemory ini;
+  try {
+    ini.setContent(ini_text);
+  } catch (const std::exception& e) {
+    std::string why = e.what();
+    if (const auto m = why.find("Message:"); m != std::string::npos) why.erase(0, m + 8);
+    why.erase(0, why.find_first_not_of(' '));
+    why = why.substr(0, why.find('\n'));
+    throw std::invalid_argument(params.icp_ini + ": cannot be read as an icp-slam INI: " + why);
+  }
+  if (!ini.sectionExists(kMappingSection) || !ini.sectionExists("ICP"))
+    throw std::invalid_argument(params.icp_ini +
+                                ": needs the [MappingApplication] and [ICP] "
+                                "sections of the icp-slam app");
+  const ScanSliceParams slice = loadScanSliceParams(params.icp_ini);
+  AppConfig config = loadAppConfig(params.freeinit_ini);
+  log << "Reading " << params.rawlog << "\n";
+  const ValidatedInput in = readRecording(params.rawlog, config);
+  for (const auto& w : in.warnings) log << "Warning: " << w << "\n";
+  if (config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics)
+    config.core.extrinsics = *in.sensor_pose_extrinsics;
+  std::vector<TruthSample> truth;
+  if (const std::string tf = truthPathFor(params.rawlog); std::filesystem::is_regular_file(tf))
+    truth = readTruthCsv(tf);
+
+  // 2. Free-Init: the seed and the levelling of the scans.
+  freeinit = FreeInit::run(config.core, in.imu, in.frames);
+  const InitialState& s = freeinit.state;
+  log << "Free-Init: " << toString(s.status) << (s.message.empty() ? "" : " (" + s.message + ")")
+      << "\n";
+  int rc = 0;
+  std::vector<IcpSeedMode> modes = params.modes;
+  if (!s.ok()) {
+    const auto n = modes.size();
+    modes.erase(std::remove_if(modes.begin(), modes.end(),
+                               [](IcpSeedMode m) { return m != IcpSeedMode::Plain; }),
+                modes.end());
+    if (modes.size() != n) {
+      log << "Seeded runs skipped: no initial state\n";
+      rc = 3;
+    }
+  }
+  const Mat3 R_level = s.ok() ? levellingRotation(s.q_wb) : Mat3::Identity();
+  std::vector<mrpt::obs::CObservation2DRangeScan::Ptr> scans;
+  for (const auto& f : in.frames)
+    scans.push_back(scanFromFrame(f, config.core.extrinsics, R_level, slice, "LIDAR"));
+  std::optional<IcpSeed> seed;
+  if (s.ok()) seed = makeIcpSeed(freeinit, slice);
+  std::vector<OdometrySample> odometry;
+  if (std::count(modes.begin(), modes.end(), IcpSeedMode::Odometry) > 0) {
+    odometry = DopplerInertialOdometry(config.core, s).run(in.imu, in.frames);
+    log << "Doppler-inertial odometry: " << odometry.size() << " poses, " << std::setprecision(4)
+        << (odometry.back().p_w - odometry.front().p_w).norm() << " m travelled\n";
+  }
+  // The odometry mode's scans: deskewed with the odometry (frames it covers) when configured.
+  std::vector<mrpt::obs::CObservation2DRangeScan::Ptr> odometry_scans = scans;
+  if (!odometry.empty() && slice.deskew_with_odometry) {
+    for (std::size_t k = 0; k < in.frames.size(); ++k)
+      odometry_scans[k] =
+          scanFromFrame(in.frames[k], config.core.extrinsics, R_level, slice, "LIDAR", &odometry);
+  }
+  auto scansFor = [&](IcpSeedMode m) -> const auto& {
+    return m == IcpSeedMode::Odometry ? odometry_scans : scans;
+  };
+  if (!odometry.empty() && !truth.empty()) {
+    // The odometry alone, at the scans after the state time: the reference the fed run starts
+    // from (no map, no loop: its drift grows with the integrated velocity error).
+    std::vector<PlanarPathSample> path;
+    for (const auto& sc : scans) {
+      const double t = toUnix(sc->timestamp);
+      if (t <= s.timestamp || t > odometry.back().t) continue;
+      const BodyPose b = bodyPoseAt(odometry, t);
+      path.push_back({t, planarPose(b.q_wb, b.p_w)});
+    }
+    set.write(kOdometryAloneFile, [&](const std::string& p) { writeTumPlanar(p, path); });
+    odometry_errors = comparePathWithTruth(path, truth, s.timestamp);
+    log << std::fixed << std::setprecision(3) << "  odometry alone: ATE "
+        << odometry_errors->ate_rmse << " m, end-point " << odometry_errors->end_point << " m\n"
+        << std::defaultfloat;
+  }
+  if (seed) {
+    const auto& m = seed->pose.mean;
+    log << std::fixed << std::setprecision(3) << "Seed: pose (" << m.x() << ", " << m.y() << ", "
+        << m.phi() * 180 / M_PI << " deg), sigma (" << std::sqrt(seed->pose.cov(0, 0)) << " m, "
+        << std::sqrt(seed->pose.cov(1, 1)) << " m, " << std::sqrt(seed->pose.cov(2, 2)) * 180 / M_PI
+        << " deg), velocity (" << seed->velocity_local.vx << ", " << seed->velocity_local.vy
+        << ") m/s\n"
+        << std::defaultfloat;
+  }
+
+  // 3. One icp-slam run per mode; outputs as the stock app names them, in <out>/<mode>/.
+  // How the seed enters (MRPT 2.5.8; docs/icp_slam.md, "What MRPT 2.5.8 does with the seed"): the
+  // map through initialize(); the pose through the first odometry reading, in w, as the stock app
+  // on the export gets it. initialize()'s pose argument is used only when a lone reading would
+  // block ICP (seeded mode, slow start): it keeps the mean only and stamps it with the wall clock,
+  // which hides later odometry from the pose estimator until the first ICP correction.
+  bool seed_reading = true;
+  if (seed) {
+    mrpt::slam::CMetricMapBuilderICP probe;
+    probe.ICP_options.loadFromConfigFile(ini, kMappingSection);
+    seed_reading = !seedReadingBlocksIcp(*seed, probe.ICP_options);
+    if (!seed_reading && std::count(modes.begin(), modes.end(), IcpSeedMode::Seeded) > 0)
+      log << "Seeded: the seed pose is closer to the window start than icp-slam's "
+             "localization/insertion distances: it goes in as initialize()'s pose prior, "
+             "without the velocity (a lone odometry reading would stop ICP)\n";
+  }
+  if (seed) set.write(kSeedIniFile, [&](const std::string& p) { writeSeedIni(p, *seed); });
+  runs.clear();
+  for (const IcpSeedMode mode : modes) {
+    const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
+    const auto obs = icpSlamObservations(mode, scansFor(mode), sd, odometry, seed_reading);
+    const bool prior = mode == IcpSeedMode::Seeded && !seed_reading;
+    BuilderOutput b = runBuilder(ini, sd, prior ? &sd->pose : nullptr, obs);
+    IcpSlamRun r;
+    r.mode = mode;
+    r.path = std::move(b.path);
+    r.keyframes = b.map.size();
+    r.map_x = std::move(b.map_x);
+    r.map_y = std::move(b.map_y);
+    const std::string dir = std::string(toString(mode)) + "/";
+    set.write(dir + kMapFile, [&](const std::string& p) { saveSimplemapAtomically(p, b.map); });
+    set.write(dir + kStepLogFile, [&](const std::string& p) {
+      writeFileAtomically(p, [&](std::ostream& o) { o << b.step_log; });
+    });
+    set.write(dir + kPathFile, [&](const std::string& p) { writeTumPlanar(p, r.path); });
+    log << "icp-slam " << std::left << std::setw(9) << toString(mode) << std::right << ": "
+        << r.path.size() << " scans, " << r.keyframes << " keyframes";
+    if (!truth.empty() && s.ok()) {
+      // Compared from the state time on: the span every mode covers.
+      r.errors = comparePathWithTruth(r.path, truth, s.timestamp);
+      const PathErrors& e = *r.errors;
+      log << std::fixed << std::setprecision(3) << ", ATE " << e.ate_rmse << " m, end-point "
+          << e.end_point << " m over " << e.length << " m" << std::defaultfloat;
+      set.write(dir + kErrorsFile, [&](const std::string& p) {
+        writeFileAtomically(p, [&](std::ostream& o) {
+          o << "; icp-slam path vs ground truth, poses at the scans from the Free-Init state "
+               "time,\n; after the best SE(2) alignment\n[errors_wrt_gt]\nmode = "
+            << toString(mode) << "\nsamples = " << e.samples << "\nate_rmse = " << e.ate_rmse
+            << "   ; [m]\nend_point = " << e.end_point << "   ; [m]\ntrue_length = " << e.length
+            << "   ; [m]\n";
+        });
+      });
+    }
+    log << "\n";
+    runs.push_back(std::move(r));
+  }
+
+  // 4. The export for the stock icp-slam app: one observations-only rawlog of stock classes per
+  // mode (no IMU, no plugin class) and a matching INI. The stock app has no initial-map option:
+  // the static map is the first observation (inserted at the origin of the still empty map),
+  // followed by the same observations as above (the seed pose as an odometry reading in w). It
+  // cannot take a pose prior: in the seeded mode of a slow start it starts at w's origin, within
+  // icp-slam's localization distance of the seed pose.
+  if (export_set) {
+    // The INI names the files where they will be once installed.
+    const std::filesystem::path ex = std::filesystem::absolute(params.export_dir);
+    for (const IcpSeedMode mode : modes) {
+      const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
+      std::vector<mrpt::obs::CObservation::Ptr> obs;
+      if (sd) obs.push_back(sd->map_observation);
+      const auto rest = icpSlamObservations(mode, scansFor(mode), sd, odometry, seed_reading);
+      obs.insert(obs.end(), rest.begin(), rest.end());
+      const std::string name = toString(mode);
+      const std::string rawlog = (ex / (name + ".rawlog")).string();
+      export_set->write(name + ".rawlog",
+                        [&](const std::string& p) { writeObservationRawlog(p, obs); });
+      mrpt::config::CConfigFileMemory cfg(ini_text);
+      cfg.write(kMappingSection, "rawlog_file", rawlog);
+      cfg.write(kMappingSection, "logOutput_dir", (ex / (name + "_icp_slam_out")).string());
+      std::string text;
+      cfg.getContent(text);
+      export_set->write(name + ".ini", [&](const std::string& p) {
+        writeFileAtomically(p, [&](std::ostream& o) {
+          o << "; icp-slam " << name << ".ini   (from " << params.icp_ini << " for " << rawlog
+            << ")\n"
+            << text;
+        });
+      });
+      log << "Export: icp-slam " << (ex / (name + ".ini")).string() << "\n";
+    }
+  }
+
+  // 5. Results table and the picture.
+  if (!runs.empty() && runs.front().errors) {
+    set.write(kResultsFile, [&](const std::string& p) {
+      writeFileAtomically(p, [&](std::ostream& o) {
+        o << "# mode ate_rmse[m] end_point[m] true_length[m] scans keyframes\n" << std::fixed;
+        if (odometry_errors)
+          o << "odometry_alone " << std::setprecision(3) << odometry_errors->ate_rmse << " "
+            << odometry_errors->end_point << " " << odometry_errors->length << " "
+            << odometry_errors->samples << " 0\n";
+        for (const auto& r : runs)
+          o << toString(r.mode) << " " << std::setprecision(3) << r.errors->ate_rmse << " "
+            << r.errors->end_point << " " << r.errors->length << " " << r.path.size() << " "
+            << r.keyframes << "\n";
+      });
+    });
+  }
+  if (params.snapshot && !runs.empty()) {
+    set.write(kPictureFile, [&](const std::string& p) {
+      renderRuns(p, std::filesystem::path(params.rawlog).filename().string(), runs, truth,
+                 s.timestamp, params.snapshot_width, params.snapshot_height);
+    });
+    log << "Picture: " << set.finalPath(kPictureFile) << "\n";
+  }
+  if (own_export_set) own_export_set->commit();
+  set.commit();
+  return rc;
+}
+
+}  // namespace freeinit::mrpt_plugins

@@ -1,0 +1,176 @@
+#include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/input_validator.h>
+#include <freeinit/mrpt_plugins/stream_app.h>
+#include <freeinit/mrpt_plugins/stream_conversions.h>
+#include <freeinit/net/udp_socket.h>
+#include <freeinit/sim/simulator.h>
+
+#include <algorithm>
+#include <chrono>
+#include <ostream>
+#include <stdexcept>
+#include <thread>
+
+namespace freeinit::mrpt_plugins {
+namespace {
+
+// What is played: IMU samples and frames, each stream in time order.
+struct Messages {
+  std::vector<net::ImuMessage> imu;
+  std::vector<net::FrameMessage> frames;
+};
+
+// One datagram to send at `send_ns` (stream time): an IMU sample or one chunk of a frame.
+struct Slot {
+  std::int64_t send_ns = 0;
+  bool is_chunk = false;
+  std::size_t index = 0;  ///< into Messages::imu or Messages::frames
+  std::size_t chunk = 0;
+};
+
+// The rawlog through the ingest path (the same labels, extrinsics from sensorPose, unit and
+// Doppler checks as freeinit), with the exact stamps of the observations.
+Messages fromRawlog(const StreamAppParams& p) {
+  AppConfig cfg;
+  cfg.input.imu_label = p.imu_label;
+  cfg.input.lidar_label = p.lidar_label;
+  cfg.input.imu_accel_in_g = p.imu_accel_in_g;
+  cfg.input.min_imu_rate = 0;    // the receiver judges the rate
+  cfg.core.window.duration = 0;  // any length can be streamed
+  ValidatedInput in = readRecording(p.rawlog, cfg);
+  if (in.imu_stamp_ns.size() != in.imu.size() || in.frame_stamp_ns.size() != in.frames.size())
+    throw InputError(p.rawlog + ": timestamps outside the stream's range 1970 .. 2116");
+  const Extrinsics extrinsics = in.sensor_pose_extrinsics.value_or(Extrinsics{});
+  Messages m;
+  m.imu.reserve(in.imu.size());
+  for (std::size_t i = 0; i < in.imu.size(); ++i) {
+    net::ImuMessage msg;
+    msg.stamp_ns = in.imu_stamp_ns[i];
+    msg.gyro = in.imu[i].gyro;
+    msg.accel = in.imu[i].accel;  // in m/s^2 (the reader applied the declared unit)
+    m.imu.push_back(msg);
+  }
+  m.frames.reserve(in.frames.size());
+  for (std::size_t i = 0; i < in.frames.size(); ++i) {
+    net::FrameMessage msg;
+    msg.stamp_ns = in.frame_stamp_ns[i];
+    msg.extrinsics = extrinsics;
+    msg.points = std::move(in.frames[i].points);
+    m.frames.push_back(std::move(msg));
+  }
+  return m;
+}
+
+// The simulated recording, through the same observations freeinit-sim writes (so that stamps
+// are on MRPT's 100 ns clock as in a rawlog).
+Messages fromSimulator(const StreamAppParams& p) {
+  sim::ScenarioConfig sc = sim::preset(p.preset, p.seed);
+  if (p.duration > 0) sc.duration = p.duration;
+  if (p.points_per_frame > 0) sc.points_per_frame = p.points_per_frame;
+  const sim::Recording rec = sim::simulate(sc);
+  Messages m;
+  for (const auto& s : rec.imu) m.imu.push_back(imuMessage(*imuToObservation(s, "IMU")));
+  for (const auto& f : rec.frames)
+    m.frames.push_back(
+        frameMessage(*frameToObservation(f, rec.extrinsics, "LIDAR"), rec.extrinsics));
+  return m;
+}
+
+// Each IMU sample at its stamp; each chunk of a frame when its last point was measured (points
+// are in time order), as a scanning sensor streams them.
+std::vector<Slot> schedule(const Messages& m, std::size_t max_datagram) {
+  std::vector<Slot> slots;
+  for (std::size_t i = 0; i < m.imu.size(); ++i) slots.push_back({m.imu[i].stamp_ns, false, i, 0});
+  const std::size_t per_chunk = net::pointsPerChunk(max_datagram);
+  for (std::size_t i = 0; i < m.frames.size(); ++i) {
+    const auto& f = m.frames[i];
+    const std::size_t chunks = net::chunkCount(f.points.size(), max_datagram);
+    float last = 0;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      for (std::size_t k = c * per_chunk; k < std::min(f.points.size(), (c + 1) * per_chunk); ++k)
+        last = std::max(last, f.points[k].time_offset);
+      slots.push_back(
+          {f.stamp_ns + static_cast<std::int64_t>(static_cast<double>(last) * 1e9), true, i, c});
+    }
+  }
+  // By send time; IMU first on ties; chunks of a frame stay in order.
+  std::stable_sort(slots.begin(), slots.end(), [](const Slot& a, const Slot& b) {
+    return a.send_ns != b.send_ns ? a.send_ns < b.send_ns : (!a.is_chunk && b.is_chunk);
+  });
+  return slots;
+}
+
+}  // namespace
+
+void StreamApp::run(std::ostream& log) {
+  if (!(params.speed >= 0)) throw std::invalid_argument("speed must be >= 0");
+  Messages m = params.rawlog.empty() ? fromSimulator(params) : fromRawlog(params);
+  if (m.imu.empty() && m.frames.empty()) throw std::invalid_argument("nothing to send");
+  for (std::size_t i = 0; i < m.frames.size(); ++i)
+    m.frames[i].frame_id = static_cast<std::uint32_t>(i);
+  const std::vector<Slot> slots = schedule(m, params.max_datagram);
+  const double span = 1e-9 * static_cast<double>(slots.back().send_ns - slots.front().send_ns);
+  log << "Streaming " << (params.rawlog.empty() ? "preset " + params.preset : params.rawlog) << ": "
+      << m.imu.size() << " IMU samples and " << m.frames.size() << " frames (" << slots.size()
+      << " datagrams) over " << span << " s to UDP " << params.address << ":" << params.port
+      << " at " << (params.speed > 0 ? std::to_string(params.speed) + "x real time" : "full speed")
+      << "\n";
+
+  if (params.wait_listener > 0) {
+    const auto until =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(params.wait_listener);
+    while (!net::udpPortInUse(params.address, params.port)) {
+      if (std::chrono::steady_clock::now() > until)
+        throw std::runtime_error("nothing listens on UDP " + params.address + ":" +
+                                 std::to_string(params.port) + " after " +
+                                 std::to_string(params.wait_listener) + " s");
+      std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+  }
+
+  net::StreamSender sender(params.address, params.port, params.max_datagram, params.faults);
+  const auto t0 = std::chrono::steady_clock::now();
+  const std::int64_t first = slots.front().send_ns;
+  bool restarted = false, garbage_sent = false;
+  imu_sent = frames_sent = 0;
+  for (std::size_t i = 0; i < slots.size(); ++i) {
+    const Slot& slot = slots[i];
+    const double t_stream = 1e-9 * static_cast<double>(slot.send_ns - first);
+    if (params.speed > 0)
+      std::this_thread::sleep_until(t0 +
+                                    std::chrono::duration_cast<std::chrono::nanoseconds>(
+                                        std::chrono::duration<double>(t_stream / params.speed)));
+    // A restart mid-frame loses the frame in flight, as a real sender restart would.
+    if (!restarted && params.restart_at >= 0 && t_stream >= params.restart_at) {
+      sender.restart();
+      restarted = true;
+      log << "Sender restarted at " << t_stream << " s (new session)\n";
+    }
+    if (!garbage_sent && params.garbage > 0 && 2 * i >= slots.size()) {
+      sender.sendGarbage(params.garbage);
+      garbage_sent = true;
+    }
+    if (slot.is_chunk) {
+      const auto& f = m.frames[slot.index];
+      sender.sendFrameChunk(f, slot.chunk);
+      if (slot.chunk + 1 == net::chunkCount(f.points.size(), params.max_datagram)) ++frames_sent;
+    } else {
+      sender.sendImu(m.imu[slot.index]);
+      ++imu_sent;
+    }
+  }
+  if (params.end_marker) sender.sendEndOfStream();
+  sender.flush();
+  stats = sender.stats();
+  log << "Sent " << imu_sent << " IMU samples and " << frames_sent << " frames in "
+      << stats.datagrams << " datagrams (" << stats.bytes / 1e6 << " MB) in "
+      << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
+  if (stats.dropped + stats.duplicated + stats.reordered + stats.corrupted + stats.garbage > 0)
+    log << "Injected faults: " << stats.dropped << " dropped, " << stats.duplicated
+        << " duplicated, " << stats.reordered << " reordered, " << stats.corrupted << " corrupted, "
+        << stats.garbage << " garbage datagrams\n";
+  if (stats.refused > 0)
+    log << "Warning: " << stats.refused << " datagrams refused by the system (no listener?)\n";
+}
+
+}  // namespace freeinit::mrpt_plugins
