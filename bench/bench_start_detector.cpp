@@ -24,7 +24,7 @@ namespace {
 /// The decision's input as the pipeline builds it from a recording.
 struct StartInput {
   freeinit::sim::Recording rec;
-  std::size_t k0 = 0, k1 = 0;
+  std::size_t k_first = 0, k_last = 0;
   std::vector<freeinit::StartPoint> points;
   freeinit::StartDetectorParams params;
 };
@@ -57,9 +57,9 @@ StartInput prepare(const std::string& name) {
   if (all.empty() || imu.empty()) return in;
   const freeinit::StartSpan start = freeinit::startSpan(imu, all.front().t, cfg);
   if (!start.valid) return in;
-  const std::size_t k = start.k0, k1 = start.k1;
+  const std::size_t k = start.k_first, k_last = start.k_last;
   const double t_ref = imu[k].t;
-  const double t_end = imu[k1].t;
+  const double t_end = imu[k_last].t;
   std::size_t n_usable = 0;
   for (const Timed& q : all)
     if (q.t <= t_end && q.t >= t_ref && usable(*q.p, vp)) ++n_usable;
@@ -72,8 +72,8 @@ StartInput prepare(const std::string& name) {
     if (n++ % thin != 0) continue;
     in.points.push_back({q.t - t_ref, q.p->p_l.cast<double>().normalized(), q.p->doppler});
   }
-  in.k0 = k;
-  in.k1 = k1;
+  in.k_first = k;
+  in.k_last = k_last;
   in.params = freeinit::startDetectorParams(cfg);
   return in;
 }
@@ -83,7 +83,7 @@ void BM_DecideStart(benchmark::State& state, const std::string& name) {
   const freeinit::FreeInitConfig cfg;
   freeinit::StartDecision d;
   for (auto _ : state) {
-    d = freeinit::decideStart(in.rec.imu, in.k0, in.k1, in.points, in.rec.extrinsics,
+    d = freeinit::decideStart(in.rec.imu, in.k_first, in.k_last, in.points, in.rec.extrinsics,
                               cfg.velocimeter.gyro_bias_prior, in.params);
     benchmark::DoNotOptimize(d.chosen.v_b0.data());
   }

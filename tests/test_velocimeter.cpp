@@ -77,9 +77,9 @@ Eigen::Matrix<double, 1, N> numericJacobian(const F& f, const Eigen::Matrix<doub
   return J;
 }
 
-Vec9 bodyState(const Velocimeter& div) {
+Vec9 bodyState(const Velocimeter& velocimeter) {
   Vec9 x;
-  x << div.v_b(), div.omega_b(), div.b_g();
+  x << velocimeter.v_b(), velocimeter.omega_b(), velocimeter.b_g();
   return x;
 }
 
@@ -132,15 +132,15 @@ void checkDopplerUpdateAgainstNumericKalman(bool full, std::uint64_t seed) {
     Extrinsics ext;
     ext.R_bl = Exp(Vec3(randomNormal(rng)));
     ext.p_bl = 0.5 * randomNormal(rng);
-    Velocimeter div(params, ext);
+    Velocimeter velocimeter(params, ext);
     Mat3 A;
     A << randomNormal(rng), randomNormal(rng), randomNormal(rng);
     const Mat3 P_l0 = A * A.transpose() + 0.1 * Mat3::Identity();
     const Vec3 v_l0 = 5.0 * randomNormal(rng);
-    div.start(1.0, v_l0, P_l0, 2.0 * randomNormal(rng));
+    velocimeter.start(1.0, v_l0, P_l0, 2.0 * randomNormal(rng));
 
-    const Vec9 x0 = bodyState(div);
-    const Mat9 P0 = div.covBody();
+    const Vec9 x0 = bodyState(velocimeter);
+    const Mat9 P0 = velocimeter.covBody();
     // A true rigid-body state half a sigma away from the estimate (innovation well inside the
     // 4-sigma gate): body errors drawn from P0, the LiDAR velocity from the rigid-body relation.
     Vec9 n9;
@@ -152,7 +152,7 @@ void checkDopplerUpdateAgainstNumericKalman(bool full, std::uint64_t seed) {
     const double z = dopplerLidar(v_l_true, ray.d_l);
     ASSERT_NEAR(z, dopplerBody(x_true, ray.d_l, ext.R_bl, ext.p_bl), 1e-9);
 
-    const auto out = div.updateDoppler(ray.p_l, z);
+    const auto out = velocimeter.updateDoppler(ray.p_l, z);
     ASSERT_TRUE(out.accepted);
 
     // Body block.
@@ -173,13 +173,14 @@ void checkDopplerUpdateAgainstNumericKalman(bool full, std::uint64_t seed) {
     const Vec9 x1 = x0 + K * innov;
     const Mat9 M = Mat9::Identity() - K * H;
     const Mat9 P1 = M * P0 * M.transpose() + K * r * K.transpose();
-    EXPECT_LT((bodyState(div) - x1).norm(), 1e-9 * (1 + x1.norm()));
-    EXPECT_LT(maxAbs(div.covBody() - P1), 1e-10 * maxAbs(P0));
+    EXPECT_LT((bodyState(velocimeter) - x1).norm(), 1e-9 * (1 + x1.norm()));
+    EXPECT_LT(maxAbs(velocimeter.covBody() - P1), 1e-10 * maxAbs(P0));
     if (!full) {
       // Consider states: estimates and their own covariance block untouched.
-      EXPECT_EQ(div.omega_b(), x0.segment<3>(3));
-      EXPECT_EQ(div.b_g(), x0.segment<3>(6));
-      EXPECT_EQ(Mat6(div.covBody().bottomRightCorner<6, 6>()), Mat6(P0.bottomRightCorner<6, 6>()));
+      EXPECT_EQ(velocimeter.omega_b(), x0.segment<3>(3));
+      EXPECT_EQ(velocimeter.b_g(), x0.segment<3>(6));
+      EXPECT_EQ(Mat6(velocimeter.covBody().bottomRightCorner<6, 6>()),
+                Mat6(P0.bottomRightCorner<6, 6>()));
     }
 
     // LiDAR block.
@@ -190,8 +191,8 @@ void checkDopplerUpdateAgainstNumericKalman(bool full, std::uint64_t seed) {
     const Vec3 v_l1 = v_l0 + K_l * (z - hl(v_l0));
     const Mat3 M_l = Mat3::Identity() - K_l * Hl;
     const Mat3 P_l1 = M_l * P_l0 * M_l.transpose() + K_l * r * K_l.transpose();
-    EXPECT_LT((div.v_l() - v_l1).norm(), 1e-9 * (1 + v_l1.norm()));
-    EXPECT_LT(maxAbs(div.covVl() - P_l1), 1e-10 * maxAbs(P_l0));
+    EXPECT_LT((velocimeter.v_l() - v_l1).norm(), 1e-9 * (1 + v_l1.norm()));
+    EXPECT_LT(maxAbs(velocimeter.covVl() - P_l1), 1e-10 * maxAbs(P_l0));
   }
 }
 
@@ -219,17 +220,17 @@ TEST(Velocimeter, NoiseFreeConstantVelocityConverges) {
   const ConstantVelocityCase c;
   VelocimeterParams params;
   Extrinsics ext{c.R_bl, c.p_bl};
-  Velocimeter div(params, ext);
-  div.start(0.0, Vec3::Zero(), 100.0 * Mat3::Identity(), Vec3::Zero());
+  Velocimeter velocimeter(params, ext);
+  velocimeter.start(0.0, Vec3::Zero(), 100.0 * Mat3::Identity(), Vec3::Zero());
   std::mt19937_64 rng(1);
   for (int i = 0; i < 2000; ++i) {
     const Ray ray = randomRay(rng);
-    const auto out = div.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l));
+    const auto out = velocimeter.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l));
     ASSERT_TRUE(out.accepted) << "point " << i;
   }
-  EXPECT_LT((div.v_l() - c.v_l_true).norm(), 1e-6);
+  EXPECT_LT((velocimeter.v_l() - c.v_l_true).norm(), 1e-6);
   // No rotation: v_b = R_bl v_l.
-  EXPECT_LT((div.v_b() - c.R_bl * c.v_l_true).norm(), 1e-6);
+  EXPECT_LT((velocimeter.v_b() - c.R_bl * c.v_l_true).norm(), 1e-6);
 }
 
 TEST(Velocimeter, NoisyConstantVelocityIsConsistent) {
@@ -250,25 +251,25 @@ TEST(Velocimeter, NoisyConstantVelocityIsConsistent) {
   for (int seed = 0; seed < 100; ++seed) {
     std::mt19937_64 rng(1000 + seed);
     std::normal_distribution<double> noise(0.0, sigma);
-    Velocimeter div(params, ext);
+    Velocimeter velocimeter(params, ext);
     const Vec3 b_true = params.gyro_bias_sigma0 * randomNormal(rng);
     const Vec3 gyro0 = b_true + params.gyro_sigma * randomNormal(rng);
-    div.start(0.0, c.v_l_true + 2.0 * randomNormal(rng), P_l0, gyro0);
+    velocimeter.start(0.0, c.v_l_true + 2.0 * randomNormal(rng), P_l0, gyro0);
     Mat3 info = P_l0.inverse();
     for (int i = 0; i < 1000; ++i) {
       const Ray ray = randomRay(rng);
-      div.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l) + noise(rng));
+      velocimeter.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l) + noise(rng));
       info += ray.d_l * ray.d_l.transpose() / (sigma * sigma);
     }
     const Mat3 cov_rls = info.inverse();
     // Each rank-1 downdate subtracts terms of the size of the prior (4 (m/s)^2) to reach
     // ~1e-6: rounding ~eps * 4 per update, 1000 updates -> < 1e-12 absolute (~1e-6 relative).
-    EXPECT_LT(maxAbs(div.covVl() - cov_rls), 1e-12);
-    const Vec3 e_l = div.v_l() - c.v_l_true;
+    EXPECT_LT(maxAbs(velocimeter.covVl() - cov_rls), 1e-12);
+    const Vec3 e_l = velocimeter.v_l() - c.v_l_true;
     for (int k = 0; k < 3; ++k) EXPECT_LT(std::abs(e_l(k)), 5.0 * std::sqrt(cov_rls(k, k)));
-    nees_l += e_l.dot(div.covVl().inverse() * e_l);
-    const Vec3 e_b = div.v_b() - c.R_bl * c.v_l_true;
-    nees_b += e_b.dot(div.covVb().inverse() * e_b);
+    nees_l += e_l.dot(velocimeter.covVl().inverse() * e_l);
+    const Vec3 e_b = velocimeter.v_b() - c.R_bl * c.v_l_true;
+    nees_b += e_b.dot(velocimeter.covVb().inverse() * e_b);
   }
   EXPECT_GT(nees_l, kChi2_300_Lo);
   EXPECT_LT(nees_l, kChi2_300_Hi);
@@ -291,21 +292,22 @@ TEST(Velocimeter, NoiseFreeGyroIsMatchedBySumOfRateAndBias) {
   params.gyro_bias_sigma0 = 1e-4;
   Extrinsics ext;
   ext.p_bl = Vec3(0.1, 0.05, -0.2);
-  Velocimeter div(params, ext);
-  div.start(0.0, Vec3::Zero(), Mat3::Identity(), Vec3::Zero());
+  Velocimeter velocimeter(params, ext);
+  velocimeter.start(0.0, Vec3::Zero(), Mat3::Identity(), Vec3::Zero());
   const Vec3 gyro = omega_true + b_true;
   const double dt = 0.005;
   for (int k = 1; k <= 200; ++k) {
-    div.propagate(k * dt);
-    div.updateGyro(gyro, gyro, dt);
+    velocimeter.propagate(k * dt);
+    velocimeter.updateGyro(gyro, gyro, dt);
     if (k >= 5) {
-      ASSERT_LT((div.omega_b() + div.b_g() - gyro).norm(), 1e-9) << "sample " << k;
+      ASSERT_LT((velocimeter.omega_b() + velocimeter.b_g() - gyro).norm(), 1e-9) << "sample " << k;
     }
   }
   // The split follows the bias prior: b_g only drifts by the modelled decay, T/tau |b| ~ 2e-5.
   const double T = 200 * dt;
-  EXPECT_LT((div.b_g() - b_true).norm(), 2.0 * T / params.gyro_bias_tau * b_true.norm());
-  EXPECT_LT((div.omega_b() - omega_true).norm(), 2.0 * T / params.gyro_bias_tau * b_true.norm());
+  EXPECT_LT((velocimeter.b_g() - b_true).norm(), 2.0 * T / params.gyro_bias_tau * b_true.norm());
+  EXPECT_LT((velocimeter.omega_b() - omega_true).norm(),
+            2.0 * T / params.gyro_bias_tau * b_true.norm());
 }
 
 TEST(Velocimeter, ZeroVelocityUpdateEstimatesGyroBiasAtRest) {
@@ -326,24 +328,24 @@ TEST(Velocimeter, ZeroVelocityUpdateEstimatesGyroBiasAtRest) {
     std::mt19937_64 rng(200 + seed);
     Extrinsics ext;
     ext.p_bl = Vec3(0.1, 0.05, -0.2);
-    Velocimeter div(params, ext);
+    Velocimeter velocimeter(params, ext);
     const Vec3 b_true = params.gyro_bias_sigma0 * randomNormal(rng);
     std::vector<Vec3> gyro(n);
     for (auto& g : gyro) g = b_true + sigma_g * randomNormal(rng);
-    div.start(0.0, Vec3::Zero(), Mat3::Identity() * 1e-2, gyro[0]);
+    velocimeter.start(0.0, Vec3::Zero(), Mat3::Identity() * 1e-2, gyro[0]);
     for (int k = 0; k < n; ++k) {
-      div.propagate(k * dt);
-      div.updateZeroVelocity(sigma_z);
+      velocimeter.propagate(k * dt);
+      velocimeter.updateZeroVelocity(sigma_z);
       const bool has_next = k + 1 < n;
-      div.updateGyro(gyro[k], has_next ? gyro[k + 1] : gyro[k], has_next ? dt : 0.0);
+      velocimeter.updateGyro(gyro[k], has_next ? gyro[k + 1] : gyro[k], has_next ? dt : 0.0);
     }
-    const Vec3 e = div.b_g() - b_true;
+    const Vec3 e = velocimeter.b_g() - b_true;
     for (int k = 0; k < 3; ++k) {
       EXPECT_LT(std::abs(e(k)), 5.0 * sigma_mean) << "seed " << seed << " axis " << k;
-      EXPECT_GT(div.covBg()(k, k), 1.0 * var_model);
-      EXPECT_LT(div.covBg()(k, k), 1.3 * var_model);
+      EXPECT_GT(velocimeter.covBg()(k, k), 1.0 * var_model);
+      EXPECT_LT(velocimeter.covBg()(k, k), 1.3 * var_model);
     }
-    EXPECT_LT(div.omega_b().norm(), 5.0 * sigma_z);
+    EXPECT_LT(velocimeter.omega_b().norm(), 5.0 * sigma_z);
   }
 }
 
@@ -353,36 +355,38 @@ TEST(Velocimeter, ZeroVelocityUpdateEstimatesGyroBiasAtRest) {
 TEST(Velocimeter, GateRejectsInconsistentPointWithoutTouchingTheState) {
   const ConstantVelocityCase c;
   VelocimeterParams params;
-  Velocimeter div(params, Extrinsics{c.R_bl, c.p_bl});
-  div.start(0.0, Vec3::Zero(), 100.0 * Mat3::Identity(), Vec3::Zero());
+  Velocimeter velocimeter(params, Extrinsics{c.R_bl, c.p_bl});
+  velocimeter.start(0.0, Vec3::Zero(), 100.0 * Mat3::Identity(), Vec3::Zero());
   std::mt19937_64 rng(3);
   std::normal_distribution<double> noise(0.0, params.doppler_sigma);
   for (int i = 0; i < 2000; ++i) {
     const Ray ray = randomRay(rng);
-    div.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l) + noise(rng));
+    velocimeter.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l) + noise(rng));
   }
   // Converged: the gate is max(0.15, 4 sqrt(S)) + 0.01 |v_l| ~ 0.2 m/s, far below 5 m/s.
-  const Vec3 v_l = div.v_l(), v_b = div.v_b(), omega = div.omega_b(), b_g = div.b_g();
-  const Mat3 P_l = div.covVl();
-  const Mat9 P_b = div.covBody();
+  const Vec3 v_l = velocimeter.v_l(), v_b = velocimeter.v_b(), omega = velocimeter.omega_b(),
+             b_g = velocimeter.b_g();
+  const Mat3 P_l = velocimeter.covVl();
+  const Mat9 P_b = velocimeter.covBody();
   for (int i = 0; i < 100; ++i) {
     const Ray ray = randomRay(rng);
     const double sign = (i % 2 == 0) ? 1.0 : -1.0;
-    const auto out = div.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l) + sign * 5.0);
+    const auto out =
+        velocimeter.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l) + sign * 5.0);
     EXPECT_FALSE(out.accepted);
     EXPECT_NEAR(out.residual, sign * 5.0, 0.05);  // the innovation is reported anyway
   }
-  EXPECT_EQ(div.v_l(), v_l);
-  EXPECT_EQ(div.v_b(), v_b);
-  EXPECT_EQ(div.omega_b(), omega);
-  EXPECT_EQ(div.b_g(), b_g);
-  EXPECT_EQ(div.covVl(), P_l);
-  EXPECT_EQ(div.covBody(), P_b);
+  EXPECT_EQ(velocimeter.v_l(), v_l);
+  EXPECT_EQ(velocimeter.v_b(), v_b);
+  EXPECT_EQ(velocimeter.omega_b(), omega);
+  EXPECT_EQ(velocimeter.b_g(), b_g);
+  EXPECT_EQ(velocimeter.covVl(), P_l);
+  EXPECT_EQ(velocimeter.covBody(), P_b);
   // A consistent (noise-free) point is accepted and changes the state.
   const Ray ray = randomRay(rng);
-  const auto out = div.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l));
+  const auto out = velocimeter.updateDoppler(ray.p_l, dopplerLidar(c.v_l_true, ray.d_l));
   EXPECT_TRUE(out.accepted);
-  EXPECT_NE(div.covVl(), P_l);
+  EXPECT_NE(velocimeter.covVl(), P_l);
 }
 
 // -------------------------------------------------------------------------------------------------
@@ -403,33 +407,33 @@ CovarianceHealth runRandomUpdates(bool full, std::uint64_t seed) {
   VelocimeterParams params;
   params.doppler_updates_omega = full;
   const Extrinsics ext{Exp(Vec3(0.1, 0.2, -0.3)), Vec3(0.3, -0.2, 0.1)};
-  Velocimeter div(params, ext);
+  Velocimeter velocimeter(params, ext);
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> unif(0.0, 1.0);
   std::normal_distribution<double> noise(0.0, 1.0);
-  div.start(0.0, Vec3(1, 0, 0), Mat3::Identity(), Vec3(0.1, 0.2, 0.3));
+  velocimeter.start(0.0, Vec3(1, 0, 0), Mat3::Identity(), Vec3(0.1, 0.2, 0.3));
   CovarianceHealth h;
-  double scale_b = maxAbs(div.covBody()), scale_l = maxAbs(div.covVl());
+  double scale_b = maxAbs(velocimeter.covBody()), scale_l = maxAbs(velocimeter.covVl());
   for (int i = 1; i <= 100000; ++i) {
     const double t = i * 1e-5;
     const Vec3 v_l_true(5 * std::sin(3 * t), 2 * std::cos(2 * t), 0.5 * t);
     const Vec3 omega_true(2 * std::sin(5 * t), -1.5 * std::cos(4 * t), 3 * std::sin(t));
-    div.propagate(t);
+    velocimeter.propagate(t);
     const Ray ray = randomRay(rng);
     double z = dopplerLidar(v_l_true, ray.d_l) + params.doppler_sigma * noise(rng);
     if (unif(rng) < 0.05) z += 10.0 * (unif(rng) - 0.5);
-    div.updateDoppler(ray.p_l, z);
+    velocimeter.updateDoppler(ray.p_l, z);
     if (i % 500 == 0) {
       const Vec3 g = omega_true + Vec3(0.01, -0.01, 0.02) + params.gyro_sigma * randomNormal(rng);
-      div.updateGyro(g, g, 5e-3);
+      velocimeter.updateGyro(g, g, 5e-3);
     }
-    if (i == 20000) div.setAcceleration(Vec3(0.5, -0.2, 0.1), Vec3::Zero());
-    if (i >= 40000 && i < 45000 && i % 500 == 0) div.updateZeroVelocity(0.002);
-    if (i == 45000) div.releaseZeroVelocity(0.5, 0.5);
-    scale_b = std::max(scale_b, maxAbs(div.covBody()));
-    scale_l = std::max(scale_l, maxAbs(div.covVl()));
+    if (i == 20000) velocimeter.setAcceleration(Vec3(0.5, -0.2, 0.1), Vec3::Zero());
+    if (i >= 40000 && i < 45000 && i % 500 == 0) velocimeter.updateZeroVelocity(0.002);
+    if (i == 45000) velocimeter.releaseZeroVelocity(0.5, 0.5);
+    scale_b = std::max(scale_b, maxAbs(velocimeter.covBody()));
+    scale_l = std::max(scale_l, maxAbs(velocimeter.covVl()));
     if (i % 1000 == 250) {
-      const Eigen::MatrixXd Pb = div.covBody(), Pl = div.covVl();
+      const Eigen::MatrixXd Pb = velocimeter.covBody(), Pl = velocimeter.covVl();
       for (const auto& [P, scale] : {std::pair{Pb, scale_b}, std::pair{Pl, scale_l}}) {
         const double asym = maxAbs(P - P.transpose());
         h.max_rel_asym = std::max(h.max_rel_asym, asym / maxAbs(P));
@@ -439,7 +443,8 @@ CovarianceHealth runRandomUpdates(bool full, std::uint64_t seed) {
       }
     }
   }
-  h.finite = div.v_l().allFinite() && div.v_b().allFinite() && div.covBody().allFinite();
+  h.finite = velocimeter.v_l().allFinite() && velocimeter.v_b().allFinite() &&
+             velocimeter.covBody().allFinite();
   return h;
 }
 

@@ -4,9 +4,9 @@
 // reader (no silent truncation) and is one independent job; reading is serialized, the
 // initializations run in parallel.
 #include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/checked_recording.h>
 #include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/ground_truth.h>
-#include <freeinit/mrpt_plugins/input_validator.h>
 #include <freeinit/mrpt_plugins/output_set.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <freeinit/mrpt_plugins/stop_signal.h>
@@ -41,7 +41,7 @@ JobResult evaluateRawlog(const plugins::AppConfig& config, const std::string& ra
   // Reading is one job at a time: MRPT does not document its class registry and deserialization
   // as thread-safe. The initializations then run in parallel on plain data.
   static std::mutex mrpt_mutex;
-  plugins::ValidatedInput in;
+  plugins::CheckedRecording in;
   {
     const std::lock_guard<std::mutex> lock(mrpt_mutex);
     in = plugins::readRecording(rawlog, config);

@@ -27,10 +27,10 @@ struct FreeInit::Impl {
                    : detail::makePaperPipeline(cfg, seq);
   }
 
-  void pump() {
+  void processBuffered() {
     if (done) return;
     const double t0 = wallSeconds();
-    done = pipeline->pump(result);
+    done = pipeline->processBuffered(result);
     if (done) result.diag.time_to_result = wallSeconds() - t0;
   }
 
@@ -59,7 +59,7 @@ void FreeInit::addImu(const ImuSample& s) {
   impl_->seq.checkImu(s);
   if (impl_->done) return;  // the result is final: nothing more to keep
   impl_->seq.addImu(s);
-  impl_->pump();
+  impl_->processBuffered();
 }
 
 void FreeInit::addFrame(const LidarFrame& f) { addFrame(LidarFrame(f)); }
@@ -70,7 +70,7 @@ void FreeInit::addFrame(LidarFrame&& f) {
     return;
   }
   impl_->seq.addFrame(std::move(f));
-  impl_->pump();
+  impl_->processBuffered();
 }
 
 void FreeInit::addFrame(std::shared_ptr<const LidarFrame> f) {
@@ -80,12 +80,12 @@ void FreeInit::addFrame(std::shared_ptr<const LidarFrame> f) {
     return;
   }
   impl_->seq.addSharedFrame(std::move(f));
-  impl_->pump();
+  impl_->processBuffered();
 }
 
 void FreeInit::finish() {
   impl_->seq.finish();
-  impl_->pump();
+  impl_->processBuffered();
 }
 
 bool FreeInit::ready() const { return impl_->done; }
@@ -105,7 +105,7 @@ InitResult FreeInit::run(const FreeInitConfig& config, const std::vector<ImuSamp
     while (k < imu.size() && imu[k].t <= t_last) fi.addImu(imu[k++]);
     if (fi.ready()) break;
     fi.impl_->seq.addBorrowedFrame(f);  // `frames` outlives fi: no copy
-    fi.impl_->pump();
+    fi.impl_->processBuffered();
     if (fi.ready()) break;
   }
   while (k < imu.size() && !fi.ready()) fi.addImu(imu[k++]);

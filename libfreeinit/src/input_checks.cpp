@@ -114,7 +114,7 @@ std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, b
   if (imu.empty()) return std::nullopt;
   // Units: the specific force averages to about 9.81 m/s^2 (1 g) over any short stretch.
   Vec3 mean = Vec3::Zero();
-  const std::size_t n_mean = std::min(imu.size(), kImuCheckSamples);
+  const std::size_t n_mean = std::min(imu.size(), kRecordingImuCheckSamples);
   for (std::size_t i = 0; i < n_mean; ++i) mean += imu[i].accel;
   const double g_seen = (mean / static_cast<double>(n_mean)).norm();
   switch (accelUnitMismatch(g_seen, declared_g)) {

@@ -20,7 +20,7 @@
 #include <sstream>
 
 #include "pipeline.h"
-#include "velocimeter_steps.h"
+#include "velocimeter_inputs.h"
 #include "window_parts.h"
 
 namespace freeinit::detail {
@@ -55,7 +55,7 @@ class JointPipeline final : public Pipeline {
   JointPipeline(const FreeInitConfig& cfg, const MeasurementSequencer& seq)
       : cfg_(cfg), seq_(seq) {}
 
-  bool pump(InitResult& r) override {
+  bool processBuffered(InitResult& r) override {
     if (phase_ == Phase::Done) return true;
     const double t0 = wallSeconds();
     if (phase_ == Phase::WaitStart) tryStart(r);
@@ -111,16 +111,16 @@ class JointPipeline final : public Pipeline {
     // decision's span: bootstrap_duration, within the window.
     const StartSpan start = startSpan(imu, seq_.time(c), cfg_);
     if (!start.valid) return;
-    const std::size_t k = start.k0, k1 = start.k1;
+    const std::size_t k = start.k_first, k_last = start.k_last;
     const double t_ref = imu[k].t;
-    if ((!start.complete || !seq_.lidarPassed(imu[k1].t)) && !seq_.finished()) return;
-    if (k1 < k + 2) return;  // wait for a few samples at least (finished: not enough data)
+    if ((!start.complete || !seq_.lidarPassed(imu[k_last].t)) && !seq_.finished()) return;
+    if (k_last < k + 2) return;  // wait for a few samples at least (finished: not enough data)
     // The decision interpolates the IMU with the two samples after the span: wait for them, so
     // that it does not depend on how far the IMU stream happens to be ahead.
-    if (k1 + 2 >= imu.size() && !seq_.finished()) return;
+    if (k_last + 2 >= imu.size() && !seq_.finished()) return;
 
     // Returns of the span, evenly thinned to bootstrap_points.
-    const double t_end = imu[k1].t;
+    const double t_end = imu[k_last].t;
     std::size_t usable = 0;
     for (MeasurementSequencer::Cursor q = c; seq_.normalize(q) && seq_.time(q) <= t_end; ++q.p)
       if (seq_.time(q) >= t_ref && usablePoint(seq_.point(q), vp)) ++usable;
@@ -136,7 +136,7 @@ class JointPipeline final : public Pipeline {
       if (n++ % thin != 0) continue;
       pts.push_back({t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
     }
-    const StartDecision d = decideStart(imu, k, k1, pts, cfg_.extrinsics, vp.gyro_bias_prior,
+    const StartDecision d = decideStart(imu, k, k_last, pts, cfg_.extrinsics, vp.gyro_bias_prior,
                                         startDetectorParams(cfg_));
     r.diag.imu_at_rest_at_start = d.imu_still;
     switch (d.kind) {
@@ -153,18 +153,18 @@ class JointPipeline final : public Pipeline {
       case StartDecision::Kind::Rest:
         break;
     }
-    k0_ = k;
+    k_first_ = k;
     t_ref_ = t_ref;
     stride_ = vp.point_stride > 0 ? vp.point_stride
                                   : automaticPointStride(frameList(), vp.max_point_rate);
     reserveRecorder();
     startFilter(d);
     Vec3 gm = Vec3::Zero(), am = Vec3::Zero();
-    for (std::size_t i = k; i <= k1; ++i) {
+    for (std::size_t i = k; i <= k_last; ++i) {
       gm += imu[i].gyro;
       am += imu[i].accel;
     }
-    const double cnt = static_cast<double>(k1 - k + 1);
+    const double cnt = static_cast<double>(k_last - k + 1);
     const bool rest =
         d.kind == StartDecision::Kind::Rest && d.imu_still && cfg_.static_detector.enabled;
     rest_.start(rest, gm / cnt, am / cnt, vp.gyro_sigma, cfg_.gravity.accel_sigma);
@@ -220,8 +220,8 @@ class JointPipeline final : public Pipeline {
     prior.rotation_sigma = cfg_.estimator.calibration_rotation_sigma_deg * kPi / 180.0;
     prior.time_sigma = cfg_.estimator.time_offset_sigma;
     filter_.emplace(filterParams(), cfg_.extrinsics);
-    fed_ = k0_;
-    feedImu(k0_ + 2);
+    fed_ = k_first_;
+    feedImu(k_first_ + 2);
     filter_->start(x0, prior);
   }
 
@@ -237,20 +237,20 @@ class JointPipeline final : public Pipeline {
     const auto& imu = seq_.imu();
     const VelocimeterParams& vp = cfg_.velocimeter;
     while (true) {
-      const std::size_t k = k0_ + filter_->nodes() - 1;
+      const std::size_t k = k_first_ + filter_->nodes() - 1;
       if (!node_open_) {
         // The window rule (config.h): this sample closes the window, or the next one is beyond.
         const double duration = cfg_.window.duration;
-        last_ = k > k0_ &&
-                windowSample(imu[k0_].t, imu[k - 1].t, imu[k].t, duration) == WindowSample::Last;
+        last_ = k > k_first_ && windowSample(imu[k_first_].t, imu[k - 1].t, imu[k].t, duration) ==
+                                    WindowSample::Last;
         if (!last_) {
           if (k + 1 >= imu.size()) return;  // the node's interval needs the next sample
-          last_ =
-              windowSample(imu[k0_].t, imu[k].t, imu[k + 1].t, duration) == WindowSample::Outside;
+          last_ = windowSample(imu[k_first_].t, imu[k].t, imu[k + 1].t, duration) ==
+                  WindowSample::Outside;
         }
         // The cubic interpolation of the IMU between k and k + 1 wants sample k + 2 too.
         if (!last_ && k + 2 >= imu.size() && !seq_.finished()) return;
-        if (last_) k_end_ = k;
+        if (last_) k_window_last_ = k;
         feedImu(last_ ? k + 1 : k + 2);
         filter_->beginNode(last_);
         node_open_ = true;
@@ -294,7 +294,8 @@ class JointPipeline final : public Pipeline {
         // The IMU shows motion only once it has grown beyond its noise: the last nodes held at
         // rest may already have moved (a gentle start). The smoother does without their rest.
         filter_->cancelRestFrom(t_k - kRestBackdating);
-        for (std::size_t j = node_rest_.size(); j-- > 0 && imu[k0_ + j].t >= t_k - kRestBackdating;)
+        for (std::size_t j = node_rest_.size();
+             j-- > 0 && imu[k_first_ + j].t >= t_k - kRestBackdating;)
           node_rest_[j] = false;
         // Their returns were not seen from a standing sensor after all: out of the rest cells.
         for (std::size_t i = recorder_.size(); i-- > 0;) {
@@ -343,14 +344,14 @@ class JointPipeline final : public Pipeline {
     Diagnostics& diag = r.diag;
     rejectMovingDirections(r);  // before the counts below: they are of the returns used
     const auto& imu = seq_.imu();
-    const double T = imu[k_end_].t - t_ref_;
+    const double T = imu[k_window_last_].t - t_ref_;
     diag.window_duration = T;
     diag.update_rate_hz = T > 0 ? static_cast<double>(diag.points_used + diag.gyro_updates) / T : 0;
     for (const auto& f : seq_.frames()) {
       if (f.points->empty()) continue;
       const double a = f.stamp + static_cast<double>(f.points->front().time_offset);
       const double b = f.stamp + static_cast<double>(f.points->back().time_offset);
-      if (b >= t_ref_ && a <= imu[k_end_].t) ++diag.frames_in_window;
+      if (b >= t_ref_ && a <= imu[k_window_last_].t) ++diag.frames_in_window;
     }
     if (diag.points_used < 10 && !diag.static_start) {
       fail(r, InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
@@ -398,7 +399,7 @@ class JointPipeline final : public Pipeline {
     r.velocities.clear();
     for (std::size_t k = 0; k < N; ++k) {
       const FilterState& xk = filter_->state(k);
-      const ImuSample& sk = imu[k0_ + k];
+      const ImuSample& sk = imu[k_first_ + k];
       PoseSample p;
       p.t = sk.t;
       p.q_wb = Quat(xk.R_wb).normalized();
@@ -426,7 +427,7 @@ class JointPipeline final : public Pipeline {
   void completeMap(InitResult& r) override {
     if (!map_pending_) return;
     map_pending_ = false;
-    recorder_.finish(*filter_, seq_.imu(), k0_, cfg_.extrinsics, r);
+    recorder_.finish(*filter_, seq_.imu(), k_first_, cfg_.extrinsics, r);
   }
 
   /// Whether the returns contradict the rest the IMU showed up to the window's last node: the
@@ -472,12 +473,12 @@ class JointPipeline final : public Pipeline {
       // One span: each accepted return of a moving node, its residual against the smoothed
       // motion summed into its cell. The recorder holds the returns in node order; the residual
       // is computed in float, as the recorder keeps it.
-      const double t_begin = imu[k0_ + rec.tag(i).node].t;
+      const double t_begin = imu[k_first_ + rec.tag(i).node].t;
       filed.clear();
       touched.clear();
       double sumsq = 0;
       std::size_t total = 0;
-      while (i < count && imu[k0_ + rec.tag(i).node].t < t_begin + kSpan) {
+      while (i < count && imu[k_first_ + rec.tag(i).node].t < t_begin + kSpan) {
         const std::uint32_t node = rec.tag(i).node;
         std::size_t end = i;
         while (end < count && rec.tag(end).node == node) ++end;
@@ -693,7 +694,7 @@ class JointPipeline final : public Pipeline {
   const FreeInitConfig& cfg_;
   const MeasurementSequencer& seq_;
   Phase phase_ = Phase::WaitStart;
-  std::size_t k0_ = 0, k_end_ = 0;
+  std::size_t k_first_ = 0, k_window_last_ = 0;
   double t_ref_ = 0;
   int stride_ = 1;
   std::size_t stride_counter_ = 0;

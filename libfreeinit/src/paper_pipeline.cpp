@@ -1,11 +1,11 @@
 // The paper's pipeline (Zhao et al., Sec. III): the Doppler-inertial velocimeter over the window,
 // pose integration and mapping at every update, then the accelerometer bias and gravity solve.
 //
-// Processing is incremental: every pump() processes, in time order, all gyro samples and points
-// that the data received so far allow (a point needs the IMU sample after it; a gyro sample needs
-// the LiDAR stream to have passed it). A seed pass covers the first `seed_duration` seconds of
-// the window; its gravity solve starts the accelerometer-aided last pass, which catches up on the
-// buffered data and then follows the stream. When the last IMU sample of the window has been
+// Processing is incremental: every processBuffered() processes, in time order, all gyro samples and
+// points that the data received so far allow (a point needs the IMU sample after it; a gyro sample
+// needs the LiDAR stream to have passed it). A seed pass covers the first `seed_duration` seconds
+// of the window; its gravity solve starts the accelerometer-aided last pass, which catches up on
+// the buffered data and then follows the stream. When the last IMU sample of the window has been
 // processed the last solve makes the result final.
 #include <freeinit/gravity_estimator.h>
 #include <freeinit/pose_integrator.h>
@@ -21,7 +21,7 @@
 #include <string>
 
 #include "pipeline.h"
-#include "velocimeter_steps.h"
+#include "velocimeter_inputs.h"
 
 namespace freeinit::detail {
 namespace {
@@ -42,18 +42,18 @@ class PaperPipeline final : public Pipeline {
   Phase phase = Phase::WaitStart;
 
   // Window and cursors.
-  double t_ref = 0;                  ///< UNIX time of the window start; internal times are relative
-  std::size_t k0 = 0;                ///< first IMU sample of the window
-  std::size_t k_end = 0;             ///< last IMU sample of the window (once known)
-  std::size_t k_stop = 0;            ///< last IMU sample of the current pass (once closed)
-  double pass_duration = 0;          ///< [s] length of the current pass (window rule, config.h)
-  bool pass_closed = false;          ///< the last IMU sample of the current pass is processed
-  std::size_t k_next = 0;            ///< next IMU sample to process
-  std::size_t f_cur = 0, p_cur = 0;  ///< next point to process
-  int point_stride = 1;              ///< the configured stride, or the automatic one
-  std::size_t stride_counter = 0;    ///< usable points since the last used one (mod the stride)
+  double t_ref = 0;               ///< UNIX time of the window start; internal times are relative
+  std::size_t k_first = 0;        ///< first IMU sample of the window
+  std::size_t k_window_last = 0;  ///< last IMU sample of the window (once known)
+  std::size_t k_pass_last = 0;    ///< last IMU sample of the current pass (once closed)
+  double pass_duration = 0;       ///< [s] length of the current pass (window rule, config.h)
+  bool pass_closed = false;       ///< the last IMU sample of the current pass is processed
+  std::size_t k_next = 0;         ///< next IMU sample to process
+  std::size_t next_frame = 0, next_point = 0;  ///< next point to process
+  int point_stride = 1;                        ///< the configured stride, or the automatic one
+  std::size_t stride_counter = 0;  ///< usable points since the last used one (mod the stride)
 
-  std::optional<Velocimeter> div;
+  std::optional<Velocimeter> velocimeter;
   PoseIntegrator integrator;
   std::vector<KinematicSample> kinematics;
 
@@ -112,7 +112,7 @@ class PaperPipeline final : public Pipeline {
     phase = Phase::Done;
   }
 
-  bool pump(InitResult& r) override {
+  bool processBuffered(InitResult& r) override {
     res = &r;
     if (phase == Phase::Done) return true;
     const double t0 = wallSeconds(), solver0 = res->diag.time_solver;
@@ -168,28 +168,28 @@ class PaperPipeline final : public Pipeline {
       fail(InitStatus::DegenerateGeometry, "bootstrap: " + fit.message);
       return;
     }
-    k0 = k;
+    k_first = k;
     point_stride = vp.point_stride > 0 ? vp.point_stride
                                        : automaticPointStride(frameList(), vp.max_point_rate);
     boot_fit = fit;
     b_g_start = vp.gyro_bias_prior;
     const auto& sp = cfg.static_detector;
-    boot_static =
-        sp.enabled && fit.v_l.norm() < sp.max_speed &&
-        (imu[k0].gyro - vp.gyro_bias_prior).norm() < sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
+    boot_static = sp.enabled && fit.v_l.norm() < sp.max_speed &&
+                  (imu[k_first].gyro - vp.gyro_bias_prior).norm() <
+                      sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
     startPass();
     phase = Phase::Running;
   }
 
   /// (Re)starts the velocimeter at the window start; all window data are buffered for pass > 0.
   void startPass() {
-    k_next = k0 + 1;
+    k_next = k_first + 1;
     const double seed = cfg.window.seed_duration;
     pass_duration =
         finalPass() || seed <= 0 ? cfg.window.duration : std::min(seed, cfg.window.duration);
     pass_closed = false;
-    f_cur = 0;
-    p_cur = 0;
+    next_frame = 0;
+    next_point = 0;
     stride_counter = 0;
     kinematics.clear();
     res->static_map.clear();
@@ -200,12 +200,13 @@ class PaperPipeline final : public Pipeline {
     d.points_seen = d.points_used = d.points_skipped = d.points_rejected = d.gyro_updates = 0;
     VelocimeterParams vp = cfg.velocimeter;
     vp.gyro_bias_prior = b_g_start;
-    div.emplace(vp, cfg.extrinsics);
+    velocimeter.emplace(vp, cfg.extrinsics);
     // The bootstrap points are processed again by the filter: its covariance is widened so that
     // it acts as a starting point and a gate, not as information counted twice.
-    div->start(0.0, boot_fit.v_l, boot_fit.cov * 100.0, imu[k0].gyro);
-    div->setOmegaSlope((imu[k0 + 1].gyro - imu[k0].gyro) / (imu[k0 + 1].t - imu[k0].t));
-    integrator.reset(0.0, div->omega_b(), div->v_b());
+    velocimeter->start(0.0, boot_fit.v_l, boot_fit.cov * 100.0, imu[k_first].gyro);
+    velocimeter->setOmegaSlope((imu[k_first + 1].gyro - imu[k_first].gyro) /
+                               (imu[k_first + 1].t - imu[k_first].t));
+    integrator.reset(0.0, velocimeter->omega_b(), velocimeter->v_b());
     stationary = boot_static;
     d.static_start = boot_static;
     d.static_duration = 0;
@@ -213,24 +214,25 @@ class PaperPipeline final : public Pipeline {
     static_dirs.clear();
     static_dopplers.clear();
     motion_check_counter = 0;
-    if (pass > 0) setAcceleration(k0);
-    recordSample(k0);
+    if (pass > 0) setAcceleration(k_first);
+    recordSample(k_first);
   }
 
   /// Aided passes: the body acceleration a_b = f - b_a + R_w0b^T g_w0 at sample k and its slope to
   /// sample k + 1 (gravity in b turns as dg_b/dt = -omega x g_b).
   void setAcceleration(std::size_t k) {
-    setAidedAcceleration(*div, imu, k, gravity.b_a, integrator.R_wb().transpose() * gravity.g_w);
+    setAidedAcceleration(*velocimeter, imu, k, gravity.b_a,
+                         integrator.R_wb().transpose() * gravity.g_w);
   }
 
   void run() {
     while (true) {
-      const bool have_point = normalizeCursor(f_cur, p_cur);
-      const double tp = have_point ? pointTime(f_cur, p_cur) : 0.0;
+      const bool have_point = normalizeCursor(next_frame, next_point);
+      const double tp = have_point ? pointTime(next_frame, next_point) : 0.0;
       if (!pass_closed) {
         if (k_next >= imu.size()) return;  // wait for IMU
         const WindowSample w =
-            windowSample(imu[k0].t, imu[k_next - 1].t, imu[k_next].t, pass_duration);
+            windowSample(imu[k_first].t, imu[k_next - 1].t, imu[k_next].t, pass_duration);
         if (w == WindowSample::Outside) {  // after a gap: the pass ended with the sample before
           closePass(k_next - 1);
           continue;
@@ -256,8 +258,8 @@ class PaperPipeline final : public Pipeline {
 
   void closePass(std::size_t k_last) {
     pass_closed = true;
-    k_stop = k_last;
-    if (finalPass()) k_end = k_last;
+    k_pass_last = k_last;
+    if (finalPass()) k_window_last = k_last;
   }
 
   /// Solves b_a and gravity; starts the next pass and returns true if there is one.
@@ -267,12 +269,13 @@ class PaperPipeline final : public Pipeline {
     gp.compute_covariance = finalPass();  // earlier passes only need the estimate
     // Each solve starts from the previous pass's estimate (same window start, same frame w0).
     const GravityEstimate previous = gravity;
-    gravity = GravityEstimator(gp).estimate(kinematics, cfg.extrinsics, div->covBg(), &previous);
+    gravity =
+        GravityEstimator(gp).estimate(kinematics, cfg.extrinsics, velocimeter->covBg(), &previous);
     res->diag.time_solver += wallSeconds() - t0;
     if (!gravity.ok && !finalPass()) {
       // The data of the window are not all there yet: nothing beyond the seed to report.
       fail(InitStatus::SolverFailed, "accelerometer bias / gravity of the seed pass (first " +
-                                         std::to_string(k_stop - k0 + 1) +
+                                         std::to_string(k_pass_last - k_first + 1) +
                                          " IMU samples): " + gravity.message);
       return false;
     }
@@ -280,7 +283,7 @@ class PaperPipeline final : public Pipeline {
       ++pass;
       // The next pass integrates with the corrected gyro bias (same prior width: the window's
       // data must not be counted twice).
-      b_g_start = div->b_g() + gravity.delta_b_g;
+      b_g_start = velocimeter->b_g() + gravity.delta_b_g;
       startPass();
       return true;
     }
@@ -289,8 +292,8 @@ class PaperPipeline final : public Pipeline {
   }
 
   void processPoint(double t) {
-    const DopplerPoint& pt = pts(f_cur)[p_cur];
-    ++p_cur;
+    const DopplerPoint& pt = pts(next_frame)[next_point];
+    ++next_point;
     auto& diag = res->diag;
     if (t < 0) return;  // before the window
     ++diag.points_seen;
@@ -309,13 +312,13 @@ class PaperPipeline final : public Pipeline {
       return;
     }
     const double r = pt.p_l.norm();
-    div->propagate(t);
+    velocimeter->propagate(t);
     bool accepted;
     double residual;
     if (stationary) {
       // Zero-velocity mode: points only feed the motion check and the map.
       const Vec3 d = pt.p_l.cast<double>() / r;
-      residual = pt.doppler + d.dot(div->v_l());
+      residual = pt.doppler + d.dot(velocimeter->v_l());
       accepted = std::abs(residual) < vp.gate_min;
       // One point in kMotionCheckStride is plenty for a 3-D velocity every check period.
       if (++motion_check_counter % kMotionCheckStride == 0) {
@@ -323,11 +326,11 @@ class PaperPipeline final : public Pipeline {
         static_dopplers.push_back(pt.doppler);
       }
     } else {
-      const auto out = div->updateDoppler(pt.p_l, pt.doppler);
+      const auto out = velocimeter->updateDoppler(pt.p_l, pt.doppler);
       accepted = out.accepted;
       residual = out.residual;
     }
-    integrator.integrate(t, div->omega_b(), div->v_b());
+    integrator.integrate(t, velocimeter->omega_b(), velocimeter->v_b());
     if (accepted)
       ++diag.points_used;
     else
@@ -348,15 +351,15 @@ class PaperPipeline final : public Pipeline {
 
   void processGyro(std::size_t k) {
     const double t = imu[k].t - t_ref;
-    div->propagate(t);
+    velocimeter->propagate(t);
     const auto& sp = cfg.static_detector;
     if (stationary) {
-      div->updateZeroVelocity(sp.zupt_sigma);
+      velocimeter->updateZeroVelocity(sp.zupt_sigma);
       checkMotion(k, t);
     }
-    updateGyroAt(*div, imu, k);
+    updateGyroAt(*velocimeter, imu, k);
     ++res->diag.gyro_updates;
-    integrator.integrate(t, div->omega_b(), div->v_b());
+    integrator.integrate(t, velocimeter->omega_b(), velocimeter->v_b());
     if (pass > 0) setAcceleration(k);
     recordSample(k);
   }
@@ -365,8 +368,8 @@ class PaperPipeline final : public Pipeline {
   void checkMotion(std::size_t k, double t) {
     const auto& sp = cfg.static_detector;
     // The gyro deviates from the bias estimate by more than its own uncertainty allows.
-    const double sigma_bg = std::sqrt(div->covBg().diagonal().maxCoeff());
-    bool moving = (imu[k].gyro - div->b_g()).norm() > sp.max_gyro_dev + 3.0 * sigma_bg;
+    const double sigma_bg = std::sqrt(velocimeter->covBg().diagonal().maxCoeff());
+    bool moving = (imu[k].gyro - velocimeter->b_g()).norm() > sp.max_gyro_dev + 3.0 * sigma_bg;
     Vec3 v_ls = Vec3::Zero();
     if (t - last_check >= sp.check_period) {
       // Robust (IRLS) velocity of the points since the last check: moving objects in view must
@@ -387,18 +390,18 @@ class PaperPipeline final : public Pipeline {
     if (!moving) return;
     stationary = false;
     res->diag.static_duration = t;
-    div->releaseZeroVelocity(std::max(0.2, 2.0 * v_ls.norm()), 0.5);
+    velocimeter->releaseZeroVelocity(std::max(0.2, 2.0 * v_ls.norm()), 0.5);
   }
 
   void recordSample(std::size_t k) {
     KinematicSample s;
     s.t = imu[k].t - t_ref;
     s.R_wb = integrator.R_wb();
-    s.v_b = div->v_b();
-    s.cov_v_b = div->covVb();
-    s.v_l = div->v_l();
-    s.cov_v_l = div->covVl();
-    s.omega_b = div->omega_b();
+    s.v_b = velocimeter->v_b();
+    s.cov_v_b = velocimeter->covVb();
+    s.v_l = velocimeter->v_l();
+    s.cov_v_l = velocimeter->covVl();
+    s.omega_b = velocimeter->omega_b();
     s.accel = imu[k].accel;
     kinematics.push_back(s);
     VelocitySample v;
@@ -406,7 +409,7 @@ class PaperPipeline final : public Pipeline {
     v.v_l = s.v_l;
     v.v_b = s.v_b;
     v.omega_b = s.omega_b;
-    v.b_g = div->b_g();
+    v.b_g = velocimeter->b_g();
     v.sigma_v_b = s.cov_v_b.diagonal().cwiseSqrt();
     v.stationary = stationary;
     res->velocities.push_back(v);
@@ -423,8 +426,8 @@ class PaperPipeline final : public Pipeline {
 void PaperPipeline::finalize() {
   phase = Phase::Done;
   auto& diag = res->diag;
-  if (stationary) diag.static_duration = imu[k_end].t - t_ref;
-  const double T = imu[k_end].t - t_ref;
+  if (stationary) diag.static_duration = imu[k_window_last].t - t_ref;
+  const double T = imu[k_window_last].t - t_ref;
   diag.update_rate_hz = T > 0 ? static_cast<double>(diag.points_used + diag.gyro_updates) / T : 0;
   if (diag.points_used < 10 && !diag.static_start) {
     fail(InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
@@ -457,12 +460,12 @@ void PaperPipeline::finalize() {
   InitialState& s = res->state;
   s.status = InitStatus::Ok;
   s.message.clear();
-  s.timestamp = imu[k_end].t;
+  s.timestamp = imu[k_window_last].t;
   s.q_wb = Quat(R_wb).normalized();
   s.p_w = R_align * integrator.p_w();
-  const Vec3 v_b = div->v_b();
+  const Vec3 v_b = velocimeter->v_b();
   s.v_w = R_wb * v_b;
-  s.b_g = div->b_g() + db;
+  s.b_g = velocimeter->b_g() + db;
   s.b_a = ge.b_a;
   s.g_w = Vec3(0, 0, -kGravity);
 
@@ -471,7 +474,7 @@ void PaperPipeline::finalize() {
   // gyro bias its block is the velocimeter's (uncorrelated).
   Eigen::Matrix<double, 9, 9> C = ge.cov_full;
   if (C.block<3, 3>(6, 6).isZero()) {
-    C.block<3, 3>(6, 6) = div->covBg();
+    C.block<3, 3>(6, 6) = velocimeter->covBg();
   }
   // Tilt: g_b = R_w0b^T g_w0 with R_w0b,true = Exp(-M_end db) R_w0b, so
   //   dg_b = R_w0b^T (dg_w0 - [g_w0]x M_end db),  and g_b,true = g_b + [g_b]x dtheta gives the
@@ -484,7 +487,7 @@ void PaperPipeline::finalize() {
   A_th.block<3, 3>(0, 0) = -skew(g_b) * R_w0b.transpose() / g2;
   A_th.block<3, 3>(0, 6) = skew(g_b) * R_w0b.transpose() * skew(ge.g_w) * M_end / g2 -
                            up_b * up_b.transpose() * R_w0b.transpose() * M_end;
-  const double dt_imu = T / static_cast<double>(std::max<std::size_t>(1, k_end - k0));
+  const double dt_imu = T / static_cast<double>(std::max<std::size_t>(1, k_window_last - k_first));
   const double var_gyro_walk = cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma * dt_imu * T;
   // P = G S G^T over independent error sources, so it is a covariance by construction:
   //   [dg_w0, db_a, db_g] (solver, 9), dv_b (velocimeter, 3), gyro white noise integrated into
@@ -496,7 +499,7 @@ void PaperPipeline::finalize() {
   constexpr int kSrc = 21;
   Eigen::Matrix<double, kSrc, kSrc> S = Eigen::Matrix<double, kSrc, kSrc>::Zero();
   S.block<9, 9>(0, 0) = C;
-  S.block<3, 3>(9, 9) = div->covVb();
+  S.block<3, 3>(9, 9) = velocimeter->covVb();
   S.block<3, 3>(12, 12) = Mat3::Identity() * var_gyro_walk;
   S.block<6, 6>(15, 15) = Eigen::Matrix<double, 6, 6>::Identity() * 1e-6;
   Eigen::Matrix<double, 18, kSrc> G = Eigen::Matrix<double, 18, kSrc>::Zero();

@@ -11,15 +11,15 @@
 
 namespace freeinit::detail {
 
-/// An estimator over the sequencer's buffered data. pump() processes, in time order, everything
-/// the data received so far allow, and returns true once `result` is final (initialized or not).
-/// The sequencer outlives the pipeline; the pipeline reads it only.
+/// An estimator over the sequencer's buffered data. processBuffered() processes, in time order,
+/// everything the data received so far allow, and returns true once `result` is final (initialized
+/// or not). The sequencer outlives the pipeline; the pipeline reads it only.
 class Pipeline {
  public:
   virtual ~Pipeline() = default;
-  virtual bool pump(InitResult& result) = 0;
-  /// Fills result.static_map and result.rejected once pump() returned true, if pump() left them
-  /// for later (the state does not wait for the map); called once.
+  virtual bool processBuffered(InitResult& result) = 0;
+  /// Fills result.static_map and result.rejected once processBuffered() returned true, if
+  /// processBuffered() left them for later (the state does not wait for the map); called once.
   virtual void completeMap(InitResult& /*result*/) {}
 };
 

@@ -377,15 +377,15 @@ StartSpan startSpan(const std::vector<ImuSample>& imu, double t_first, const Fre
   if (k + 1 >= imu.size()) return out;
   const double t_ref = imu[k].t;
   const double span = std::min(cfg.estimator.bootstrap_duration, cfg.window.duration);
-  std::size_t k1 = k;
-  while (k1 + 1 < imu.size() && imu[k1].t < t_ref + span &&
-         imu[k1 + 1].t - t_ref < cfg.window.duration)
-    ++k1;
-  out.k0 = k;
-  out.k1 = k1;
+  std::size_t k_last = k;
+  while (k_last + 1 < imu.size() && imu[k_last].t < t_ref + span &&
+         imu[k_last + 1].t - t_ref < cfg.window.duration)
+    ++k_last;
+  out.k_first = k;
+  out.k_last = k_last;
   out.valid = true;
-  out.complete = imu[k1].t >= t_ref + span ||
-                 (k1 + 1 < imu.size() && imu[k1 + 1].t - t_ref >= cfg.window.duration);
+  out.complete = imu[k_last].t >= t_ref + span ||
+                 (k_last + 1 < imu.size() && imu[k_last + 1].t - t_ref >= cfg.window.duration);
   return out;
 }
 
@@ -402,36 +402,37 @@ StartDetectorParams startDetectorParams(const FreeInitConfig& cfg) {
   return sp;
 }
 
-StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std::size_t k1,
-                          const std::vector<StartPoint>& points, const Extrinsics& extrinsics,
-                          const Vec3& b_g_prior, const StartDetectorParams& p) {
+StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first,
+                          std::size_t k_last, const std::vector<StartPoint>& points,
+                          const Extrinsics& extrinsics, const Vec3& b_g_prior,
+                          const StartDetectorParams& p) {
   StartDecision out;
-  if (k1 <= k0 || k1 >= imu.size()) {
+  if (k_last <= k_first || k_last >= imu.size()) {
     out.message = "no IMU samples over the start of the window";
     return out;
   }
-  const double t_ref = imu[k0].t;
+  const double t_ref = imu[k_first].t;
   // Strapdown integration in b0 over the span, with the estimator's own integrator (cubic
   // interpolation of the IMU and Simpson's rule: a vibrating platform needs them). It integrates
   // with a gravity, so with the world w = b0 and a start at rest the velocity it gives is
   // v(t) = C(t) + g_w t, from which C(t) follows.
   const std::vector<ImuSample> span(
-      imu.begin() + static_cast<std::ptrdiff_t>(k0 > 0 ? k0 - 1 : k0),
-      imu.begin() + static_cast<std::ptrdiff_t>(std::min(imu.size(), k1 + 3)));
-  const std::size_t j0 = k0 > 0 ? 1 : 0;  // the window start in `span`
+      imu.begin() + static_cast<std::ptrdiff_t>(k_first > 0 ? k_first - 1 : k_first),
+      imu.begin() + static_cast<std::ptrdiff_t>(std::min(imu.size(), k_last + 3)));
+  const std::size_t j0 = k_first > 0 ? 1 : 0;  // the window start in `span`
   const Vec3 g_w(0, 0, -kGravity);
-  const double T = imu[k1].t - t_ref;
+  const double T = imu[k_last].t - t_ref;
   FilterState x0;
   x0.t = t_ref;
   x0.b_g = b_g_prior;
   std::vector<FilterState> at;  // the state at each sample of the span
-  at.reserve(k1 - k0 + 1);
+  at.reserve(k_last - k_first + 1);
   at.push_back(x0);
-  for (std::size_t i = 1; i <= k1 - k0; ++i)
+  for (std::size_t i = 1; i <= k_last - k_first; ++i)
     at.push_back(DopplerInertialFilter::propagate(at.back(), span, j0 + i - 1));
   const Vec3 g_mean = -(at.back().v_w - g_w * T) / T;  // exact at rest, off by the mean
                                                        // acceleration otherwise
-  out.imu_still = imuShowsRest(imu, k0, k1 + 1, p.gyro_sigma, p.accel_sigma);
+  out.imu_still = imuShowsRest(imu, k_first, k_last + 1, p.gyro_sigma, p.accel_sigma);
 
   // Every return as a linear equation.
   Rows rows;
@@ -442,8 +443,8 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std
   std::size_t i = 0;
   for (const StartPoint& sp : points) {
     if (sp.t < 0 || sp.t > T) continue;
-    while (i + 1 < at.size() - 1 && imu[k0 + i + 1].t - t_ref <= sp.t) ++i;
-    const double tau = sp.t - (imu[k0 + i].t - t_ref);
+    while (i + 1 < at.size() - 1 && imu[k_first + i + 1].t - t_ref <= sp.t) ++i;
+    const double tau = sp.t - (imu[k_first + i].t - t_ref);
     const FilterState xt = DopplerInertialFilter::integrate(at[i], span, j0 + i, tau);
     Vec3 gyro, accel;
     DopplerInertialFilter::interpolateImu(span, t_ref + sp.t, gyro, accel);

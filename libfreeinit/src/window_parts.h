@@ -103,7 +103,7 @@ class WindowRecorder {
   /// r.static_map (the recorder's own buffer, moved), the others into r.rejected. The recorder
   /// is empty afterwards.
   void finish(const DopplerInertialFilter& filter, const std::vector<ImuSample>& imu,
-              std::size_t k0, const Extrinsics& ext, InitResult& r) {
+              std::size_t k_first, const Extrinsics& ext, InitResult& r) {
     // In float, as the map is kept: at 100 m its rounding is 0.01 mm. A return at tau from its
     // node is at x_b = p_b + tau (omega x p_b + v_b) in the node's body frame (p_b = R_bl p_l +
     // p_bl), so in the world p_w = A p_l + a + tau (B p_l + b) with, per node, A = R R_bl,
@@ -117,7 +117,7 @@ class WindowRecorder {
     const double t_state = filter.state(filter.nodes() - 1).t;
     for (std::size_t k = 0; k < maps.size(); ++k) {
       const FilterState& x = filter.state(k);
-      const Vec3 omega = imu[k0 + k].gyro - x.b_g;
+      const Vec3 omega = imu[k_first + k].gyro - x.b_g;
       const Vec3 v_b = x.R_wb.transpose() * x.v_w;
       maps[k] = {(x.R_wb * ext.R_bl).cast<float>(), (x.R_wb * skew(omega) * ext.R_bl).cast<float>(),
                  (x.R_wb * ext.p_bl + x.p_w).cast<float>(),

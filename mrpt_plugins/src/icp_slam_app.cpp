@@ -1,8 +1,8 @@
 #include <freeinit/doppler_inertial_odometry.h>
 #include <freeinit/free_init.h>
+#include <freeinit/mrpt_plugins/checked_recording.h>
 #include <freeinit/mrpt_plugins/conversions.h>
 #include <freeinit/mrpt_plugins/icp_slam_app.h>
-#include <freeinit/mrpt_plugins/input_validator.h>
 #include <freeinit/mrpt_plugins/map_export.h>
 #include <freeinit/mrpt_plugins/output_set.h>
 #include <freeinit/mrpt_plugins/output_writers.h>
@@ -227,7 +227,7 @@ int IcpSlamApp::run(std::ostream& log) {
   const ScanSliceParams slice = loadScanSliceParams(params.icp_ini);
   AppConfig config = loadAppConfig(params.freeinit_ini);
   log << "Reading " << params.rawlog << "\n";
-  const ValidatedInput in = readRecording(params.rawlog, config);
+  const CheckedRecording in = readRecording(params.rawlog, config);
   for (const auto& w : in.warnings) log << "Warning: " << w << "\n";
   if (config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics)
     config.core.extrinsics = *in.sensor_pose_extrinsics;

@@ -1,5 +1,5 @@
+#include <freeinit/mrpt_plugins/checked_recording.h>
 #include <freeinit/mrpt_plugins/conversions.h>
-#include <freeinit/mrpt_plugins/input_validator.h>
 #include <freeinit/mrpt_plugins/stream_app.h>
 #include <freeinit/mrpt_plugins/stream_conversions.h>
 #include <freeinit/net/udp_socket.h>
@@ -37,7 +37,7 @@ Messages fromRawlog(const StreamAppParams& p) {
   cfg.input.imu_accel_in_g = p.imu_accel_in_g;
   cfg.input.min_imu_rate = 0;    // the receiver judges the rate
   cfg.core.window.duration = 0;  // any length can be streamed
-  ValidatedInput in = readRecording(p.rawlog, cfg);
+  CheckedRecording in = readRecording(p.rawlog, cfg);
   if (in.imu_stamp_ns.size() != in.imu.size() || in.frame_stamp_ns.size() != in.frames.size())
     throw InputError(p.rawlog + ": timestamps outside the stream's range 1970 .. 2116");
   const Extrinsics extrinsics = in.sensor_pose_extrinsics.value_or(Extrinsics{});

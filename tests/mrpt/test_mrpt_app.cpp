@@ -3,11 +3,11 @@
 // reads only what the window needs, initializes anywhere (--start, --every, --starts) with the
 // seek index, and tells bad records inside the window (errors) from those outside (warnings).
 #include <freeinit/free_init.h>
+#include <freeinit/mrpt_plugins/checked_recording.h>
 #include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/conversions.h>
 #include <freeinit/mrpt_plugins/file_kind.h>
 #include <freeinit/mrpt_plugins/free_init_app.h>
-#include <freeinit/mrpt_plugins/input_validator.h>
 #include <freeinit/mrpt_plugins/output_writers.h>
 #include <freeinit/mrpt_plugins/plugin_path.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
@@ -502,7 +502,7 @@ TEST(FreeInitAppStreaming, StopsAtTheWindowWithTheStateOfTheWholeRecording) {
     EXPECT_LT(app.records_read, readRawlog(sample).size() / 2);
 
     AppConfig config = loadAppConfig(kSrc + "/ini/freeinit.ini");
-    const ValidatedInput in = readRecording(sample, config);
+    const CheckedRecording in = readRecording(sample, config);
     if (config.extrinsics.from_sensor_pose) config.core.extrinsics = *in.sensor_pose_extrinsics;
     const InitResult whole = FreeInit::run(config.core, in.imu, in.frames);
     const std::string path = tmpFile("whole_initial_state.ini");

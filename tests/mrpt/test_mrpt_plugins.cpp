@@ -2,8 +2,8 @@
 // reader (truncation, unregistered classes) and its seek index, and the record checks of the
 // ingest path on whole recordings (INI loading: tests/config).
 #include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/checked_recording.h>
 #include <freeinit/mrpt_plugins/conversions.h>
-#include <freeinit/mrpt_plugins/input_validator.h>
 #include <freeinit/mrpt_plugins/output_writers.h>
 #include <freeinit/mrpt_plugins/points_map_doppler.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
@@ -106,8 +106,8 @@ void writeRawlogGz(const std::string& path, const std::vector<RawlogRecord>& rec
 }
 
 // The records as a rawlog file, read back by the ingest path (readRecording).
-ValidatedInput validate(const std::vector<RawlogRecord>& records, const AppConfig& config,
-                        const std::string& name = "bad.rawlog") {
+CheckedRecording validate(const std::vector<RawlogRecord>& records, const AppConfig& config,
+                          const std::string& name = "bad.rawlog") {
   const std::string p = tmpPath(name);
   writeRawlogPlain(p, records);
   return readRecording(p, config);

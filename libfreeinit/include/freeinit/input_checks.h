@@ -21,7 +21,7 @@
 namespace freeinit::input {
 
 /// IMU samples whose mean specific force judges the accelerometer unit (whole recordings).
-inline constexpr std::size_t kImuCheckSamples = 200;
+inline constexpr std::size_t kRecordingImuCheckSamples = 200;
 /// IMU samples a window's rate and unit checks use before the estimator sees any data (0.1 s at
 /// 200 Hz): enough for the rate and for g vs m/s^2 (a mean of 1 vs 9.81), few enough that a live
 /// estimator keeps up with the stream from early on.
@@ -60,8 +60,8 @@ bool dopplerAllZero(const std::vector<DopplerPoint>& points);
 
 /// Median-interval rate of `imu` (>= 2 samples) below `min_rate` [Hz].
 std::optional<std::string> imuRateProblem(const std::vector<ImuSample>& imu, double min_rate);
-/// The mean of the first kImuCheckSamples accelerations (already scaled by the declared unit)
-/// says the declared unit ([input] imu_accel_in_g) is wrong.
+/// The mean of the first kRecordingImuCheckSamples accelerations (already scaled by the declared
+/// unit) says the declared unit ([input] imu_accel_in_g) is wrong.
 std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, bool declared_g);
 
 /// Thresholds of the rest test, from the estimator's configuration.

@@ -97,12 +97,12 @@ struct StartDecision {
 bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
                   double gyro_sigma, double accel_sigma);
 
-/// The start decision's span of a window: its first IMU sample k0 (the first at or after t_first,
-/// the window's first LiDAR return) and its last k1, bootstrap_duration later or the last one
-/// inside the window. valid: k0 has a sample after it; complete: the samples given cover the
-/// span (a later one exists, or k1 is the window's last).
+/// The start decision's span of a window: its first IMU sample k_first (the first at or after
+/// t_first, the window's first LiDAR return) and its last k_last, bootstrap_duration later or the
+/// last one inside the window. valid: k_first has a sample after it; complete: the samples given
+/// cover the span (a later one exists, or k_last is the window's last).
 struct StartSpan {
-  std::size_t k0 = 0, k1 = 0;
+  std::size_t k_first = 0, k_last = 0;
   bool valid = false;
   bool complete = false;
 };
@@ -112,11 +112,12 @@ StartSpan startSpan(const std::vector<ImuSample>& imu, double t_first, const Fre
 /// gate, rest speed, information floor).
 StartDetectorParams startDetectorParams(const FreeInitConfig& cfg);
 
-/// Decides the motion at the window start from the IMU samples `imu[k0..k1]` (times absolute;
-/// imu[k0].t is the window start) and the returns of [imu[k0].t, imu[k1].t] (times relative to
-/// the window start). `b_g_prior` is removed from the gyro. Deterministic.
-StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k0, std::size_t k1,
-                          const std::vector<StartPoint>& points, const Extrinsics& extrinsics,
-                          const Vec3& b_g_prior, const StartDetectorParams& params);
+/// Decides the motion at the window start from the IMU samples `imu[k_first..k_last]` (times
+/// absolute; imu[k_first].t is the window start) and the returns of [imu[k_first].t, imu[k_last].t]
+/// (times relative to the window start). `b_g_prior` is removed from the gyro. Deterministic.
+StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first,
+                          std::size_t k_last, const std::vector<StartPoint>& points,
+                          const Extrinsics& extrinsics, const Vec3& b_g_prior,
+                          const StartDetectorParams& params);
 
 }  // namespace freeinit

@@ -1,20 +1,20 @@
 #include <freeinit/input_checks.h>
+#include <freeinit/mrpt_plugins/checked_recording.h>
 #include <freeinit/mrpt_plugins/ingest.h>
 #include <freeinit/mrpt_plugins/ingest_sources.h>
-#include <freeinit/mrpt_plugins/input_validator.h>
 
 #include <algorithm>
 #include <map>
 
 namespace freeinit::mrpt_plugins {
 
-ValidatedInput readRecording(const std::string& path, const AppConfig& config,
-                             const RawlogIndexPolicy& index) {
+CheckedRecording readRecording(const std::string& path, const AppConfig& config,
+                               const RawlogIndexPolicy& index) {
   RawlogReader reader(path, index);
   reader.setMaxRecordBytes(static_cast<std::size_t>(config.input.max_record_mb * 1e6));
   ObservationDecoder decoder(config.input);
   RecordChecker checker(config);
-  ValidatedInput in;
+  CheckedRecording in;
   bool all_ns = true;
   std::map<std::string, int> ignored;  // "class 'label'" -> count
   std::size_t first_imu_record = 0, first_cloud_record = 0;

@@ -15,7 +15,7 @@
 namespace freeinit::mrpt_plugins {
 
 /// The recording in core types, as the estimator will see it.
-struct ValidatedInput {
+struct CheckedRecording {
   std::vector<ImuSample> imu;
   std::vector<LidarFrame> frames;
   /// [ns] exact stamps of `imu` and `frames` (MRPT's 100 ns clock); empty if one is outside the
@@ -34,7 +34,7 @@ struct ValidatedInput {
 /// the IMU moves), no IMU or no LiDAR observations with the configured labels, an IMU slower than
 /// [input] min_imu_rate, accelerations in g without [input] imu_accel_in_g (or the reverse), a
 /// recording shorter than the window.
-ValidatedInput readRecording(const std::string& path, const AppConfig& config,
-                             const RawlogIndexPolicy& index = {});
+CheckedRecording readRecording(const std::string& path, const AppConfig& config,
+                               const RawlogIndexPolicy& index = {});
 
 }  // namespace freeinit::mrpt_plugins
