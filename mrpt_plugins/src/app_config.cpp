@@ -3,6 +3,7 @@
 // documented INI and the loader cannot drift apart.
 #include <freeinit/config_section.h>
 #include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/result_files.h>
 
 #include <Eigen/Geometry>
 #include <cmath>
@@ -111,16 +112,15 @@ const config::Section<InputParams>& inputSection() {
 
 const config::Section<OutputParams>& outputSection() {
   using P = OutputParams;
-  static const auto s =
-      config::Section<P>("output", "what the app writes to its output folder")
-          .flag("simplemap", &P::simplemap, "static_map.simplemap (stock MRPT classes)")
-          .flag("ply", &P::ply, "static_map.ply")
-          .flag("trajectory", &P::trajectory, "trajectory_tum.txt")
-          .flag("velocities", &P::velocities, "velocimeter.csv")
-          .flag("snapshots", &P::snapshots, "PNG snapshots rendered offscreen")
-          .number("snapshot_width", &P::snapshot_width, "px", between(64, 16384), "snapshot width")
-          .number("snapshot_height", &P::snapshot_height, "px", between(64, 16384),
-                  "snapshot height");
+  static const auto s = [] {
+    config::Section<P> sec("output", "what the app writes to its output folder");
+    for (const ResultFile& f : resultFiles())  // one flag per key, from its first file
+      if (f.help != nullptr) sec.flag(f.key, f.enabled, f.help);
+    sec.number("snapshot_width", &P::snapshot_width, "px", between(64, 16384), "snapshot width")
+        .number("snapshot_height", &P::snapshot_height, "px", between(64, 16384),
+                "snapshot height");
+    return sec;
+  }();
   return s;
 }
 

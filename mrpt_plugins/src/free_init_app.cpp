@@ -3,10 +3,10 @@
 #include <freeinit/mrpt_plugins/free_init_app.h>
 #include <freeinit/mrpt_plugins/ingest.h>
 #include <freeinit/mrpt_plugins/ingest_sources.h>
-#include <freeinit/mrpt_plugins/map_export.h>
 #include <freeinit/mrpt_plugins/output_set.h>
 #include <freeinit/mrpt_plugins/output_writers.h>
 #include <freeinit/mrpt_plugins/progress_bar.h>
+#include <freeinit/mrpt_plugins/result_files.h>
 #include <freeinit/mrpt_plugins/snapshots.h>
 #include <freeinit/mrpt_plugins/stop_signal.h>
 
@@ -33,12 +33,6 @@ std::string v3(const Vec3& v) {
   return os.str();
 }
 
-constexpr const char* kSimplemapFile = "static_map.simplemap";
-constexpr const char* kPlyFile = "static_map.ply";
-constexpr const char* kTrajectoryFile = "trajectory_tum.txt";
-constexpr const char* kVelocityCsvFile = "velocimeter.csv";
-constexpr const char* kMapPngFile = "static_map.png";
-constexpr const char* kVelocityPngFile = "velocity.png";
 constexpr const char* kStateFile = "initial_state.ini";
 constexpr const char* kErrorsFile = "errors_wrt_gt.ini";
 constexpr const char* kConfigFile = "effective_config.ini";
@@ -177,35 +171,6 @@ std::vector<double> readStartsFile(const std::string& path) {
   }
   if (out.empty()) throw InputError(path + ": no start in the file");
   return out;
-}
-
-std::vector<std::string> resultFileNames() {
-  return {kSimplemapFile,   kPlyFile,    kTrajectoryFile,
-          kVelocityCsvFile, kMapPngFile, kVelocityPngFile};
-}
-
-void writeResultFiles(OutputSet& set, const std::string& prefix, const OutputParams& output,
-                      const InitResult& result, const std::vector<TruthSample>& truth) {
-  auto file = [&](const char* name) { return prefix + name; };
-  if (output.simplemap)
-    set.write(file(kSimplemapFile), [&](const std::string& p) { writeStaticSimplemap(p, result); });
-  if (output.ply)
-    set.write(file(kPlyFile), [&](const std::string& p) { writePly(p, result.static_map); });
-  if (output.trajectory)
-    set.write(file(kTrajectoryFile), [&](const std::string& p) { writeTum(p, result.trajectory); });
-  if (output.velocities)
-    set.write(file(kVelocityCsvFile),
-              [&](const std::string& p) { writeVelocityCsv(p, result.velocities); });
-  if (output.snapshots) {
-    if (!result.static_map.empty())
-      set.write(file(kMapPngFile), [&](const std::string& p) {
-        renderMapSnapshot(p, result, output.snapshot_width, output.snapshot_height);
-      });
-    if (!result.velocities.empty())
-      set.write(file(kVelocityPngFile), [&](const std::string& p) {
-        renderVelocityPlot(p, result, truth, output.snapshot_width, output.snapshot_height);
-      });
-  }
 }
 
 int FreeInitApp::run(std::ostream& log) {

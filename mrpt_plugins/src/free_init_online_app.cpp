@@ -1,5 +1,4 @@
 #include <freeinit/mrpt_plugins/conversions.h>
-#include <freeinit/mrpt_plugins/free_init_app.h>
 #include <freeinit/mrpt_plugins/free_init_online_app.h>
 #include <freeinit/mrpt_plugins/ingest.h>
 #include <freeinit/mrpt_plugins/ingest_sources.h>
@@ -8,6 +7,7 @@
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
 #include <freeinit/mrpt_plugins/register.h>
+#include <freeinit/mrpt_plugins/result_files.h>
 #include <freeinit/mrpt_plugins/stop_signal.h>
 #include <freeinit/mrpt_plugins/stream_conversions.h>
 

@@ -1,6 +1,7 @@
 #include <fcntl.h>
 #include <fnmatch.h>
 #include <freeinit/mrpt_plugins/output_set.h>
+#include <freeinit/mrpt_plugins/result_files.h>
 #include <freeinit/mrpt_plugins/stop_signal.h>
 #include <sys/file.h>
 #include <sys/stat.h>
@@ -79,16 +80,18 @@ std::pair<std::string, std::string> splitExtension(const std::string& name) {
 }  // namespace
 
 std::vector<std::string> folderOutputNames() {
-  return {// freeinit (one start, and several: start folders and their table)
-          "initial_state.ini", "effective_config.ini", "errors_wrt_gt.ini", "static_map.simplemap",
-          "static_map.ply", "trajectory_tum.txt", "velocimeter.csv", "static_map.png",
-          "velocity.png", "starts.csv", "starts.md", "starts.png", "start_*/",
-          // freeinit-online
-          "stream_stats.ini",
-          // freeinit-icp-slam, its export and freeinit-eval-rawlog --plots
-          "icp_slam_seed.ini", "odometry_alone_tum.txt", "results.txt", "trajectories.png",
-          "plain/", "seeded/", "odometry/", "plain.rawlog", "plain.ini", "seeded.rawlog",
-          "seeded.ini", "odometry.rawlog", "odometry.ini", "velocity_error.png"};
+  std::vector<std::string> names = {
+      // freeinit (one start, and several: start folders and their table)
+      "initial_state.ini", "effective_config.ini", "errors_wrt_gt.ini", "starts.csv", "starts.md",
+      "starts.png", "start_*/",
+      // freeinit-online
+      "stream_stats.ini",
+      // freeinit-icp-slam, its export and freeinit-eval-rawlog --plots
+      "icp_slam_seed.ini", "odometry_alone_tum.txt", "results.txt", "trajectories.png", "plain/",
+      "seeded/", "odometry/", "plain.rawlog", "plain.ini", "seeded.rawlog", "seeded.ini",
+      "odometry.rawlog", "odometry.ini", "velocity_error.png"};
+  for (std::string& n : resultFileNames()) names.push_back(std::move(n));  // and the results'
+  return names;
 }
 
 OutputSetOptions folderSetOptions() {

@@ -1,11 +1,14 @@
 // The output set (output_set.h): a run's outputs appear whole or not at all, replace the earlier
 // run's as a whole, never touch what is not ours, never delete a recording, and two sets on one
 // folder exclude each other.
+#include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/output_set.h>
+#include <freeinit/mrpt_plugins/result_files.h>
 #include <freeinit/mrpt_plugins/stop_signal.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <csignal>
 #include <filesystem>
 #include <fstream>
@@ -277,6 +280,41 @@ TEST(OutputSet, RefusesAFileAsTheFolder) {
   } catch (const OutputError& e) {
     EXPECT_EQ(std::string(e.what()), d.string() + ": not a folder (the outputs need one)");
   }
+}
+
+// The result files' table (result_files.h) is the one list: each file is ours in an output folder
+// (replaced with the set, never left behind) and enabled by an [output] flag the INI declares.
+TEST(ResultFiles, EveryFileIsOwnedByAFolderSetAndHasADeclaredFlag) {
+  using namespace freeinit::mrpt_plugins;
+  const std::vector<std::string> owned = folderOutputNames();
+  std::set<std::string> flags;
+  for (const auto& k : outputSection().keys())
+    if (k.unit == "bool") flags.insert(k.name);
+  std::set<std::string> keys;
+  for (const ResultFile& f : resultFiles()) {
+    EXPECT_NE(std::find(owned.begin(), owned.end(), f.name), owned.end()) << f.name;
+    keys.insert(f.key);
+  }
+  EXPECT_EQ(keys, flags);
+  EXPECT_EQ(resultFileNames().size(), resultFiles().size());
+}
+
+TEST(ResultFiles, WritesWhatOutputEnablesAndWhatHasContent) {
+  using namespace freeinit::mrpt_plugins;
+  freeinit::InitResult r;  // no map and no velocities: no snapshot has anything to draw
+  r.trajectory.resize(2);
+  OutputParams output;  // snapshots enabled, as by default
+  output.simplemap = false;
+  output.velocities = false;
+  const fs::path d = freshDir("result_files");
+  std::ostringstream log;
+  {
+    OutputSet set(d.string(), "", folderSetOptions(), log);
+    writeResultFiles(set, "start_0001.000/", output, r, {});
+    set.commit();
+  }
+  EXPECT_EQ(listing(d), (std::set<std::string>{"start_0001.000", "start_0001.000/static_map.ply",
+                                               "start_0001.000/trajectory_tum.txt"}));
 }
 
 }  // namespace

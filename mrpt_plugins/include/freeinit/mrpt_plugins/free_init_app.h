@@ -73,17 +73,6 @@ struct FreeInitAppParams {
   std::string argumentsProblem() const;
 };
 
-class OutputSet;
-
-/// Names of every file writeResultFiles may write (whatever [output] enables).
-std::vector<std::string> resultFileNames();
-
-/// Stages the [output] files other than initial_state.ini (static map .simplemap / .ply,
-/// trajectory, velocimeter CSV, snapshots) in `set`, under `prefix` ("" or "start_0012.000/").
-/// `truth` may be empty.
-void writeResultFiles(OutputSet& set, const std::string& prefix, const OutputParams& output,
-                      const InitResult& result, const std::vector<TruthSample>& truth);
-
 class FreeInitApp {
  public:
   FreeInitAppParams params;
