@@ -19,6 +19,7 @@
 #include <iomanip>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <ostream>
 #include <sstream>
 #include <thread>
@@ -126,253 +127,332 @@ class RecordWriter {
   std::thread thread_;
 };
 
-}  // namespace
+const char* const kSourceName = "live stream";
 
-int FreeInitOnlineApp::run(std::ostream& log) {
-  registerClasses();
-  const auto t_start = Clock::now();
-
-  // The outputs are one set (output_set.h): the earlier run's go when this run's first data
-  // arrive (its recording renamed, never deleted); the state is installed the moment the window
-  // closes, the rest when the stream ends.
-  if (params.record.find('/') != std::string::npos)
-    throw std::invalid_argument("--record " + params.record +
+/// The output set's options: the recording (a file name in the output folder) and its
+/// statistics are kept, never deleted.
+OutputSetOptions onlineSetOptions(const FreeInitOnlineAppParams& p) {
+  if (p.record.find('/') != std::string::npos)
+    throw std::invalid_argument("--record " + p.record +
                                 ": a file name in the output folder, without '/'");
   OutputSetOptions options = folderSetOptions();
-  options.recording = params.record;
-  options.recording_companion = params.record.empty() ? "" : kStatsFile;
-  OutputSet set(params.out_dir, "", options, log);
+  options.recording = p.record;
+  options.recording_companion = p.record.empty() ? "" : kStatsFile;
+  return options;
+}
 
-  config = loadAppConfig(params.config_file);
-  std::ostringstream effective;
-  dumpAppConfig(config, effective);
-  log << "Effective configuration (" << params.config_file << "):\n" << effective.str() << "\n";
-  const StreamLabels labels{config.input.imu_label.empty() ? "IMU" : config.input.imu_label,
-                            config.input.lidar_label.empty() ? "LIDAR" : config.input.lidar_label};
+/// One run of freeinit-online, step by step (FreeInitOnlineApp::run() calls them in order); what
+/// it finds goes to the app's members.
+///
+/// The outputs are one set (output_set.h): the earlier run's go when this run's first data
+/// arrive (its recording renamed, never deleted); the state is installed the moment the window
+/// closes, the rest when the stream ends.
+class OnlineRun {
+ public:
+  OnlineRun(FreeInitOnlineApp& app, std::ostream& log)
+      : app_(app),
+        p_(app.params),
+        log_(log),
+        t_start_(Clock::now()),
+        set_(p_.out_dir, "", onlineSetOptions(p_), log) {}
 
-  const std::string state_file = set.finalPath(kStateFile);
-  record_path = params.record.empty() ? "" : set.finalPath(params.record);
-  set.write(kConfigFile, [&](const std::string& p) {
-    writeFileAtomically(p, [&](std::ostream& o) { o << effective.str(); });
-  });
-
-  // The recording: written into the staging folder, kept whatever happens.
-  std::unique_ptr<RecordWriter> rec;
-  if (!record_path.empty()) rec = std::make_unique<RecordWriter>(set.path(params.record), 128);
-
-  std::unique_ptr<net::StreamSource> src =
-      source ? std::move(source) : std::make_unique<net::UdpStreamSource>(params.source);
-  src->start();
-  if (const auto* udp = dynamic_cast<const net::UdpStreamSource*>(src.get())) {
-    log << "Listening on UDP " << params.source.address << ":" << udp->port() << " (receive buffer "
-        << udp->receiveBufferGranted() << " bytes)\n";
-    log.flush();  // a live tool's log is followed as it runs (e.g. tail -f on a file)
-    if (on_listening) on_listening(udp->port());
+  /// The configuration (echoed, and staged as effective_config.ini) and the recording, written
+  /// into the staging folder and kept whatever happens.
+  void prepare() {
+    app_.config = loadAppConfig(p_.config_file);
+    std::ostringstream effective;
+    dumpAppConfig(app_.config, effective);
+    log_ << "Effective configuration (" << p_.config_file << "):\n" << effective.str() << "\n";
+    const InputParams& in = app_.config.input;
+    labels_ = {in.imu_label.empty() ? "IMU" : in.imu_label,
+               in.lidar_label.empty() ? "LIDAR" : in.lidar_label};
+    state_file_ = set_.finalPath(kStateFile);
+    app_.record_path = p_.record.empty() ? "" : set_.finalPath(p_.record);
+    set_.write(kConfigFile, [&](const std::string& path) {
+      writeFileAtomically(path, [&](std::ostream& o) { o << effective.str(); });
+    });
+    if (!app_.record_path.empty()) rec_ = std::make_unique<RecordWriter>(set_.path(p_.record), 128);
   }
 
-  // The ingest path, as offline: wire items -> record checks -> one session.
-  const std::string source_name = "live stream";
-  RecordChecker checker(config);
-  InitSession session(config, source_name, false);
-  const double accel_scale = config.input.imu_accel_in_g ? kGravity : 1.0;
-  std::vector<CheckedItem> checked;
-  ready_live = false;
-  stats_at_ready = {};
-  recorded = 0;
-  std::string input_error;
-  bool data_seen = false, end = false, stopped = false;
-  int stopped_by_signal = 0;
-  int sessions = 0;
-  auto last_data = Clock::now();
-  std::vector<net::StreamEvent> events;
-  // The moment the session is done while the stream runs: the state is written, or the input
-  // error stops the run.
-  auto onDone = [&](const net::StreamEvent& e, Clock::time_point t_fed) {
+  /// The source (the app's, or the UDP receiver) and the ingest path behind it, as offline: wire
+  /// items -> record checks -> one session.
+  void startSource() {
+    src_ = app_.source ? std::move(app_.source) : std::make_unique<net::UdpStreamSource>(p_.source);
+    src_->start();
+    if (const auto* udp = dynamic_cast<const net::UdpStreamSource*>(src_.get())) {
+      log_ << "Listening on UDP " << p_.source.address << ":" << udp->port() << " (receive buffer "
+           << udp->receiveBufferGranted() << " bytes)\n";
+      log_.flush();  // a live tool's log is followed as it runs (e.g. tail -f on a file)
+      if (app_.on_listening) app_.on_listening(udp->port());
+    }
+    checker_.emplace(app_.config);
+    session_.emplace(app_.config, kSourceName, false);
+    accel_scale_ = app_.config.input.imu_accel_in_g ? kGravity : 1.0;
+    app_.ready_live = false;
+    app_.stats_at_ready = {};
+    app_.recorded = 0;
+  }
+
+  /// Until the stream ends (end-of-stream marker, idle or time limits, a stop signal, or an
+  /// input error), feeding every item to the recording and, until it is done, to the session.
+  void receive() {
+    auto last_data = Clock::now();
+    std::vector<net::StreamEvent> events;
+    while (!end_) {
+      if (const int sig = stopSignal()) {
+        // The normal way to stop a live tool: the end of the stream, with every output written.
+        log_ << "Stopped by " << signalName(sig) << ": end of the stream\n";
+        clearStopRequest();
+        stopped_by_signal_ = sig;
+        break;
+      }
+      events.clear();
+      src_->poll(events, 0.05);
+      const auto now = Clock::now();
+      if (!events.empty()) {
+        last_data = now;
+        if (!data_seen_) set_.install({kConfigFile});  // the earlier run's outputs go now
+        data_seen_ = true;
+      } else if (data_seen_ && p_.idle_timeout > 0 &&
+                 secondsBetween(last_data, now) > p_.idle_timeout) {
+        log_ << "No data for " << p_.idle_timeout << " s: end of the stream\n";
+        break;
+      } else if (!data_seen_ && p_.wait_first > 0 &&
+                 secondsBetween(t_start_, now) > p_.wait_first) {
+        log_ << "No data within " << p_.wait_first << " s\n";
+        break;
+      }
+      if (p_.max_duration > 0 && secondsBetween(t_start_, now) > p_.max_duration) {
+        log_ << "Maximum duration reached\n";
+        break;
+      }
+      for (auto& e : events) {
+        handle(e);
+        if (end_) break;
+      }
+      if (!input_error_.empty()) break;
+    }
+    src_->stop();
+    app_.stats = src_->stats();
+  }
+
+  /// Closes the recording (removed when nothing was recorded); then, without any data, the run
+  /// fails with nothing written.
+  void closeRecording() {
+    if (rec_) {
+      try {
+        rec_->commit();
+      } catch (const std::exception& e) {
+        throw OutputError(set_.describe(p_.record, e.what()));
+      }
+      rec_.reset();
+      if (app_.recorded == 0) {
+        std::filesystem::remove(set_.path(p_.record));  // nothing was recorded
+      } else {
+        log_ << "Recorded " << app_.recorded << " observations to " << app_.record_path << "\n";
+      }
+    }
+    if (!data_seen_) {
+      std::ostringstream within;
+      if (p_.wait_first > 0) within << " within " << p_.wait_first << " s";
+      throw InputError(
+          std::string(kSourceName) + ": no data received" + within.str() +
+          (stopped_by_signal_ != 0 ? " before " + signalName(stopped_by_signal_) : "") +
+          "; nothing written");
+    }
+  }
+
+  /// stream_stats.ini (kept with the recording), with the latency when the state was written
+  /// live. An input error then ends the run: the recording and its statistics are kept
+  /// (abandon() installs them), the rest goes.
+  void writeStreamStats() {
+    const net::SourceStats& stats = app_.stats;
+    const net::SourceStats& at_ready = app_.stats_at_ready;
+    const OnlineLatency& latency = app_.latency;
+    std::ostringstream st;
+    net::printStats(st, stats);
+    log_ << "Stream statistics:\n" << st.str();
+    set_.write(kStatsFile, [&](const std::string& path) {
+      writeFileAtomically(path, [&](std::ostream& o) {
+        o << "[stream]\n" << st.str() << "recorded            = " << app_.recorded << "\n";
+        if (stopped_by_signal_ != 0)
+          o << "stopped_by          = " << signalName(stopped_by_signal_) << "\n";
+        if (app_.ready_live)
+          o << std::setprecision(6) << "latency_total_ms    = " << 1e3 * latency.total
+            << "\nlatency_queue_ms    = " << 1e3 * latency.queue
+            << "\nlatency_estimator_ms= " << 1e3 * latency.estimator
+            << "\nlatency_write_ms    = " << 1e3 * latency.write
+            << "\n; stream anomalies before the state was written (data possibly in the window)"
+            << "\nanomalies_before_ready = " << at_ready.anomalies()
+            << "\nlost_before_ready   = " << at_ready.receiver.lost
+            << "\nqueue_dropped_imu_before_ready    = " << at_ready.queue_dropped_imu
+            << "\nqueue_dropped_frames_before_ready = " << at_ready.queue_dropped_frames << "\n";
+      });
+    });
+    if (stats.anomalies() > 0)
+      log_ << "Warning: " << stats.anomalies()
+           << " datagrams or items lost, dropped or rejected (see stream_stats.ini)\n";
+    if (!input_error_.empty()) throw InputError(input_error_);
+  }
+
+  /// A session the stream ended before: given the end of the data, it initializes or says why
+  /// not (an InputError).
+  void finishSession() {
+    InitSession& session = *session_;
+    if (!session.done()) {
+      std::vector<CheckedItem> checked;
+      checker_->finish(checked);
+      for (const auto& c : checked) session.push(c);
+      session.finish();
+      if (session.failed()) {
+        for (const auto& err : session.errors()) log_ << "Error: " << err << "\n";
+        throw InputError(session.errors().front());
+      }
+      if (!session.ready()) throw InputError(session.endOfDataReason());
+      writeState(session.result());
+    }
+    for (const auto& w : session.warnings()) log_ << "Warning: " << w << "\n";
+    if (session.ready() && session.result().state.ok()) {
+      printVerdict(log_, verdictOf(session.result(), dopplerSigma()));
+      for (const auto& w : session.result().state.warnings) log_ << "  warning: " << w << "\n";
+    }
+    app_.result = session.result();
+    if (stopped_by_signal_ != 0 && !app_.ready_live)
+      log_ << "The stream was stopped by " << signalName(stopped_by_signal_)
+           << " before the window closed\n";
+  }
+
+  /// The other outputs (as the offline app writes them), and the set installed.
+  int writeOutputs() {
+    const InitResult& result = app_.result;
+    writeResultFiles(set_, "", app_.config.output, result, {});
+    set_.commit();
+    log_ << "Initialization: " << toString(result.state.status)
+         << (result.state.message.empty() ? "" : " (" + result.state.message + ")") << "\n";
+    return result.state.ok() ? 0 : 3;
+  }
+
+ private:
+  double dopplerSigma() const { return app_.config.core.velocimeter.doppler_sigma; }
+
+  void writeState(const InitResult& r) {
+    set_.write(kStateFile, [&](const std::string& path) {
+      const StateVerdict v = verdictOf(r, dopplerSigma());
+      writeInitialStateIni(path, r.state, &v);
+    });
+  }
+
+  /// One event of the stream: a sender's session start or end of stream, or an item for the
+  /// recording and the session.
+  void handle(net::StreamEvent& e) {
+    using Kind = net::StreamEvent::Kind;
+    if (e.kind == Kind::SessionStart) {
+      log_ << "Sender session " << std::hex << e.session << std::dec
+           << (++sessions_ > 1 ? " (the sender restarted)" : "") << "\n";
+      return;
+    }
+    if (e.kind == Kind::EndOfStream) {
+      log_ << "End of stream from the sender\n";
+      if (p_.stop_at_end_of_stream) end_ = true;
+      return;
+    }
+    const auto t_fed = Clock::now();
+    const Extrinsics declared = e.frame.extrinsics;
+    auto item = itemFromStream(std::move(e), app_.recorded, accel_scale_);
+    if (!item) return;
+    if (rec_) {
+      const bool imu = item->kind == IngestItem::Kind::Imu;
+      Recorded r;
+      r.item.kind = item->kind;
+      r.item.stamp_ns = item->stamp_ns;
+      r.item.imu = item->imu;
+      r.item.imu.accel = e.imu.accel;  // as received (the rawlog decoder applies the unit)
+      r.item.frame = item->frame;
+      r.label = imu ? labels_.imu : labels_.lidar;
+      r.extrinsics = declared;
+      rec_->push(std::move(r));
+    }
+    ++app_.recorded;
+    InitSession& session = *session_;
+    if (stopped_ || session.done()) return;
+    checked_.clear();
+    checker_->push(std::move(*item), checked_);
+    for (const auto& c : checked_) session.push(c);
+    if (session.done()) {
+      done(e, t_fed);
+      if (!input_error_.empty()) stopped_ = true;
+    }
+  }
+
+  /// The moment the session is done while the stream runs: the state is written, or the input
+  /// error stops the run.
+  void done(const net::StreamEvent& e, Clock::time_point t_fed) {
+    InitSession& session = *session_;
     if (session.failed()) {
-      input_error = session.errors().front();
-      for (const auto& err : session.errors()) log << "Error: " << err << "\n";
+      input_error_ = session.errors().front();
+      for (const auto& err : session.errors()) log_ << "Error: " << err << "\n";
       return;
     }
     const auto t_processed = Clock::now();
     // The state goes out before the map is built (the map is for the outputs at the end).
-    const InitResult& r = session.resultBeforeMap();
-    set.write(kStateFile, [&](const std::string& p) {
-      const StateVerdict v = verdictOf(r, config.core.velocimeter.doppler_sigma);
-      writeInitialStateIni(p, r.state, &v);
-    });
-    set.install({kStateFile});
+    writeState(session.resultBeforeMap());
+    set_.install({kStateFile});
     const auto t_written = Clock::now();
+    OnlineLatency& latency = app_.latency;
     latency.queue = secondsBetween(e.received, t_fed);
     latency.estimator = secondsBetween(t_fed, t_processed);
     latency.write = secondsBetween(t_processed, t_written);
     latency.total = secondsBetween(e.received, t_written);
-    ready_live = true;
-    stats_at_ready = src->stats();
-    log << std::fixed << std::setprecision(3) << "State written to " << state_file << ": latency "
-        << 1e3 * latency.total << " ms from the receipt of the last needed "
-        << "measurement (queue and conversion " << 1e3 * latency.queue << ", estimator "
-        << 1e3 * latency.estimator << ", write " << 1e3 * latency.write << ")\n"
-        << std::defaultfloat;
-    log << (stats_at_ready.anomalies() > 0 ? "Warning: " : "")
-        << "anomalies_before_ready = " << stats_at_ready.anomalies() << " ("
-        << stats_at_ready.receiver.lost << " datagrams lost, " << stats_at_ready.queue_dropped_imu
-        << " IMU samples and " << stats_at_ready.queue_dropped_frames << " frames dropped, "
-        << stats_at_ready.receiver.frames_incomplete + stats_at_ready.receiver.frames_inconsistent
-        << " frames incomplete or inconsistent)\n";
-    log.flush();
-    if (params.stop_when_ready) end = true;
-  };
-  while (!end) {
-    if (const int sig = stopSignal()) {
-      // The normal way to stop a live tool: the end of the stream, with every output written.
-      log << "Stopped by " << signalName(sig) << ": end of the stream\n";
-      clearStopRequest();
-      stopped_by_signal = sig;
-      break;
-    }
-    events.clear();
-    src->poll(events, 0.05);
-    const auto now = Clock::now();
-    if (!events.empty()) {
-      last_data = now;
-      if (!data_seen) set.install({kConfigFile});  // the earlier run's outputs go now
-      data_seen = true;
-    } else if (data_seen && params.idle_timeout > 0 &&
-               secondsBetween(last_data, now) > params.idle_timeout) {
-      log << "No data for " << params.idle_timeout << " s: end of the stream\n";
-      break;
-    } else if (!data_seen && params.wait_first > 0 &&
-               secondsBetween(t_start, now) > params.wait_first) {
-      log << "No data within " << params.wait_first << " s\n";
-      break;
-    }
-    if (params.max_duration > 0 && secondsBetween(t_start, now) > params.max_duration) {
-      log << "Maximum duration reached\n";
-      break;
-    }
-    for (auto& e : events) {
-      using Kind = net::StreamEvent::Kind;
-      if (e.kind == Kind::SessionStart) {
-        log << "Sender session " << std::hex << e.session << std::dec
-            << (++sessions > 1 ? " (the sender restarted)" : "") << "\n";
-        continue;
-      }
-      if (e.kind == Kind::EndOfStream) {
-        log << "End of stream from the sender\n";
-        if (params.stop_at_end_of_stream) {
-          end = true;
-          break;
-        }
-        continue;
-      }
-      const auto t_fed = Clock::now();
-      const Extrinsics declared = e.frame.extrinsics;
-      auto item = itemFromStream(std::move(e), recorded, accel_scale);
-      if (!item) continue;
-      if (rec) {
-        const bool imu = item->kind == IngestItem::Kind::Imu;
-        Recorded r;
-        r.item.kind = item->kind;
-        r.item.stamp_ns = item->stamp_ns;
-        r.item.imu = item->imu;
-        r.item.imu.accel = e.imu.accel;  // as received (the rawlog decoder applies the unit)
-        r.item.frame = item->frame;
-        r.label = imu ? labels.imu : labels.lidar;
-        r.extrinsics = declared;
-        rec->push(std::move(r));
-      }
-      ++recorded;
-      if (stopped || session.done()) continue;
-      checked.clear();
-      checker.push(std::move(*item), checked);
-      for (const auto& c : checked) session.push(c);
-      if (session.done()) {
-        onDone(e, t_fed);
-        if (!input_error.empty()) stopped = true;
-      }
-      if (end) break;
-    }
-    if (!input_error.empty()) break;
+    app_.ready_live = true;
+    const net::SourceStats& at_ready = app_.stats_at_ready = src_->stats();
+    log_ << std::fixed << std::setprecision(3) << "State written to " << state_file_ << ": latency "
+         << 1e3 * latency.total << " ms from the receipt of the last needed "
+         << "measurement (queue and conversion " << 1e3 * latency.queue << ", estimator "
+         << 1e3 * latency.estimator << ", write " << 1e3 * latency.write << ")\n"
+         << std::defaultfloat;
+    log_ << (at_ready.anomalies() > 0 ? "Warning: " : "")
+         << "anomalies_before_ready = " << at_ready.anomalies() << " (" << at_ready.receiver.lost
+         << " datagrams lost, " << at_ready.queue_dropped_imu << " IMU samples and "
+         << at_ready.queue_dropped_frames << " frames dropped, "
+         << at_ready.receiver.frames_incomplete + at_ready.receiver.frames_inconsistent
+         << " frames incomplete or inconsistent)\n";
+    log_.flush();
+    if (p_.stop_when_ready) end_ = true;
   }
-  src->stop();
-  stats = src->stats();
-  if (rec) {
-    try {
-      rec->commit();
-    } catch (const std::exception& e) {
-      throw OutputError(set.describe(params.record, e.what()));
-    }
-    rec.reset();
-    if (recorded == 0) {
-      std::filesystem::remove(set.path(params.record));  // nothing was recorded
-    } else {
-      log << "Recorded " << recorded << " observations to " << record_path << "\n";
-    }
-  }
-  if (!data_seen) {
-    std::ostringstream within;
-    if (params.wait_first > 0) within << " within " << params.wait_first << " s";
-    throw InputError(source_name + ": no data received" + within.str() +
-                     (stopped_by_signal != 0 ? " before " + signalName(stopped_by_signal) : "") +
-                     "; nothing written");
-  }
-  std::ostringstream st;
-  net::printStats(st, stats);
-  log << "Stream statistics:\n" << st.str();
-  set.write(kStatsFile, [&](const std::string& p) {
-    writeFileAtomically(p, [&](std::ostream& o) {
-      o << "[stream]\n" << st.str() << "recorded            = " << recorded << "\n";
-      if (stopped_by_signal != 0)
-        o << "stopped_by          = " << signalName(stopped_by_signal) << "\n";
-      if (ready_live)
-        o << std::setprecision(6) << "latency_total_ms    = " << 1e3 * latency.total
-          << "\nlatency_queue_ms    = " << 1e3 * latency.queue
-          << "\nlatency_estimator_ms= " << 1e3 * latency.estimator
-          << "\nlatency_write_ms    = " << 1e3 * latency.write
-          << "\n; stream anomalies before the state was written (data possibly in the window)"
-          << "\nanomalies_before_ready = " << stats_at_ready.anomalies()
-          << "\nlost_before_ready   = " << stats_at_ready.receiver.lost
-          << "\nqueue_dropped_imu_before_ready    = " << stats_at_ready.queue_dropped_imu
-          << "\nqueue_dropped_frames_before_ready = " << stats_at_ready.queue_dropped_frames
-          << "\n";
-    });
-  });
-  if (stats.anomalies() > 0)
-    log << "Warning: " << stats.anomalies()
-        << " datagrams or items lost, dropped or rejected (see stream_stats.ini)\n";
-  // An input error: the recording and its statistics are kept (abandon() installs them), the
-  // rest goes.
-  if (!input_error.empty()) throw InputError(input_error);
 
-  if (!session.done()) {
-    checked.clear();
-    checker.finish(checked);
-    for (const auto& c : checked) session.push(c);
-    session.finish();
-    if (session.failed()) {
-      for (const auto& err : session.errors()) log << "Error: " << err << "\n";
-      throw InputError(session.errors().front());
-    }
-    if (!session.ready()) throw InputError(session.endOfDataReason());
-    set.write(kStateFile, [&](const std::string& p) {
-      const StateVerdict v = verdictOf(session.result(), config.core.velocimeter.doppler_sigma);
-      writeInitialStateIni(p, session.result().state, &v);
-    });
-  }
-  for (const auto& w : session.warnings()) log << "Warning: " << w << "\n";
-  if (session.ready() && session.result().state.ok()) {
-    printVerdict(log, verdictOf(session.result(), config.core.velocimeter.doppler_sigma));
-    for (const auto& w : session.result().state.warnings) log << "  warning: " << w << "\n";
-  }
-  result = session.result();
-  if (stopped_by_signal != 0 && !ready_live)
-    log << "The stream was stopped by " << signalName(stopped_by_signal)
-        << " before the window closed\n";
-  writeResultFiles(set, "", config.output, result, {});
-  set.commit();
-  log << "Initialization: " << toString(result.state.status)
-      << (result.state.message.empty() ? "" : " (" + result.state.message + ")") << "\n";
-  return result.state.ok() ? 0 : 3;
+  FreeInitOnlineApp& app_;
+  const FreeInitOnlineAppParams& p_;
+  std::ostream& log_;
+  Clock::time_point t_start_;
+  OutputSet set_;
+  StreamLabels labels_;
+  std::string state_file_;
+  std::unique_ptr<RecordWriter> rec_;
+  std::unique_ptr<net::StreamSource> src_;
+  std::optional<RecordChecker> checker_;
+  std::optional<InitSession> session_;
+  double accel_scale_ = 1.0;
+  std::vector<CheckedItem> checked_;
+  std::string input_error_;
+  bool data_seen_ = false;
+  bool end_ = false;      ///< the stream ended (or the state is ready with stop_when_ready)
+  bool stopped_ = false;  ///< an input error: nothing more is fed
+  int stopped_by_signal_ = 0;
+  int sessions_ = 0;  ///< sender sessions seen
+};
+
+}  // namespace
+
+int FreeInitOnlineApp::run(std::ostream& log) {
+  registerClasses();
+  OnlineRun r(*this, log);
+  r.prepare();
+  r.startSource();
+  r.receive();
+  r.closeRecording();
+  r.writeStreamStats();
+  r.finishSession();
+  return r.writeOutputs();
 }
 
 }  // namespace freeinit::mrpt_plugins

@@ -192,231 +192,305 @@ void renderRuns(const std::string& png, const std::string& title,
   renderTopViewPanels(png, title, panels, width, height);
 }
 
-}  // namespace
+/// The icp-slam INI: its text (the export copies it) and MRPT's parse of it, checked for the
+/// stock app's sections.
+struct IcpIni {
+  std::string text;
+  mrpt::config::CConfigFileMemory ini;
+};
 
-int IcpSlamApp::run(std::ostream& log) {
-  // 0. The outputs are one set per folder (output_set.h), installed when the run is complete; a
-  // run that fails leaves no output of ours in either folder, nor one of an earlier run.
-  OutputSet set(params.out_dir, "", folderSetOptions(), log);
-  std::optional<OutputSet> own_export_set;
-  const bool exporting = !params.export_dir.empty();
-  if (exporting && std::filesystem::weakly_canonical(params.export_dir) !=
-                       std::filesystem::weakly_canonical(params.out_dir))
-    own_export_set.emplace(params.export_dir, "", folderSetOptions(), log);
-  OutputSet* export_set = own_export_set ? &*own_export_set : exporting ? &set : nullptr;
-  // 1. Configuration (both files), then the input: everything is checked before any output.
-  if (!std::filesystem::is_regular_file(params.icp_ini))
-    throw std::invalid_argument(params.icp_ini + ": no such file");
-  const std::string ini_text = mrpt::io::file_get_contents(params.icp_ini);
+void loadIcpIni(const std::string& path, IcpIni& out) {
+  if (!std::filesystem::is_regular_file(path)) throw std::invalid_argument(path + ": no such file");
+  out.text = mrpt::io::file_get_contents(path);
   // MRPT's own parser reads the stock app's sections ([MappingApplication], [ICP]); its errors
   // name neither the file nor the line's text, and carry a backtrace.
-  mrpt::config::CConfigFileMemory ini;
   try {
-    ini.setContent(ini_text);
+    out.ini.setContent(out.text);
   } catch (const std::exception& e) {
     std::string why = e.what();
     if (const auto m = why.find("Message:"); m != std::string::npos) why.erase(0, m + 8);
     why.erase(0, why.find_first_not_of(' '));
     why = why.substr(0, why.find('\n'));
-    throw std::invalid_argument(params.icp_ini + ": cannot be read as an icp-slam INI: " + why);
+    throw std::invalid_argument(path + ": cannot be read as an icp-slam INI: " + why);
   }
-  if (!ini.sectionExists(kMappingSection) || !ini.sectionExists("ICP"))
-    throw std::invalid_argument(params.icp_ini +
+  if (!out.ini.sectionExists(kMappingSection) || !out.ini.sectionExists("ICP"))
+    throw std::invalid_argument(path +
                                 ": needs the [MappingApplication] and [ICP] "
                                 "sections of the icp-slam app");
-  const ScanSliceParams slice = loadScanSliceParams(params.icp_ini);
-  AppConfig config = loadAppConfig(params.freeinit_ini);
-  log << "Reading " << params.rawlog << "\n";
-  const CheckedRecording in = readRecording(params.rawlog, config);
-  for (const auto& w : in.warnings) log << "Warning: " << w << "\n";
-  if (config.extrinsics.from_sensor_pose && in.sensor_pose_extrinsics)
-    config.core.extrinsics = *in.sensor_pose_extrinsics;
-  std::vector<TruthSample> truth;
-  if (const std::string tf = truthPathFor(params.rawlog); std::filesystem::is_regular_file(tf))
-    truth = readTruthCsv(tf);
+}
 
-  // 2. Free-Init: the seed and the levelling of the scans.
-  freeinit = FreeInit::run(config.core, in.imu, in.frames);
-  const InitialState& s = freeinit.state;
-  log << "Free-Init: " << toString(s.status) << (s.message.empty() ? "" : " (" + s.message + ")")
-      << "\n";
-  int rc = 0;
-  std::vector<IcpSeedMode> modes = params.modes;
-  if (!s.ok()) {
-    const auto n = modes.size();
-    modes.erase(std::remove_if(modes.begin(), modes.end(),
-                               [](IcpSeedMode m) { return m != IcpSeedMode::Plain; }),
-                modes.end());
-    if (modes.size() != n) {
-      log << "Seeded runs skipped: no initial state\n";
-      rc = 3;
+/// The outputs: one set per folder (output_set.h), installed when the run is complete; a run
+/// that fails leaves no output of ours in either folder, nor one of an earlier run.
+struct IcpOutputs {
+  OutputSet out;
+  std::optional<OutputSet> own_export;  ///< an export folder other than the output folder
+  OutputSet* exports = nullptr;         ///< where the export goes (nullptr: no export)
+
+  IcpOutputs(const IcpSlamAppParams& params, std::ostream& log)
+      : out(params.out_dir, "", folderSetOptions(), log) {
+    if (params.export_dir.empty()) return;
+    if (std::filesystem::weakly_canonical(params.export_dir) !=
+        std::filesystem::weakly_canonical(params.out_dir))
+      own_export.emplace(params.export_dir, "", folderSetOptions(), log);
+    exports = own_export ? &*own_export : &out;
+  }
+  void commit() {
+    if (own_export) own_export->commit();
+    out.commit();
+  }
+};
+
+/// One run of the app, step by step (IcpSlamApp::run() calls them in order).
+class IcpSlamJob {
+ public:
+  IcpSlamJob(const IcpSlamAppParams& params, std::ostream& log) : params_(params), log_(log) {}
+
+  /// Both configuration files, then the input: everything is checked before any output.
+  void readInputs() {
+    loadIcpIni(params_.icp_ini, ini_);
+    slice_ = loadScanSliceParams(params_.icp_ini);
+    config_ = loadAppConfig(params_.freeinit_ini);
+    log_ << "Reading " << params_.rawlog << "\n";
+    in_ = readRecording(params_.rawlog, config_);
+    for (const auto& w : in_.warnings) log_ << "Warning: " << w << "\n";
+    if (config_.extrinsics.from_sensor_pose && in_.sensor_pose_extrinsics)
+      config_.core.extrinsics = *in_.sensor_pose_extrinsics;
+    if (const std::string tf = truthPathFor(params_.rawlog); std::filesystem::is_regular_file(tf))
+      truth_ = readTruthCsv(tf);
+  }
+
+  /// Free-Init: the seed and the levelling of the scans. Without a state only the plain mode
+  /// runs; returns 3 if a seeded mode was asked for then, else 0.
+  int initialize(InitResult& freeinit) {
+    freeinit = FreeInit::run(config_.core, in_.imu, in_.frames);
+    state_ = freeinit.state;
+    log_ << "Free-Init: " << toString(state_.status)
+         << (state_.message.empty() ? "" : " (" + state_.message + ")") << "\n";
+    modes_ = params_.modes;
+    int rc = 0;
+    if (!state_.ok()) {
+      const auto n = modes_.size();
+      modes_.erase(std::remove_if(modes_.begin(), modes_.end(),
+                                  [](IcpSeedMode m) { return m != IcpSeedMode::Plain; }),
+                   modes_.end());
+      if (modes_.size() != n) {
+        log_ << "Seeded runs skipped: no initial state\n";
+        rc = 3;
+      }
+    }
+    if (state_.ok()) seed_ = makeIcpSeed(freeinit, slice_);
+    return rc;
+  }
+
+  /// The levelled scans, and the odometry with its deskewed scans when the odometry mode runs.
+  void prepareScans() {
+    const Mat3 R_level = state_.ok() ? levellingRotation(state_.q_wb) : Mat3::Identity();
+    const Extrinsics& ext = config_.core.extrinsics;
+    for (const auto& f : in_.frames)
+      scans_.push_back(scanFromFrame(f, ext, R_level, slice_, "LIDAR"));
+    if (std::count(modes_.begin(), modes_.end(), IcpSeedMode::Odometry) > 0) {
+      odometry_ = DopplerInertialOdometry(config_.core, state_).run(in_.imu, in_.frames);
+      log_ << "Doppler-inertial odometry: " << odometry_.size() << " poses, "
+           << std::setprecision(4) << (odometry_.back().p_w - odometry_.front().p_w).norm()
+           << " m travelled\n";
+    }
+    // The odometry mode's scans: deskewed with the odometry (frames it covers) when configured.
+    odometry_scans_ = scans_;
+    if (!odometry_.empty() && slice_.deskew_with_odometry) {
+      for (std::size_t k = 0; k < in_.frames.size(); ++k)
+        odometry_scans_[k] =
+            scanFromFrame(in_.frames[k], ext, R_level, slice_, "LIDAR", &odometry_);
     }
   }
-  const Mat3 R_level = s.ok() ? levellingRotation(s.q_wb) : Mat3::Identity();
-  std::vector<mrpt::obs::CObservation2DRangeScan::Ptr> scans;
-  for (const auto& f : in.frames)
-    scans.push_back(scanFromFrame(f, config.core.extrinsics, R_level, slice, "LIDAR"));
-  std::optional<IcpSeed> seed;
-  if (s.ok()) seed = makeIcpSeed(freeinit, slice);
-  std::vector<OdometrySample> odometry;
-  if (std::count(modes.begin(), modes.end(), IcpSeedMode::Odometry) > 0) {
-    odometry = DopplerInertialOdometry(config.core, s).run(in.imu, in.frames);
-    log << "Doppler-inertial odometry: " << odometry.size() << " poses, " << std::setprecision(4)
-        << (odometry.back().p_w - odometry.front().p_w).norm() << " m travelled\n";
-  }
-  // The odometry mode's scans: deskewed with the odometry (frames it covers) when configured.
-  std::vector<mrpt::obs::CObservation2DRangeScan::Ptr> odometry_scans = scans;
-  if (!odometry.empty() && slice.deskew_with_odometry) {
-    for (std::size_t k = 0; k < in.frames.size(); ++k)
-      odometry_scans[k] =
-          scanFromFrame(in.frames[k], config.core.extrinsics, R_level, slice, "LIDAR", &odometry);
-  }
-  auto scansFor = [&](IcpSeedMode m) -> const auto& {
-    return m == IcpSeedMode::Odometry ? odometry_scans : scans;
-  };
-  if (!odometry.empty() && !truth.empty()) {
-    // The odometry alone, at the scans after the state time: the reference the fed run starts
-    // from (no map, no loop: its drift grows with the integrated velocity error).
+
+  /// The odometry alone, at the scans after the state time: the reference the fed run starts
+  /// from (no map, no loop: its drift grows with the integrated velocity error).
+  std::optional<PathErrors> writeOdometryAlone(OutputSet& set) {
+    if (odometry_.empty() || truth_.empty()) return std::nullopt;
     std::vector<PlanarPathSample> path;
-    for (const auto& sc : scans) {
+    for (const auto& sc : scans_) {
       const double t = toUnix(sc->timestamp);
-      if (t <= s.timestamp || t > odometry.back().t) continue;
-      const BodyPose b = bodyPoseAt(odometry, t);
+      if (t <= state_.timestamp || t > odometry_.back().t) continue;
+      const BodyPose b = bodyPoseAt(odometry_, t);
       path.push_back({t, planarPose(b.q_wb, b.p_w)});
     }
     set.write(kOdometryAloneFile, [&](const std::string& p) { writeTumPlanar(p, path); });
-    odometry_errors = comparePathWithTruth(path, truth, s.timestamp);
-    log << std::fixed << std::setprecision(3) << "  odometry alone: ATE "
-        << odometry_errors->ate_rmse << " m, end-point " << odometry_errors->end_point << " m\n"
-        << std::defaultfloat;
-  }
-  if (seed) {
-    const auto& m = seed->pose.mean;
-    log << std::fixed << std::setprecision(3) << "Seed: pose (" << m.x() << ", " << m.y() << ", "
-        << m.phi() * 180 / M_PI << " deg), sigma (" << std::sqrt(seed->pose.cov(0, 0)) << " m, "
-        << std::sqrt(seed->pose.cov(1, 1)) << " m, " << std::sqrt(seed->pose.cov(2, 2)) * 180 / M_PI
-        << " deg), velocity (" << seed->velocity_local.vx << ", " << seed->velocity_local.vy
-        << ") m/s\n"
-        << std::defaultfloat;
+    const PathErrors e = comparePathWithTruth(path, truth_, state_.timestamp);
+    log_ << std::fixed << std::setprecision(3) << "  odometry alone: ATE " << e.ate_rmse
+         << " m, end-point " << e.end_point << " m\n"
+         << std::defaultfloat;
+    return e;
   }
 
-  // 3. One icp-slam run per mode; outputs as the stock app names them, in <out>/<mode>/.
-  // How the seed enters (MRPT 2.5.8; docs/icp_slam.md, "What MRPT 2.5.8 does with the seed"): the
-  // map through initialize(); the pose through the first odometry reading, in w, as the stock app
-  // on the export gets it. initialize()'s pose argument is used only when a lone reading would
-  // block ICP (seeded mode, slow start): it keeps the mean only and stamps it with the wall clock,
-  // which hides later odometry from the pose estimator until the first ICP correction.
-  bool seed_reading = true;
-  if (seed) {
+  /// Logs the seed and decides how it enters icp-slam, then writes it.
+  ///
+  /// How the seed enters (MRPT 2.5.8; docs/icp_slam.md, "What MRPT 2.5.8 does with the seed"):
+  /// the map through initialize(); the pose through the first odometry reading, in w, as the
+  /// stock app on the export gets it. initialize()'s pose argument is used only when a lone
+  /// reading would block ICP (seeded mode, slow start): it keeps the mean only and stamps it with
+  /// the wall clock, which hides later odometry from the pose estimator until the first ICP
+  /// correction.
+  void placeSeed(OutputSet& set) {
+    if (!seed_) return;
+    const auto& m = seed_->pose.mean;
+    log_ << std::fixed << std::setprecision(3) << "Seed: pose (" << m.x() << ", " << m.y() << ", "
+         << m.phi() * 180 / M_PI << " deg), sigma (" << std::sqrt(seed_->pose.cov(0, 0)) << " m, "
+         << std::sqrt(seed_->pose.cov(1, 1)) << " m, "
+         << std::sqrt(seed_->pose.cov(2, 2)) * 180 / M_PI << " deg), velocity ("
+         << seed_->velocity_local.vx << ", " << seed_->velocity_local.vy << ") m/s\n"
+         << std::defaultfloat;
     mrpt::slam::CMetricMapBuilderICP probe;
-    probe.ICP_options.loadFromConfigFile(ini, kMappingSection);
-    seed_reading = !seedReadingBlocksIcp(*seed, probe.ICP_options);
-    if (!seed_reading && std::count(modes.begin(), modes.end(), IcpSeedMode::Seeded) > 0)
-      log << "Seeded: the seed pose is closer to the window start than icp-slam's "
-             "localization/insertion distances: it goes in as initialize()'s pose prior, "
-             "without the velocity (a lone odometry reading would stop ICP)\n";
-  }
-  if (seed) set.write(kSeedIniFile, [&](const std::string& p) { writeSeedIni(p, *seed); });
-  runs.clear();
-  for (const IcpSeedMode mode : modes) {
-    const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
-    const auto obs = icpSlamObservations(mode, scansFor(mode), sd, odometry, seed_reading);
-    const bool prior = mode == IcpSeedMode::Seeded && !seed_reading;
-    BuilderOutput b = runBuilder(ini, sd, prior ? &sd->pose : nullptr, obs);
-    IcpSlamRun r;
-    r.mode = mode;
-    r.path = std::move(b.path);
-    r.keyframes = b.map.size();
-    r.map_x = std::move(b.map_x);
-    r.map_y = std::move(b.map_y);
-    const std::string dir = std::string(toString(mode)) + "/";
-    set.write(dir + kMapFile, [&](const std::string& p) { saveSimplemapAtomically(p, b.map); });
-    set.write(dir + kStepLogFile, [&](const std::string& p) {
-      writeFileAtomically(p, [&](std::ostream& o) { o << b.step_log; });
-    });
-    set.write(dir + kPathFile, [&](const std::string& p) { writeTumPlanar(p, r.path); });
-    log << "icp-slam " << std::left << std::setw(9) << toString(mode) << std::right << ": "
-        << r.path.size() << " scans, " << r.keyframes << " keyframes";
-    if (!truth.empty() && s.ok()) {
-      // Compared from the state time on: the span every mode covers.
-      r.errors = comparePathWithTruth(r.path, truth, s.timestamp);
-      const PathErrors& e = *r.errors;
-      log << std::fixed << std::setprecision(3) << ", ATE " << e.ate_rmse << " m, end-point "
-          << e.end_point << " m over " << e.length << " m" << std::defaultfloat;
-      set.write(dir + kErrorsFile, [&](const std::string& p) {
-        writeFileAtomically(p, [&](std::ostream& o) {
-          o << "; icp-slam path vs ground truth, poses at the scans from the Free-Init state "
-               "time,\n; after the best SE(2) alignment\n[errors_wrt_gt]\nmode = "
-            << toString(mode) << "\nsamples = " << e.samples << "\nate_rmse = " << e.ate_rmse
-            << "   ; [m]\nend_point = " << e.end_point << "   ; [m]\ntrue_length = " << e.length
-            << "   ; [m]\n";
-        });
-      });
-    }
-    log << "\n";
-    runs.push_back(std::move(r));
+    probe.ICP_options.loadFromConfigFile(ini_.ini, kMappingSection);
+    seed_reading_ = !seedReadingBlocksIcp(*seed_, probe.ICP_options);
+    if (!seed_reading_ && std::count(modes_.begin(), modes_.end(), IcpSeedMode::Seeded) > 0)
+      log_ << "Seeded: the seed pose is closer to the window start than icp-slam's "
+              "localization/insertion distances: it goes in as initialize()'s pose prior, "
+              "without the velocity (a lone odometry reading would stop ICP)\n";
+    set.write(kSeedIniFile, [&](const std::string& p) { writeSeedIni(p, *seed_); });
   }
 
-  // 4. The export for the stock icp-slam app: one observations-only rawlog of stock classes per
-  // mode (no IMU, no plugin class) and a matching INI. The stock app has no initial-map option:
-  // the static map is the first observation (inserted at the origin of the still empty map),
-  // followed by the same observations as above (the seed pose as an odometry reading in w). It
-  // cannot take a pose prior: in the seeded mode of a slow start it starts at w's origin, within
-  // icp-slam's localization distance of the seed pose.
-  if (export_set) {
+  /// One icp-slam run per mode; outputs as the stock app names them, in <out>/<mode>/.
+  std::vector<IcpSlamRun> runModes(OutputSet& set) {
+    std::vector<IcpSlamRun> runs;
+    for (const IcpSeedMode mode : modes_) {
+      const IcpSeed* sd = seedFor(mode);
+      const auto obs = icpSlamObservations(mode, scansFor(mode), sd, odometry_, seed_reading_);
+      const bool prior = mode == IcpSeedMode::Seeded && !seed_reading_;
+      BuilderOutput b = runBuilder(ini_.ini, sd, prior ? &sd->pose : nullptr, obs);
+      IcpSlamRun r;
+      r.mode = mode;
+      r.path = std::move(b.path);
+      r.keyframes = b.map.size();
+      r.map_x = std::move(b.map_x);
+      r.map_y = std::move(b.map_y);
+      const std::string dir = std::string(toString(mode)) + "/";
+      set.write(dir + kMapFile, [&](const std::string& p) { saveSimplemapAtomically(p, b.map); });
+      set.write(dir + kStepLogFile, [&](const std::string& p) {
+        writeFileAtomically(p, [&](std::ostream& o) { o << b.step_log; });
+      });
+      set.write(dir + kPathFile, [&](const std::string& p) { writeTumPlanar(p, r.path); });
+      log_ << "icp-slam " << std::left << std::setw(9) << toString(mode) << std::right << ": "
+           << r.path.size() << " scans, " << r.keyframes << " keyframes";
+      if (!truth_.empty() && state_.ok()) {
+        // Compared from the state time on: the span every mode covers.
+        r.errors = comparePathWithTruth(r.path, truth_, state_.timestamp);
+        const PathErrors& e = *r.errors;
+        log_ << std::fixed << std::setprecision(3) << ", ATE " << e.ate_rmse << " m, end-point "
+             << e.end_point << " m over " << e.length << " m" << std::defaultfloat;
+        set.write(dir + kErrorsFile, [&](const std::string& p) {
+          writeFileAtomically(p, [&](std::ostream& o) {
+            o << "; icp-slam path vs ground truth, poses at the scans from the Free-Init state "
+                 "time,\n; after the best SE(2) alignment\n[errors_wrt_gt]\nmode = "
+              << toString(mode) << "\nsamples = " << e.samples << "\nate_rmse = " << e.ate_rmse
+              << "   ; [m]\nend_point = " << e.end_point << "   ; [m]\ntrue_length = " << e.length
+              << "   ; [m]\n";
+          });
+        });
+      }
+      log_ << "\n";
+      runs.push_back(std::move(r));
+    }
+    return runs;
+  }
+
+  /// The export for the stock icp-slam app: one observations-only rawlog of stock classes per
+  /// mode (no IMU, no plugin class) and a matching INI. The stock app has no initial-map option:
+  /// the static map is the first observation (inserted at the origin of the still empty map),
+  /// followed by the same observations as above (the seed pose as an odometry reading in w). It
+  /// cannot take a pose prior: in the seeded mode of a slow start it starts at w's origin,
+  /// within icp-slam's localization distance of the seed pose.
+  void writeExport(OutputSet& set) {
     // The INI names the files where they will be once installed.
-    const std::filesystem::path ex = std::filesystem::absolute(params.export_dir);
-    for (const IcpSeedMode mode : modes) {
-      const IcpSeed* sd = mode == IcpSeedMode::Plain ? nullptr : &*seed;
+    const std::filesystem::path ex = std::filesystem::absolute(params_.export_dir);
+    for (const IcpSeedMode mode : modes_) {
+      const IcpSeed* sd = seedFor(mode);
       std::vector<mrpt::obs::CObservation::Ptr> obs;
       if (sd) obs.push_back(sd->map_observation);
-      const auto rest = icpSlamObservations(mode, scansFor(mode), sd, odometry, seed_reading);
+      const auto rest = icpSlamObservations(mode, scansFor(mode), sd, odometry_, seed_reading_);
       obs.insert(obs.end(), rest.begin(), rest.end());
       const std::string name = toString(mode);
       const std::string rawlog = (ex / (name + ".rawlog")).string();
-      export_set->write(name + ".rawlog",
-                        [&](const std::string& p) { writeObservationRawlog(p, obs); });
-      mrpt::config::CConfigFileMemory cfg(ini_text);
+      set.write(name + ".rawlog", [&](const std::string& p) { writeObservationRawlog(p, obs); });
+      mrpt::config::CConfigFileMemory cfg(ini_.text);
       cfg.write(kMappingSection, "rawlog_file", rawlog);
       cfg.write(kMappingSection, "logOutput_dir", (ex / (name + "_icp_slam_out")).string());
       std::string text;
       cfg.getContent(text);
-      export_set->write(name + ".ini", [&](const std::string& p) {
+      set.write(name + ".ini", [&](const std::string& p) {
         writeFileAtomically(p, [&](std::ostream& o) {
-          o << "; icp-slam " << name << ".ini   (from " << params.icp_ini << " for " << rawlog
+          o << "; icp-slam " << name << ".ini   (from " << params_.icp_ini << " for " << rawlog
             << ")\n"
             << text;
         });
       });
-      log << "Export: icp-slam " << (ex / (name + ".ini")).string() << "\n";
+      log_ << "Export: icp-slam " << (ex / (name + ".ini")).string() << "\n";
     }
   }
 
-  // 5. Results table and the picture.
-  if (!runs.empty() && runs.front().errors) {
-    set.write(kResultsFile, [&](const std::string& p) {
-      writeFileAtomically(p, [&](std::ostream& o) {
-        o << "# mode ate_rmse[m] end_point[m] true_length[m] scans keyframes\n" << std::fixed;
-        if (odometry_errors)
-          o << "odometry_alone " << std::setprecision(3) << odometry_errors->ate_rmse << " "
-            << odometry_errors->end_point << " " << odometry_errors->length << " "
-            << odometry_errors->samples << " 0\n";
-        for (const auto& r : runs)
-          o << toString(r.mode) << " " << std::setprecision(3) << r.errors->ate_rmse << " "
-            << r.errors->end_point << " " << r.errors->length << " " << r.path.size() << " "
-            << r.keyframes << "\n";
+  /// The results table (when the truth is present) and the picture of maps and paths.
+  void writeSummary(OutputSet& set, const std::vector<IcpSlamRun>& runs,
+                    const std::optional<PathErrors>& odometry_errors) {
+    if (!runs.empty() && runs.front().errors) {
+      set.write(kResultsFile, [&](const std::string& p) {
+        writeFileAtomically(p, [&](std::ostream& o) {
+          o << "# mode ate_rmse[m] end_point[m] true_length[m] scans keyframes\n" << std::fixed;
+          if (odometry_errors)
+            o << "odometry_alone " << std::setprecision(3) << odometry_errors->ate_rmse << " "
+              << odometry_errors->end_point << " " << odometry_errors->length << " "
+              << odometry_errors->samples << " 0\n";
+          for (const auto& r : runs)
+            o << toString(r.mode) << " " << std::setprecision(3) << r.errors->ate_rmse << " "
+              << r.errors->end_point << " " << r.errors->length << " " << r.path.size() << " "
+              << r.keyframes << "\n";
+        });
       });
-    });
+    }
+    if (params_.snapshot && !runs.empty()) {
+      set.write(kPictureFile, [&](const std::string& p) {
+        renderRuns(p, std::filesystem::path(params_.rawlog).filename().string(), runs, truth_,
+                   state_.timestamp, params_.snapshot_width, params_.snapshot_height);
+      });
+      log_ << "Picture: " << set.finalPath(kPictureFile) << "\n";
+    }
   }
-  if (params.snapshot && !runs.empty()) {
-    set.write(kPictureFile, [&](const std::string& p) {
-      renderRuns(p, std::filesystem::path(params.rawlog).filename().string(), runs, truth,
-                 s.timestamp, params.snapshot_width, params.snapshot_height);
-    });
-    log << "Picture: " << set.finalPath(kPictureFile) << "\n";
+
+ private:
+  const IcpSeed* seedFor(IcpSeedMode m) const {
+    return m == IcpSeedMode::Plain ? nullptr : &*seed_;
   }
-  if (own_export_set) own_export_set->commit();
-  set.commit();
+  const std::vector<mrpt::obs::CObservation2DRangeScan::Ptr>& scansFor(IcpSeedMode m) const {
+    return m == IcpSeedMode::Odometry ? odometry_scans_ : scans_;
+  }
+
+  const IcpSlamAppParams& params_;
+  std::ostream& log_;
+  IcpIni ini_;
+  ScanSliceParams slice_;
+  AppConfig config_;
+  CheckedRecording in_;
+  std::vector<TruthSample> truth_;
+  InitialState state_;
+  std::vector<IcpSeedMode> modes_;
+  std::optional<IcpSeed> seed_;
+  bool seed_reading_ = true;  ///< the seed pose goes in as an odometry reading
+  std::vector<mrpt::obs::CObservation2DRangeScan::Ptr> scans_, odometry_scans_;
+  std::vector<OdometrySample> odometry_;
+};
+
+}  // namespace
+
+int IcpSlamApp::run(std::ostream& log) {
+  IcpOutputs outputs(params, log);
+  IcpSlamJob job(params, log);
+  job.readInputs();
+  const int rc = job.initialize(freeinit);
+  job.prepareScans();
+  odometry_errors = job.writeOdometryAlone(outputs.out);
+  job.placeSeed(outputs.out);
+  runs = job.runModes(outputs.out);
+  if (outputs.exports) job.writeExport(*outputs.exports);
+  job.writeSummary(outputs.out, runs, odometry_errors);
+  outputs.commit();
   return rc;
 }
 
