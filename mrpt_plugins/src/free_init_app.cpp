@@ -1,4 +1,5 @@
 #include <freeinit/input_checks.h>
+#include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/file_kind.h>
 #include <freeinit/mrpt_plugins/free_init_app.h>
 #include <freeinit/mrpt_plugins/ingest.h>
@@ -9,6 +10,7 @@
 #include <freeinit/mrpt_plugins/result_files.h>
 #include <freeinit/mrpt_plugins/snapshots.h>
 #include <freeinit/mrpt_plugins/stop_signal.h>
+#include <unistd.h>
 
 #include <chrono>
 #include <cmath>
@@ -17,6 +19,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
+#include <iostream>
 #include <limits>
 #include <memory>
 #include <ostream>
@@ -502,6 +505,68 @@ int FreeInitApp::run(std::ostream& log) {
   const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
   log << "Outputs in " << out.string() << " (" << std::setprecision(3) << secs << " s total)\n";
   return s.ok() ? 0 : 3;
+}
+
+int FreeInitApp::main(int argc, char** argv) {
+  namespace range = freeinit::config;
+  CommandLine cli("freeinit",
+                  "initial state (attitude, velocity, biases, gravity, static map) from the "
+                  "first instants of a Doppler LiDAR + IMU rawlog");
+  const auto& ini = cli.positional("config.ini",
+                                   "INI configuration file (ini/freeinit.ini documents every key); "
+                                   "without it the defaults, the extrinsics from the rawlog",
+                                   false);
+  const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
+  const auto& out =
+      cli.text("o", "out", "output folder (its earlier outputs are replaced)", "", "DIR",
+               std::string(kDefaultOutDir) +
+                   "; without <config.ini> a new folder for each run, "
+                   "freeinit_out/<input>.<time>");
+  const auto& quiet = cli.flag("q", "quiet",
+                               "no progress bar and no listing of the effective configuration "
+                               "(still written to effective_config.ini)");
+  const auto& start = cli.number("", "start",
+                                 "initialize with the records from T on: seconds after the first "
+                                 "record, or a UNIX stamp if T > 1e8",
+                                 0, range::atLeast(0), "T", "the first record");
+  const auto& every = cli.number("", "every",
+                                 "initialize every S seconds along the recording (from --start), "
+                                 "each start in its own folder, with starts.csv/.md/.png",
+                                 0, range::atLeast(0), "S", "off");
+  const auto& starts = cli.text("", "starts",
+                                "initialize at each start in FILE (one per line, as --start), "
+                                "as --every does",
+                                "", "FILE", "none");
+  const auto& check_all = cli.flag("", "check-all",
+                                   "read and check the whole file (by default reading stops once "
+                                   "the state is ready)");
+  const auto& salvage = cli.flag("", "salvage",
+                                 "read a rawlog cut short (e.g. a recording when the power went "
+                                 "off) up to its last whole record, with a warning naming where "
+                                 "it stopped");
+  const auto& no_index =
+      cli.flag("", "no-index", "neither use nor write the seek index <input>.freeinit.idx");
+  if (const auto code = cli.parse(argc, argv)) return *code;
+  FreeInitApp app;
+  app.params.config_file = ini.value;
+  app.params.rawlog = rawlog.value;
+  if (const auto problem = app.params.argumentsProblem(); !problem.empty())
+    return cli.usageError(problem);
+  return runMain(cli.program(), [&] {
+    app.params.out_dir = out.given ? out.value : ini.given ? kDefaultOutDir : "";
+    app.params.progress = !quiet.value;
+    app.params.echo_config = !quiet.value;
+    app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
+    if (start.given) app.params.start = start.value;
+    app.params.every = every.value;
+    app.params.starts_file = starts.value;
+    app.params.check_all = check_all.value;
+    app.params.salvage = salvage.value;
+    app.params.index.use = !no_index.value;
+    app.params.command = "freeinit";
+    for (int i = 1; i < argc; ++i) app.params.command += std::string(" ") + argv[i];
+    return app.run(std::cout);
+  });
 }
 
 }  // namespace freeinit::mrpt_plugins

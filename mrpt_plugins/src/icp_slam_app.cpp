@@ -1,6 +1,7 @@
 #include <freeinit/doppler_inertial_odometry.h>
 #include <freeinit/free_init.h>
 #include <freeinit/mrpt_plugins/checked_recording.h>
+#include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/conversions.h>
 #include <freeinit/mrpt_plugins/icp_slam_app.h>
 #include <freeinit/mrpt_plugins/map_export.h>
@@ -20,6 +21,7 @@
 #include <cmath>
 #include <filesystem>
 #include <iomanip>
+#include <iostream>
 #include <ostream>
 #include <sstream>
 
@@ -492,6 +494,37 @@ int IcpSlamApp::run(std::ostream& log) {
   job.writeSummary(outputs.out, runs, odometry_errors);
   outputs.commit();
   return rc;
+}
+
+int IcpSlamApp::main(int argc, char** argv) {
+  CommandLine cli("freeinit-icp-slam",
+                  "MRPT icp-slam (CMetricMapBuilderICP) started plain, seeded by "
+                  "Free-Init's static map, pose and velocity, or seeded and fed with "
+                  "Doppler-inertial odometry");
+  const auto& icp_ini =
+      cli.positional("icp_slam.ini", "icp-slam INI ([MappingApplication], [ICP], [freeinit_scan])");
+  const auto& fi_ini = cli.positional("freeinit.ini", "Free-Init INI");
+  const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
+  const auto& mode =
+      cli.choice("m", "mode", "icp-slam start", "all", {"plain", "seeded", "odometry", "all"});
+  const auto& out = cli.text("o", "out", "output folder", "icp_slam_out", "DIR");
+  const auto& exp = cli.text("e", "export",
+                             "also write <DIR>/<mode>.rawlog + <mode>.ini for the stock icp-slam "
+                             "app",
+                             "", "DIR", "none");
+  const auto& no_png = cli.flag("", "no-png", "do not render trajectories.png");
+  if (const auto code = cli.parse(argc, argv)) return *code;
+  return runMain(cli.program(), [&] {
+    IcpSlamApp app;
+    app.params.icp_ini = icp_ini.value;
+    app.params.freeinit_ini = fi_ini.value;
+    app.params.rawlog = rawlog.value;
+    app.params.out_dir = out.value;
+    app.params.export_dir = exp.value;
+    app.params.snapshot = !no_png.value;
+    if (mode.value != "all") app.params.modes = {seedModeFromString(mode.value)};
+    return app.run(std::cout);
+  });
 }
 
 }  // namespace freeinit::mrpt_plugins

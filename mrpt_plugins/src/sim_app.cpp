@@ -1,3 +1,4 @@
+#include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/ground_truth.h>
 #include <freeinit/mrpt_plugins/output_set.h>
 #include <freeinit/mrpt_plugins/output_writers.h>
@@ -9,8 +10,10 @@
 #include <freeinit/sim/scenario_ini.h>
 #include <freeinit/sim/simulator.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <iomanip>
+#include <iostream>
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
@@ -162,6 +165,51 @@ void SimApp::run(std::ostream& log) {
         << ".truth_extrinsics.ini)\n";
   log << std::setprecision(6) << "True biases: b_g = " << rec.b_g.transpose()
       << " rad/s, b_a = " << rec.b_a.transpose() << " m/s^2\n";
+}
+
+int SimApp::main(int argc, char** argv) {
+  namespace range = freeinit::config;
+  CommandLine cli("freeinit-sim", "Doppler LiDAR + IMU recording with ground truth, as a rawlog");
+  const auto& preset =
+      cli.choice("p", "preset", "simulator preset", "dyna_01", freeinit::sim::presetNames());
+  const auto& seed = cli.integer("s", "seed", "random seed", 1, 0, 4294967295LL, "N");
+  const auto& random = cli.integer("", "random",
+                                   "simulate the randomized scenario drawn with this seed "
+                                   "(instead of a preset)",
+                                   0, 0, 4294967295LL, "SEED");
+  const auto& duration =
+      cli.number("d", "duration", "seconds (0: the preset's)", 0, range::between(0, 3600), "S");
+  const auto& points = cli.integer("n", "points-per-frame", "points per frame (0: the preset's)", 0,
+                                   0, 10000000, "N");
+  const auto& out = cli.text("o", "out", "output rawlog; truth files go beside it", "", "FILE",
+                             "<preset>.rawlog");
+  const auto& scenario = cli.text("c", "scenario",
+                                  "INI file with a [scenario] section (a base preset or random "
+                                  "+ scenario keys, or a written <out>.scenario.ini)",
+                                  "", "FILE", "none");
+  const auto& keys = cli.flag("", "scenario-keys", "print the [scenario] keys and exit");
+  const auto& in_g = cli.flag("", "accel-in-g", "write accelerations in g");
+  if (const auto code = cli.parse(argc, argv)) return *code;
+  return runMain(cli.program(), [&] {
+    if (keys.value) {
+      std::cout << SimApp::scenarioKeys();
+      return 0;
+    }
+    if (random.given && (seed.given || preset.given || scenario.given))
+      throw std::invalid_argument("--random: not with --seed, --preset or --scenario");
+    SimApp app;
+    app.params.preset = preset.value;
+    app.params.seed = static_cast<std::uint64_t>(random.given ? random.value : seed.value);
+    app.params.random = random.given;
+    app.params.duration = duration.value;
+    app.params.points_per_frame = static_cast<int>(points.value);
+    const std::string base = random.given ? "random_" + std::to_string(random.value) : preset.value;
+    app.params.output = out.given ? out.value : base + ".rawlog";
+    app.params.accel_in_g = in_g.value;
+    app.params.scenario_file = scenario.value;
+    app.run(std::cout);
+    return 0;
+  });
 }
 
 }  // namespace freeinit::mrpt_plugins

@@ -1,17 +1,20 @@
 #include <freeinit/atomic_file.h>
 #include <freeinit/config_section.h>
 #include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/output_set.h>
 #include <freeinit/mrpt_plugins/progress_bar.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
 #include <freeinit/mrpt_plugins/stop_signal.h>
 #include <freeinit/ros1/bag_import_app.h>
+#include <unistd.h>
 
 #include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
 #include <iomanip>
+#include <iostream>
 #include <limits>
 #include <optional>
 #include <ostream>
@@ -332,6 +335,34 @@ int BagImportApp::run(std::ostream& log) {
         << summary.lidar.gaps << "); the largest IMU gap is " << fixed(summary.imu.largest_gap, 4)
         << " s\n";
   return 0;
+}
+
+int BagImportApp::main(int argc, char** argv) {
+  CommandLine cli("freeinit-import-bag",
+                  "a ROS1 bag (sensor_msgs/Imu + sensor_msgs/PointCloud2 with per-point "
+                  "Doppler and time) to a rawlog for freeinit");
+  const auto& bag = cli.positional("input.bag", "input ROS1 bag");
+  const auto& config = cli.requiredText(
+      "c", "config",
+      "INI with [bag_import], [extrinsics] and optionally [doppler_fit] (see ini/import_bag.ini)",
+      "FILE");
+  const auto& out = cli.text("o", "out", "output rawlog", "", "FILE", "<bag>.rawlog");
+  const auto& fit_csv = cli.text("", "doppler-fit-csv",
+                                 "also write each imported scan's sensor velocity fitted from its "
+                                 "Doppler alone (no IMU; [doppler_fit] of the INI) to FILE",
+                                 "", "FILE", "none");
+  const auto& quiet = cli.flag("q", "quiet", "no progress bar");
+  if (const auto code = cli.parse(argc, argv)) return *code;
+  return runMain(cli.program(), [&] {
+    BagImportApp app;
+    app.params.bag = bag.value;
+    app.params.config_file = config.value;
+    app.params.output = out.value;
+    app.params.doppler_fit_csv = fit_csv.value;
+    app.params.progress = !quiet.value;
+    app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
+    return app.run(std::cout);
+  });
 }
 
 }  // namespace freeinit::mrpt_plugins

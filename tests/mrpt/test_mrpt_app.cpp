@@ -6,6 +6,7 @@
 #include <freeinit/mrpt_plugins/checked_recording.h>
 #include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/conversions.h>
+#include <freeinit/mrpt_plugins/eval_rawlog_app.h>
 #include <freeinit/mrpt_plugins/file_kind.h>
 #include <freeinit/mrpt_plugins/free_init_app.h>
 #include <freeinit/mrpt_plugins/output_writers.h>
@@ -783,4 +784,55 @@ TEST(FreeInitAppChecks, ZeroDopplerAtRestInitializesInMotionIsRefused) {
         << e.what();
   }
   EXPECT_FALSE(fs::exists(refused.params.out_dir));
+}
+
+// freeinit-eval-rawlog's app: the rows of the committed samples against their truth, the same
+// tolerance as FreeInitAppEndToEnd (velocity <= 0.05 m/s on the dynamic sample), the CSV as one
+// set, and a rawlog without its truth refused with nothing written.
+TEST(EvalRawlogApp, RowsOfTheSamplesAgainstTheirTruth) {
+  const fs::path out = outDir("eval");
+  fs::create_directories(out);
+  EvalRawlogApp app;
+  app.params.config_file = quickIni();
+  app.params.rawlogs = {kDyna, kStat};
+  app.params.baselines = false;
+  app.params.csv = (out / "eval.csv").string();
+  app.params.jobs = 2;
+  std::ostringstream log;
+  ASSERT_EQ(app.run(log), 0) << log.str();
+  ASSERT_EQ(app.rows.size(), 2u);  // one method, two rawlogs, in the order given
+  EXPECT_EQ(app.rows[0].source, kDyna);
+  EXPECT_EQ(app.rows[1].source, kStat);
+  for (const auto& r : app.rows) {
+    EXPECT_EQ(r.method, "free-init");
+    EXPECT_EQ(r.status, "ok") << r.source;
+    EXPECT_FALSE(r.failed) << r.failure;
+  }
+  EXPECT_LE(app.rows[0].velocity_err, 0.05);
+  EXPECT_LE(app.rows[1].speed, 1e-6);  // the static sample: at rest
+  const std::string csv = readText(app.params.csv);
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 3) << csv;  // header + two rows
+  EXPECT_NE(log.str().find("free-init"), std::string::npos) << log.str();
+}
+
+TEST(EvalRawlogApp, ARawlogWithoutTruthIsRefusedAndNothingIsWritten) {
+  const fs::path out = outDir("eval_no_truth");
+  fs::create_directories(out);
+  const fs::path lone = out / "lone.rawlog";
+  fs::copy_file(kDyna, lone);
+  EvalRawlogApp app;
+  app.params.config_file = quickIni();
+  app.params.rawlogs = {kDyna, lone.string()};
+  app.params.baselines = false;
+  app.params.csv = (out / "eval.csv").string();
+  std::ostringstream log;
+  try {
+    app.run(log);
+    FAIL() << "a rawlog without truth was accepted";
+  } catch (const std::exception& e) {
+    EXPECT_EQ(std::string(e.what()), lone.string() + ": no ground truth (expected " +
+                                         (out / "lone.truth.csv").string() + ")");
+  }
+  EXPECT_FALSE(fs::exists(out / "eval.csv"));
+  EXPECT_EQ(std::distance(fs::directory_iterator(out), fs::directory_iterator{}), 1);  // lone
 }

@@ -85,6 +85,8 @@ class FreeInitApp {
   /// whose window the recording covers initialized, else 3 (the table says why; starts the
   /// recording ends too early for are listed as not_enough_data).
   int run(std::ostream& log);
+  /// The command line (`main` of freeinit): parses it, runs, returns the exit code.
+  static int main(int argc, char** argv);
 
   // Filled by run(), for callers and tests.
   std::string out_dir;  ///< where the outputs went (params.out_dir, or the new folder)

@@ -49,6 +49,8 @@ class FreeInitOnlineApp {
   /// observations the estimator rejects throw InputError after the recording is closed.
   /// Returns 0 initialized, 3 not initialized (reason in initial_state.ini).
   int run(std::ostream& log);
+  /// The command line (`main` of freeinit-online): parses it, runs, returns the exit code.
+  static int main(int argc, char** argv);
 
   // Filled by run().
   AppConfig config;

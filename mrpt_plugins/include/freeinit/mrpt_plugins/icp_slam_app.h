@@ -48,6 +48,8 @@ class IcpSlamApp {
   /// a stop request) leaves none of ours there. Returns 0, or 3 when Free-Init did not
   /// initialize and a seeded mode was asked for (the plain run is still done).
   int run(std::ostream& log);
+  /// The command line (`main` of freeinit-icp-slam): parses it, runs, returns the exit code.
+  static int main(int argc, char** argv);
 
   // Filled by run(), for callers and tests.
   InitResult freeinit;

@@ -39,6 +39,8 @@ class SimApp {
   SimAppParams params;
   /// Throws on any error; every output is written atomically.
   void run(std::ostream& log);
+  /// The command line (`main` of freeinit-sim): parses it, runs, returns the exit code.
+  static int main(int argc, char** argv);
   /// The [scenario] keys of a scenario file, one per line with unit, default, range and doc.
   static std::string scenarioKeys();
   std::size_t records_written = 0;

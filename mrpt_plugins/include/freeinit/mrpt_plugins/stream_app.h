@@ -39,6 +39,8 @@ class StreamApp {
   StreamAppParams params;
   /// Throws on bad input; returns when everything was sent.
   void run(std::ostream& log);
+  /// The command line (`main` of freeinit-stream): parses it, runs, returns the exit code.
+  static int main(int argc, char** argv);
   net::SenderStats stats;
   std::size_t imu_sent = 0, frames_sent = 0;
 };

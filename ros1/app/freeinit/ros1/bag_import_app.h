@@ -62,6 +62,8 @@ class BagImportApp {
   BagImportAppParams params;
   /// Throws on any error (nothing is written then). Returns the exit code (0).
   int run(std::ostream& log);
+  /// The command line (`main` of freeinit-import-bag): parses it, runs, returns the exit code.
+  static int main(int argc, char** argv);
 
   BagImportSettings settings;  ///< filled by run()
   ros1::BagSummary summary;    ///< filled by run()
