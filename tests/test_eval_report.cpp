@@ -424,7 +424,7 @@ TEST(Plot, WritesAReadablePngWithTheData) {
   p.log_y = true;
   Series s;
   s.label = "line";
-  s.color = cv::Scalar(0, 0, 255);  // pure red, not used by the axes or text
+  s.color = plot::Rgb{255, 0, 0};  // pure red, not used by the axes or text
   s.x = {0, 1, 2};
   s.y = {0.01, 0.1, 1};
   p.add(s);

@@ -182,10 +182,10 @@ void renderStartPlot(const std::string& png, const std::vector<StartRow>& rows, 
     report::Series err, sigma;
     err.label = "error w.r.t. ground truth";
     err.style = report::Series::Style::Markers;
-    err.color = report::paletteColor(0);
+    err.color = plot::palette(0);
     err.thickness = 4;
     sigma.label = "1 sigma (reported)";
-    sigma.color = report::paletteColor(1);
+    sigma.color = plot::palette(1);
     for (const auto& r : rows) {
       if (!(r.state && r.state->ok())) continue;
       const GaugeFreeCov c = gaugeFreeCov(*r.state);

@@ -13,11 +13,11 @@ const VelocityTrack* find(const std::vector<VelocityTrack>& tracks, const std::s
 }
 
 /// One colour per method in every figure.
-cv::Scalar methodColor(const std::string& method) {
+plot::Rgb methodColor(const std::string& method) {
   const char* const kMethods[] = {"free-init", "fast-lio2", "dlio", "doppler-ls"};
   for (std::size_t i = 0; i < 4; ++i)
-    if (method == kMethods[i]) return paletteColor(i);
-  return paletteColor(4);
+    if (method == kMethods[i]) return plot::palette(i);
+  return plot::palette(4);
 }
 
 std::string displayName(const std::string& method) {
@@ -73,42 +73,21 @@ cv::Mat velocityErrorPanel(const std::string& title, const std::vector<VelocityT
 
 cv::Mat velocityComponentsPanel(const std::string& title, const std::vector<VelocityTrack>& tracks,
                                 int width, int height) {
-  Plot p = timePlot(title, "body velocity [m/s]", tracks);
-  const char* axis[] = {"x", "y", "z"};
-  const VelocityTrack* fi = find(tracks, "free-init");
-  const VelocityTrack* ls = find(tracks, "doppler-ls");
-  // Estimates first, the truth drawn over them (thin black), the per-frame fits on top.
-  for (int pass = 0; pass < 2 && fi != nullptr; ++pass) {
-    for (int k = 0; k < 3; ++k) {
-      Series s;
-      if (pass == 0) {
-        s.label = std::string("Free-Init v_") + axis[k];
-        s.color = paletteColor(static_cast<std::size_t>(k));
-        s.thickness = 3;
-      } else {
-        s.label = k == 0 ? "truth" : "";
-        s.thickness = 1;
-      }
-      for (std::size_t i = 0; i < fi->t.size(); ++i) {
-        s.x.push_back(fi->t[i]);
-        s.y.push_back(pass == 0 ? fi->v_est[i](k) : fi->v_true[i](k));
-      }
-      p.add(std::move(s));
-    }
+  plot::ComponentPanelData d;
+  d.title = title;
+  d.x_label = "time since the recording start [s]";
+  d.y_label = "body velocity [m/s]";
+  d.estimate_name = "Free-Init v";
+  if (const VelocityTrack* fi = find(tracks, "free-init")) {
+    d.estimate = {fi->t, fi->v_est, {}};
+    d.truth = {fi->t, fi->v_true, {}};
+    d.time_range = plot::Range{fi->t.front(), fi->t.back()};
   }
-  for (int k = 0; k < 3 && ls != nullptr; ++k) {
-    Series s;
-    s.label = k == 0 ? "per-frame Doppler LS" : "";
-    s.style = Series::Style::Markers;
-    s.color = paletteColor(static_cast<std::size_t>(k));
-    s.thickness = 3;
-    for (std::size_t i = 0; i < ls->t.size(); ++i) {
-      s.x.push_back(ls->t[i]);
-      s.y.push_back(ls->v_est[i](k));
-    }
-    p.add(std::move(s));
-  }
-  return p.render(width, height);
+  if (const VelocityTrack* ls = find(tracks, "doppler-ls")) d.fits = {ls->t, ls->v_est, {}};
+  d.fits_label = "per-frame Doppler LS";
+  cv::Mat img(height, width, CV_8UC3, cv::Scalar(255, 255, 255));
+  drawPanel(img, plot::componentPanel(d));
+  return img;
 }
 
 }  // namespace freeinit::report

@@ -4,7 +4,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <limits>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <ostream>
@@ -14,33 +13,10 @@ namespace freeinit::report {
 namespace {
 
 constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
-const cv::Scalar kBlack(0, 0, 0), kGrid(225, 225, 225), kWhite(255, 255, 255);
+constexpr double kFontScale = 0.45;  // ticks and legend
+const cv::Scalar kBlack(0, 0, 0), kWhite(255, 255, 255);
 
-/// Ticks at 1, 2 or 5 times a power of ten, about `target` of them over [lo, hi].
-std::vector<double> niceTicks(double lo, double hi, int target) {
-  const double raw = (hi - lo) / std::max(1, target);
-  const double mag = std::pow(10.0, std::floor(std::log10(raw)));
-  double step = mag;
-  for (double m : {1.0, 2.0, 5.0, 10.0})
-    if (m * mag >= raw) {
-      step = m * mag;
-      break;
-    }
-  std::vector<double> t;
-  for (double v = std::ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step)
-    t.push_back(std::abs(v) < step * 1e-9 ? 0.0 : v);
-  return t;
-}
-
-std::string tickLabel(double v, bool log) {
-  char buf[32];
-  if (log) {
-    std::snprintf(buf, sizeof(buf), "%g", v);
-  } else {
-    std::snprintf(buf, sizeof(buf), "%.4g", v);
-  }
-  return buf;
-}
+cv::Scalar bgr(const plot::Rgb& c) { return cv::Scalar(c.b, c.g, c.r); }
 
 void text(cv::Mat& img, const std::string& s, cv::Point org, double scale, int thickness = 1,
           const cv::Scalar& color = kBlack) {
@@ -52,149 +28,146 @@ cv::Size textSize(const std::string& s, double scale, int thickness = 1) {
   return cv::getTextSize(s, kFont, scale, thickness, &baseline);
 }
 
-}  // namespace
-
-cv::Scalar paletteColor(std::size_t i) {
-  // Okabe-Ito palette (BGR): blue, vermillion, bluish green, reddish purple, orange, sky blue.
-  static const cv::Scalar kColors[] = {{178, 114, 0},   {0, 94, 213},  {115, 158, 0},
-                                       {167, 121, 204}, {0, 159, 230}, {233, 180, 86}};
-  return kColors[i % (sizeof(kColors) / sizeof(kColors[0]))];
+/// A series' line through `pts`; dashed: every other run of four segments.
+void drawLine(cv::Mat& img, const std::vector<cv::Point>& pts, const plot::Series& s) {
+  if (pts.size() < 2) return;
+  if (s.style == plot::Series::Style::Line) {
+    cv::polylines(img, pts, false, bgr(s.color), s.thickness, cv::LINE_AA);
+    return;
+  }
+  for (std::size_t i = 1; i < pts.size(); ++i)
+    if ((i / 4) % 2 == 0) cv::line(img, pts[i - 1], pts[i], bgr(s.color), s.thickness, cv::LINE_AA);
 }
 
-cv::Mat Plot::render(int width, int height) const {
-  cv::Mat img(height, width, CV_8UC3, kWhite);
-  const double fs = 0.45;  // font scale of ticks and legend
-  const int left = 70, right = 15, bottom = 48;
-  int top = title.empty() ? 12 : 36;
+}  // namespace
 
-  // Legend: rows of entries between the title and the plot area, so it never hides data.
-  struct Entry {
-    const Series* series;
-    cv::Point at;  // left end of the sample
+void drawPanel(cv::Mat& img, const plot::PanelSpec& spec) {
+  using Style = plot::Series::Style;
+  const double W = img.cols, H = img.rows;
+  const plot::PanelLayout l =
+      plot::layoutPanel(spec, {0, 0, 1, 1}, plot::figurePanelStyle(),
+                        [&](const std::string& s) { return textSize(s, kFontScale).width / W; });
+  auto at = [&](double nx, double ny) {
+    return cv::Point(static_cast<int>(std::lround(nx * W)), static_cast<int>(std::lround(ny * H)));
   };
-  std::vector<Entry> legend;
-  {
-    const int sample = 30, gap = 18, row_h = 18;
-    int x = left, rows = 0;
-    for (const auto& s : series_) {
-      if (s.label.empty()) continue;
-      const int w = sample + 6 + textSize(s.label, fs).width;
-      if (rows == 0 || (x + w > width - right && x > left)) {
-        ++rows;
-        x = left;
-      }
-      legend.push_back({&s, cv::Point(x, top + row_h * (rows - 1) + 6)});
-      x += w + gap;
-    }
-    top += row_h * rows + (rows > 0 ? 6 : 0);
-  }
-  const cv::Rect area(left, top, width - left - right, height - top - bottom);
+  const cv::Rect area(at(l.area.x0, l.area.y0), at(l.area.x1, l.area.y1));
+  auto X = [&](double v) { return static_cast<int>(std::lround(l.toX(v) * W)); };
+  auto Y = [&](double v) { return static_cast<int>(std::lround(l.toY(v) * H)); };
 
-  // Limits from the data where not given.
-  double x0 = x_min, x1 = x_max, y0 = y_min, y1 = y_max;
-  const bool auto_x = !(x0 < x1), auto_y = !(y0 < y1);
-  if (auto_x) x0 = std::numeric_limits<double>::infinity(), x1 = -x0;
-  if (auto_y) y0 = std::numeric_limits<double>::infinity(), y1 = -y0;
-  for (const auto& s : series_) {
-    for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-      if (auto_x) x0 = std::min(x0, s.x[i]), x1 = std::max(x1, s.x[i]);
-      if (auto_y && (!log_y || s.y[i] > 0)) y0 = std::min(y0, s.y[i]), y1 = std::max(y1, s.y[i]);
-    }
+  if (spec.shade) {
+    const int x0 = std::max(area.x, X(spec.shade->lo));
+    const int x1 = std::min(area.x + area.width, X(spec.shade->hi));
+    if (x1 > x0)
+      cv::rectangle(img, cv::Rect(x0, area.y, x1 - x0, area.height), bgr(plot::kShade), cv::FILLED);
   }
-  if (!(x0 < x1)) x0 = 0, x1 = 1;
-  if (!(y0 <= y1)) y0 = log_y ? 0.01 : 0, y1 = 1;
-  if (log_y) {
-    if (auto_y)
-      y0 = std::pow(10.0, std::floor(std::log10(y0))),
-      y1 = std::pow(10.0, std::ceil(std::log10(y1)));
-    if (!(y1 > y0)) y1 = y0 * 10;
-  } else if (auto_y) {
-    const double pad = 0.05 * std::max(y1 - y0, 1e-9);
-    y0 -= pad, y1 += pad;
-  }
-  auto fy = [&](double y) {
-    return log_y
-               ? (std::log10(std::max(y, y0)) - std::log10(y0)) / (std::log10(y1) - std::log10(y0))
-               : (y - y0) / (y1 - y0);
-  };
-  auto px = [&](double x, double y) {
-    return cv::Point2d(area.x + (x - x0) / (x1 - x0) * area.width,
-                       area.y + (1.0 - fy(y)) * area.height);
-  };
 
   // Grid and ticks.
-  for (double t : niceTicks(x0, x1, 6)) {
-    const int x = static_cast<int>(std::lround(px(t, y0).x));
-    cv::line(img, {x, area.y}, {x, area.y + area.height}, kGrid, 1);
-    const std::string s = tickLabel(t, false);
-    text(img, s, {x - textSize(s, fs).width / 2, area.y + area.height + 18}, fs);
+  for (std::size_t i = 0; i < l.x.ticks.size(); ++i) {
+    const int x = X(l.x.ticks[i]);
+    cv::line(img, {x, area.y}, {x, area.y + area.height}, bgr(plot::kGrid), 1);
+    const std::string& s = l.x.labels[i];
+    text(img, s, {x - textSize(s, kFontScale).width / 2, area.y + area.height + 18}, kFontScale);
   }
-  std::vector<double> yt;
-  if (log_y) {
-    for (double d = y0; d <= y1 * (1 + 1e-9); d *= 10) yt.push_back(d);
-  } else {
-    yt = niceTicks(y0, y1, 5);
+  for (std::size_t i = 0; i < l.y.ticks.size(); ++i) {
+    const int y = Y(l.y.ticks[i]);
+    cv::line(img, {area.x, y}, {area.x + area.width, y}, bgr(plot::kGrid), 1);
+    const std::string& s = l.y.labels[i];
+    const auto sz = textSize(s, kFontScale);
+    text(img, s, {area.x - sz.width - 6, y + sz.height / 2}, kFontScale);
   }
-  for (double t : yt) {
-    const int y = static_cast<int>(std::lround(px(x0, t).y));
-    cv::line(img, {area.x, y}, {area.x + area.width, y}, kGrid, 1);
-    const std::string s = tickLabel(t, log_y);
-    const auto sz = textSize(s, fs);
-    text(img, s, {area.x - sz.width - 6, y + sz.height / 2}, fs);
-  }
-  if (log_y) {  // minor grid lines at 2..9 times each decade
-    for (double d = y0; d < y1; d *= 10)
-      for (int k = 2; k <= 9; ++k) {
-        const int y = static_cast<int>(std::lround(px(x0, d * k).y));
-        cv::line(img, {area.x, y}, {area.x + 5, y}, kBlack, 1);
-      }
+  for (double m : l.y.minor) {  // log axis: short ticks at 2..9 times each decade
+    const int y = Y(m);
+    cv::line(img, {area.x, y}, {area.x + 5, y}, kBlack, 1);
   }
   cv::rectangle(img, area, kBlack, 1);
 
   // Labels and title.
-  if (!x_label.empty()) {
-    const auto sz = textSize(x_label, 0.5);
-    text(img, x_label, {area.x + (area.width - sz.width) / 2, height - 8}, 0.5);
+  if (!l.x.label.empty()) {
+    const auto sz = textSize(l.x.label, 0.5);
+    text(img, l.x.label, {area.x + (area.width - sz.width) / 2, img.rows - 8}, 0.5);
   }
-  if (!y_label.empty()) {
-    const auto sz = textSize(y_label, 0.5);
+  if (!l.y.label.empty()) {
+    const auto sz = textSize(l.y.label, 0.5);
     cv::Mat label(sz.height + 8, sz.width + 4, CV_8UC3, kWhite);
-    text(label, y_label, {2, sz.height + 2}, 0.5);
+    text(label, l.y.label, {2, sz.height + 2}, 0.5);
     cv::rotate(label, label, cv::ROTATE_90_COUNTERCLOCKWISE);
     const int y = std::max(0, area.y + (area.height - label.rows) / 2);
     if (y + label.rows <= img.rows) label.copyTo(img(cv::Rect(4, y, label.cols, label.rows)));
   }
-  if (!title.empty()) {
-    const auto sz = textSize(title, 0.6, 2);
-    text(img, title, {(width - sz.width) / 2, 24}, 0.6, 2);
+  if (!spec.title.empty()) {
+    const auto sz = textSize(spec.title, 0.6, 2);
+    const cv::Point c = at(l.title_x, l.title_y);
+    text(img, spec.title, {c.x - sz.width / 2, c.y}, 0.6, 2,
+         bgr(spec.title_color.value_or(plot::kBlack)));
   }
 
-  // Data, clipped to the plot area.
+  // Data, clipped to the plot area: the bands first, then the series in order, then the marks.
   cv::Mat canvas = img(area);
-  const cv::Point2d offset(area.x, area.y);
-  for (const auto& s : series_) {
+  auto point = [&](double x, double y) { return cv::Point(X(x) - area.x, Y(y) - area.y); };
+  auto finite = [](double x, double y) { return std::isfinite(x) && std::isfinite(y); };
+  for (const auto& s : spec.series) {
+    std::vector<cv::Point> upper, lower;
+    for (std::size_t i = 0; i < s.x.size() && i < s.y.size() && i < s.sigma.size(); ++i) {
+      if (!finite(s.x[i], s.y[i]) || !std::isfinite(s.sigma[i])) continue;
+      upper.push_back(point(s.x[i], s.y[i] + s.sigma[i]));
+      lower.push_back(point(s.x[i], s.y[i] - s.sigma[i]));
+    }
+    if (upper.size() < 2) continue;
+    upper.insert(upper.end(), lower.rbegin(), lower.rend());
+    cv::fillPoly(canvas, std::vector<std::vector<cv::Point>>{upper},
+                 bgr(plot::mix(s.color, plot::kWhite, 0.9)), cv::LINE_AA);
+  }
+  for (const auto& s : spec.series) {
     std::vector<cv::Point> pts;
-    for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i) {
-      if (!std::isfinite(s.x[i]) || !std::isfinite(s.y[i])) continue;
-      const cv::Point2d p = px(s.x[i], s.y[i]) - offset;
-      pts.emplace_back(static_cast<int>(std::lround(p.x)), static_cast<int>(std::lround(p.y)));
-    }
-    if (s.style == Series::Style::Line) {
-      if (pts.size() >= 2) cv::polylines(canvas, pts, false, s.color, s.thickness, cv::LINE_AA);
+    for (std::size_t i = 0; i < s.x.size() && i < s.y.size(); ++i)
+      if (finite(s.x[i], s.y[i])) pts.push_back(point(s.x[i], s.y[i]));
+    if (s.style == Style::Markers) {
+      for (const auto& p : pts)
+        cv::circle(canvas, p, s.thickness + 2, bgr(s.color), -1, cv::LINE_AA);
     } else {
-      for (const auto& p : pts) cv::circle(canvas, p, s.thickness + 2, s.color, -1, cv::LINE_AA);
+      drawLine(canvas, pts, s);
     }
+  }
+  for (double t : spec.x_lines)
+    cv::line(canvas, point(t, l.y.range.lo), point(t, l.y.range.hi), kBlack, 1);
+  for (const auto& m : spec.marks) {
+    if (!finite(m.x, m.y)) continue;
+    const cv::Point p = point(m.x, m.y);
+    cv::rectangle(canvas, p - cv::Point(5, 5), p + cv::Point(5, 5), bgr(m.color), cv::FILLED);
+    cv::rectangle(canvas, p - cv::Point(5, 5), p + cv::Point(5, 5), kBlack, 1);
   }
 
-  for (const Entry& e : legend) {
-    const Series& s = *e.series;
-    if (s.style == Series::Style::Line)
-      cv::line(img, e.at, e.at + cv::Point(30, 0), s.color, s.thickness, cv::LINE_AA);
-    else
-      cv::circle(img, e.at + cv::Point(15, 0), s.thickness + 2, s.color, -1, cv::LINE_AA);
-    text(img, s.label, e.at + cv::Point(36, 5), fs);
+  for (const auto& e : l.legend) {
+    const plot::Series& s = spec.series[e.series];
+    const cv::Point p = at(e.x, e.y);
+    if (s.style == Style::Markers) {
+      cv::circle(img, p + cv::Point(15, 0), s.thickness + 2, bgr(s.color), -1, cv::LINE_AA);
+    } else if (s.style == Style::Dashed) {
+      for (int k = 0; k < 3; ++k)
+        cv::line(img, p + cv::Point(12 * k, 0), p + cv::Point(12 * k + 6, 0), bgr(s.color),
+                 s.thickness, cv::LINE_AA);
+    } else {
+      cv::line(img, p, p + cv::Point(30, 0), bgr(s.color), s.thickness, cv::LINE_AA);
+    }
+    text(img, s.label, p + cv::Point(36, 5), kFontScale);
   }
+}
+
+cv::Mat Plot::render(int width, int height) const {
+  plot::PanelSpec spec;
+  spec.title = title;
+  spec.x.label = x_label;
+  spec.x.min = x_min;
+  spec.x.max = x_max;
+  spec.x.pad = 0;  // the data's own time span
+  spec.x.ticks = 6;
+  spec.y.label = y_label;
+  spec.y.min = y_min;
+  spec.y.max = y_max;
+  spec.y.log = log_y;
+  spec.series = series_;
+  cv::Mat img(height, width, CV_8UC3, kWhite);
+  drawPanel(img, spec);
   return img;
 }
 

@@ -43,7 +43,8 @@ cv::Mat velocityErrorPanel(const std::string& title, const std::vector<VelocityT
                            int width, int height);
 
 /// Free-Init's body-velocity components (lines) and the per-frame Doppler fits (markers) against
-/// the truth (thin black lines).
+/// the truth (thin black dashed lines): plot::componentPanel, the layout of the app's velocity
+/// snapshot.
 cv::Mat velocityComponentsPanel(const std::string& title, const std::vector<VelocityTrack>& tracks,
                                 int width, int height);
 

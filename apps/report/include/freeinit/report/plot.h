@@ -1,6 +1,10 @@
-// A small line plot rendered with OpenCV: axes with "nice" ticks (linear or log y), labels, a
-// title, a legend, lines and markers. For the evaluation figures; not a general plotting library.
+// A small line plot rendered with OpenCV: what to draw and where comes from the core's
+// plot layout (freeinit/plot_layout.h: nice ticks, linear or log y, legend, margins), shared with
+// the MRPT app's snapshot; this file holds the OpenCV drawing only. For the evaluation figures;
+// not a general plotting library.
 #pragma once
+
+#include <freeinit/plot_layout.h>
 
 #include <opencv2/core.hpp>
 #include <string>
@@ -8,14 +12,7 @@
 
 namespace freeinit::report {
 
-struct Series {
-  enum class Style { Line, Markers };
-  std::string label;  ///< legend text; empty: not in the legend
-  std::vector<double> x, y;
-  cv::Scalar color{0, 0, 0};  ///< BGR
-  Style style = Style::Line;
-  int thickness = 2;  ///< [px] line width or marker radius
-};
+using Series = plot::Series;
 
 class Plot {
  public:
@@ -32,8 +29,8 @@ class Plot {
   std::vector<Series> series_;
 };
 
-/// Distinct, colour-blind-friendly colours (BGR), indexed cyclically.
-cv::Scalar paletteColor(std::size_t i);
+/// Draws the panel `spec` laid out with the evaluation figures' style over all of `img` (BGR).
+void drawPanel(cv::Mat& img, const plot::PanelSpec& spec);
 
 /// Panels laid out in a grid of `columns`, row by row (all panels the same size).
 cv::Mat tile(const std::vector<cv::Mat>& panels, int columns);
