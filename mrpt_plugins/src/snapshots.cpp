@@ -1,4 +1,5 @@
 #include <freeinit/mrpt_plugins/snapshots.h>
+#include <freeinit/plot_layout.h>
 #include <freeinit/report/plot.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CArrow.h>
@@ -16,7 +17,6 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <functional>
 #include <iomanip>
 #include <optional>
 #include <sstream>
@@ -215,6 +215,83 @@ void swatch(mrpt::img::CImage& img, int x, int y, const TColor& c, const std::st
   img.textOut(x + 20, y, text, TColor(230, 230, 230));
 }
 
+TColor toColor(const plot::Rgb& c) { return TColor(c.r, c.g, c.b); }
+
+// The velocity plot's panels, in normalized coordinates of the image (at 1280 x 800: 80 px left
+// for the tick labels, 70 px of header, 30 px under the panels for the time labels).
+const plot::Box kVelocityPlotBox{80.0 / 1280, 70.0 / 800, 1260.0 / 1280, 770.0 / 800};
+
+// Draws `spec` laid out in `cell` (the stacked style) with CImage's lines, rectangles and the
+// 9x15 font; the time tick labels only under the bottom panel (`time_labels`).
+void drawPanel(mrpt::img::CImage& img, const plot::PanelSpec& spec, const plot::Box& cell,
+               bool time_labels) {
+  using Style = plot::Series::Style;
+  const double W = img.getWidth(), H = img.getHeight();
+  constexpr int kCharW = 9;  // the 9x15 font
+  const plot::PanelLayout l =
+      plot::layoutPanel(spec, cell, plot::stackedPanelStyle(), [&](const std::string& t) {
+        return static_cast<double>(kCharW * static_cast<int>(t.size())) / W;
+      });
+  auto px = [](double v) { return static_cast<int>(std::lround(v)); };
+  const int ax0 = px(l.area.x0 * W), ax1 = px(l.area.x1 * W);
+  const int ay0 = px(l.area.y0 * H), ay1 = px(l.area.y1 * H);
+  auto X = [&](double v) { return std::clamp(px(l.toX(v) * W), ax0, ax1); };
+  auto Y = [&](double v) { return std::clamp(px(l.toY(v) * H), ay0, ay1); };
+  const TColor black(0, 0, 0);
+  auto finite = [](double x, double y) { return std::isfinite(x) && std::isfinite(y); };
+
+  if (spec.shade)
+    img.filledRectangle(X(spec.shade->lo), ay0, X(spec.shade->hi), ay1, toColor(plot::kShade));
+  for (std::size_t i = 0; i < l.x.ticks.size(); ++i) {
+    const int x = X(l.x.ticks[i]);
+    img.line(x, ay0, x, ay1, toColor(plot::kGrid));
+    const std::string& t = l.x.labels[i];
+    if (time_labels) img.textOut(x - kCharW * static_cast<int>(t.size()) / 2, ay1 + 8, t, black);
+  }
+  for (std::size_t i = 0; i < l.y.ticks.size(); ++i) {
+    const int y = Y(l.y.ticks[i]);
+    img.line(ax0, y, ax1, y, toColor(plot::kGrid));
+    const std::string& t = l.y.labels[i];
+    img.textOut(ax0 - 6 - kCharW * static_cast<int>(t.size()), y - 7, t, black);
+  }
+  for (const auto& ser : spec.series) {  // the bands behind every line
+    const TColor band = toColor(plot::mix(ser.color, plot::kWhite, 0.9));
+    for (std::size_t i = 0; i < ser.x.size() && i < ser.y.size() && i < ser.sigma.size(); ++i)
+      if (finite(ser.x[i], ser.y[i]) && std::isfinite(ser.sigma[i]))
+        img.line(X(ser.x[i]), Y(ser.y[i] - ser.sigma[i]), X(ser.x[i]), Y(ser.y[i] + ser.sigma[i]),
+                 band, 2);
+  }
+  for (const auto& ser : spec.series) {
+    const TColor c = toColor(ser.color);
+    std::vector<std::pair<int, int>> pts;
+    for (std::size_t i = 0; i < ser.x.size() && i < ser.y.size(); ++i)
+      if (finite(ser.x[i], ser.y[i])) pts.emplace_back(X(ser.x[i]), Y(ser.y[i]));
+    if (ser.style == Style::Markers) {
+      for (const auto& [x, y] : pts)
+        for (int r = 1; r <= ser.thickness + 2; ++r) img.drawCircle(x, y, r, c, 1);
+      continue;
+    }
+    for (std::size_t i = 1; i < pts.size(); ++i)
+      if (ser.style == Style::Line || (i / 4) % 2 == 0)  // dashed: every other run of four
+        img.line(pts[i - 1].first, pts[i - 1].second, pts[i].first, pts[i].second, c,
+                 static_cast<unsigned>(ser.thickness));
+  }
+  for (double t : spec.x_lines) img.line(X(t), ay0, X(t), ay1, black, 1);
+  for (const auto& m : spec.marks) {
+    if (!finite(m.x, m.y)) continue;
+    const int x = X(m.x), y = Y(m.y);
+    img.filledRectangle(x - 5, y - 5, x + 5, y + 5, toColor(m.color));
+    img.rectangle(x - 5, y - 5, x + 5, y + 5, black);
+  }
+  img.rectangle(ax0, ay0, ax1, ay1, black);
+  if (!spec.title.empty()) {
+    const int tx = px(l.title_x * W), ty = px(l.title_y * H);
+    img.filledRectangle(tx - 6, ty - 2, tx + 4 + kCharW * static_cast<int>(spec.title.size()),
+                        ty + 16, TColor(255, 255, 255));
+    img.textOut(tx, ty, spec.title, toColor(spec.title_color.value_or(plot::kBlack)));
+  }
+}
+
 }  // namespace
 
 void renderMapSnapshot(const std::string& png, const InitResult& result, int width, int height) {
@@ -352,12 +429,22 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
   const double pad = truth.empty() ? 0.0 : 0.1 * (w1 - w0);
   const double t0 = w0 - pad, t1 = w1 + pad;
 
-  // Ground truth: body velocity and gyro bias over the plotted span.
-  std::vector<std::pair<double, Vec3>> gt_v, gt_bg;
+  // On the plot's time axis, seconds since the window start: the velocimeter's estimates and the
+  // ground truth (body velocity and gyro bias) over the plotted span.
+  plot::VectorTrack est_v, est_bg, true_v, true_bg;
+  for (const auto& x : v) {
+    est_v.t.push_back(x.t - w0);
+    est_v.value.push_back(x.v_b);
+    est_v.sigma.push_back(x.sigma_v_b);
+    est_bg.t.push_back(x.t - w0);
+    est_bg.value.push_back(x.b_g);
+  }
   for (const auto& g : truth) {
     if (g.t < t0 || g.t > t1) continue;
-    gt_v.emplace_back(g.t, g.q_wb.conjugate() * g.v_w);
-    gt_bg.emplace_back(g.t, g.b_g);
+    true_v.t.push_back(g.t - w0);
+    true_v.value.push_back(g.q_wb.conjugate() * g.v_w);
+    true_bg.t.push_back(g.t - w0);
+    true_bg.value.push_back(g.b_g);
   }
   std::optional<TruthErrors> err;
   if (!truth.empty() && s.ok()) {
@@ -370,13 +457,8 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
 
   mrpt::img::CImage img(width, height, mrpt::img::CH_RGB);
   img.filledRectangle(0, 0, width - 1, height - 1, TColor(255, 255, 255));
-  const TColor black(0, 0, 0), grey(215, 215, 215), window_col(255, 246, 214);
-  const TColor axis_col[3] = {TColor(215, 40, 40), TColor(30, 150, 30), TColor(40, 60, 220)};
-  const int left = 80, right = width - 20, top = 70, bottom = height - 30;
-  const int n_panels = 4;
-  const int panel_h = (bottom - top) / n_panels;
-  auto X = [&](double t) { return left + static_cast<int>((t - t0) / (t1 - t0) * (right - left)); };
-
+  const TColor black(0, 0, 0);
+  const int left = static_cast<int>(std::lround(kVelocityPlotBox.x0 * width));
   img.selectTextFont("10x20");
   img.textOut(left, 6, "Free-Init velocimeter over the initialization window", black);
   img.selectTextFont("9x15");
@@ -391,92 +473,38 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
                     " rad/s",
                 black);
 
-  // One panel: the series `est(i, a)` of the velocimeter samples for the axes `axes`, with an
-  // optional band, against the truth series.
-  auto panel = [&](int k, const std::string& title, const std::vector<int>& axes,
-                   const std::function<double(std::size_t, int)>& est,
-                   const std::function<double(std::size_t, int)>& sigma,
-                   const std::vector<std::pair<double, Vec3>>& gt,
-                   const std::optional<Vec3>& state_value) {
-    double lo = 1e9, hi = -1e9;
-    if (state_value)
-      for (int a : axes) {
-        lo = std::min(lo, (*state_value)[a]);
-        hi = std::max(hi, (*state_value)[a]);
-      }
-    for (std::size_t i = 0; i < v.size(); ++i)
-      for (int a : axes) {
-        const double sg = sigma ? sigma(i, a) : 0.0;
-        lo = std::min(lo, est(i, a) - sg);
-        hi = std::max(hi, est(i, a) + sg);
-      }
-    for (const auto& g : gt)
-      for (int a : axes) {
-        lo = std::min(lo, g.second[a]);
-        hi = std::max(hi, g.second[a]);
-      }
-    const double margin = std::max(0.02, 0.1 * (hi - lo));
-    lo -= margin;
-    hi += margin;
-    const int y_top = top + k * panel_h + 6, y_bot = top + (k + 1) * panel_h - 6;
-    auto Y = [&](double val) {
-      return y_bot - static_cast<int>((val - lo) / (hi - lo) * (y_bot - y_top));
-    };
-    img.filledRectangle(X(w0), y_top, X(s.timestamp), y_bot, window_col);
-    for (int q = 0; q <= 4; ++q) {
-      const double val = lo + (hi - lo) * q / 4.0;
-      img.line(left, Y(val), right, Y(val), grey);
-      img.textOut(4, Y(val) - 7, num(val, hi - lo < 0.2 ? 3 : 2), black);
-    }
-    for (int a : axes) {
-      if (sigma) {
-        const TColor band(static_cast<std::uint8_t>(235 + axis_col[a].R / 20),
-                          static_cast<std::uint8_t>(235 + axis_col[a].G / 20),
-                          static_cast<std::uint8_t>(235 + axis_col[a].B / 20));
-        for (std::size_t i = 0; i < v.size(); ++i)
-          img.line(X(v[i].t), Y(est(i, a) - sigma(i, a)), X(v[i].t), Y(est(i, a) + sigma(i, a)),
-                   band, 2);
-      }
-      for (std::size_t i = 1; i < v.size(); ++i)
-        img.line(X(v[i - 1].t), Y(est(i - 1, a)), X(v[i].t), Y(est(i, a)), axis_col[a], 3);
-      for (std::size_t i = 1; i < gt.size(); ++i)
-        if ((i / 4) % 2 == 0)  // dashed
-          img.line(X(gt[i - 1].first), Y(gt[i - 1].second[a]), X(gt[i].first), Y(gt[i].second[a]),
-                   black, 1);
-      if (state_value) {  // the state's own value, a filled square at the state time
-        const int ys = Y((*state_value)[a]);
-        img.filledRectangle(X(s.timestamp) - 5, ys - 5, X(s.timestamp) + 5, ys + 5, axis_col[a]);
-        img.rectangle(X(s.timestamp) - 5, ys - 5, X(s.timestamp) + 5, ys + 5, black);
-      }
-    }
-    img.line(X(s.timestamp), y_top, X(s.timestamp), y_bot, black, 1);
-    img.rectangle(left, y_top, right, y_bot, black);
-    img.filledRectangle(left + 2, y_top + 2, left + 12 + 9 * static_cast<int>(title.size()),
-                        y_top + 20, TColor(255, 255, 255));
-    int tx = left + 8;
-    if (axes.size() == 1) {
-      img.textOut(tx, y_top + 4, title, axis_col[axes[0]]);
-    } else {
-      img.textOut(tx, y_top + 4, title, black);
-    }
+  // Four panels stacked under the header: v_b per axis with its band, then the gyro bias.
+  auto data = [&](const std::string& title, std::vector<int> axes) {
+    plot::ComponentPanelData d;
+    d.title = title;
+    d.axes = std::move(axes);
+    d.state_t = s.timestamp - w0;
+    d.window = plot::Range{0.0, s.timestamp - w0};
+    d.time_range = plot::Range{t0 - w0, t1 - w0};
+    d.min_pad = 0.02;
+    d.time_unit = " s";
+    return d;
   };
-
+  const char* names[3] = {"v_b.x [m/s]", "v_b.y [m/s]", "v_b.z [m/s]"};
+  std::vector<plot::PanelSpec> panels;
   for (int a = 0; a < 3; ++a) {
-    const char* names[3] = {"v_b.x [m/s]", "v_b.y [m/s]", "v_b.z [m/s]"};
-    panel(
-        a, names[a], {a}, [&](std::size_t i, int ax) { return v[i].v_b[ax]; },
-        [&](std::size_t i, int ax) { return v[i].sigma_v_b[ax]; }, gt_v,
-        s.ok() ? std::optional<Vec3>(s.v_b()) : std::nullopt);
+    plot::ComponentPanelData d = data(names[a], {a});
+    d.estimate = est_v;
+    d.truth = true_v;
+    if (s.ok()) d.state_value = s.v_b();
+    panels.push_back(plot::componentPanel(d));
   }
-  panel(
-      3, "gyro bias x y z [rad/s]: velocimeter (lines), state (squares)", {0, 1, 2},
-      [&](std::size_t i, int ax) { return v[i].b_g[ax]; }, nullptr, gt_bg,
-      s.ok() ? std::optional<Vec3>(s.b_g) : std::nullopt);
-
-  for (int k = 0; k <= 5; ++k) {
-    const double t = w0 + (w1 - w0) * k / 5.0;
-    img.textOut(X(t) - 20, bottom - 2, num(t - w0, 2) + " s", black);
+  {
+    plot::ComponentPanelData d =
+        data("gyro bias x y z [rad/s]: velocimeter (lines), state (squares)", {0, 1, 2});
+    d.estimate = est_bg;
+    d.truth = true_bg;
+    if (s.ok()) d.state_value = s.b_g;
+    panels.push_back(plot::componentPanel(d));
   }
+  const auto cells = plot::stackCells(kVelocityPlotBox, static_cast<int>(panels.size()), 0.0);
+  for (std::size_t k = 0; k < panels.size(); ++k)
+    drawPanel(img, panels[k], cells[k], k + 1 == panels.size());
   saveAtomically(img, png);
 }
 
