@@ -1,10 +1,11 @@
 // The evaluation report: CSV written and read back, failure marking, the paper-layout summary,
-// the displacement error, the job pool, and the PNG writer.
+// the displacement error, the job pool, the PNG writer, and the methods run on equal terms.
 #include <freeinit/eval/state_errors.h>
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
 #include <freeinit/rotation.h>
+#include <freeinit/sim/simulator.h>
 #include <gtest/gtest.h>
 #include <pthread.h>
 #include <sys/resource.h>
@@ -442,6 +443,38 @@ TEST(Plot, WritesAReadablePngWithTheData) {
     }
   EXPECT_GT(red, 200);  // two panels of a line across the plot area
   std::filesystem::remove(path);
+}
+
+// The methods in the order of the tables, each with its kind of velocity track.
+TEST(RunMethods, EveryMethodInTableOrderWithItsTrack) {
+  sim::ScenarioConfig sc = sim::preset("stat_01", 1);
+  sc.duration = 1.0;
+  sc.points_per_frame = 2000;
+  const sim::Recording rec = sim::simulate(sc);
+  MethodOptions options;
+  options.dlio_duration = 0.8;
+  const auto runs =
+      runMethods(FreeInitConfig{}, rec.imu, rec.frames, rec.declared_extrinsics, options);
+  ASSERT_EQ(runs.size(), 4u);
+  const char* const names[] = {"free-init", "fast-lio2", "dlio", "doppler-ls"};
+  for (std::size_t i = 0; i < runs.size(); ++i) {
+    SCOPED_TRACE(names[i]);
+    EXPECT_EQ(runs[i].method, names[i]);
+    ASSERT_TRUE(runs[i].result.state.ok()) << runs[i].result.state.message;
+    EXPECT_FALSE(runs[i].track.empty());
+    EXPECT_EQ(runs[i].track_per_frame, i == 3);
+  }
+  EXPECT_EQ(runs[0].track.size(), runs[0].result.velocities.size());
+  for (const std::size_t i :
+       {std::size_t{1}, std::size_t{2}}) {  // the static means: v = 0 over their window
+    EXPECT_EQ(runs[i].track.size(), runs[i].result.trajectory.size());
+    for (const TimedVelocity& v : runs[i].track) EXPECT_EQ(v.v_b, Vec3::Zero());
+  }
+  options.baselines = false;
+  const auto alone =
+      runMethods(FreeInitConfig{}, rec.imu, rec.frames, rec.declared_extrinsics, options);
+  ASSERT_EQ(alone.size(), 1u);
+  EXPECT_EQ(alone[0].method, "free-init");
 }
 
 }  // namespace

@@ -25,45 +25,90 @@ MethodRun timed(const char* method, F&& run) {
   return m;
 }
 
+/// What every method is given: the same input, on equal terms.
+struct MethodInput {
+  const FreeInitConfig& config;  ///< with the input's extrinsics
+  const std::vector<ImuSample>& imu;
+  const std::vector<LidarFrame>& frames;
+  const Extrinsics& extrinsics;
+  const MethodOptions& options;
+  /// The IMU samples of Free-Init's window (one more than there are when the IMU does not cover
+  /// it), which the baselines of a fixed sample count are given.
+  int window = 0;
+};
+
+/// One method of the evaluation: how it runs (timed) and what it reports as its velocity track.
+struct Method {
+  const char* name;
+  bool baseline;  ///< skipped when MethodOptions::baselines is off
+  InitResult (*run)(const MethodInput&);
+  void (*track)(const MethodInput&, MethodRun&);
+  bool track_per_frame;  ///< the track is one fit per frame (plotted as markers)
+};
+
+InitResult runFreeInit(const MethodInput& in) {
+  return FreeInit::run(in.config, in.imu, in.frames);
+}
+
+InitResult runFastLio2(const MethodInput& in) { return baselines::fastLio2(in.imu, in.window); }
+
+InitResult runDlio(const MethodInput& in) {
+  return baselines::dlio(in.imu, in.options.dlio_duration);
+}
+
+InitResult runDopplerLeastSquares(const MethodInput& in) {
+  return baselines::dopplerLeastSquares(in.imu, in.frames, in.extrinsics, in.window);
+}
+
+/// Free-Init's velocimeter at every IMU sample.
+void velocimeterTrack(const MethodInput&, MethodRun& m) {
+  for (const VelocitySample& v : m.result.velocities) m.track.push_back({v.t, v.v_b});
+}
+
 /// A static-mean initializer reports v = 0 over its window (its trajectory).
-void zeroVelocityTrack(MethodRun& m) {
+void zeroVelocityTrack(const MethodInput&, MethodRun& m) {
   if (!m.result.state.ok()) return;
   for (const PoseSample& p : m.result.trajectory) m.track.push_back({p.t, Vec3::Zero()});
 }
+
+/// The Doppler least squares on every frame that starts inside the window, as the method would
+/// report them.
+void perFrameDopplerTrack(const MethodInput& in, MethodRun& m) {
+  if (in.imu.empty() || in.imu.size() < static_cast<std::size_t>(in.window)) return;
+  const double t_end = in.imu[static_cast<std::size_t>(in.window) - 1].t;
+  for (const LidarFrame& f : in.frames) {
+    if (f.stamp < in.imu.front().t || f.stamp > t_end) continue;
+    const auto fv = baselines::dopplerFrameVelocity(f, in.imu, in.extrinsics);
+    if (fv.ok()) m.track.push_back({fv.t_mid, fv.v_b});
+  }
+}
+
+/// The methods in the order of the tables. A new baseline is a run function (and, if its track
+/// is not one of these, a track function) and one line here.
+constexpr Method kMethods[] = {
+    {"free-init", false, runFreeInit, velocimeterTrack, false},
+    {"fast-lio2", true, runFastLio2, zeroVelocityTrack, false},
+    {"dlio", true, runDlio, zeroVelocityTrack, false},
+    {"doppler-ls", true, runDopplerLeastSquares, perFrameDopplerTrack, true},
+};
 
 }  // namespace
 
 std::vector<MethodRun> runMethods(const FreeInitConfig& config, const std::vector<ImuSample>& imu,
                                   const std::vector<LidarFrame>& frames,
                                   const Extrinsics& extrinsics, const MethodOptions& options) {
-  std::vector<MethodRun> runs;
   FreeInitConfig cfg = config;
   cfg.extrinsics = extrinsics;
-  runs.push_back(timed("free-init", [&] { return FreeInit::run(cfg, imu, frames); }));
-  for (const VelocitySample& v : runs.back().result.velocities)
-    runs.back().track.push_back({v.t, v.v_b});
-  if (!options.baselines) return runs;
-
-  // The IMU samples of the window (more than there are when the IMU does not cover it).
   const auto last = windowLastSample(imu, 0, cfg.window.duration);
   const int window = static_cast<int>(last ? *last + 1 : imu.size() + 1);
-  runs.push_back(timed("fast-lio2", [&] { return baselines::fastLio2(imu, window); }));
-  zeroVelocityTrack(runs.back());
-  runs.push_back(timed("dlio", [&] { return baselines::dlio(imu, options.dlio_duration); }));
-  zeroVelocityTrack(runs.back());
-  runs.push_back(timed("doppler-ls", [&] {
-    return baselines::dopplerLeastSquares(imu, frames, extrinsics, window);
-  }));
-  // The same fit on every frame that starts inside the window, as the method would report them.
-  MethodRun& d = runs.back();
-  d.track_per_frame = true;
-  if (!imu.empty() && imu.size() >= static_cast<std::size_t>(window)) {
-    const double t_end = imu[static_cast<std::size_t>(window) - 1].t;
-    for (const LidarFrame& f : frames) {
-      if (f.stamp < imu.front().t || f.stamp > t_end) continue;
-      const auto fv = baselines::dopplerFrameVelocity(f, imu, extrinsics);
-      if (fv.ok()) d.track.push_back({fv.t_mid, fv.v_b});
-    }
+  const MethodInput in{cfg, imu, frames, extrinsics, options, window};
+  std::vector<MethodRun> runs;
+  for (const Method& method : kMethods) {
+    if (method.baseline && !options.baselines) continue;
+    runs.push_back(timed(method.name, [&] { return method.run(in); }));
+    MethodRun& m = runs.back();
+    m.track_per_frame = method.track_per_frame;
+    method.track(in, m);
   }
   return runs;
 }

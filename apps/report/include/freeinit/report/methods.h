@@ -40,7 +40,8 @@ struct MethodOptions {
 
 /// Runs Free-Init with `config` and (optionally) FAST-LIO2's static mean over the same number of
 /// IMU samples as Free-Init's window, DLIO's mean over `dlio_duration`, and the per-frame Doppler
-/// least squares of the last frame in that window.
+/// least squares of the last frame in that window, in this order (one table in methods.cpp: a
+/// method is a run function, a track function and one line there).
 std::vector<MethodRun> runMethods(const FreeInitConfig& config, const std::vector<ImuSample>& imu,
                                   const std::vector<LidarFrame>& frames,
                                   const Extrinsics& extrinsics, const MethodOptions& options);
