@@ -1,6 +1,8 @@
 // The evaluation report: CSV written and read back, failure marking, the paper-layout summary,
-// the displacement error, the job pool, the PNG writer, and the methods run on equal terms.
+// the displacement error, the job pool, the PNG writer, the methods run on equal terms and
+// freeinit-eval's app class (its command line, a tiny run).
 #include <freeinit/eval/state_errors.h>
+#include <freeinit/report/eval_app.h>
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
@@ -17,6 +19,7 @@
 #include <fstream>
 #include <limits>
 #include <opencv2/imgcodecs.hpp>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <system_error>
@@ -475,6 +478,123 @@ TEST(RunMethods, EveryMethodInTableOrderWithItsTrack) {
       runMethods(FreeInitConfig{}, rec.imu, rec.frames, rec.declared_extrinsics, options);
   ASSERT_EQ(alone.size(), 1u);
   EXPECT_EQ(alone[0].method, "free-init");
+}
+
+EvalApp::Action parseLine(EvalApp& app, std::vector<const char*> args) {
+  args.insert(args.begin(), "freeinit-eval");
+  return app.parse(static_cast<int>(args.size()), args.data());
+}
+
+TEST(EvalApp, ParsesTheCommandLine) {
+  EvalApp app;
+  EXPECT_EQ(parseLine(app, {"-q", "--seeds", "2", "--no-baselines", "--dlio-duration", "0.8",
+                            "--csv", "out/e.csv", "dyna_04", "stat_01"}),
+            EvalApp::Action::Run);
+  const EvalAppParams& p = app.params;
+  EXPECT_TRUE(p.quiet);
+  EXPECT_EQ(p.seeds, 2);
+  EXPECT_FALSE(p.methods.baselines);
+  EXPECT_EQ(p.methods.dlio_duration, 0.8);
+  EXPECT_EQ(p.csv, "out/e.csv");
+  EXPECT_EQ(p.presets, (std::vector<std::string>{"dyna_04", "stat_01"}));
+  EXPECT_EQ(p.command,
+            "freeinit-eval -q --seeds 2 --no-baselines --dlio-duration 0.8 --csv out/e.csv "
+            "dyna_04 stat_01");
+  EXPECT_EQ(parseLine(app, {}), EvalApp::Action::Run);  // the defaults again
+  EXPECT_EQ(app.params.seeds, 3);
+  EXPECT_TRUE(app.params.presets.empty());  // every preset
+}
+
+TEST(EvalApp, HelpAndVersionWinWhateverElseIsOnTheLine) {
+  EvalApp app;
+  EXPECT_EQ(parseLine(app, {"--seeds", "2.7", "--help", "--csv", "x.csv"}), EvalApp::Action::Help);
+  EXPECT_EQ(parseLine(app, {"--bogus", "-h"}), EvalApp::Action::Help);
+  EXPECT_EQ(parseLine(app, {"--bogus", "--version", "--help"}), EvalApp::Action::Version);
+  EXPECT_EQ(std::string(EvalApp::usage()).rfind("Usage: freeinit-eval", 0), 0u);
+}
+
+TEST(EvalApp, BadArgumentsGiveOneLineNamingTheFlag) {
+  struct Bad {
+    const char* named;  ///< what the message starts with
+    std::vector<const char*> args;
+  };
+  const std::vector<Bad> bad = {{"--seeds", {"--seeds", "2.7"}},
+                                {"--jobs", {"--jobs", "-1"}},
+                                {"--points", {"--points", "0.5"}},
+                                {"--seeds", {"--seeds", "1e11"}},
+                                {"--passes", {"--passes", "x"}},
+                                {"--duration", {"--duration", "0"}},
+                                {"--duration", {"--duration", "nan"}},
+                                {"--fail-velocity", {"--fail-velocity", "x"}},
+                                {"--gyro-prior", {"--gyro-prior", "-0.1"}},
+                                {"--tau", {"--tau", "inf"}},
+                                {"--time-offset-sigma", {"--time-offset-sigma", "0.2"}},
+                                {"--md", {"--md"}},
+                                {"--csv", {"--csv", "--md", "x"}},
+                                {"--bogus", {"dyna_04", "--bogus"}},
+                                {"nopreset", {"-q", "nopreset"}}};
+  for (const Bad& b : bad) {
+    SCOPED_TRACE(b.named);
+    EvalApp app;
+    app.params.seeds = 7;
+    try {
+      parseLine(app, b.args);
+      ADD_FAILURE() << "no error";
+    } catch (const EvalApp::UsageError& e) {
+      const std::string what = e.what();
+      EXPECT_EQ(what.rfind(std::string(b.named) + ": ", 0), 0u) << what;
+      EXPECT_EQ(what.find('\n'), std::string::npos) << what;
+    }
+    EXPECT_EQ(app.params.seeds, 7);  // unchanged
+  }
+}
+
+TEST(EvalApp, ATinyRunGivesARowPerMethodAndTheFiles) {
+  EvalApp app;
+  const std::string dir = tempPath("eval_app");
+  std::filesystem::remove_all(dir);
+  ASSERT_EQ(
+      parseLine(app, {"-q", "--seeds", "1", "--jobs", "1", "--points", "2000", "--duration", "1.0",
+                      "--dlio-duration", "0.8", "stat_01", "--csv", (dir + "/sub/e.csv").c_str()}),
+      EvalApp::Action::Run);
+  std::ostringstream out, progress;
+  app.run(out, progress);
+  ASSERT_EQ(app.rows.size(), 4u);
+  const char* const names[] = {"free-init", "fast-lio2", "dlio", "doppler-ls"};
+  for (std::size_t i = 0; i < app.rows.size(); ++i) {
+    EXPECT_EQ(app.rows[i].source, "stat_01");
+    EXPECT_EQ(app.rows[i].seed, 1);
+    EXPECT_EQ(app.rows[i].method, names[i]);
+    EXPECT_EQ(app.rows[i].status, "ok");
+  }
+  EXPECT_FALSE(app.rows[0].failed) << app.rows[0].failure;
+  EXPECT_EQ(progress.str(), "done stat_01 seed 1\n");
+  EXPECT_EQ(out.str().find("free-init  stat_01"), std::string::npos);  // -q: no per-run lines
+  EXPECT_NE(out.str().find("stat_01"), std::string::npos);             // the summary
+  const auto back = readEvalCsv(dir + "/sub/e.csv");
+  ASSERT_EQ(back.size(), 4u);
+  EXPECT_EQ(back[3].method, "doppler-ls");
+  std::filesystem::remove_all(dir);
+}
+
+// An output folder that cannot be created fails before any run, naming its option.
+TEST(EvalApp, AnOutputFolderThatCannotBeMadeFailsFirst) {
+  const std::string file = tempPath("eval_app_file");
+  std::ofstream(file) << "x";
+  EvalApp app;
+  app.params.presets = {"stat_01"};
+  app.params.md = file + "/e.md";
+  std::ostringstream out, progress;
+  try {
+    app.run(out, progress);
+    ADD_FAILURE() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("--md: cannot create the folder " + file, 0), 0u)
+        << e.what();
+  }
+  EXPECT_TRUE(progress.str().empty());
+  EXPECT_TRUE(app.rows.empty());
+  std::filesystem::remove(file);
 }
 
 }  // namespace

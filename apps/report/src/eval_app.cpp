@@ -1,15 +1,7 @@
-// freeinit-eval: Free-Init and the baseline initializers (FAST-LIO2 and DLIO static means,
-// per-frame Doppler least squares) on simulated scenarios, against the ground truth and against
-// the Cramer-Rao bound of each run (freeinit/eval).
-// What it runs is a list of cases (a scenario config and its name in the tables): today the
-// presets x seeds. Jobs (one per case) are independent and deterministic and run in parallel; the
-// tables are the same whatever --jobs (only the wall times differ).
 #include <freeinit/atomic_file.h>
-#include <freeinit/report/eval_table.h>
+#include <freeinit/report/eval_app.h>
 #include <freeinit/report/figures.h>
-#include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
-#include <freeinit/report/version.h>
 #include <freeinit/sim/evaluation.h>
 #include <freeinit/sim/presets.h>
 #include <freeinit/sim/random_scenario.h>
@@ -17,24 +9,24 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
-#include <exception>
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <mutex>
 #include <ostream>
 #include <random>
 #include <stdexcept>
 #include <string>
+#include <system_error>
 #include <utility>
 #include <vector>
 
+namespace freeinit::report {
 namespace {
 
-using freeinit::Vec3;
-namespace eval = freeinit::eval;
-namespace report = freeinit::report;
-namespace sim = freeinit::sim;
+using UsageError = EvalApp::UsageError;
 
 const char* const kUsage =
     "Usage: freeinit-eval [options] [preset ...]   (default: every preset)\n"
@@ -71,32 +63,9 @@ const char* const kUsage =
     "  -h, --help           this text;  --version: the version\n"
     "Exit status: 0 done, 1 a run could not be made, 2 a bad option or value.\n";
 
-/// A bad command line: exit status 2, the message names the flag.
-struct UsageError : std::invalid_argument {
-  using std::invalid_argument::invalid_argument;
-};
-
-struct Options {
-  int seeds = 3;
-  int random = 0;           ///< > 0: this many randomized scenarios instead of the presets
-  long long seed_base = 1;  ///< first seed of the randomized scenarios
-  double calibration_sigma = -1, time_offset_sigma = -1;  ///< < 0: the configuration default
-  unsigned jobs = 0;
-  std::string md, csv, summary_csv, bounds_md, plots;
-  report::FailureThresholds thresholds;
-  double duration = -1;  // < 0: default by baselines
-  int points = 0, stride = 0, passes = -1, seed_samples = -1;
-  double window = 0;
-  double tau = -1, gyro_prior = 0;
-  bool zero_bg = false, no_db = false, trace = false, quiet = false;
-  report::MethodOptions methods;
-  std::vector<std::string> presets;
-  std::string command;
-};
-
-Options parse(int argc, char** argv) {
-  Options o;
-  o.command = "freeinit-eval";
+/// The parameters of a command line (argv[0] is the program); throws UsageError.
+EvalAppParams parseParams(int argc, const char* const* argv) {
+  EvalAppParams o;
   for (int i = 1; i < argc; ++i) o.command += std::string(" ") + argv[i];
   auto value = [&](int& i) -> std::string {
     const std::string flag = argv[i];
@@ -114,7 +83,7 @@ Options parse(int argc, char** argv) {
   // A finite number in [lo, hi] (checked on the double).
   auto number = [&](int& i, double lo, double hi) {
     const std::string flag = argv[i], v = value(i);
-    const auto x = report::parseDouble(v);
+    const auto x = parseDouble(v);
     if (!x || !std::isfinite(*x)) throw UsageError(flag + ": not a number: '" + v + "'");
     if (!(*x >= lo && *x <= hi))
       throw UsageError(flag + ": must be in [" + text(lo) + ", " + text(hi) + "], not '" + v + "'");
@@ -131,7 +100,7 @@ Options parse(int argc, char** argv) {
   // (checked on the double, before any conversion).
   auto integer = [&](int& i, int lo, int hi) {
     const std::string flag = argv[i];
-    const auto x = report::parseDouble(value(i));
+    const auto x = parseDouble(value(i));
     if (!x || !(*x >= lo && *x <= hi) || *x != std::floor(*x))
       throw UsageError(flag + ": must be a whole number in [" + std::to_string(lo) + ", " +
                        std::to_string(hi) + "], not '" + argv[i] + "'");
@@ -184,8 +153,6 @@ Options parse(int argc, char** argv) {
       o.presets.push_back(a);
     }
   }
-  if (o.duration < 0) o.duration = o.methods.baselines ? o.methods.dlio_duration + 0.2 : 1.2;
-  if (o.presets.empty()) o.presets = names;
   return o;
 }
 
@@ -198,7 +165,7 @@ struct EvalCase {
 };
 
 /// The command line's changes to a scenario (duration, points, the zero-gyro-bias variant).
-void applyOverrides(const Options& o, sim::ScenarioConfig& sc) {
+void applyOverrides(const EvalAppParams& o, sim::ScenarioConfig& sc) {
   sc.duration = o.duration;
   if (o.points > 0) sc.points_per_frame = o.points;
   if (o.zero_bg) {
@@ -210,7 +177,7 @@ void applyOverrides(const Options& o, sim::ScenarioConfig& sc) {
 
 /// Every preset of the command line x seeds 1..N. (Randomized scenarios are one more function of
 /// this kind: N seeds from a base, each sim::randomScenario(seed) through applyOverrides.)
-std::vector<EvalCase> presetCases(const Options& o) {
+std::vector<EvalCase> presetCases(const EvalAppParams& o) {
   std::vector<EvalCase> cases;
   for (const auto& name : o.presets)
     for (int seed = 1; seed <= o.seeds; ++seed) {
@@ -223,7 +190,7 @@ std::vector<EvalCase> presetCases(const Options& o) {
 
 /// N randomized scenarios from the seed base, named in the tables by platform and start
 /// ("handheld/static", "vehicular/moving", ...).
-std::vector<EvalCase> randomCases(const Options& o) {
+std::vector<EvalCase> randomCases(const EvalAppParams& o) {
   std::vector<EvalCase> cases;
   for (long long seed = o.seed_base; seed < o.seed_base + o.random; ++seed) {
     const sim::RandomScenario r = sim::drawRandomScenario(static_cast<std::uint64_t>(seed));
@@ -236,8 +203,8 @@ std::vector<EvalCase> randomCases(const Options& o) {
 }
 
 struct JobResult {
-  std::vector<report::EvalRow> rows;
-  std::vector<report::VelocityTrack> tracks;
+  std::vector<EvalRow> rows;
+  std::vector<VelocityTrack> tracks;
   std::string log;
 };
 
@@ -248,8 +215,8 @@ void appendf(std::string& s, const char* fmt, Args... args) {
   s += buf;
 }
 
-freeinit::FreeInitConfig configFor(const Options& o, const sim::Recording& rec, int seed) {
-  freeinit::FreeInitConfig cfg;
+FreeInitConfig configFor(const EvalAppParams& o, const sim::Recording& rec, int seed) {
+  FreeInitConfig cfg;
   if (o.calibration_sigma >= 0) cfg.estimator.calibration_rotation_sigma_deg = o.calibration_sigma;
   if (o.time_offset_sigma >= 0) cfg.estimator.time_offset_sigma = o.time_offset_sigma;
   if (o.random > 0) {
@@ -275,17 +242,16 @@ freeinit::FreeInitConfig configFor(const Options& o, const sim::Recording& rec, 
   return cfg;
 }
 
-JobResult runCase(const Options& o, const EvalCase& c) {
+JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
   const auto rec = sim::simulate(c.scenario);
-  const freeinit::FreeInitConfig cfg = configFor(o, rec, c.seed);
-  const auto runs =
-      report::runMethods(cfg, rec.imu, rec.frames, rec.declared_extrinsics, o.methods);
+  const FreeInitConfig cfg = configFor(o, rec, c.seed);
+  const auto runs = runMethods(cfg, rec.imu, rec.frames, rec.declared_extrinsics, o.methods);
 
   // The bound of each method's window (methods with the same window share it), with the
   // estimator's priors.
   const eval::BoundModel model = sim::boundModel(rec, cfg);
   std::map<std::pair<double, double>, eval::Bound> bounds;
-  auto boundOf = [&](const freeinit::InitResult& r) -> const eval::Bound* {
+  auto boundOf = [&](const InitResult& r) -> const eval::Bound* {
     if (!r.state.ok() || r.trajectory.empty()) return nullptr;
     const std::pair<double, double> window(r.trajectory.front().t, r.state.timestamp);
     auto it = bounds.find(window);
@@ -296,9 +262,9 @@ JobResult runCase(const Options& o, const EvalCase& c) {
   };
 
   JobResult out;
-  const report::TruthFn truth = [&](double t) { return sim::stateTruth(rec, t); };
+  const TruthFn truth = [&](double t) { return sim::stateTruth(rec, t); };
   for (const auto& m : runs) {
-    report::EvalRow row = report::makeEvalRow(c.source, c.seed, m, truth, boundOf(m.result));
+    EvalRow row = makeEvalRow(c.source, c.seed, m, truth, boundOf(m.result));
     row.wrong_calibration = c.wrong_calibration;
     out.rows.push_back(row);
     char head[96];
@@ -329,7 +295,7 @@ JobResult runCase(const Options& o, const EvalCase& c) {
     out.log += wrong.empty() ? "\n" : "  CONFIDENT WRONG: " + wrong + "\n";
   }
   out.tracks =
-      report::velocityTracks(runs, rec.config.t0, [&](double t) -> Vec3 { return truth(t).v_b(); });
+      velocityTracks(runs, rec.config.t0, [&](double t) -> Vec3 { return truth(t).v_b(); });
   if (o.trace) {
     const auto& fi = out.tracks.front();
     for (std::size_t i = 0; i < fi.t.size(); i += 5) {
@@ -343,7 +309,7 @@ JobResult runCase(const Options& o, const EvalCase& c) {
 
 /// One figure of panels for the inputs whose name starts with `prefix` (the first case of each).
 template <typename Panel>
-void writeFigure(const Options& o, const std::vector<EvalCase>& cases,
+void writeFigure(std::ostream& out, const EvalAppParams& o, const std::vector<EvalCase>& cases,
                  const std::vector<JobResult>& results, const std::string& prefix,
                  const std::string& file, Panel&& panel) {
   std::vector<cv::Mat> panels;
@@ -357,13 +323,13 @@ void writeFigure(const Options& o, const std::vector<EvalCase>& cases,
   }
   if (panels.empty()) return;
   const std::string path = (std::filesystem::path(o.plots) / file).string();
-  report::savePng(path, report::tile(panels, panels.size() >= 2 ? 2 : 1));
-  std::printf("wrote %s\n", path.c_str());
+  savePng(path, tile(panels, panels.size() >= 2 ? 2 : 1));
+  out << "wrote " << path << "\n";
 }
 
 /// Creates the folders the outputs go to before any run, so that a path that cannot be written
 /// fails at once, naming its option, not after the evaluation.
-void prepareOutputFolders(const Options& o) {
+void prepareOutputFolders(const EvalAppParams& o) {
   namespace fs = std::filesystem;
   const std::pair<const char*, fs::path> folders[] = {
       {"--md", fs::path(o.md).parent_path()},
@@ -381,71 +347,63 @@ void prepareOutputFolders(const Options& o) {
   }
 }
 
-int run(const Options& o) {
-  prepareOutputFolders(o);
-  const std::vector<EvalCase> cases = o.random > 0 ? randomCases(o) : presetCases(o);
-  std::vector<JobResult> results(cases.size());
-  report::parallelFor(cases.size(), o.jobs, [&](std::size_t i) {
-    results[i] = runCase(o, cases[i]);
-    std::fprintf(stderr, "done %s seed %d\n", cases[i].source.c_str(), cases[i].seed);
-  });
-
-  std::vector<report::EvalRow> rows;
-  for (const auto& r : results) {
-    if (!o.quiet) std::fputs(r.log.c_str(), stdout);
-    rows.insert(rows.end(), r.rows.begin(), r.rows.end());
-  }
-  report::markFailures(rows, o.thresholds);
-  std::printf("\n%s\n%s", report::markdownSummary(rows, o.thresholds).c_str(),
-              report::boundsMarkdown(rows).c_str());
-  if (!o.csv.empty()) report::writeEvalCsv(o.csv, rows);
-  if (!o.summary_csv.empty()) report::writeSummaryCsv(o.summary_csv, rows);
-  if (!o.md.empty()) report::writeEvalMarkdown(o.md, rows, o.thresholds, o.command);
-  if (!o.bounds_md.empty()) {
-    // For a README: ten confident wrong answers per method at most (the report lists all).
-    const std::string md = report::boundsMarkdown(rows, {}, 10);
-    freeinit::writeFileAtomically(o.bounds_md, [&](std::ostream& f) { f << md; });
-  }
-  if (!o.plots.empty()) {
-    std::filesystem::create_directories(o.plots);
-    writeFigure(o, cases, results, "dyna", "velocity_error_dyna.png",
-                [](const std::string& title, const auto& tracks) {
-                  return report::velocityErrorPanel(title, tracks, 640, 400);
-                });
-    writeFigure(o, cases, results, "tunnel", "tunnel_velocity.png",
-                [](const std::string& title, const auto& tracks) {
-                  return report::velocityComponentsPanel(title, tracks, 640, 400);
-                });
-  }
-  return 0;
-}
-
 }  // namespace
 
-int main(int argc, char** argv) {
+const char* EvalApp::usage() { return kUsage; }
+
+EvalApp::Action EvalApp::parse(int argc, const char* const* argv) {
   // --help and --version print and exit whatever else is on the line.
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
-    if (a == "-h" || a == "--help") {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    if (a == "--version") {
-      std::printf("freeinit-eval %s\n", report::version());
-      return 0;
-    }
+    if (a == "-h" || a == "--help") return Action::Help;
+    if (a == "--version") return Action::Version;
   }
-  Options o;
-  try {
-    o = parse(argc, argv);
-  } catch (const UsageError& e) {
-    std::fprintf(stderr, "freeinit-eval: %s\n", e.what());
-    return 2;
+  params = parseParams(argc, argv);
+  return Action::Run;
+}
+
+void EvalApp::run(std::ostream& out, std::ostream& progress) {
+  EvalAppParams o = params;
+  if (o.duration < 0) o.duration = o.methods.baselines ? o.methods.dlio_duration + 0.2 : 1.2;
+  if (o.presets.empty()) o.presets = sim::presetNames();
+  prepareOutputFolders(o);
+  const std::vector<EvalCase> cases = o.random > 0 ? randomCases(o) : presetCases(o);
+  std::vector<JobResult> results(cases.size());
+  std::mutex progress_mutex;
+  parallelFor(cases.size(), o.jobs, [&](std::size_t i) {
+    results[i] = runCase(o, cases[i]);
+    const std::string done =
+        "done " + cases[i].source + " seed " + std::to_string(cases[i].seed) + "\n";
+    const std::lock_guard<std::mutex> lock(progress_mutex);
+    progress << done << std::flush;
+  });
+
+  rows.clear();
+  for (const auto& r : results) {
+    if (!o.quiet) out << r.log;
+    rows.insert(rows.end(), r.rows.begin(), r.rows.end());
   }
-  try {
-    return run(o);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "freeinit-eval: %s\n", e.what());
-    return 1;
+  markFailures(rows, o.thresholds);
+  out << "\n" << markdownSummary(rows, o.thresholds) << "\n" << boundsMarkdown(rows);
+  if (!o.csv.empty()) writeEvalCsv(o.csv, rows);
+  if (!o.summary_csv.empty()) writeSummaryCsv(o.summary_csv, rows);
+  if (!o.md.empty()) writeEvalMarkdown(o.md, rows, o.thresholds, o.command);
+  if (!o.bounds_md.empty()) {
+    // For a README: ten confident wrong answers per method at most (the report lists all).
+    const std::string md = boundsMarkdown(rows, {}, 10);
+    writeFileAtomically(o.bounds_md, [&](std::ostream& f) { f << md; });
+  }
+  if (!o.plots.empty()) {
+    std::filesystem::create_directories(o.plots);
+    writeFigure(out, o, cases, results, "dyna", "velocity_error_dyna.png",
+                [](const std::string& title, const auto& tracks) {
+                  return velocityErrorPanel(title, tracks, 640, 400);
+                });
+    writeFigure(out, o, cases, results, "tunnel", "tunnel_velocity.png",
+                [](const std::string& title, const auto& tracks) {
+                  return velocityComponentsPanel(title, tracks, 640, 400);
+                });
   }
 }
+
+}  // namespace freeinit::report
