@@ -513,6 +513,21 @@ TEST(EvalApp, HelpAndVersionWinWhateverElseIsOnTheLine) {
   EXPECT_EQ(std::string(EvalApp::usage()).rfind("Usage: freeinit-eval", 0), 0u);
 }
 
+// The exit codes of the command line (its output is the shell tests' in tests/CMakeLists.txt).
+TEST(EvalApp, MainReturnsTheExitCode) {
+  auto exitCode = [](std::vector<const char*> args) {
+    args.insert(args.begin(), "freeinit-eval");
+    return EvalApp::main(static_cast<int>(args.size()), args.data());
+  };
+  EXPECT_EQ(exitCode({"--bogus", "--version"}), 0);
+  EXPECT_EQ(exitCode({"--seeds", "2.7"}), 2);
+  EXPECT_EQ(exitCode({"-q", "--duration", "0"}), 2);
+  const std::string file = tempPath("eval_app_main_file");
+  std::ofstream(file) << "x";
+  EXPECT_EQ(exitCode({"-q", "stat_01", "--csv", (file + "/e.csv").c_str()}), 1);
+  std::filesystem::remove(file);
+}
+
 TEST(EvalApp, BadArgumentsGiveOneLineNamingTheFlag) {
   struct Bad {
     const char* named;  ///< what the message starts with

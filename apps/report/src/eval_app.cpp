@@ -2,6 +2,7 @@
 #include <freeinit/report/eval_app.h>
 #include <freeinit/report/figures.h>
 #include <freeinit/report/plot.h>
+#include <freeinit/report/version.h>
 #include <freeinit/sim/evaluation.h>
 #include <freeinit/sim/presets.h>
 #include <freeinit/sim/random_scenario.h>
@@ -11,8 +12,10 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <exception>
 #include <filesystem>
 #include <functional>
+#include <iostream>
 #include <map>
 #include <mutex>
 #include <ostream>
@@ -403,6 +406,32 @@ void EvalApp::run(std::ostream& out, std::ostream& progress) {
                 [](const std::string& title, const auto& tracks) {
                   return velocityComponentsPanel(title, tracks, 640, 400);
                 });
+  }
+}
+
+int EvalApp::main(int argc, const char* const* argv) {
+  EvalApp app;
+  try {
+    switch (app.parse(argc, argv)) {
+      case Action::Help:
+        std::cout << usage();
+        return 0;
+      case Action::Version:
+        std::cout << "freeinit-eval " << version() << "\n";
+        return 0;
+      case Action::Run:
+        break;
+    }
+  } catch (const UsageError& e) {
+    std::cerr << "freeinit-eval: " << e.what() << "\n";
+    return 2;
+  }
+  try {
+    app.run(std::cout, std::cerr);
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "freeinit-eval: " << e.what() << "\n";
+    return 1;
   }
 }
 

@@ -73,6 +73,11 @@ class EvalApp {
 
   /// After run(): one row per case and method, failures marked, in the order of the tables.
   std::vector<EvalRow> rows;
+
+  /// The command line (`main` of freeinit-eval): parses it, prints the help or the version, or
+  /// runs on std::cout / std::cerr; returns the exit code (0 done, 1 a run could not be made, 2 a
+  /// bad option or value), each error one line on std::cerr.
+  static int main(int argc, const char* const* argv);
 };
 
 }  // namespace freeinit::report
