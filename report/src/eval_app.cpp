@@ -147,7 +147,7 @@ EvalAppParams parseParams(int argc, const char* const* argv) {
     } else if (a == "--no-baselines") {
       o.methods.baselines = false;
     } else if (!a.empty() && a[0] == '-') {
-      throw UsageError(a + ": unknown option (--help lists them)");
+      throw UsageError(a + ": unknown option");
     } else if (std::find(names.begin(), names.end(), a) == names.end()) {
       std::string list;
       for (const auto& n : names) list += (list.empty() ? "" : ", ") + n;
@@ -422,15 +422,15 @@ int EvalApp::main(int argc, const char* const* argv) {
       case Action::Run:
         break;
     }
-  } catch (const UsageError& e) {
-    std::cerr << "freeinit-eval: " << e.what() << "\n";
+  } catch (const UsageError& e) {  // as every app's command line (mrpt_plugins/command_line.h)
+    std::cerr << "freeinit-eval: error: " << e.what() << "; see 'freeinit-eval --help'\n";
     return 2;
   }
   try {
     app.run(std::cout, std::cerr);
     return 0;
   } catch (const std::exception& e) {
-    std::cerr << "freeinit-eval: " << e.what() << "\n";
+    std::cerr << "freeinit-eval: error: " << e.what() << "\n";
     return 1;
   }
 }
