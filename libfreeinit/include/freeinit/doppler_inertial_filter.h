@@ -42,6 +42,7 @@
 #include <freeinit/types.h>
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 namespace freeinit {
@@ -144,22 +145,27 @@ class DopplerInertialFilter {
   double intervalBefore() const { return before_; }
   double intervalAfter() const { return after_; }
 
-  struct PointOutcome {
-    bool accepted = false;
-    double residual = 0;  ///< [m/s] against the prediction
-  };
   /// One Doppler return of the open node: tau [s] from the node time, position in the LiDAR
-  /// frame (non-zero), Doppler [m/s]. Gated against the prediction; accepted points enter the
-  /// node's sums.
-  PointOutcome addPoint(double tau, const Eigen::Vector3f& p_l, double doppler);
+  /// frame (non-zero), Doppler [m/s]. Kept as given; update() gates the node's returns against
+  /// the prediction (all at once: the prediction does not change while the node is open) and
+  /// the accepted ones enter the node's sums.
+  void addPoint(double tau, const Eigen::Vector3f& p_l, double doppler) {
+    open_.tau.push_back(static_cast<double>(static_cast<float>(tau)));
+    open_.px.push_back(p_l.x());
+    open_.py.push_back(p_l.y());
+    open_.pz.push_back(p_l.z());
+    open_.z.push_back(doppler);
+  }
 
   /// Applies the open node's sums (iterated update of the node), then gates the node's points
   /// again against the update (regate_sigma) and solves the node again with those that pass.
   void update();
   /// After update(): whether the i-th point given to the open node was used in the end, and its
   /// residual against the update (against the prediction if the first gate rejected it).
-  bool pointAccepted(std::size_t i) const { return open_outcomes_[i].accepted; }
-  double pointResidual(std::size_t i) const { return open_outcomes_[i].residual; }
+  bool pointAccepted(std::size_t i) const { return open_.accepted[i] != 0; }
+  double pointResidual(std::size_t i) const {
+    return static_cast<double>(static_cast<float>(open_.residual[i]));
+  }
   /// Takes back an accepted point of node k, a node already updated (exactly as given to
   /// addPoint() while it was open: the same tau, position and Doppler), e.g. once the whole window
   /// shows it on a moving object. smooth() next: it rebuilds the node's rows, which nothing else
@@ -288,20 +294,35 @@ class DopplerInertialFilter {
     bool rows_stale = false;         ///< the sums changed after the rows were built
   };
 
+  /// Adds `count` returns (normalized time, unit direction, Doppler) to the sums.
+  static void sumReturns(DopplerSums& sums, const double* s, const double* dx, const double* dy,
+                         const double* dz, const double* z, std::size_t count);
   /// Adds a point to the sums (w = 1) or takes it out (w = -1).
   static void accumulate(DopplerSums& sums, double s, const Vec3& d, double z, double w = 1.0);
 
-  /// A point of the open node that passed the first gate.
-  struct OpenPoint {
-    double s;             ///< normalized time
-    Vec3 d;               ///< unit direction (LiDAR frame)
-    double z;             ///< Doppler
-    std::size_t outcome;  ///< index in open_outcomes_
+  /// The open node's returns, structure of arrays. As given (addPoint): tau (float, the form
+  /// normalizedTime() rounds it to), position, Doppler; after update()'s first gate, per return:
+  /// the residual (against the prediction, then against the update for those accepted) and
+  /// whether it is used; and the accepted ones, in order, as the sums see them: normalized
+  /// time, unit direction, Doppler and their index among the given ones.
+  struct OpenReturns {
+    // All 8 bytes wide, so that the loops over them vectorize without conversions.
+    std::vector<double> tau, px, py, pz, z;
+    std::vector<double> residual;
+    std::vector<std::int64_t> accepted;
+    std::vector<double> s, dx, dy, dz, za;
+    std::vector<std::uint32_t> index;
+    void clear() {
+      tau.clear();
+      px.clear();
+      py.clear();
+      pz.clear();
+      z.clear();
+    }
   };
-  struct PointResult {
-    bool accepted;
-    float residual;
-  };
+  /// The first gate of the open node's returns against the prediction, and the sums of those
+  /// it accepts.
+  void gateAndSum(Node& n);
 
   /// Q = [q0; q1; q2] of node n at state x, optionally with its Jacobian dQ/ddx (9x19).
   Vec9 velocityPolynomial(const Node& n, const FilterState& x, Mat9xS* G) const;
@@ -327,12 +348,11 @@ class DopplerInertialFilter {
   std::vector<Node> nodes_;
   FilterState x0_prior_;
   StartPrior prior_;
-  std::vector<OpenPoint> open_points_;
+  OpenReturns open_;
   // Work buffers of update(), kept to avoid allocations per node.
   std::vector<double> scratch_r_, scratch_var_, scratch_cum_r_, scratch_cum_v_;
   std::vector<char> scratch_pass_, scratch_incoherent_;
   std::vector<std::size_t> scratch_idx_;
-  std::vector<PointResult> open_outcomes_;
   // The open node's prediction for gating.
   Vec9 q_open_ = Vec9::Zero();
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction
