@@ -579,17 +579,30 @@ void DopplerInertialFilter::beginNode(bool last) {
   gate_speed_open_ = params_.gate_rel * q_open_.head<3>().norm();
 }
 
+void DopplerInertialFilter::addPoints(const DopplerPoint* p, std::size_t count, double stamp,
+                                      double t_node) {
+  OpenReturns& o = open_;
+  const std::size_t m = o.given;
+  o.reserveGiven(m + count);
+  o.given = m + count;
+  double* __restrict tau = o.tau.data() + m;
+  double* __restrict px = o.px.data() + m;
+  double* __restrict py = o.py.data() + m;
+  double* __restrict pz = o.pz.data() + m;
+  double* __restrict z = o.z.data() + m;
+  for (std::size_t i = 0; i < count; ++i) {
+    const double t = stamp + static_cast<double>(p[i].time_offset);
+    tau[i] = static_cast<double>(static_cast<float>(t - t_node));
+    px[i] = p[i].p_l.x();
+    py[i] = p[i].p_l.y();
+    pz[i] = p[i].p_l.z();
+    z[i] = p[i].doppler;
+  }
+}
+
 void DopplerInertialFilter::gateAndSum(Node& n) {
   OpenReturns& o = open_;
-  const std::size_t m = o.tau.size();
-  o.residual.resize(m);
-  o.accepted.resize(m);
-  o.s.resize(m);
-  o.dx.resize(m);
-  o.dy.resize(m);
-  o.dz.resize(m);
-  o.za.resize(m);
-  o.index.resize(m);
+  const std::size_t m = o.given;
   GatePrediction g;
   for (int i = 0; i < 9; ++i) g.q[i] = q_open_(i);
   g.setCovariance(M_open_);
@@ -613,12 +626,7 @@ void DopplerInertialFilter::gateAndSum(Node& n) {
     o.index[na] = static_cast<std::uint32_t>(i);
     na += acc_out[i] != 0 ? 1 : 0;
   }
-  o.s.resize(na);
-  o.dx.resize(na);
-  o.dy.resize(na);
-  o.dz.resize(na);
-  o.za.resize(na);
-  o.index.resize(na);
+  o.used = na;
   sumReturns(n.sums, o.s.data(), o.dx.data(), o.dy.data(), o.dz.data(), o.za.data(), na);
 }
 
@@ -792,20 +800,22 @@ void DopplerInertialFilter::update() {
   // no share of the speed: at the update the model is exact for a static point), and the node
   // is solved again with the points that pass.
   OpenReturns& o = open_;
-  if (params_.regate_sigma > 0 && !o.index.empty()) {
+  if (params_.regate_sigma > 0 && o.used > 0) {
     Mat9xS G;
     const Vec9 q = velocityPolynomial(n, x, &G);
     const Eigen::Matrix<double, 3, kStateDim> G0 = G.topRows<3>();
     const Mat3 M = G0 * P * G0.transpose();
     const double k2 = params_.regate_sigma * params_.regate_sigma;
     // Residual and its variance against the update; which pass the point's own gate.
-    const std::size_t m = o.index.size();
+    const std::size_t m = o.used;
     std::vector<double>& res_r = scratch_r_;
     std::vector<double>& res_var = scratch_var_;
     std::vector<char>& pass = scratch_pass_;
-    res_r.resize(m);
-    res_var.resize(m);
-    pass.resize(m);
+    if (res_r.size() < m) {  // grown only: the loop below writes the first m
+      res_r.resize(m);
+      res_var.resize(m);
+      pass.resize(m);
+    }
     {
       GatePrediction g;
       for (int i = 0; i < 9; ++i) g.q[i] = q(i);
@@ -825,30 +835,32 @@ void DopplerInertialFilter::update() {
       std::vector<double>& cum_r = scratch_cum_r_;
       std::vector<double>& cum_v = scratch_cum_v_;
       std::vector<std::size_t>& idx = scratch_idx_;
-      idx.clear();
-      for (std::size_t i = 0; i < m; ++i)
-        if (pass[i]) idx.push_back(i);
-      const std::size_t np = idx.size();
-      cum_r.assign(np + 1, 0.0);
-      cum_v.assign(np + 1, 0.0);
+      if (idx.size() < m) idx.resize(m);
+      std::size_t np = 0;
+      for (std::size_t i = 0; i < m; ++i) {  // those that passed, packed without branches
+        idx[np] = i;
+        np += pass[i] != 0 ? 1 : 0;
+      }
+      if (cum_r.size() < np + 1) {
+        cum_r.resize(np + 1);
+        cum_v.resize(np + 1);
+      }
+      cum_r[0] = cum_v[0] = 0.0;
       for (std::size_t j = 0; j < np; ++j) {
         cum_r[j + 1] = cum_r[j] + res_r[idx[j]];
         cum_v[j + 1] = cum_v[j] + res_var[idx[j]];
       }
       const std::size_t half = static_cast<std::size_t>(K / 2);
       const double c2 = params_.coherence_sigma * params_.coherence_sigma;
-      std::vector<char>& incoherent = scratch_incoherent_;
-      incoherent.assign(np, 0);
+      // The test reads the prefix sums only: a point's verdict does not change its neighbours'.
       for (std::size_t j = 0; j < np; ++j) {
         const std::size_t lo = j >= half ? j - half : 0;
         const std::size_t hi = std::min(np, j + half + 1);
         if (hi - lo < static_cast<std::size_t>(K) / 2) continue;
         const double sum = cum_r[hi] - cum_r[lo];
         const double var = cum_v[hi] - cum_v[lo];  // of the sum
-        incoherent[j] = sum * sum > c2 * var;
+        if (sum * sum > c2 * var) pass[idx[j]] = 0;
       }
-      for (std::size_t j = 0; j < np; ++j)
-        if (incoherent[j]) pass[idx[j]] = 0;
     }
     // The dropped points leave the sums (a small share: taking them out is cheaper than summing
     // the kept ones again).

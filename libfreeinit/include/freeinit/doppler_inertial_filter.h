@@ -41,6 +41,7 @@
 
 #include <freeinit/types.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -150,12 +151,18 @@ class DopplerInertialFilter {
   /// the prediction (all at once: the prediction does not change while the node is open) and
   /// the accepted ones enter the node's sums.
   void addPoint(double tau, const Eigen::Vector3f& p_l, double doppler) {
-    open_.tau.push_back(static_cast<double>(static_cast<float>(tau)));
-    open_.px.push_back(p_l.x());
-    open_.py.push_back(p_l.y());
-    open_.pz.push_back(p_l.z());
-    open_.z.push_back(doppler);
+    const std::size_t i = open_.given;
+    open_.reserveGiven(i + 1);
+    open_.tau[i] = static_cast<double>(static_cast<float>(tau));
+    open_.px[i] = p_l.x();
+    open_.py[i] = p_l.y();
+    open_.pz[i] = p_l.z();
+    open_.z[i] = doppler;
+    open_.given = i + 1;
   }
+  /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each as
+  /// addPoint(stamp + time_offset - t_node, p_l, doppler) takes it.
+  void addPoints(const DopplerPoint* p, std::size_t count, double stamp, double t_node);
 
   /// Applies the open node's sums (iterated update of the node), then gates the node's points
   /// again against the update (regate_sigma) and solves the node again with those that pass.
@@ -305,6 +312,8 @@ class DopplerInertialFilter {
   /// the residual (against the prediction, then against the update for those accepted) and
   /// whether it is used; and the accepted ones, in order, as the sums see them: normalized
   /// time, unit direction, Doppler and their index among the given ones.
+  /// The arrays only grow (to what the largest node needed), so that no return is written
+  /// twice; `given` and `used` count what is valid in them.
   struct OpenReturns {
     // All 8 bytes wide, so that the loops over them vectorize without conversions.
     std::vector<double> tau, px, py, pz, z;
@@ -312,12 +321,17 @@ class DopplerInertialFilter {
     std::vector<std::int64_t> accepted;
     std::vector<double> s, dx, dy, dz, za;
     std::vector<std::uint32_t> index;
-    void clear() {
-      tau.clear();
-      px.clear();
-      py.clear();
-      pz.clear();
-      z.clear();
+    std::size_t given = 0;  ///< returns given to the node
+    std::size_t used = 0;   ///< accepted by the first gate (s, dx, dy, dz, za, index)
+    void clear() { given = used = 0; }
+    /// Room for n given returns.
+    void reserveGiven(std::size_t n) {
+      if (n <= tau.size()) return;
+      const std::size_t size = std::max(n, 2 * tau.size());
+      for (std::vector<double>* v : {&tau, &px, &py, &pz, &z, &residual, &s, &dx, &dy, &dz, &za})
+        v->resize(size);
+      accepted.resize(size);
+      index.resize(size);
     }
   };
   /// The first gate of the open node's returns against the prediction, and the sums of those
@@ -351,7 +365,7 @@ class DopplerInertialFilter {
   OpenReturns open_;
   // Work buffers of update(), kept to avoid allocations per node.
   std::vector<double> scratch_r_, scratch_var_, scratch_cum_r_, scratch_cum_v_;
-  std::vector<char> scratch_pass_, scratch_incoherent_;
+  std::vector<char> scratch_pass_;
   std::vector<std::size_t> scratch_idx_;
   // The open node's prediction for gating.
   Vec9 q_open_ = Vec9::Zero();
