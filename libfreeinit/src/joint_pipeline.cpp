@@ -259,8 +259,36 @@ class JointPipeline final : public Pipeline {
       const double t_k = imu[k].t;
       const double lo = t_k - filter_->intervalBefore();
       const double hi = t_k + filter_->intervalAfter();
-      // The node's points.
-      while (seq_.normalize(cursor_)) {
+      // The node's points. Every point used (stride 1): each frame's run of them in the
+      // interval goes to the filter and the recorder at once.
+      while (stride_ == 1 && seq_.normalize(cursor_)) {
+        const MeasurementSequencer::FrameRef& frame = seq_.frames()[cursor_.f];
+        const std::vector<DopplerPoint>& pts = *frame.points;
+        const double stamp = frame.stamp;
+        const std::size_t n = pts.size();
+        std::size_t p = cursor_.p, run = p;
+        const std::size_t node = filter_->nodes() - 1;
+        auto flush = [&](std::size_t end) {
+          if (end == run) return;
+          filter_->addPoints(&pts[run], end - run, stamp, t_k);
+          recorder_.add(node, &pts[run], end - run, stamp, t_k);
+          r.diag.points_seen += end - run;
+        };
+        for (; p < n; ++p) {
+          const double t = stamp + static_cast<double>(pts[p].time_offset);
+          if (last ? t > t_k : t >= hi) break;
+          if (t >= lo && usablePoint(pts[p], vp)) continue;
+          flush(p);
+          run = p + 1;
+          if (t < lo) continue;  // before the window
+          ++r.diag.points_seen;
+          ++r.diag.points_skipped;
+        }
+        flush(p);
+        cursor_.p = p;
+        if (p < n) break;
+      }
+      while (stride_ != 1 && seq_.normalize(cursor_)) {
         const double t = seq_.time(cursor_);
         if (last ? t > t_k : t >= hi) break;
         const DopplerPoint& pt = seq_.point(cursor_);
@@ -279,14 +307,8 @@ class JointPipeline final : public Pipeline {
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
       filter_->update();
       const std::size_t node_points_begin = node_first_point_, node_points_end = recorder_.size();
-      for (std::size_t i = node_points_begin; i < node_points_end; ++i) {
-        const std::size_t j = i - node_points_begin;
-        const bool used = filter_->pointAccepted(j);
-        (used ? r.diag.points_used : r.diag.points_rejected)++;
-        recorder_.judge(
-            i, used, static_cast<float>(filter_->pointResidual(j)),
-            used ? RestCells::cellOf(recorder_.lidarPoint(i)) : WindowRecorder::kNoCell);
-      }
+      recorder_.judgeNode(node_points_begin, node_points_end, *filter_, RestCells::cellOf,
+                          r.diag.points_used, r.diag.points_rejected);
       node_first_point_ = node_points_end;
       const bool was_rest = rest_.atRest();
       const bool rest = rest_.update(imu[k]);

@@ -85,19 +85,47 @@ class WindowRecorder {
     returns_.push_back(m);
     tags_.push_back({static_cast<std::uint32_t>(node), kNoCell, false, false});
   }
+  /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each as
+  /// add(node, stamp + time_offset - t_node, p) takes it.
+  void add(std::size_t node, const DopplerPoint* p, std::size_t count, double stamp,
+           double t_node) {
+    const std::size_t m = returns_.size();
+    returns_.resize(m + count);
+    tags_.resize(m + count, {static_cast<std::uint32_t>(node), kNoCell, false, false});
+    MapPoint* out = returns_.data() + m;
+    for (std::size_t i = 0; i < count; ++i) {
+      const double t = stamp + static_cast<double>(p[i].time_offset);
+      out[i].p_w = p[i].p_l;
+      out[i].intensity = p[i].intensity;
+      out[i].doppler = p[i].doppler;
+      out[i].time = static_cast<float>(t - t_node);
+    }
+  }
   const Tag& tag(std::size_t i) const { return tags_[i]; }
   Tag& tag(std::size_t i) { return tags_[i]; }
   const Eigen::Vector3f& lidarPoint(std::size_t i) const { return returns_[i].p_w; }
   float tau(std::size_t i) const { return returns_[i].time; }  ///< [s] from its node's time
   float doppler(std::size_t i) const { return returns_[i].doppler; }
   float residual(std::size_t i) const { return returns_[i].residual; }
-  /// The verdict on the i-th return recorded; an accepted return's cell.
-  void judge(std::size_t i, bool accepted, float residual, std::uint32_t cell) {
-    tags_[i].accepted = accepted;
-    returns_[i].residual = residual;
-    tags_[i].cell = static_cast<std::uint16_t>(cell);
-  }
   void reject(std::size_t i) { tags_[i].accepted = false; }
+  /// The verdicts on the returns [begin, end), the open node's in the order given to the
+  /// filter, after its update(): accepted or not, the residual, an accepted return's cell
+  /// (cell_of: RestCells::cellOf); adds them to the counts.
+  template <class CellOf>
+  void judgeNode(std::size_t begin, std::size_t end, const DopplerInertialFilter& filter,
+                 CellOf cell_of, std::size_t& used, std::size_t& rejected) {
+    std::size_t accepted = 0;
+    for (std::size_t i = begin; i < end; ++i) {
+      const std::size_t j = i - begin;
+      const bool a = filter.pointAccepted(j);
+      accepted += a ? 1 : 0;
+      tags_[i].accepted = a;
+      returns_[i].residual = static_cast<float>(filter.pointResidual(j));
+      tags_[i].cell = a ? static_cast<std::uint16_t>(cell_of(returns_[i].p_w)) : kNoCell;
+    }
+    used += accepted;
+    rejected += (end - begin) - accepted;
+  }
   /// Maps every return with the final node states (the body moved by tau, its angular and
   /// linear velocity at the node, between the node and the return), the accepted ones into
   /// r.static_map (the recorder's own buffer, moved), the others into r.rejected. The recorder
@@ -128,18 +156,45 @@ class WindowRecorder {
     for (const Tag& t : tags_) accepted += t.accepted ? 1 : 0;
     r.rejected.clear();
     r.rejected.reserve(returns_.size() - accepted);
-    // The accepted returns close up in place (the write position never passes the read one).
+    // Node by node (the recorder holds the returns in node order), its map's coefficients held
+    // in registers: every return mapped in place, without branches; then the accepted ones close
+    // up in place (the write position never passes the read one) and the others are copied out.
+    const std::size_t count = returns_.size();
+    for (std::size_t begin = 0; begin < count;) {
+      const std::uint32_t node = tags_[begin].node;
+      std::size_t end = begin + 1;
+      while (end < count && tags_[end].node == node) ++end;
+      const NodeMap& m = maps[node];
+      const float a00 = m.A(0, 0), a01 = m.A(0, 1), a02 = m.A(0, 2), a10 = m.A(1, 0),
+                  a11 = m.A(1, 1), a12 = m.A(1, 2), a20 = m.A(2, 0), a21 = m.A(2, 1),
+                  a22 = m.A(2, 2);
+      const float b00 = m.B(0, 0), b01 = m.B(0, 1), b02 = m.B(0, 2), b10 = m.B(1, 0),
+                  b11 = m.B(1, 1), b12 = m.B(1, 2), b20 = m.B(2, 0), b21 = m.B(2, 1),
+                  b22 = m.B(2, 2);
+      const float ax = m.a.x(), ay = m.a.y(), az = m.a.z(), bx = m.b.x(), by = m.b.y(),
+                  bz = m.b.z(), t_node = m.time;
+      MapPoint* ps = returns_.data();
+      for (std::size_t i = begin; i < end; ++i) {
+        MapPoint& p = ps[i];
+        const float x = p.p_w.x(), y = p.p_w.y(), z = p.p_w.z(), tau = p.time;
+        // A p_l + a + tau (B p_l + b), each sum in the order Eigen's float products take it.
+        const float wx =
+            ((a00 * x + a01 * y) + a02 * z) + ax + tau * (((b00 * x + b01 * y) + b02 * z) + bx);
+        const float wy =
+            ((a10 * x + a11 * y) + a12 * z) + ay + tau * (((b10 * x + b11 * y) + b12 * z) + by);
+        const float wz =
+            ((a20 * x + a21 * y) + a22 * z) + az + tau * (((b20 * x + b21 * y) + b22 * z) + bz);
+        p.p_w = Eigen::Vector3f(wx, wy, wz);
+        p.time = t_node + tau;
+      }
+      begin = end;
+    }
     std::size_t kept = 0;
-    for (std::size_t i = 0; i < returns_.size(); ++i) {
-      MapPoint p = returns_[i];
-      const NodeMap& m = maps[tags_[i].node];
-      const float tau = p.time;
-      p.p_w = m.A * p.p_w + m.a + tau * (m.B * p.p_w + m.b);
-      p.time = m.time + tau;
+    for (std::size_t i = 0; i < count; ++i) {
       if (tags_[i].accepted)
-        returns_[kept++] = p;
+        returns_[kept++] = returns_[i];
       else
-        r.rejected.push_back(p);
+        r.rejected.push_back(returns_[i]);
     }
     returns_.resize(kept);
     r.static_map = std::move(returns_);
@@ -180,13 +235,12 @@ class RestCells {
   RestCells() : sum_(kCells, 0.0), count_(kCells, 0) {}
   static std::uint32_t cellOf(const Eigen::Vector3f& p) {
     const float l1 = std::abs(p.x()) + std::abs(p.y()) + std::abs(p.z());
-    float u = p.x() / l1, v = p.y() / l1;
-    if (p.z() < 0) {
-      const float fu = (1.0f - std::abs(v)) * (u >= 0 ? 1.0f : -1.0f);
-      const float fv = (1.0f - std::abs(u)) * (v >= 0 ? 1.0f : -1.0f);
-      u = fu;
-      v = fv;
-    }
+    const float u0 = p.x() / l1, v0 = p.y() / l1;
+    // The lower half folded over (selects, not a branch: the sign of z is as good as random).
+    const float fu = (1.0f - std::abs(v0)) * (u0 >= 0 ? 1.0f : -1.0f);
+    const float fv = (1.0f - std::abs(u0)) * (v0 >= 0 ? 1.0f : -1.0f);
+    const bool lower = p.z() < 0;
+    const float u = lower ? fu : u0, v = lower ? fv : v0;
     auto bin = [](float x) {
       return static_cast<std::uint32_t>(
           std::clamp(static_cast<int>((x + 1.0f) * 0.5f * kSide), 0, kSide - 1));
