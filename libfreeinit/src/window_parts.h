@@ -12,6 +12,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace freeinit::detail {
@@ -230,6 +231,13 @@ class RestCells {
     }
     return e;
   }();
+  /// The edges padded to 32 with infinities, for the bisection in cellOf().
+  static constexpr std::array<float, 32> kRangeEdges2Padded = [] {
+    std::array<float, 32> e{};
+    for (std::size_t i = 0; i < e.size(); ++i)
+      e[i] = i < kRangeEdges2.size() ? kRangeEdges2[i] : std::numeric_limits<float>::infinity();
+    return e;
+  }();
   static constexpr std::uint32_t kCells = kSide * kSide * kRangeBins;
   static_assert(kCells < WindowRecorder::kNoCell, "a cell must fit the recorder's tag");
   RestCells() : sum_(kCells, 0.0), count_(kCells, 0) {}
@@ -246,11 +254,13 @@ class RestCells {
           std::clamp(static_cast<int>((x + 1.0f) * 0.5f * kSide), 0, kSide - 1));
     };
     // Range bins: a person and the wall behind share directions, not ranges. The bin is the
-    // number of bin edges at or below the range, counted on the squared range (no root, no
-    // logarithm; a branch-free count the compiler vectorizes).
+    // number of bin edges at or below the range, on the squared range (no root, no logarithm),
+    // found by a branch-free bisection of the sorted edges (five comparisons).
     const float r2 = p.squaredNorm();
     std::uint32_t rb = 0;
-    for (const float edge2 : kRangeEdges2) rb += r2 >= edge2 ? 1u : 0u;
+    for (std::uint32_t step = 16; step > 0; step /= 2)
+      rb += kRangeEdges2Padded[rb + step - 1] <= r2 ? step : 0u;
+    rb = std::min<std::uint32_t>(rb, kRangeBins - 1);
     return (bin(u) * kSide + bin(v)) * kRangeBins + rb;
   }
   void add(std::uint32_t cell, double residual) {
