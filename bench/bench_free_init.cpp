@@ -1,6 +1,8 @@
 // Speed and memory of the estimator core, on one core:
 //   BM_JointForwardPass    the joint estimator's forward pass alone, with and without the returns
 //                          (their difference: the per-point stage; items_per_second = returns/s).
+//   BM_JointForwardPassFrameRuns  the same with the returns handed over as the pipeline does
+//                          with every point used: a frame's run of them per node at once.
 //   BM_VelocimeterDoppler  Doppler point updates per second through the velocimeter alone
 //                          (propagate + updateDoppler, gyro updates interleaved at 200 Hz as in the
 //                          real stream). items_per_second = points/s; target >= 3,000,000.
@@ -272,8 +274,66 @@ void BM_JointForwardPass(benchmark::State& state, const std::string& name, bool 
   state.counters["points"] = static_cast<double>(points) / static_cast<double>(state.iterations());
 }
 
+/// BM_JointForwardPass with the returns handed over as the joint pipeline does with every point
+/// used: each frame's run of in-range returns in the node's interval at once (addPoints()).
+void BM_JointForwardPassFrameRuns(benchmark::State& state, const std::string& name) {
+  const freeinit::sim::Recording& rec = recording(name);
+  const freeinit::FreeInitConfig cfg;
+  const double t0 = rec.imu.front().t;
+  freeinit::DopplerInertialFilterParams fp;
+  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  std::size_t k_end = 0;
+  while (k_end + 3 < rec.imu.size() && rec.imu[k_end].t - t0 < cfg.window.duration) ++k_end;
+  auto in_range = [&](const freeinit::DopplerPoint& p) {
+    const double r = p.p_l.norm();
+    return !(r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range);
+  };
+  std::int64_t points = 0;
+  for (auto _ : state) {
+    freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
+    for (std::size_t k = 0; k <= k_end + 2; ++k) filter.addImu(rec.imu[k]);
+    const freeinit::sim::TruthState x = rec.truth(t0);
+    freeinit::FilterState x0;
+    x0.R_wb = x.R_wb;
+    x0.v_w = x.v_w;
+    freeinit::DopplerInertialFilter::StartPrior prior;
+    prior.cov_v_b = freeinit::Mat3::Identity() * 1e-4;
+    filter.start(x0, prior);
+    std::size_t f = 0, j = 0;  // the next return: frame f, index j
+    for (std::size_t k = 0;; ++k) {
+      const bool last = k == k_end;
+      filter.beginNode(last);
+      const double t_k = rec.imu[k].t, hi = t_k + filter.intervalAfter();
+      for (; f < rec.frames.size(); ++f, j = 0) {
+        const auto& pts = rec.frames[f].points;
+        const double stamp = rec.frames[f].stamp;
+        std::size_t run = j;
+        for (; j < pts.size(); ++j) {
+          const double t = stamp + static_cast<double>(pts[j].time_offset);
+          if (last ? t > t_k : t >= hi) break;
+          if (t >= t0 && in_range(pts[j])) continue;
+          if (j > run) filter.addPoints(&pts[run], j - run, stamp, t_k);
+          points += static_cast<std::int64_t>(j - run);
+          run = j + 1;
+        }
+        if (j > run) filter.addPoints(&pts[run], j - run, stamp, t_k);
+        points += static_cast<std::int64_t>(j - run);
+        if (j < pts.size()) break;
+      }
+      filter.update();
+      if (last) break;
+      filter.predict();
+    }
+    benchmark::DoNotOptimize(filter.state(filter.nodes() - 1).v_w.data());
+  }
+  state.SetItemsProcessed(points);
+  state.counters["points"] = static_cast<double>(points) / static_cast<double>(state.iterations());
+}
+
 }  // namespace
 
+BENCHMARK_CAPTURE(BM_JointForwardPassFrameRuns, dyna_05_every_point, std::string("dyna_05"))
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_JointForwardPass, dyna_05_every_point, std::string("dyna_05"), true)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_JointForwardPass, dyna_05_nodes_only, std::string("dyna_05"), false)
