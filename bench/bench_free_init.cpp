@@ -219,6 +219,29 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   state.counters["updates_per_s_of_data"] = rate_hz;
 }
 
+/// The last IMU sample of the window that starts at the recording's first (two samples after it
+/// stay available to the filter's interpolation).
+std::size_t lastNodeOfWindow(const freeinit::sim::Recording& rec,
+                             const freeinit::FreeInitConfig& cfg) {
+  const double t0 = rec.imu.front().t;
+  std::size_t k_end = 0;
+  while (k_end + 3 < rec.imu.size() && rec.imu[k_end].t - t0 < cfg.window.duration) ++k_end;
+  return k_end;
+}
+
+/// The filter with the window's IMU samples, started at the true attitude and velocity.
+void startAtTruth(freeinit::DopplerInertialFilter& filter, const freeinit::sim::Recording& rec,
+                  std::size_t k_end) {
+  for (std::size_t k = 0; k <= k_end + 2; ++k) filter.addImu(rec.imu[k]);
+  const freeinit::sim::TruthState x = rec.truth(rec.imu.front().t);
+  freeinit::FilterState x0;
+  x0.R_wb = x.R_wb;
+  x0.v_w = x.v_w;
+  freeinit::DopplerInertialFilter::StartPrior prior;
+  prior.cov_v_b = freeinit::Mat3::Identity() * 1e-4;
+  filter.start(x0, prior);
+}
+
 /// The joint estimator's forward pass over the 0.5 s window alone (no start decision, no
 /// smoothing), started at the truth: per node beginNode, every return of its interval through
 /// addPoint (gate and sums), update (solve, second gate with the coherence test, solve again),
@@ -242,19 +265,11 @@ void BM_JointForwardPass(benchmark::State& state, const std::string& name, bool 
     }
   freeinit::DopplerInertialFilterParams fp;
   fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
-  std::size_t k_end = 0;
-  while (k_end + 3 < rec.imu.size() && rec.imu[k_end].t - t0 < cfg.window.duration) ++k_end;
+  const std::size_t k_end = lastNodeOfWindow(rec, cfg);
   std::int64_t points = 0;
   for (auto _ : state) {
     freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
-    for (std::size_t k = 0; k <= k_end + 2; ++k) filter.addImu(rec.imu[k]);
-    const freeinit::sim::TruthState x = rec.truth(t0);
-    freeinit::FilterState x0;
-    x0.R_wb = x.R_wb;
-    x0.v_w = x.v_w;
-    freeinit::DopplerInertialFilter::StartPrior prior;
-    prior.cov_v_b = freeinit::Mat3::Identity() * 1e-4;
-    filter.start(x0, prior);
+    startAtTruth(filter, rec, k_end);
     std::size_t j = 0;
     while (j < returns.size() && returns[j].t < t0) ++j;
     for (std::size_t k = 0;; ++k) {
@@ -282,8 +297,7 @@ void BM_JointForwardPassFrameRuns(benchmark::State& state, const std::string& na
   const double t0 = rec.imu.front().t;
   freeinit::DopplerInertialFilterParams fp;
   fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
-  std::size_t k_end = 0;
-  while (k_end + 3 < rec.imu.size() && rec.imu[k_end].t - t0 < cfg.window.duration) ++k_end;
+  const std::size_t k_end = lastNodeOfWindow(rec, cfg);
   auto in_range = [&](const freeinit::DopplerPoint& p) {
     const double r = p.p_l.norm();
     return !(r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range);
@@ -291,14 +305,7 @@ void BM_JointForwardPassFrameRuns(benchmark::State& state, const std::string& na
   std::int64_t points = 0;
   for (auto _ : state) {
     freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
-    for (std::size_t k = 0; k <= k_end + 2; ++k) filter.addImu(rec.imu[k]);
-    const freeinit::sim::TruthState x = rec.truth(t0);
-    freeinit::FilterState x0;
-    x0.R_wb = x.R_wb;
-    x0.v_w = x.v_w;
-    freeinit::DopplerInertialFilter::StartPrior prior;
-    prior.cov_v_b = freeinit::Mat3::Identity() * 1e-4;
-    filter.start(x0, prior);
+    startAtTruth(filter, rec, k_end);
     std::size_t f = 0, j = 0;  // the next return: frame f, index j
     for (std::size_t k = 0;; ++k) {
       const bool last = k == k_end;
