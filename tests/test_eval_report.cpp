@@ -53,6 +53,11 @@ std::vector<EvalRow> sampleRows() {
   ok.nees_tilt = 14.0;  // above the 2-dof 99.9 % quantile
   ok.nees_gyro_bias = 0.7;
   ok.nees_accel_bias = 1.1;
+  ok.sigma_velocity = 0.0021;
+  ok.sigma_gravity_deg = 0.13;  // below 0.95 of its bound: claims more than the data hold
+  ok.sigma_gyro_bias = 0.0101;
+  ok.sigma_accel_bias = 0.05;  // against an infinite bound: not compared
+  ok.rest_duration = 0.25;
   EvalRow fast = ok;
   fast.method = "fast-lio2";
   fast.velocity_err = 1.22;  // over the 0.2 m/s threshold
@@ -106,12 +111,17 @@ TEST(EvalTable, CsvReadsBackWhatWasWritten) {
     EXPECT_EQ(back[i].failure, rows[i].failure);
     EXPECT_EQ(back[i].warnings, rows[i].warnings);
     EXPECT_EQ(back[i].wrong_calibration, rows[i].wrong_calibration);
-    for (auto f : {&EvalRow::speed, &EvalRow::velocity_err, &EvalRow::gravity_err_deg,
-                   &EvalRow::gravity_bound_deg, &EvalRow::gyro_bias_err, &EvalRow::accel_bias_err,
-                   &EvalRow::position_err, &EvalRow::time_ms, &EvalRow::crb_velocity,
-                   &EvalRow::crb_gravity_deg, &EvalRow::crb_gyro_bias, &EvalRow::crb_accel_bias,
-                   &EvalRow::nees_velocity, &EvalRow::nees_tilt, &EvalRow::nees_gyro_bias,
-                   &EvalRow::nees_accel_bias})
+    EXPECT_TRUE(same(back[i].rest_duration, rows[i].rest_duration));
+    for (auto f : {&EvalRow::speed,           &EvalRow::velocity_err,
+                   &EvalRow::gravity_err_deg, &EvalRow::gravity_bound_deg,
+                   &EvalRow::gyro_bias_err,   &EvalRow::accel_bias_err,
+                   &EvalRow::position_err,    &EvalRow::time_ms,
+                   &EvalRow::crb_velocity,    &EvalRow::crb_gravity_deg,
+                   &EvalRow::crb_gyro_bias,   &EvalRow::crb_accel_bias,
+                   &EvalRow::nees_velocity,   &EvalRow::nees_tilt,
+                   &EvalRow::nees_gyro_bias,  &EvalRow::nees_accel_bias,
+                   &EvalRow::sigma_velocity,  &EvalRow::sigma_gravity_deg,
+                   &EvalRow::sigma_gyro_bias, &EvalRow::sigma_accel_bias})
       EXPECT_TRUE(same(back[i].*f, rows[i].*f)) << back[i].*f << " vs " << rows[i].*f;
   }
   std::filesystem::remove(path);
@@ -131,19 +141,20 @@ TEST(EvalTable, BadCsvNamesFileAndLine) {
           << e.what();
     }
   };
-  // A row of the 29 columns: source, seed, method, status, 20 numbers, confident_wrong, failed,
-  // failure, warnings, wrong_calibration.
+  // A row of the 34 columns: source, seed, method, status, 24 numbers, confident_wrong, failed,
+  // failure, warnings, wrong_calibration, rest_s.
   auto line = [](const std::string& seed, const std::string& first_number,
-                 const std::string& tail = "0,0") {
+                 const std::string& tail = "0,0,0") {
     std::string l = "dyna_02," + seed + ",free-init,ok," + first_number;
-    for (int i = 0; i < 19; ++i) l += ",";
+    for (int i = 0; i < 23; ++i) l += ",";
     return l + ",,0,," + tail;
   };
   expectError(line("1", "abc"), "not a number");
   expectError(line("2.7", ""), "seed");  // was truncated to 2
-  expectError(line("3", "", "1.5,0"), "warnings is not a whole number");
-  expectError(line("4", "", "0,yes"), "wrong_calibration must be 0 or 1");
-  expectError("dyna_02,1,free-init,ok,,,,,,,,,0,", "14 fields, expected 29");
+  expectError(line("3", "", "1.5,0,0"), "warnings is not a whole number");
+  expectError(line("4", "", "0,yes,0"), "wrong_calibration must be 0 or 1");
+  expectError(line("5", "", "0,0,x"), "not a number");
+  expectError("dyna_02,1,free-init,ok,,,,,,,,,0,", "14 fields, expected 34");
   std::filesystem::remove(path);
   EXPECT_THROW(readEvalCsv(path), std::runtime_error);  // missing file
 }
@@ -189,6 +200,13 @@ std::vector<EvalRow> ratioRows(int n) {
     r.accel_bias_err = 0.02 * i;
     r.crb_accel_bias = 0.02;
     r.nees_velocity = r.nees_tilt = r.nees_gyro_bias = r.nees_accel_bias = i;
+    // Own sigmas at 0.9 of the bound for runs 1..5 (below 0.95 of it), at the bound after.
+    const double own = i <= 5 ? 0.9 : 1.0;
+    r.sigma_velocity = own * r.crb_velocity;
+    r.sigma_gravity_deg = own * r.crb_gravity_deg;
+    r.sigma_gyro_bias = own * r.crb_gyro_bias;
+    r.sigma_accel_bias = own * r.crb_accel_bias;
+    r.rest_duration = 0;
     rows.push_back(r);
   }
   return rows;
@@ -221,6 +239,8 @@ TEST(EvalSummary, CountsStatusesRatiosNeesAndConfidentWrongAnswers) {
   EXPECT_EQ(m.nees_above[0], 4);
   EXPECT_EQ(m.nees_above[1], 7);
   EXPECT_EQ(m.with_nees, 20);
+  EXPECT_EQ(m.with_sigma, 20);
+  for (int q = 0; q < 4; ++q) EXPECT_EQ(m.sigma_below_bound[q], 5);
   // More than 3x on some quantity and above its floor (0.02 m/s, 0.2 deg, 0.001 rad/s,
   // 0.03 m/s^2): gravity from ratio 4 on (0.4 deg), so runs 4..20.
   EXPECT_EQ(m.confident_wrong, 17);
@@ -237,6 +257,9 @@ TEST(EvalSummary, CountsStatusesRatiosNeesAndConfidentWrongAnswers) {
             std::string::npos)
       << md;
   EXPECT_NE(md.find("| m | 4/20 (20.0 %) | 7/20 (35.0 %) | 4/20 (20.0 %) | 4/20 (20.0 %) |"),
+            std::string::npos)
+      << md;
+  EXPECT_NE(md.find("| m | 5/20 (25.0 %) | 5/20 (25.0 %) | 5/20 (25.0 %) | 5/20 (25.0 %) |"),
             std::string::npos)
       << md;
   EXPECT_NE(md.find("| m | 20 | 0 | 0 | 0 | 0 | 0 | 0 |"), std::string::npos) << md;

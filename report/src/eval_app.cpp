@@ -288,8 +288,9 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
     const std::string wrong = row.confidentlyWrong();
     if (m.method == "free-init")
       appendf(
-          out.log, "  rms/sigma=%.3f used=%.2f",
+          out.log, "  rms/sigma=%.3f node-chi2/dof=%.2f used=%.2f",
           m.result.diag.doppler_residual_rms / cfg.velocimeter.doppler_sigma,
+          m.result.diag.node_residual_ratio,
           static_cast<double>(m.result.diag.points_used) /
               std::max<std::size_t>(1, m.result.diag.points_used + m.result.diag.points_rejected));
     if (!m.result.state.warnings.empty())

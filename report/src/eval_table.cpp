@@ -21,18 +21,22 @@ const char* const kHeader =
     "source,seed,method,status,speed_mps,velocity_err_mps,gravity_err_deg,gravity_bound_deg,"
     "gyro_bias_err_radps,accel_bias_err_mps2,position_err_m,time_ms,crb_velocity_mps,"
     "crb_gravity_deg,crb_gyro_bias_radps,crb_accel_bias_mps2,nees_velocity,nees_tilt,"
-    "nees_gyro_bias,nees_accel_bias,ratio_velocity,ratio_gravity,ratio_gyro_bias,"
-    "ratio_accel_bias,confident_wrong,failed,failure,warnings,wrong_calibration";
-constexpr std::size_t kColumns = 29;
-constexpr std::size_t kFirstRatioColumn = 20;
-constexpr std::size_t kConfidentWrongColumn = 24;
+    "nees_gyro_bias,nees_accel_bias,sigma_velocity_mps,sigma_gravity_deg,sigma_gyro_bias_radps,"
+    "sigma_accel_bias_mps2,ratio_velocity,ratio_gravity,ratio_gyro_bias,ratio_accel_bias,"
+    "confident_wrong,failed,failure,warnings,wrong_calibration,rest_s";
+constexpr std::size_t kColumns = 34;
+constexpr std::size_t kFirstRatioColumn = 24;
+constexpr std::size_t kConfidentWrongColumn = 28;
+constexpr std::size_t kFailedColumn = 29, kFailureColumn = 30, kWarningsColumn = 31,
+                      kWrongCalibrationColumn = 32, kRestColumn = 33;
 
 /// The stored numeric fields of a row, in CSV order after "status".
 std::vector<double*> numbers(EvalRow& r) {
-  return {&r.speed,         &r.velocity_err,    &r.gravity_err_deg, &r.gravity_bound_deg,
-          &r.gyro_bias_err, &r.accel_bias_err,  &r.position_err,    &r.time_ms,
-          &r.crb_velocity,  &r.crb_gravity_deg, &r.crb_gyro_bias,   &r.crb_accel_bias,
-          &r.nees_velocity, &r.nees_tilt,       &r.nees_gyro_bias,  &r.nees_accel_bias};
+  return {&r.speed,          &r.velocity_err,      &r.gravity_err_deg, &r.gravity_bound_deg,
+          &r.gyro_bias_err,  &r.accel_bias_err,    &r.position_err,    &r.time_ms,
+          &r.crb_velocity,   &r.crb_gravity_deg,   &r.crb_gyro_bias,   &r.crb_accel_bias,
+          &r.nees_velocity,  &r.nees_tilt,         &r.nees_gyro_bias,  &r.nees_accel_bias,
+          &r.sigma_velocity, &r.sigma_gravity_deg, &r.sigma_gyro_bias, &r.sigma_accel_bias};
 }
 
 /// The derived ratios of a row, in CSV order.
@@ -158,7 +162,8 @@ void writeEvalCsv(const std::string& path, const std::vector<EvalRow>& rows) {
       for (const double* x : numbers(r)) o << "," << number(*x);
       for (const double x : ratios(r)) o << "," << number(x);
       o << "," << quoted(r.confidentlyWrong()) << "," << (r.failed ? 1 : 0) << ","
-        << quoted(r.failure) << "," << r.warnings << "," << (r.wrong_calibration ? 1 : 0) << "\n";
+        << quoted(r.failure) << "," << r.warnings << "," << (r.wrong_calibration ? 1 : 0) << ","
+        << number(r.rest_duration) << "\n";
     }
   });
 }
@@ -188,16 +193,20 @@ std::vector<EvalRow> readEvalCsv(const std::string& path) {
     std::size_t i = 4;
     for (double* x : numbers(r)) *x = parseNumber(c[i++], where);
     for (i = kFirstRatioColumn; i < kConfidentWrongColumn; ++i) parseNumber(c[i], where);
-    if (c[25] != "0" && c[25] != "1") throw std::runtime_error(where + ": failed must be 0 or 1");
-    r.failed = c[25] == "1";
-    r.failure = c[26];
-    const auto warnings = parseDouble(c[27]);
+    const std::string& failed = c[kFailedColumn];
+    if (failed != "0" && failed != "1") throw std::runtime_error(where + ": failed must be 0 or 1");
+    r.failed = failed == "1";
+    r.failure = c[kFailureColumn];
+    const auto warnings = parseDouble(c[kWarningsColumn]);
     if (!warnings || !(*warnings >= 0 && *warnings <= 1e6) || *warnings != std::floor(*warnings))
-      throw std::runtime_error(where + ": warnings is not a whole number >= 0: '" + c[27] + "'");
+      throw std::runtime_error(where + ": warnings is not a whole number >= 0: '" +
+                               c[kWarningsColumn] + "'");
     r.warnings = static_cast<int>(*warnings);
-    if (c[28] != "0" && c[28] != "1")
+    const std::string& wrong = c[kWrongCalibrationColumn];
+    if (wrong != "0" && wrong != "1")
       throw std::runtime_error(where + ": wrong_calibration must be 0 or 1");
-    r.wrong_calibration = c[28] == "1";
+    r.wrong_calibration = wrong == "1";
+    r.rest_duration = parseNumber(c[kRestColumn], where);
     rows.push_back(r);
   }
   return rows;
@@ -395,6 +404,17 @@ std::vector<MethodSummary> summarize(const std::vector<EvalRow>& rows,
         for (int q = 0; q < 4; ++q)
           if (nees[q] > chi2[q]) ++m.nees_above[q];
       }
+      const double own[4] = {r.sigma_velocity, r.sigma_gravity_deg, r.sigma_gyro_bias,
+                             r.sigma_accel_bias};
+      const double bound[4] = {r.crb_velocity, r.crb_gravity_deg, r.crb_gyro_bias,
+                               r.crb_accel_bias};
+      bool compared = false;
+      for (int q = 0; q < 4 && !(r.rest_duration > 0); ++q) {
+        if (!std::isfinite(own[q]) || !std::isfinite(bound[q])) continue;
+        compared = true;
+        if (own[q] < kOwnSigmaBelowBound * bound[q]) ++m.sigma_below_bound[q];
+      }
+      if (compared) ++m.with_sigma;
       if (!r.confidentlyWrong(floors).empty()) ++m.confident_wrong;
     }
     for (int q = 0; q < 4; ++q) {
@@ -441,6 +461,26 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
       else
         std::snprintf(buf, sizeof(buf), "%d/%d (%.1f %%)", m.nees_above[q], m.with_nees,
                       100.0 * m.nees_above[q] / m.with_nees);
+      o << " " << buf << " |";
+    }
+    o << "\n";
+  }
+  o << "\nShare of the ok runs whose own sigma (the square root of the trace of each block of "
+       "the state's covariance) is below "
+    << kOwnSigmaBelowBound
+    << " of the bound: a covariance that claims more than the data hold (0 for a consistent "
+       "estimator). Runs that used the knowledge of rest (zero velocity and rate while the IMU "
+       "showed rest) are left out: the bound does not know of it.\n\n| method | velocity | gravity "
+       "| b_g | b_a |\n|---|---|---|---|---|\n";
+  for (const auto& m : summaries) {
+    o << "| " << m.method << " |";
+    for (int q = 0; q < 4; ++q) {
+      char buf[64];
+      if (m.with_sigma == 0)
+        std::snprintf(buf, sizeof(buf), "–");
+      else
+        std::snprintf(buf, sizeof(buf), "%d/%d (%.1f %%)", m.sigma_below_bound[q], m.with_sigma,
+                      100.0 * m.sigma_below_bound[q] / m.with_sigma);
       o << " " << buf << " |";
     }
     o << "\n";

@@ -124,6 +124,7 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, c
   row.time_ms = run.time_ms;
   if (!r.state.ok()) return row;
   row.warnings = static_cast<int>(r.state.warnings.size());
+  row.rest_duration = r.diag.static_duration;
   const eval::StateTruth gt = truth(r.state.timestamp);
   const eval::StateErrors e = eval::stateErrors(r.state, gt);
   row.speed = e.speed;
@@ -139,6 +140,11 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, c
   row.nees_tilt = n.tilt;
   row.nees_gyro_bias = n.gyro_bias;
   row.nees_accel_bias = n.accel_bias;
+  const eval::OwnSigmas own = eval::ownSigmas(r.state);
+  row.sigma_velocity = own.velocity;
+  row.sigma_gravity_deg = own.gravity_deg;
+  row.sigma_gyro_bias = own.gyro_bias;
+  row.sigma_accel_bias = own.accel_bias;
   if (bound && bound->ok) {
     row.crb_velocity = bound->velocity;
     row.crb_gravity_deg = bound->gravity_deg;

@@ -2,6 +2,7 @@
 #include <freeinit/rotation.h>
 
 #include <Eigen/Eigenvalues>
+#include <algorithm>
 #include <cmath>
 #include <limits>
 
@@ -104,6 +105,22 @@ Nees stateNees(const InitialState& s, const StateTruth& truth) {
   n.gyro_bias = nees<3>(Vec3(truth.b_g - s.b_g), Mat3(C.block<3, 3>(5, 5)));
   n.accel_bias = nees<3>(Vec3(truth.b_a - s.b_a), Mat3(C.block<3, 3>(8, 8)));
   return n;
+}
+
+OwnSigmas ownSigmas(const InitialState& s) {
+  const Eigen::Matrix<double, 11, 18> A = gaugeFreeJacobian(s);
+  const Eigen::Matrix<double, 11, 11> C = A * s.cov * A.transpose();
+  // A block without variance is one the estimator gave no covariance for (a baseline's).
+  auto root = [&](int begin, int size) {
+    const double t = C.block(begin, begin, size, size).trace();
+    return t > 0 ? std::sqrt(t) : std::numeric_limits<double>::quiet_NaN();
+  };
+  OwnSigmas o;
+  o.velocity = root(0, 3);
+  o.gravity_deg = root(3, 2) * kRadToDeg;
+  o.gyro_bias = root(5, 3);
+  o.accel_bias = root(8, 3);
+  return o;
 }
 
 }  // namespace freeinit::eval

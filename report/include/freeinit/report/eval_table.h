@@ -47,13 +47,24 @@ struct EvalRow {
   double nees_tilt = kNoValue;
   double nees_gyro_bias = kNoValue;
   double nees_accel_bias = kNoValue;
-  bool failed = false;  ///< set by markFailures
-  std::string failure;  ///< why, when failed
-  int warnings = 0;     ///< warnings of an ok state (InitialState::warnings)
+  // The state's own standard deviations, as the bound is given (sqrt of each block's trace):
+  // no estimator can be surer than the bound, so an own sigma below it is a covariance that
+  // claims more than the data hold. NaN without a state.
+  double sigma_velocity = kNoValue;     ///< [m/s]
+  double sigma_gravity_deg = kNoValue;  ///< [deg]
+  double sigma_gyro_bias = kNoValue;    ///< [rad/s]
+  double sigma_accel_bias = kNoValue;   ///< [m/s^2]
+  bool failed = false;                  ///< set by markFailures
+  std::string failure;                  ///< why, when failed
+  int warnings = 0;                     ///< warnings of an ok state (InitialState::warnings)
   /// The calibration handed to the estimator was wrong on purpose (a randomized scenario's
   /// undeclared time offset or extrinsics error): such a run must be within 3x its bound, flagged
   /// (a warning or a status), never a plain ok that is wrong.
   bool wrong_calibration = false;
+  /// [s] how long the state used the knowledge of rest (zero velocity and rate while the IMU
+  /// showed rest; Diagnostics::static_duration), NaN without a state. The bound does not know of
+  /// rest: an own sigma below it is then no contradiction.
+  double rest_duration = kNoValue;
 
   // error / bound (eval::boundRatio): NaN without a state or a bound.
   double ratioVelocity() const { return eval::boundRatio(velocity_err, crb_velocity); }
@@ -91,6 +102,10 @@ std::vector<EvalRow> readEvalCsv(const std::string& path);
 /// Statistics of one method over its runs. The error/bound ratios, NEES shares and confident wrong
 /// answers are over the ok runs with a correct calibration; the runs handed a wrong one are
 /// counted apart.
+/// An own sigma below this share of the Cramer-Rao bound is counted as claiming more than the
+/// data hold (the share leaves room for the bound's own linearization, a few per cent).
+inline constexpr double kOwnSigmaBelowBound = 0.95;
+
 struct MethodSummary {
   std::string method;
   int runs = 0;
@@ -104,6 +119,10 @@ struct MethodSummary {
   /// b_a), and the ok runs with a NEES.
   int nees_above[4] = {0, 0, 0, 0};
   int with_nees = 0;
+  /// Ok runs whose own sigma is below kOwnSigmaBelowBound times the bound, per block, and the ok
+  /// runs with both that did not use the knowledge of rest.
+  int sigma_below_bound[4] = {0, 0, 0, 0};
+  int with_sigma = 0;
   int confident_wrong = 0;  ///< ok runs with a correct calibration and a confident wrong quantity
   // The runs handed a wrong calibration (not in the ratios, NEES shares or confident_wrong above):
   int wrong_calibration_runs = 0;

@@ -58,6 +58,17 @@ struct Nees {
 /// with a variance below 1e-9 of the block's largest are left out).
 Nees stateNees(const InitialState& s, const StateTruth& truth);
 
+/// The state's own standard deviation of each gauge-free block, as the Cramer-Rao bound gives
+/// it: the square root of the block's trace (body velocity [m/s], tilt [deg], b_g [rad/s], b_a
+/// [m/s^2]); NaN for a block without variance.
+struct OwnSigmas {
+  double velocity = 0;
+  double gravity_deg = 0;
+  double gyro_bias = 0;
+  double accel_bias = 0;
+};
+OwnSigmas ownSigmas(const InitialState& s);
+
 /// The linear maps of the 18-dim error state of InitialState (order [dtheta p v b_g b_a g],
 /// dtheta a right perturbation: R_true = R_wb Exp(dtheta)) to the gauge-free errors, at the
 /// estimate: rows 0-2 the body velocity v_b,true - v_b, rows 3-4 the tilt B^T (g^_true x g^) in
