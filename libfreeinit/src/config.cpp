@@ -37,6 +37,8 @@ const config::Section<EstimatorParams>& estimatorSection() {
                   "smoother iterations, at most")
           .flag("zero_rate_at_rest", &P::zero_rate_at_rest,
                 "while the IMU shows rest the gyro measures its bias")
+          .flag("lever_arm_gyro_noise", &P::lever_arm_gyro_noise,
+                "model the gyro noise carried through the lever arm into the returns' velocity")
           .number("rest_velocity_sigma", &P::rest_velocity_sigma, "m/s", between(1e-5, 1),
                   "std of the zero body velocity while the IMU shows rest")
           .number("accel_bias_random_walk", &P::accel_bias_random_walk, "m/s^2/sqrt(s)",

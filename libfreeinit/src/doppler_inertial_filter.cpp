@@ -3,6 +3,7 @@
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
+#include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -244,6 +245,13 @@ DopplerInertialFilter::DopplerInertialFilter(const DopplerInertialFilterParams& 
   gate_min2_ = params.gate_min * params.gate_min;
   gate_k2_ = params.gate_sigma * params.gate_sigma;
   r_doppler_ = params.doppler_sigma * params.doppler_sigma;
+  // The gyro's white noise n_g moves the LiDAR velocity of a node by R_bl^T (n_g x p_bl), alike
+  // for all the node's returns (see buildRows()).
+  lever_noise_ = R_bl_.transpose() * skew(p_bl_);
+  const double var_lever = params.gyro_sigma * params.gyro_sigma * p_bl_.squaredNorm();
+  lever_ratio_ = params.lever_arm_gyro_noise && var_lever > 0
+                     ? r_doppler_ / (params.gyro_sigma * params.gyro_sigma)
+                     : 0.0;
 }
 
 FilterState DopplerInertialFilter::boxplus(const FilterState& x, const VecS& dx) {
@@ -294,19 +302,44 @@ void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, do
   gyro.setZero();
   accel.setZero();
   if (gyro_rate != nullptr) gyro_rate->setZero();
+  double w[4], dw[4];
+  lagrangeWeights(imu, t, lo, hi, w, dw);
+  for (std::size_t i = lo; i <= hi; ++i) {
+    gyro += w[i - lo] * imu[i].gyro;
+    accel += w[i - lo] * imu[i].accel;
+    if (gyro_rate != nullptr) *gyro_rate += dw[i - lo] * imu[i].gyro;
+  }
+}
+
+std::size_t DopplerInertialFilter::interpolationSpan(const std::vector<ImuSample>& imu, double t,
+                                                     std::size_t hint, std::size_t& lo) {
+  // As interpolateImu() finds it from a hint.
+  const std::size_t n = imu.size();
+  std::size_t j = 0;
+  if (n >= 2) {
+    j = std::min(hint, n - 1);
+    while (j + 1 < n && imu[j + 1].t <= t) ++j;
+    while (j > 0 && imu[j].t > t) --j;
+    j = std::min(j, n - 2);
+  }
+  lo = j > 0 ? j - 1 : 0;
+  return std::min(n - 1, j + 2);
+}
+
+void DopplerInertialFilter::lagrangeWeights(const std::vector<ImuSample>& imu, double t,
+                                            std::size_t lo, std::size_t hi, double* w, double* dw) {
   for (std::size_t i = lo; i <= hi; ++i) {
     // Lagrange basis polynomial of node i at t, and its derivative (product rule).
-    double w = 1.0, dw = 0.0;
+    double wi = 1.0, dwi = 0.0;
     for (std::size_t m = lo; m <= hi; ++m) {
       if (m == i) continue;
       const double inv = 1.0 / (imu[i].t - imu[m].t);
       const double f = (t - imu[m].t) * inv;
-      dw = dw * f + w * inv;
-      w *= f;
+      dwi = dwi * f + wi * inv;
+      wi *= f;
     }
-    gyro += w * imu[i].gyro;
-    accel += w * imu[i].accel;
-    if (gyro_rate != nullptr) *gyro_rate += dw * imu[i].gyro;
+    w[i - lo] = wi;
+    dw[i - lo] = dwi;
   }
 }
 
@@ -682,12 +715,13 @@ void DopplerInertialFilter::buildRows(Node& n) const {
   n.rows.W.resize(0, 9);
   n.rows.y0.resize(0);
   if (n.sums.n == 0) return;
-  Eigen::Matrix<double, 9, 9> A;
+  Mat9 A;
   Vec9 b;
   for (int m = 0; m < 3; ++m) {
     b.segment<3>(3 * m) = n.sums.bz.col(m);
     for (int k = 0; k < 3; ++k) A.block<3, 3>(3 * m, 3 * k) = n.sums.moment(m + k);
   }
+  if (lever_ratio_ > 0) marginalizeLeverNoise(n, A, b);
   const double inv_sigma = 1.0 / params_.doppler_sigma;
   // Well conditioned (the usual case: returns spread over the view and the interval): the
   // Cholesky factor, A = L L^T, gives W = L^T / sigma and y0 = L^-1 b / sigma. Otherwise the
@@ -719,6 +753,55 @@ void DopplerInertialFilter::buildRows(Node& n) const {
     n.rows.y0(r) = u.dot(b) / std::sqrt(ev) * inv_sigma;
     ++r;
   }
+}
+
+DopplerInertialFilter::LeverNoise DopplerInertialFilter::leverNoise(const Node& n) const {
+  // The gyro in the lever-arm term at a return's time is the cubic through the samples around
+  // it, so the noise of samples k - 2 .. k + 2 reaches node k's polynomial: at the fit instant i
+  // with weight w_j(t_i) for sample j, and Q_m = sum_i V_inv(m, i) v_i.
+  LeverNoise E = LeverNoise::Zero();
+  const std::size_t first = n.k >= 2 ? n.k - 2 : 0;
+  for (int i = 0; i < 3; ++i) {
+    const double t = imu_[n.k].t + n.s_fit[static_cast<std::size_t>(i)] * n.h;
+    std::size_t lo = 0;
+    const std::size_t hi = interpolationSpan(imu_, t, n.k, lo);
+    double w[4], dw[4];
+    lagrangeWeights(imu_, t, lo, hi, w, dw);
+    for (std::size_t j = lo; j <= hi; ++j) {
+      const std::size_t col = j - first;
+      if (col >= kLeverSamples) continue;  // not reached: the span lies within k -+ 2
+      for (int m = 0; m < 3; ++m)
+        E.block<3, 3>(3 * m, 3 * static_cast<int>(col)) += n.V_inv(m, i) * w[j - lo] * lever_noise_;
+    }
+  }
+  return E;
+}
+
+void DopplerInertialFilter::marginalizeLeverNoise(const Node& n, Mat9& A, Vec9& b) const {
+  // The node's LiDAR velocity is computed with the measured gyro, omega = gyro - b_g, through the
+  // lever arm: v_l = R_bl^T (v_b + omega x p_bl). The gyro's white noise (gyro_sigma per sample
+  // and axis) thus moves Q = [q0; q1; q2] by E n (n: the noise of the samples the interpolation
+  // uses, leverNoise()), for every return of the node at once: with thousands of returns per
+  // IMU sample it can exceed what their Doppler resolves (0.0025 rad/s through a 0.27 m arm is
+  // 0.7 mm/s; 10,000 returns at 0.03 m/s resolve 0.3 mm/s). It is marginalized out of the
+  // node's quadratic form: the returns' residuals z + D Q then have the covariance
+  // sigma_d^2 I + D C D^T, C = sigma_g^2 E E^T, and with A = D^T D, b = D^T z,
+  //   D^T (sigma_d^2 I + D C D^T)^-1 [D, z] = (sigma_d^2 I + A C)^-1 [A, b],
+  // so A' = Y^-1 A and b' = Y^-1 b with Y = I + A C / sigma_d^2 (one 9x9 solve, touching no
+  // return). Left out, the filter's covariance fell below the Cramer-Rao bound when
+  // kappa = (2/3) sigma_g^2 |p_bl|^2 n_node / sigma_d^2 was near or above 1.
+  // Not modelled: the correlation between neighbouring nodes (they share samples) and with the
+  // same samples' noise in the attitude propagation (its process noise).
+  const LeverNoise E = leverNoise(n);
+  const Mat9 C_scaled = (E * E.transpose()) / lever_ratio_;  // C / sigma_d^2
+  Mat9 Y = A * C_scaled;
+  Y.diagonal().array() += 1.0;
+  const Eigen::PartialPivLU<Mat9> lu(Y);
+  Eigen::Matrix<double, 9, 10> Ab;
+  Ab << A, b;
+  const Eigen::Matrix<double, 9, 10> X = lu.solve(Ab);
+  A = 0.5 * (X.leftCols<9>() + X.leftCols<9>().transpose());
+  b = X.col(9);
 }
 
 template <int D, int R>
@@ -1064,6 +1147,33 @@ std::size_t DopplerInertialFilter::acceptedPointsTotal() const {
 
 Mat3 DopplerInertialFilter::dopplerInformation(std::size_t k) const {
   return nodes_[k].sums.moment(0) / r_doppler_;
+}
+
+DopplerInertialFilter::NodeResiduals DopplerInertialFilter::nodeResiduals(
+    std::size_t min_returns) const {
+  NodeResiduals out;
+  const double var_g = params_.gyro_sigma * params_.gyro_sigma;
+  for (const Node& n : nodes_) {
+    if (n.sums.n == 0 || n.sums.n < min_returns) continue;
+    if (n.rest_velocity_sigma > 0 || n.rest_rate_sigma > 0) continue;
+    // sum r d = sum z d + sum d d^T q(s), r = z + d^T q(s): from the sums.
+    const Vec9 Q = velocityPolynomial(n, n.xs, nullptr);
+    Vec3 g = n.sums.bz.col(0);
+    for (int m = 0; m < 3; ++m) g += n.sums.moment(m) * Q.segment<3>(3 * m);
+    const Mat3 S = n.sums.moment(0);
+    Mat3 cov = r_doppler_ * S;
+    if (lever_ratio_ > 0) {  // g moves by [S0 S1 S2] E n with the gyro noise n
+      Eigen::Matrix<double, 3, 9> G;
+      for (int m = 0; m < 3; ++m) G.middleCols<3>(3 * m) = n.sums.moment(m);
+      const Eigen::Matrix<double, 3, kLeverDim> GE = G * leverNoise(n);
+      cov += var_g * GE * GE.transpose();
+    }
+    const Eigen::LDLT<Mat3> ldlt(cov);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) continue;
+    out.chi2 += g.dot(ldlt.solve(g));
+    out.dof += 3;
+  }
+  return out;
 }
 
 }  // namespace freeinit

@@ -19,6 +19,7 @@
 #include <optional>
 #include <sstream>
 
+#include "chi_square.h"
 #include "pipeline.h"
 #include "velocimeter_inputs.h"
 #include "window_parts.h"
@@ -93,6 +94,7 @@ class JointPipeline final : public Pipeline {
     p.gate_min = v.gate_min;
     p.gate_rel = v.gate_rel;
     p.max_iterations = cfg_.estimator.max_iterations;
+    p.lever_arm_gyro_noise = cfg_.estimator.lever_arm_gyro_noise;
     return p;
   }
 
@@ -397,6 +399,8 @@ class JointPipeline final : public Pipeline {
     const std::size_t used = filter_->acceptedPointsTotal();
     diag.doppler_residual_rms =
         used > 0 ? std::sqrt(filter_->residualSumOfSquares() / static_cast<double>(used)) : 0.0;
+    const double inflation = testNodeResiduals(diag);
+    node_residuals_inflated_ = inflation > 1.0;
     std::ostringstream rep;
     rep << "joint: " << N << " nodes, " << diag.iterations << " smoother iterations";
     diag.solver_report = rep.str();
@@ -413,6 +417,7 @@ class JointPipeline final : public Pipeline {
     s.g_w = Vec3(0, 0, -kGravity);
     s.cov.setZero();
     s.cov.topLeftCorner<15, 15>() = filter_->covariance().topLeftCorner<15, 15>();
+    s.cov.topLeftCorner<15, 15>() *= inflation;
     s.cov.block<3, 3>(kGrav, kGrav).diagonal().setConstant(1e-6);  // fixed by the world frame
     s.cov = 0.5 * (s.cov + s.cov.transpose()).eval();
 
@@ -440,7 +445,7 @@ class JointPipeline final : public Pipeline {
     {
       const BodyVelocityJacobian A = bodyVelocityJacobian(x);
       r.velocities.back().sigma_v_b =
-          (A * filter_->covariance() * A.transpose()).diagonal().cwiseSqrt();
+          (inflation * A * filter_->covariance() * A.transpose()).diagonal().cwiseSqrt();
     }
     addWarnings(r);
     map_pending_ = true;  // completeMap(): the state does not wait for the map
@@ -450,6 +455,23 @@ class JointPipeline final : public Pipeline {
     if (!map_pending_) return;
     map_pending_ = false;
     recorder_.finish(*filter_, seq_.imu(), k_first_, cfg_.extrinsics, r);
+  }
+
+  /// The nodes' Doppler residuals against the noise model (DopplerInertialFilter::nodeResiduals,
+  /// nodes of at least kMinReturns returns, so that their sums are near Gaussian): their
+  /// chi-square per degree of freedom in diag.node_residual_ratio. Above the 99.9 % quantile the
+  /// returns of each IMU sample share an error the model leaves out; the state's covariance is
+  /// then optimistic by about that ratio, and the returned factor (else 1) scales it: the
+  /// variance factor of least squares, which keeps the states (right to one or two bounds in
+  /// such cases) with a covariance that covers them.
+  double testNodeResiduals(Diagnostics& diag) const {
+    constexpr std::size_t kMinReturns = 30;
+    constexpr int kMinDof = 30;  // ten nodes: fewer leave the ratio itself too noisy
+    const DopplerInertialFilter::NodeResiduals t = filter_->nodeResiduals(kMinReturns);
+    diag.node_residual_ratio = t.dof > 0 ? t.chi2 / t.dof : 0.0;
+    if (t.dof < kMinDof) return 1.0;
+    constexpr double kZ999 = 3.090;  // standard normal, 99.9 %
+    return t.chi2 > detail::chi2Quantile(t.dof, kZ999) ? diag.node_residual_ratio : 1.0;
   }
 
   /// Whether the returns contradict the rest the IMU showed up to the window's last node: the
@@ -630,6 +652,14 @@ class JointPipeline final : public Pipeline {
           fmt(s.v_b().norm()) +
           " m/s): the state is that "
           "of a slowly moving sensor, without the rest knowledge");
+    if (node_residuals_inflated_)
+      s.warnings.push_back(
+          "the returns of each IMU sample disagree with the motion by more than the noise model "
+          "allows (chi-square per degree of freedom " +
+          fmt(d.node_residual_ratio) +
+          "): an error common to them that the model leaves out (vibration, time-stamp jitter, "
+          "[velocimeter] gyro_sigma set too low for the lever arm); the covariance is scaled up "
+          "by that factor");
     if (noisy)
       s.warnings.push_back("the Doppler residuals (RMS " + fmt(d.doppler_residual_rms) +
                            " m/s) exceed the configured Doppler noise (" + fmt(sigma) +
@@ -725,7 +755,8 @@ class JointPipeline final : public Pipeline {
   bool last_ = false;  ///< the open node is the window's last
   bool early_smoothed_ = false;
   bool rest_withdrawn_ = false;  ///< the returns contradicted the IMU's rest (restContradicted)
-  bool map_pending_ = false;     ///< a state is out, its map not yet (completeMap)
+  bool node_residuals_inflated_ = false;  ///< the covariance was scaled (testNodeResiduals)
+  bool map_pending_ = false;              ///< a state is out, its map not yet (completeMap)
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
   std::size_t node_first_point_ = 0;  ///< the open node's first point in the recorder
   std::optional<DopplerInertialFilter> filter_;

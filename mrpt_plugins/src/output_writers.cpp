@@ -31,6 +31,7 @@ StateVerdict verdictOf(const InitResult& r, double doppler_sigma) {
   v.points_used = r.diag.points_used;
   v.residual_rms = r.diag.doppler_residual_rms;
   v.doppler_sigma = doppler_sigma;
+  v.node_residual_ratio = r.diag.node_residual_ratio;
   return v;
 }
 
@@ -87,7 +88,8 @@ void writeInitialStateIni(const std::string& path, const InitialState& s,
         << "\nwindow_frames        = " << v.window_frames
         << "\npoints_used          = " << v.points_used
         << "\ndoppler_residual_rms = " << v.residual_rms
-        << "\ndoppler_sigma        = " << v.doppler_sigma << "\n"
+        << "\ndoppler_sigma        = " << v.doppler_sigma
+        << "\nnode_chi2_per_dof    = " << v.node_residual_ratio << "\n"
         << std::setprecision(17);
     }
     o << "warnings  = " << s.warnings.size() << "\n";

@@ -125,6 +125,10 @@ struct EstimatorParams {
   int max_iterations = 6;  ///< smoother (Gauss-Newton) iterations, at most
   /// While the IMU shows rest, the platform does not rotate: the gyro then measures its bias.
   bool zero_rate_at_rest = true;
+  /// The gyro's white noise carried through the lever arm into the LiDAR velocity of all the
+  /// returns of an IMU sample is modelled (false: taken as exact, as the paper does; the
+  /// covariance is then optimistic on rigs with a long lever arm and many returns per sample).
+  bool lever_arm_gyro_noise = true;
   /// [m/s] std of the zero body velocity while the IMU shows rest (gentle: the Doppler measures
   /// the velocity anyway; this mostly adds the vertical the field of view sees poorly).
   double rest_velocity_sigma = 0.005;

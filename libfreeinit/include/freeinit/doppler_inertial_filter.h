@@ -27,6 +27,10 @@
 //   sum_j (z_j + d_j^T q(s_j))^2 = c + 2 b^T Q + Q^T A Q,
 //   A = [S_{m+n}]_{m,n=0..2} with S_m = sum s^m d d^T (m = 0..4), b = [sum s^m z d]_{m=0..2},
 //   c = sum z^2.
+// The gyro in v_l is the measured one, so its white noise moves the LiDAR velocity of all a
+// node's returns alike (R_bl^T (n_g x p_bl)): that noise is marginalized out of the node's
+// quadratic form (marginalizeLeverNoise), as the Cramer-Rao bound models it; on a long lever arm
+// with thousands of returns per IMU sample it outweighs their Doppler noise.
 // The node's points are gated one by one against the prediction, then enter as one update with
 // the Jacobian dQ/dx of the node state: points are touched once (or twice, when the second gate
 // or the caller takes some back out of the sums), and everything after that
@@ -55,6 +59,9 @@ struct DopplerInertialFilterParams {
   double accel_sigma = 0.02;             ///< [m/s^2] accelerometer white noise per sample
   double gyro_bias_random_walk = 1e-4;   ///< [rad/s/sqrt(s)]
   double accel_bias_random_walk = 1e-3;  ///< [m/s^2/sqrt(s)]
+  /// The gyro noise through the lever arm in each node's Doppler (marginalizeLeverNoise); false:
+  /// the measured gyro taken as exact there.
+  bool lever_arm_gyro_noise = true;
   // Gating of dynamic points and gross outliers on the Doppler residual against the prediction.
   double gate_sigma = 4.0;  ///< [-] reject |r| > gate_sigma * sqrt(S) ...
   double gate_min = 0.15;   ///< [m/s] ... but never below this
@@ -223,6 +230,21 @@ class DopplerInertialFilter {
   std::size_t acceptedPointsTotal() const;
   /// Weighted information the Doppler gave about v_l at node k (sum d d^T / sigma^2).
   Mat3 dopplerInformation(std::size_t k) const;
+  /// Whether each node's returns agree with its smoothed LiDAR velocity as the noise model says
+  /// (after smooth()): for every node with at least min_returns accepted returns and no rest
+  /// knowledge (rest is a model of its own, approximate for a hand-held rig's tremor), g = sum r d
+  /// over them (r a return's residual, d its direction) is weighed against its covariance under
+  /// the model, sigma_d^2 S_0 + G C G^T (S_m = sum s^m d d^T, G = [S_0 S_1 S_2], C the
+  /// covariance the gyro noise through the lever arm gives Q), and the squares are summed. With the
+  /// model right the sum is at most chi-square with `dof` degrees of freedom (the smoothing absorbs
+  /// a part); an error common to a node's returns that the model leaves out (vibration, time-stamp
+  /// jitter, a gyro noisier than configured) makes it larger, while the overall RMS of the
+  /// residuals does not see it.
+  struct NodeResiduals {
+    double chi2 = 0;
+    int dof = 0;  ///< 3 per node tested
+  };
+  NodeResiduals nodeResiduals(std::size_t min_returns) const;
 
   // The models, exposed for tests. `imu` holds the samples, x is the state at sample k.
   /// Integrates x from sample k over a signed tau (within one interval of k): the gyro and the
@@ -255,6 +277,12 @@ class DopplerInertialFilter {
   static void interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro, Vec3& accel,
                              std::size_t hint = static_cast<std::size_t>(-1),
                              Vec3* gyro_rate = nullptr);
+  /// The samples lo..hi (returned) interpolateImu() uses at t, found from the index `hint`.
+  static std::size_t interpolationSpan(const std::vector<ImuSample>& imu, double t,
+                                       std::size_t hint, std::size_t& lo);
+  /// The Lagrange weights w (and their time derivatives dw) of samples lo..hi at t.
+  static void lagrangeWeights(const std::vector<ImuSample>& imu, double t, std::size_t lo,
+                              std::size_t hi, double* w, double* dw);
 
  private:
   using Mat9 = Eigen::Matrix<double, 9, 9>;
@@ -342,6 +370,15 @@ class DopplerInertialFilter {
   Vec9 velocityPolynomial(const Node& n, const FilterState& x, Mat9xS* G) const;
   MatS processNoise(double dt) const;
   void buildRows(Node& n) const;
+  /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
+  /// .. k + 2), and dQ/dn for their noise (column block j: sample k - 2 + j; fewer at the ends).
+  static constexpr std::size_t kLeverSamples = 5;
+  static constexpr int kLeverDim = 3 * static_cast<int>(kLeverSamples);
+  using LeverNoise = Eigen::Matrix<double, 9, kLeverDim>;
+  LeverNoise leverNoise(const Node& n) const;
+  /// Takes the gyro noise carried through the lever arm out of node n's quadratic form (A, b)
+  /// in Q (see the definition).
+  void marginalizeLeverNoise(const Node& n, Mat9& A, Vec9& b) const;
   /// Kalman update of the error dx (prior mean dx_prior relative to x_lin, covariance P) with
   /// node n's rows linearized at x_lin. Returns the posterior error relative to x_lin. full: on
   /// all 19 components even when the calibration is declared exact.
@@ -375,6 +412,8 @@ class DopplerInertialFilter {
   int active_ = kStateDim;      ///< components the filter and smoother update (15 or 19)
   double before_ = 0, after_ = 0;
   double gate_min2_ = 0, gate_k2_ = 0, r_doppler_ = 0;
+  Mat3 lever_noise_ = Mat3::Zero();  ///< d v_l / d n_g: the gyro noise through the lever arm
+  double lever_ratio_ = 0;           ///< doppler_sigma^2 / gyro_sigma^2 (0: no such noise)
 };
 
 }  // namespace freeinit

@@ -90,11 +90,15 @@ struct Diagnostics {
   std::size_t points_skipped = 0;   ///< by decimation or range limits
   std::size_t points_rejected = 0;  ///< gated out as dynamic or outlier
   std::size_t gyro_updates = 0;
-  double update_rate_hz = 0;          ///< velocimeter updates per second of data
-  bool static_start = false;          ///< the window started at rest
-  double static_duration = 0;         ///< [s] time spent in zero-velocity mode
-  double doppler_residual_rms = 0;    ///< [m/s] RMS of the used points' Doppler residuals at the
-                                      ///< estimate (compare with the configured Doppler noise)
+  double update_rate_hz = 0;        ///< velocimeter updates per second of data
+  bool static_start = false;        ///< the window started at rest
+  double static_duration = 0;       ///< [s] time spent in zero-velocity mode
+  double doppler_residual_rms = 0;  ///< [m/s] RMS of the used points' Doppler residuals at the
+                                    ///< estimate (compare with the configured Doppler noise)
+  /// Chi-square per degree of freedom of the nodes' Doppler residuals (joint estimator,
+  /// DopplerInertialFilter::nodeResiduals; 0: not tested): about 0.8-1 when the noise model
+  /// holds; above its 99.9 % quantile the state's covariance is scaled up by it.
+  double node_residual_ratio = 0;
   double window_duration = 0;         ///< [s] from the window start to the state time
   std::size_t frames_in_window = 0;   ///< LiDAR frames with points in the window
   bool imu_at_rest_at_start = false;  ///< the IMU showed only noise over the start decision's span

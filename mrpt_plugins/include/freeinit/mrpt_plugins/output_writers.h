@@ -27,6 +27,9 @@ struct StateVerdict {
   std::size_t points_used = 0;
   double residual_rms = 0;   ///< [m/s] of the used points' Doppler residuals
   double doppler_sigma = 0;  ///< [m/s] the configured Doppler noise
+  /// Chi-square per dof of the returns per IMU sample against the noise model (0: not tested;
+  /// Diagnostics::node_residual_ratio).
+  double node_residual_ratio = 0;
 };
 /// The verdict of an ok result (doppler_sigma: the configured [velocimeter] doppler_sigma).
 StateVerdict verdictOf(const InitResult& r, double doppler_sigma);
@@ -36,8 +39,8 @@ void printVerdict(std::ostream& log, const StateVerdict& v);
 /// The initial-state contract (docs/architecture.md, "Frames, signs and the output contract"):
 /// [initial_state] status, timestamp, q_wb, p_w, v_w, b_g, b_a, g_w, cov (18x18 row-major, order
 /// [dtheta p v b_g b_a g]); with a verdict (ok states) also sigma_v_b, sigma_tilt_deg,
-/// sigma_b_g, sigma_b_a, window_s, window_frames, points_used, doppler_residual_rms and
-/// doppler_sigma; then warnings.
+/// sigma_b_g, sigma_b_a, window_s, window_frames, points_used, doppler_residual_rms,
+/// doppler_sigma and node_chi2_per_dof; then warnings.
 void writeInitialStateIni(const std::string& path, const InitialState& s,
                           const StateVerdict* verdict = nullptr);
 /// TUM: "t x y z qx qy qz qw" per line.
