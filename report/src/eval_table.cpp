@@ -426,6 +426,29 @@ std::vector<MethodSummary> summarize(const std::vector<EvalRow>& rows,
   return out;
 }
 
+namespace {
+
+/// One table row per method: counts[q] of `of` runs per quantity, as "n/of (share %)" ("–"
+/// without runs).
+void shareRows(std::ostream& o, const std::vector<MethodSummary>& summaries,
+               int (MethodSummary::*counts)[4], int MethodSummary::*of) {
+  for (const auto& m : summaries) {
+    o << "| " << m.method << " |";
+    for (int q = 0; q < 4; ++q) {
+      char buf[64];
+      const int n = (m.*counts)[q], total = m.*of;
+      if (total == 0)
+        std::snprintf(buf, sizeof(buf), "–");
+      else
+        std::snprintf(buf, sizeof(buf), "%d/%d (%.1f %%)", n, total, 100.0 * n / total);
+      o << " " << buf << " |";
+    }
+    o << "\n";
+  }
+}
+
+}  // namespace
+
 std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeFloors& floors,
                            std::size_t max_listed) {
   const auto summaries = summarize(rows, floors);
@@ -452,19 +475,7 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
     << eval::kChi2Quantile999Dof3 << "; tilt: 2 dof, " << eval::kChi2Quantile999Dof2
     << "; a consistent estimator: 0.1 %).\n\n"
     << "| method | velocity | tilt | b_g | b_a |\n|---|---|---|---|---|\n";
-  for (const auto& m : summaries) {
-    o << "| " << m.method << " |";
-    for (int q = 0; q < 4; ++q) {
-      char buf[64];
-      if (m.with_nees == 0)
-        std::snprintf(buf, sizeof(buf), "–");
-      else
-        std::snprintf(buf, sizeof(buf), "%d/%d (%.1f %%)", m.nees_above[q], m.with_nees,
-                      100.0 * m.nees_above[q] / m.with_nees);
-      o << " " << buf << " |";
-    }
-    o << "\n";
-  }
+  shareRows(o, summaries, &MethodSummary::nees_above, &MethodSummary::with_nees);
   o << "\nShare of the ok runs whose own sigma (the square root of the trace of each block of "
        "the state's covariance) is below "
     << kOwnSigmaBelowBound
@@ -472,19 +483,7 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
        "estimator). Runs that used the knowledge of rest (zero velocity and rate while the IMU "
        "showed rest) are left out: the bound does not know of it.\n\n| method | velocity | gravity "
        "| b_g | b_a |\n|---|---|---|---|---|\n";
-  for (const auto& m : summaries) {
-    o << "| " << m.method << " |";
-    for (int q = 0; q < 4; ++q) {
-      char buf[64];
-      if (m.with_sigma == 0)
-        std::snprintf(buf, sizeof(buf), "–");
-      else
-        std::snprintf(buf, sizeof(buf), "%d/%d (%.1f %%)", m.sigma_below_bound[q], m.with_sigma,
-                      100.0 * m.sigma_below_bound[q] / m.with_sigma);
-      o << " " << buf << " |";
-    }
-    o << "\n";
-  }
+  shareRows(o, summaries, &MethodSummary::sigma_below_bound, &MethodSummary::with_sigma);
   const auto& names = statusNames();
   o << "\nStatus of every run.\n\n| method |";
   for (const auto& n : names) o << " " << n << " |";
