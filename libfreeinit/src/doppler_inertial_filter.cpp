@@ -246,7 +246,7 @@ DopplerInertialFilter::DopplerInertialFilter(const DopplerInertialFilterParams& 
   gate_k2_ = params.gate_sigma * params.gate_sigma;
   r_doppler_ = params.doppler_sigma * params.doppler_sigma;
   // The gyro's white noise n_g moves the LiDAR velocity of a node by R_bl^T (n_g x p_bl), alike
-  // for all the node's returns (see buildRows()).
+  // for all the node's returns (marginalizeLeverNoise()).
   lever_noise_ = R_bl_.transpose() * skew(p_bl_);
   const double var_lever = params.gyro_sigma * params.gyro_sigma * p_bl_.squaredNorm();
   lever_ratio_ = params.lever_arm_gyro_noise && var_lever > 0
@@ -281,24 +281,8 @@ DopplerInertialFilter::VecS DopplerInertialFilter::boxminus(const FilterState& a
 
 void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro,
                                            Vec3& accel, std::size_t hint, Vec3* gyro_rate) {
-  // The interval of samples that holds t, then up to one more sample on each side.
-  const std::size_t n = imu.size();
-  std::size_t j = 0;  // imu[j].t <= t < imu[j + 1].t (clamped)
-  if (n >= 2) {
-    if (hint < n) {
-      // A few steps from the hint (the callers' times lie within an interval of it).
-      j = hint;
-      while (j + 1 < n && imu[j + 1].t <= t) ++j;
-      while (j > 0 && imu[j].t > t) --j;
-    } else {
-      const auto it = std::upper_bound(imu.begin(), imu.end(), t,
-                                       [](double x, const ImuSample& s) { return x < s.t; });
-      j = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, (it - imu.begin()) - 1));
-    }
-    j = std::min(j, n - 2);
-  }
-  const std::size_t lo = j > 0 ? j - 1 : 0;
-  const std::size_t hi = std::min(n - 1, j + 2);
+  std::size_t lo = 0;
+  const std::size_t hi = interpolationSpan(imu, t, hint, lo);
   gyro.setZero();
   accel.setZero();
   if (gyro_rate != nullptr) gyro_rate->setZero();
@@ -313,13 +297,20 @@ void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, do
 
 std::size_t DopplerInertialFilter::interpolationSpan(const std::vector<ImuSample>& imu, double t,
                                                      std::size_t hint, std::size_t& lo) {
-  // As interpolateImu() finds it from a hint.
+  // The interval of samples that holds t, then up to one more sample on each side.
   const std::size_t n = imu.size();
-  std::size_t j = 0;
+  std::size_t j = 0;  // imu[j].t <= t < imu[j + 1].t (clamped)
   if (n >= 2) {
-    j = std::min(hint, n - 1);
-    while (j + 1 < n && imu[j + 1].t <= t) ++j;
-    while (j > 0 && imu[j].t > t) --j;
+    if (hint < n) {
+      // A few steps from the hint (the callers' times lie within an interval of it).
+      j = hint;
+      while (j + 1 < n && imu[j + 1].t <= t) ++j;
+      while (j > 0 && imu[j].t > t) --j;
+    } else {
+      const auto it = std::upper_bound(imu.begin(), imu.end(), t,
+                                       [](double x, const ImuSample& s) { return x < s.t; });
+      j = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, (it - imu.begin()) - 1));
+    }
     j = std::min(j, n - 2);
   }
   lo = j > 0 ? j - 1 : 0;

@@ -277,7 +277,7 @@ class DopplerInertialFilter {
   static void interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro, Vec3& accel,
                              std::size_t hint = static_cast<std::size_t>(-1),
                              Vec3* gyro_rate = nullptr);
-  /// The samples lo..hi (returned) interpolateImu() uses at t, found from the index `hint`.
+  /// The samples lo..hi (returned) interpolateImu() uses at t (hint: as there).
   static std::size_t interpolationSpan(const std::vector<ImuSample>& imu, double t,
                                        std::size_t hint, std::size_t& lo);
   /// The Lagrange weights w (and their time derivatives dw) of samples lo..hi at t.
