@@ -298,9 +298,12 @@ void BM_JointForwardPassFrameRuns(benchmark::State& state, const std::string& na
   freeinit::DopplerInertialFilterParams fp;
   fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
   const std::size_t k_end = lastNodeOfWindow(rec, cfg);
+  // The range test on the squared range, as the pipeline's (no root per return).
+  const float lo2 = static_cast<float>(cfg.velocimeter.min_range * cfg.velocimeter.min_range);
+  const float hi2 = static_cast<float>(cfg.velocimeter.max_range * cfg.velocimeter.max_range);
   auto in_range = [&](const freeinit::DopplerPoint& p) {
-    const double r = p.p_l.norm();
-    return !(r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range);
+    const float r2 = p.p_l.squaredNorm();
+    return !(r2 < lo2 || r2 > hi2);
   };
   std::int64_t points = 0;
   for (auto _ : state) {

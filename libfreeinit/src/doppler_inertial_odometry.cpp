@@ -75,6 +75,7 @@ std::vector<OdometrySample> DopplerInertialOdometry::run(
 
   // Points and gyro samples in time order: a point is processed before the gyro sample after it.
   std::size_t f = 0, p = 0, counter = 0;
+  const detail::UsablePoints usable(vp);
   auto nextPoint = [&]() -> const DopplerPoint* {
     while (f < frames.size() && p >= frames[f].points.size()) {
       ++f;
@@ -91,7 +92,7 @@ std::vector<OdometrySample> DopplerInertialOdometry::run(
       if (tp <= 0) continue;  // part of the initialization window
       const bool use = counter == 0;
       counter = (counter + 1) % static_cast<std::size_t>(stride);
-      if (!use || !detail::usablePoint(*pt, vp)) continue;
+      if (!use || !usable(*pt)) continue;
       velocimeter.propagate(tp);
       velocimeter.updateDoppler(pt->p_l, pt->doppler);
       integrator.integrate(tp, velocimeter.omega_b(), velocimeter.v_b());

@@ -54,7 +54,7 @@ BodyVelocityJacobian bodyVelocityJacobian(const FilterState& x) {
 class JointPipeline final : public Pipeline {
  public:
   JointPipeline(const FreeInitConfig& cfg, const MeasurementSequencer& seq)
-      : cfg_(cfg), seq_(seq) {}
+      : cfg_(cfg), seq_(seq), usable_(cfg.velocimeter) {}
 
   bool processBuffered(InitResult& r) override {
     if (phase_ == Phase::Done) return true;
@@ -125,7 +125,7 @@ class JointPipeline final : public Pipeline {
     const double t_end = imu[k_last].t;
     std::size_t usable = 0;
     for (MeasurementSequencer::Cursor q = c; seq_.normalize(q) && seq_.time(q) <= t_end; ++q.p)
-      if (seq_.time(q) >= t_ref && usablePoint(seq_.point(q), vp)) ++usable;
+      if (seq_.time(q) >= t_ref && usable_(seq_.point(q))) ++usable;
     const std::size_t thin = std::max<std::size_t>(
         1, usable / static_cast<std::size_t>(cfg_.estimator.bootstrap_points));
     std::vector<StartPoint> pts;
@@ -134,7 +134,7 @@ class JointPipeline final : public Pipeline {
     for (MeasurementSequencer::Cursor q = c; seq_.normalize(q) && seq_.time(q) <= t_end; ++q.p) {
       const double t = seq_.time(q);
       const DopplerPoint& p = seq_.point(q);
-      if (t < t_ref || !usablePoint(p, vp)) continue;
+      if (t < t_ref || !usable_(p)) continue;
       if (n++ % thin != 0) continue;
       pts.push_back({t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
     }
@@ -235,6 +235,49 @@ class JointPipeline final : public Pipeline {
     while (fed_ < imu.size() && fed_ <= last) filter_->addImu(imu[fed_++]);
   }
 
+  /// The open node's points received so far, those of [lo, hi) (the last node: [lo, t_k]): each
+  /// frame's run of used ones goes to the filter and the recorder at once, a run ending at a
+  /// return not used (not usable, or left out by the stride). `kStrided`: one return in stride_
+  /// (counted over the window's returns) is used, else every one.
+  template <bool kStrided>
+  void takePoints(Diagnostics& diag, double t_k, double lo, double hi, bool last) {
+    const std::size_t node = filter_->nodes() - 1;
+    const std::size_t stride = static_cast<std::size_t>(stride_);
+    while (seq_.normalize(cursor_)) {
+      const MeasurementSequencer::FrameRef& frame = seq_.frames()[cursor_.f];
+      const DopplerPoint* pts = frame.points->data();
+      const std::size_t n = frame.points->size();
+      const double stamp = frame.stamp;
+      std::size_t p = cursor_.p, run = p;
+      auto flush = [&](std::size_t end) {
+        if (end == run) return;
+        filter_->addPoints(pts + run, end - run, stamp, t_k);
+        recorder_.add(node, pts + run, end - run, stamp, t_k);
+        diag.points_seen += end - run;
+      };
+      for (; p < n; ++p) {
+        const double t = stamp + static_cast<double>(pts[p].time_offset);
+        if (last ? t > t_k : t >= hi) break;
+        if (t >= lo) {
+          bool use = true;
+          if constexpr (kStrided) {
+            use = stride_counter_ == 0;
+            if (++stride_counter_ == stride) stride_counter_ = 0;
+          }
+          if (use && usable_(pts[p])) continue;
+        }
+        flush(p);
+        run = p + 1;
+        if (t < lo) continue;  // before the window
+        ++diag.points_seen;
+        ++diag.points_skipped;
+      }
+      flush(p);
+      cursor_.p = p;
+      if (p < n) break;
+    }
+  }
+
   void run(InitResult& r) {
     const auto& imu = seq_.imu();
     const VelocimeterParams& vp = cfg_.velocimeter;
@@ -261,51 +304,10 @@ class JointPipeline final : public Pipeline {
       const double t_k = imu[k].t;
       const double lo = t_k - filter_->intervalBefore();
       const double hi = t_k + filter_->intervalAfter();
-      // The node's points. Every point used (stride 1): each frame's run of them in the
-      // interval goes to the filter and the recorder at once.
-      while (stride_ == 1 && seq_.normalize(cursor_)) {
-        const MeasurementSequencer::FrameRef& frame = seq_.frames()[cursor_.f];
-        const std::vector<DopplerPoint>& pts = *frame.points;
-        const double stamp = frame.stamp;
-        const std::size_t n = pts.size();
-        std::size_t p = cursor_.p, run = p;
-        const std::size_t node = filter_->nodes() - 1;
-        auto flush = [&](std::size_t end) {
-          if (end == run) return;
-          filter_->addPoints(&pts[run], end - run, stamp, t_k);
-          recorder_.add(node, &pts[run], end - run, stamp, t_k);
-          r.diag.points_seen += end - run;
-        };
-        for (; p < n; ++p) {
-          const double t = stamp + static_cast<double>(pts[p].time_offset);
-          if (last ? t > t_k : t >= hi) break;
-          if (t >= lo && usablePoint(pts[p], vp)) continue;
-          flush(p);
-          run = p + 1;
-          if (t < lo) continue;  // before the window
-          ++r.diag.points_seen;
-          ++r.diag.points_skipped;
-        }
-        flush(p);
-        cursor_.p = p;
-        if (p < n) break;
-      }
-      while (stride_ != 1 && seq_.normalize(cursor_)) {
-        const double t = seq_.time(cursor_);
-        if (last ? t > t_k : t >= hi) break;
-        const DopplerPoint& pt = seq_.point(cursor_);
-        ++cursor_.p;
-        if (t < lo) continue;  // before the window
-        ++r.diag.points_seen;
-        const bool use = stride_counter_ == 0;
-        if (++stride_counter_ == static_cast<std::size_t>(stride_)) stride_counter_ = 0;
-        if (!use || !usablePoint(pt, vp)) {
-          ++r.diag.points_skipped;
-          continue;
-        }
-        filter_->addPoint(t - t_k, pt.p_l, pt.doppler);
-        recorder_.add(filter_->nodes() - 1, t - t_k, pt);
-      }
+      if (stride_ == 1)
+        takePoints<false>(r.diag, t_k, lo, hi, last);
+      else
+        takePoints<true>(r.diag, t_k, lo, hi, last);
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
       filter_->update();
       const std::size_t node_points_begin = node_first_point_, node_points_end = recorder_.size();
@@ -745,6 +747,7 @@ class JointPipeline final : public Pipeline {
 
   const FreeInitConfig& cfg_;
   const MeasurementSequencer& seq_;
+  UsablePoints usable_;
   Phase phase_ = Phase::WaitStart;
   std::size_t k_first_ = 0, k_window_last_ = 0;
   double t_ref_ = 0;

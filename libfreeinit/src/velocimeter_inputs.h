@@ -10,17 +10,75 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <limits>
 #include <vector>
 
 namespace freeinit::detail {
 
-/// A point the velocimeter can use: finite, with a range inside [min_range, max_range].
+/// A point the velocimeter can use: finite, with a range inside [min_range, max_range]. The
+/// definition; the per-return loops use UsablePoints, which decides the same without a root.
 inline bool usablePoint(const DopplerPoint& p, const VelocimeterParams& vp) {
   if (!p.p_l.allFinite() || !std::isfinite(p.doppler) || !std::isfinite(p.time_offset))
     return false;
   const double r = p.p_l.norm();
   return r > 0 && r >= vp.min_range && r <= vp.max_range;
 }
+
+/// usablePoint() on the squared range: the range limits become limits on the float squared
+/// range (the one whose root usablePoint() compares), found once by bisection over the floats so
+/// that every point gets the same verdict, at the limits too.
+class UsablePoints {
+ public:
+  explicit UsablePoints(const VelocimeterParams& vp) {
+    // The root is monotone in the squared range: each test holds on one end of the floats
+    // [0, inf] (the squared range of finite coordinates may overflow to inf).
+    const double lo = vp.min_range, hi = vp.max_range;
+    lo2_ = firstPassing([lo](float r2) {
+      const float r = std::sqrt(r2);
+      return r > 0 && r >= lo;
+    });
+    const float past = firstPassing([hi](float r2) { return !(std::sqrt(r2) <= hi); });
+    if (std::isnan(past))
+      hi2_ = kInf;  // no range too far
+    else if (past > 0)
+      hi2_ = std::nextafter(past, 0.0f);
+  }
+  bool operator()(const DopplerPoint& p) const {
+    const float x = p.p_l.x(), y = p.p_l.y(), z = p.p_l.z(), d = p.doppler, t = p.time_offset;
+    // x - x is 0 for a finite x, NaN for an infinity or a NaN: the sum is 0 when all five are
+    // finite.
+    const float finite = (x - x) + (y - y) + (z - z) + (d - d) + (t - t);
+    const float r2 = p.p_l.squaredNorm();
+    return finite == 0.0f && r2 >= lo2_ && r2 <= hi2_;
+  }
+
+ private:
+  static constexpr float kInf = std::numeric_limits<float>::infinity();
+  static constexpr float kNone = std::numeric_limits<float>::quiet_NaN();  ///< nothing passes
+  /// The smallest float in [0, inf] at which `pass` holds (false below it, true from it on),
+  /// NaN if it holds nowhere.
+  template <class Pass>
+  static float firstPassing(Pass pass) {
+    auto value = [](std::uint32_t bits) {
+      float f;
+      std::memcpy(&f, &bits, sizeof f);
+      return f;
+    };
+    std::uint32_t a = 0, b = 0x7f800000u;  // the bits of +0 and +inf: ordered as the floats
+    if (!pass(value(b))) return kNone;
+    while (a < b) {
+      const std::uint32_t mid = a + (b - a) / 2;
+      if (pass(value(mid)))
+        b = mid;
+      else
+        a = mid + 1;
+    }
+    return value(a);
+  }
+  float lo2_ = kNone, hi2_ = kNone;  ///< a usable squared range is in [lo2_, hi2_]
+};
 
 /// The point stride that brings the point rate of the first frame with a measurable span closest
 /// to max_point_rate (1 when no frame tells the rate). `Frames`: a sequence of items with a
