@@ -311,8 +311,8 @@ class JointPipeline final : public Pipeline {
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
       filter_->update();
       const std::size_t node_points_begin = node_first_point_, node_points_end = recorder_.size();
-      recorder_.judgeNode(node_points_begin, node_points_end, *filter_, RestCells::cellOf,
-                          r.diag.points_used, r.diag.points_rejected);
+      recorder_.judgeNode(node_points_begin, node_points_end, *filter_, r.diag.points_used,
+                          r.diag.points_rejected);
       node_first_point_ = node_points_end;
       const bool was_rest = rest_.atRest();
       const bool rest = rest_.update(imu[k]);
@@ -526,27 +526,26 @@ class JointPipeline final : public Pipeline {
       std::size_t total = 0;
       while (i < count && imu[k_first_ + rec.tag(i).node].t < t_begin + kSpan) {
         const std::uint32_t node = rec.tag(i).node;
-        std::size_t end = i;
-        while (end < count && rec.tag(end).node == node) ++end;
-        if (node < node_rest_.size() && node_rest_[node]) {
-          i = end;
-          continue;
-        }
+        const WindowRecorder::NodeReturns nr = rec.node(node);
+        i = nr.end;
+        if (node < node_rest_.size() && node_rest_[node]) continue;
         const Eigen::Matrix<float, 9, 1> Q = filter_->lidarVelocityPolynomial(node).cast<float>();
-        const Eigen::Vector3f q0 = Q.segment<3>(0), q1 = Q.segment<3>(3), q2 = Q.segment<3>(6);
+        float q[9];
+        for (int j = 0; j < 9; ++j) q[j] = Q(j);
         const float inv_h = static_cast<float>(filter_->normalizedTime(node, 1.0));
-        for (; i < end; ++i) {
-          if (!rec.tag(i).accepted) continue;
-          const float s = rec.tau(i) * inv_h;
-          const Eigen::Vector3f v = q0 + s * (q1 + s * q2);
-          const Eigen::Vector3f& p_l = rec.lidarPoint(i);
-          const float res = rec.doppler(i) + p_l.dot(v) / p_l.norm();
-          const std::uint32_t c = rec.tag(i).cell;
+        const std::size_t n = nr.end - nr.begin;
+        span_residual_.resize(std::max(span_residual_.size(), n));
+        float* res = span_residual_.data();
+        recorder_kernels::dopplerResiduals(n, q, inv_h, nr.x, nr.y, nr.z, nr.tau, nr.doppler, res);
+        for (std::size_t j = 0; j < n; ++j) {
+          const WindowRecorder::Tag& tag = rec.tag(nr.begin + j);
+          if (!tag.accepted) continue;
+          const std::uint32_t c = tag.cell;
           if (span_count_[c]++ == 0) touched.push_back(c);
-          span_sum_[c] += res;
-          sumsq += static_cast<double>(res) * res;
+          span_sum_[c] += res[j];
+          sumsq += static_cast<double>(res[j]) * res[j];
           ++total;
-          filed.push_back(i);
+          filed.push_back(nr.begin + j);
         }
       }
       // The test of RestCells::coherent, per span: the std from the Doppler noise or, when
@@ -769,6 +768,7 @@ class JointPipeline final : public Pipeline {
   RestCells rest_cells_;
   std::vector<double> span_sum_;           ///< rejectMovingCells: residual sums of one span's cells
   std::vector<std::uint32_t> span_count_;  ///< ... and their counts (zero between spans)
+  std::vector<float> span_residual_;       ///< rejectMovingCells: a node's residuals
 };
 
 }  // namespace

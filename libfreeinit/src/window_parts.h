@@ -58,10 +58,34 @@ class RestTracker {
   std::size_t n_ = 0;
 };
 
+/// The per-return loops of the recorder (window_parts.cpp), over one node's returns as arrays;
+/// vectorized, with the same results as the scalar forms they replace.
+namespace recorder_kernels {
+/// RestCells::cellOf of each of n returns at (x, y, z).
+void cellsOf(std::size_t n, const float* x, const float* y, const float* z, std::uint16_t* cell);
+/// A node's map: a return at tau from its node maps to A p_l + a + tau (B p_l + b), at time
+/// t_node + tau from the state (WindowRecorder::finish).
+struct NodeMap {
+  float A[9], B[9];  ///< row-major
+  float a[3], b[3];
+  float time;  ///< [s] from the state's time
+};
+/// Maps n returns in place: (x, y, z) from the LiDAR frame into the world, tau into the time
+/// from the state.
+void mapReturns(std::size_t n, const NodeMap& m, float* x, float* y, float* z, float* tau);
+/// The Doppler residual of n returns against a LiDAR velocity v(s) = q0 + s (q1 + s q2),
+/// s = tau inv_h (DopplerInertialFilter::lidarVelocityPolynomial): doppler + p_l.v / |p_l|.
+void dopplerResiduals(std::size_t n, const float (&q)[9], float inv_h, const float* x,
+                      const float* y, const float* z, const float* tau, const float* doppler,
+                      float* residual);
+}  // namespace recorder_kernels
+
 /// The returns of the window as the filter received them, judged once their node is updated and
-/// mapped into the world once the node states are final. Each return is kept as the MapPoint it
-/// becomes (in the LiDAR frame and at its offset from its node until finish() maps it in place,
-/// so that the window's largest buffer is never held twice), with a small tag beside it.
+/// mapped into the world once the node states are final. The returns are kept in one buffer of
+/// the MapPoints they become, node after node, each node's part as arrays (its x, then its y,
+/// ..., each over the node's returns: the per-return loops run over contiguous arrays) until
+/// finish() maps them in place and turns each node's part into MapPoints, so that the window's
+/// largest buffer is never held twice. A small tag per return beside it.
 class WindowRecorder {
  public:
   struct Tag {
@@ -71,61 +95,88 @@ class WindowRecorder {
     bool in_rest_cells;  ///< counted in the rest cells (seen from a standing sensor)
   };
   static constexpr std::uint16_t kNoCell = 0xffff;
+  /// One node's returns: global indices [begin, end), its fields as arrays of end - begin.
+  struct NodeReturns {
+    std::size_t begin, end;
+    const float *x, *y, *z, *intensity, *doppler, *tau, *residual;
+  };
   void reserve(std::size_t n) {
     returns_.reserve(n);
     tags_.reserve(n);
   }
-  std::size_t size() const { return returns_.size(); }
-  /// A return given to the filter's open node.
-  void add(std::size_t node, double tau, const DopplerPoint& p) {
-    MapPoint m;
-    m.p_w = p.p_l;
-    m.intensity = p.intensity;
-    m.doppler = p.doppler;
-    m.time = static_cast<float>(tau);
-    returns_.push_back(m);
-    tags_.push_back({static_cast<std::uint32_t>(node), kNoCell, false, false});
-  }
-  /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each as
-  /// add(node, stamp + time_offset - t_node, p) takes it.
+  std::size_t size() const { return tags_.size(); }
+  /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each at
+  /// tau = stamp + time_offset - t_node from the node. The points must stay in place until the
+  /// node is judged (the sequencer keeps its frames in place).
   void add(std::size_t node, const DopplerPoint* p, std::size_t count, double stamp,
            double t_node) {
-    const std::size_t m = returns_.size();
-    returns_.resize(m + count);
-    tags_.resize(m + count, {static_cast<std::uint32_t>(node), kNoCell, false, false});
-    MapPoint* out = returns_.data() + m;
-    for (std::size_t i = 0; i < count; ++i) {
-      const double t = stamp + static_cast<double>(p[i].time_offset);
-      out[i].p_w = p[i].p_l;
-      out[i].intensity = p[i].intensity;
-      out[i].doppler = p[i].doppler;
-      out[i].time = static_cast<float>(t - t_node);
-    }
+    open_runs_.push_back({p, count, stamp, t_node});
+    tags_.resize(tags_.size() + count, {static_cast<std::uint32_t>(node), kNoCell, false, false});
   }
   const Tag& tag(std::size_t i) const { return tags_[i]; }
   Tag& tag(std::size_t i) { return tags_[i]; }
-  const Eigen::Vector3f& lidarPoint(std::size_t i) const { return returns_[i].p_w; }
-  float tau(std::size_t i) const { return returns_[i].time; }  ///< [s] from its node's time
-  float doppler(std::size_t i) const { return returns_[i].doppler; }
-  float residual(std::size_t i) const { return returns_[i].residual; }
+  /// The node's returns (after judgeNode).
+  NodeReturns node(std::size_t k) const {
+    const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
+    const float* f = floats() + 7 * b;
+    return {b, b + n, f, f + n, f + 2 * n, f + 3 * n, f + 4 * n, f + 5 * n, f + 6 * n};
+  }
+  Eigen::Vector3f lidarPoint(std::size_t i) const {
+    const auto [n, j, f] = field(i);
+    return {f[j], f[n + j], f[2 * n + j]};
+  }
+  float tau(std::size_t i) const {  ///< [s] from its node's time
+    const auto [n, j, f] = field(i);
+    return f[5 * n + j];
+  }
+  float doppler(std::size_t i) const {
+    const auto [n, j, f] = field(i);
+    return f[4 * n + j];
+  }
+  float residual(std::size_t i) const {
+    const auto [n, j, f] = field(i);
+    return f[6 * n + j];
+  }
   void reject(std::size_t i) { tags_[i].accepted = false; }
   /// The verdicts on the returns [begin, end), the open node's in the order given to the
   /// filter, after its update(): accepted or not, the residual, an accepted return's cell
-  /// (cell_of: RestCells::cellOf); adds them to the counts.
-  template <class CellOf>
+  /// (RestCells::cellOf); adds them to the counts. Nodes are judged in order, each once.
   void judgeNode(std::size_t begin, std::size_t end, const DopplerInertialFilter& filter,
-                 CellOf cell_of, std::size_t& used, std::size_t& rejected) {
+                 std::size_t& used, std::size_t& rejected) {
+    if (node_begin_.empty()) node_begin_.push_back(0);
+    const std::size_t n = end - begin;
+    returns_.resize(end);
+    node_begin_.push_back(end);
+    float* f = floats() + 7 * begin;
+    float *x = f, *y = f + n, *z = f + 2 * n, *in = f + 3 * n, *d = f + 4 * n, *tau = f + 5 * n,
+          *res = f + 6 * n;
+    std::size_t j = 0;
+    for (const Run& run : open_runs_) {
+      const DopplerPoint* p = run.points;
+      for (std::size_t i = 0; i < run.count; ++i, ++j) {
+        const double t = run.stamp + static_cast<double>(p[i].time_offset);
+        x[j] = p[i].p_l.x();
+        y[j] = p[i].p_l.y();
+        z[j] = p[i].p_l.z();
+        in[j] = p[i].intensity;
+        d[j] = p[i].doppler;
+        tau[j] = static_cast<float>(t - run.t_node);
+      }
+    }
+    open_runs_.clear();
+    cells_.resize(std::max(cells_.size(), n));
+    recorder_kernels::cellsOf(n, x, y, z, cells_.data());
     std::size_t accepted = 0;
-    for (std::size_t i = begin; i < end; ++i) {
-      const std::size_t j = i - begin;
+    Tag* tags = tags_.data() + begin;
+    for (j = 0; j < n; ++j) {
       const bool a = filter.pointAccepted(j);
       accepted += a ? 1 : 0;
-      tags_[i].accepted = a;
-      returns_[i].residual = static_cast<float>(filter.pointResidual(j));
-      tags_[i].cell = a ? static_cast<std::uint16_t>(cell_of(returns_[i].p_w)) : kNoCell;
+      tags[j].accepted = a;
+      tags[j].cell = a ? cells_[j] : kNoCell;
+      res[j] = static_cast<float>(filter.pointResidual(j));
     }
     used += accepted;
-    rejected += (end - begin) - accepted;
+    rejected += n - accepted;
   }
   /// Maps every return with the final node states (the body moved by tau, its angular and
   /// linear velocity at the node, between the node and the return), the accepted ones into
@@ -137,75 +188,85 @@ class WindowRecorder {
     // node is at x_b = p_b + tau (omega x p_b + v_b) in the node's body frame (p_b = R_bl p_l +
     // p_bl), so in the world p_w = A p_l + a + tau (B p_l + b) with, per node, A = R R_bl,
     // a = R p_bl + p, B = R [omega]x R_bl and b = R (omega x p_bl + v_b).
-    struct NodeMap {
-      Eigen::Matrix3f A, B;
-      Eigen::Vector3f a, b;
-      float time;  ///< [s] from the state's time (the last node's)
-    };
-    std::vector<NodeMap> maps(filter.nodes());
     const double t_state = filter.state(filter.nodes() - 1).t;
-    for (std::size_t k = 0; k < maps.size(); ++k) {
-      const FilterState& x = filter.state(k);
-      const Vec3 omega = imu[k_first + k].gyro - x.b_g;
-      const Vec3 v_b = x.R_wb.transpose() * x.v_w;
-      maps[k] = {(x.R_wb * ext.R_bl).cast<float>(), (x.R_wb * skew(omega) * ext.R_bl).cast<float>(),
-                 (x.R_wb * ext.p_bl + x.p_w).cast<float>(),
-                 (x.R_wb * (omega.cross(ext.p_bl) + v_b)).cast<float>(),
-                 static_cast<float>(x.t - t_state)};
-    }
     std::size_t accepted = 0;
     for (const Tag& t : tags_) accepted += t.accepted ? 1 : 0;
     r.rejected.clear();
-    r.rejected.reserve(returns_.size() - accepted);
-    // Node by node (the recorder holds the returns in node order), its map's coefficients held
-    // in registers: every return mapped in place, without branches; then the accepted ones close
-    // up in place (the write position never passes the read one) and the others are copied out.
-    const std::size_t count = returns_.size();
-    for (std::size_t begin = 0; begin < count;) {
-      const std::uint32_t node = tags_[begin].node;
-      std::size_t end = begin + 1;
-      while (end < count && tags_[end].node == node) ++end;
-      const NodeMap& m = maps[node];
-      const float a00 = m.A(0, 0), a01 = m.A(0, 1), a02 = m.A(0, 2), a10 = m.A(1, 0),
-                  a11 = m.A(1, 1), a12 = m.A(1, 2), a20 = m.A(2, 0), a21 = m.A(2, 1),
-                  a22 = m.A(2, 2);
-      const float b00 = m.B(0, 0), b01 = m.B(0, 1), b02 = m.B(0, 2), b10 = m.B(1, 0),
-                  b11 = m.B(1, 1), b12 = m.B(1, 2), b20 = m.B(2, 0), b21 = m.B(2, 1),
-                  b22 = m.B(2, 2);
-      const float ax = m.a.x(), ay = m.a.y(), az = m.a.z(), bx = m.b.x(), by = m.b.y(),
-                  bz = m.b.z(), t_node = m.time;
-      MapPoint* ps = returns_.data();
-      for (std::size_t i = begin; i < end; ++i) {
-        MapPoint& p = ps[i];
-        const float x = p.p_w.x(), y = p.p_w.y(), z = p.p_w.z(), tau = p.time;
-        // A p_l + a + tau (B p_l + b), each sum in the order Eigen's float products take it.
-        const float wx =
-            ((a00 * x + a01 * y) + a02 * z) + ax + tau * (((b00 * x + b01 * y) + b02 * z) + bx);
-        const float wy =
-            ((a10 * x + a11 * y) + a12 * z) + ay + tau * (((b10 * x + b11 * y) + b12 * z) + by);
-        const float wz =
-            ((a20 * x + a21 * y) + a22 * z) + az + tau * (((b20 * x + b21 * y) + b22 * z) + bz);
-        p.p_w = Eigen::Vector3f(wx, wy, wz);
-        p.time = t_node + tau;
-      }
-      begin = end;
-    }
+    r.rejected.reserve(tags_.size() - accepted);
+    // Node by node: its returns mapped in place (as arrays), then copied out as MapPoints, the
+    // accepted ones into the buffer's front (the write position never passes the node's own
+    // part, which is copied aside first), the others into r.rejected.
+    std::vector<float> part;
     std::size_t kept = 0;
-    for (std::size_t i = 0; i < count; ++i) {
-      if (tags_[i].accepted)
-        returns_[kept++] = returns_[i];
-      else
-        r.rejected.push_back(returns_[i]);
+    for (std::size_t k = 0; k + 1 < node_begin_.size(); ++k) {
+      const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
+      if (n == 0) continue;
+      const FilterState& x = filter.state(k);
+      const Vec3 omega = imu[k_first + k].gyro - x.b_g;
+      const Vec3 v_b = x.R_wb.transpose() * x.v_w;
+      const Eigen::Matrix3f A = (x.R_wb * ext.R_bl).cast<float>();
+      const Eigen::Matrix3f B = (x.R_wb * skew(omega) * ext.R_bl).cast<float>();
+      const Eigen::Vector3f a = (x.R_wb * ext.p_bl + x.p_w).cast<float>();
+      const Eigen::Vector3f bv = (x.R_wb * (omega.cross(ext.p_bl) + v_b)).cast<float>();
+      recorder_kernels::NodeMap m;
+      for (int row = 0; row < 3; ++row) {
+        for (int col = 0; col < 3; ++col) {
+          m.A[3 * row + col] = A(row, col);
+          m.B[3 * row + col] = B(row, col);
+        }
+        m.a[row] = a(row);
+        m.b[row] = bv(row);
+      }
+      m.time = static_cast<float>(x.t - t_state);
+      float* f = floats() + 7 * b;
+      recorder_kernels::mapReturns(n, m, f, f + n, f + 2 * n, f + 5 * n);
+      part.assign(f, f + 7 * n);
+      const float *px = part.data(), *py = px + n, *pz = px + 2 * n, *pi = px + 3 * n,
+                  *pd = px + 4 * n, *pt = px + 5 * n, *pr = px + 6 * n;
+      for (std::size_t j = 0; j < n; ++j) {
+        MapPoint p;
+        p.p_w = Eigen::Vector3f(px[j], py[j], pz[j]);
+        p.intensity = pi[j];
+        p.residual = pr[j];
+        p.doppler = pd[j];
+        p.time = pt[j];
+        if (tags_[b + j].accepted)
+          returns_[kept++] = p;
+        else
+          r.rejected.push_back(p);
+      }
     }
     returns_.resize(kept);
     r.static_map = std::move(returns_);
     returns_ = {};
     tags_ = {};
+    node_begin_ = {};
   }
 
  private:
-  std::vector<MapPoint> returns_;
-  std::vector<Tag> tags_;
+  struct Run {
+    const DopplerPoint* points;
+    std::size_t count;
+    double stamp, t_node;
+  };
+  // The buffer seen as floats: a MapPoint is seven floats.
+  static_assert(sizeof(MapPoint) == 7 * sizeof(float) && alignof(MapPoint) == alignof(float));
+  float* floats() { return reinterpret_cast<float*>(returns_.data()); }
+  const float* floats() const { return reinterpret_cast<const float*>(returns_.data()); }
+  struct Field {
+    std::size_t n, j;  ///< the node's count, the return's index in its node
+    const float* f;    ///< the node's part of the buffer
+  };
+  Field field(std::size_t i) const {
+    const std::size_t b = node_begin_[tags_[i].node], n = node_begin_[tags_[i].node + 1] - b;
+    return {n, i - b, floats() + 7 * b};
+  }
+
+  std::vector<MapPoint> returns_;        ///< the judged nodes' returns (see the class comment)
+  std::vector<std::size_t> node_begin_;  ///< node k's returns: [node_begin_[k], node_begin_[k+1])
+  std::vector<Tag> tags_;                ///< every return's, the open node's included
+  std::vector<Run> open_runs_;           ///< the open node's returns, where the frames hold them
+  std::vector<std::uint16_t> cells_;     ///< judgeNode's work space
 };
 
 /// The residuals of the returns while the sensor stands still, by direction: a standing sensor

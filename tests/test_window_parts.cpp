@@ -1,0 +1,107 @@
+// The window recorder's vectorized per-return loops (window_parts.h) against the scalar forms they
+// replace: the rest cells of RestCells::cellOf, the Doppler residual as Eigen computes it, and
+// the map of a return (A p_l + a + tau (B p_l + b)).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <vector>
+
+#include "window_parts.h"
+
+namespace freeinit::detail {
+namespace {
+
+struct Returns {
+  std::vector<float> x, y, z, tau, doppler;
+};
+
+/// Random returns up to 150 m, and returns at each range bin's edge (the float nearest it and
+/// its neighbours), on the axes, in every octant.
+Returns someReturns() {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> c(-150.0f, 150.0f), t(-0.0025f, 0.0025f), d(-5, 5);
+  Returns r;
+  auto add = [&](const Eigen::Vector3f& p) {
+    r.x.push_back(p.x());
+    r.y.push_back(p.y());
+    r.z.push_back(p.z());
+    r.tau.push_back(t(rng));
+    r.doppler.push_back(d(rng));
+  };
+  for (int i = 0; i < 20000; ++i) add(Eigen::Vector3f(c(rng), c(rng), c(rng)) * (i % 3 + 1) / 3.0f);
+  for (const float e2 : RestCells::kRangeEdges2) {
+    const Eigen::Vector3f dir = Eigen::Vector3f(c(rng), c(rng), c(rng)).normalized();
+    float r0 = std::sqrt(e2);
+    for (int k = 0; k < 3; ++k) r0 = std::nextafter(r0, 0.0f);
+    for (int k = 0; k < 7; ++k, r0 = std::nextafter(r0, 1e9f)) {
+      add(dir * r0);
+      add(Eigen::Vector3f(r0, 0, 0));
+      add(Eigen::Vector3f(0, -r0, 0));
+    }
+  }
+  for (const float sx : {-1.0f, 1.0f})
+    for (const float sy : {-1.0f, 1.0f})
+      for (const float sz : {-1.0f, 0.0f, 1.0f}) add(Eigen::Vector3f(3 * sx, 2 * sy, 5 * sz));
+  return r;
+}
+
+TEST(WindowParts, CellsAreThoseOfRestCells) {
+  const Returns r = someReturns();
+  const std::size_t n = r.x.size();
+  std::vector<std::uint16_t> cells(n);
+  recorder_kernels::cellsOf(n, r.x.data(), r.y.data(), r.z.data(), cells.data());
+  for (std::size_t i = 0; i < n; ++i)
+    ASSERT_EQ(cells[i], RestCells::cellOf(Eigen::Vector3f(r.x[i], r.y[i], r.z[i])))
+        << "return " << i << " at " << r.x[i] << " " << r.y[i] << " " << r.z[i];
+}
+
+TEST(WindowParts, DopplerResidualsAreThoseOfTheScalarForm) {
+  const Returns r = someReturns();
+  const std::size_t n = r.x.size();
+  const float q[9] = {1.5f, -0.2f, 0.03f, 0.4f, 0.1f, -0.05f, -0.02f, 0.01f, 0.003f};
+  const float inv_h = 1.0f / 0.0025f;
+  std::vector<float> res(n);
+  recorder_kernels::dopplerResiduals(n, q, inv_h, r.x.data(), r.y.data(), r.z.data(), r.tau.data(),
+                                     r.doppler.data(), res.data());
+  const Eigen::Vector3f q0(q[0], q[1], q[2]), q1(q[3], q[4], q[5]), q2(q[6], q[7], q[8]);
+  for (std::size_t i = 0; i < n; ++i) {
+    const float s = r.tau[i] * inv_h;
+    const Eigen::Vector3f v = q0 + s * (q1 + s * q2);
+    const Eigen::Vector3f p_l(r.x[i], r.y[i], r.z[i]);
+    ASSERT_EQ(res[i], r.doppler[i] + p_l.dot(v) / p_l.norm()) << "return " << i;
+  }
+}
+
+TEST(WindowParts, ReturnsMapThroughTheNodeMotion) {
+  Returns r = someReturns();
+  const std::size_t n = r.x.size();
+  const Eigen::Matrix3d A = Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, 2, 3).normalized()).matrix();
+  const Eigen::Matrix3d B = A * 0.3;
+  const Eigen::Vector3d a(0.5, -1.0, 2.0), b(1.2, 0.1, -0.3);
+  recorder_kernels::NodeMap m;
+  for (int row = 0; row < 3; ++row) {
+    for (int col = 0; col < 3; ++col) {
+      m.A[3 * row + col] = static_cast<float>(A(row, col));
+      m.B[3 * row + col] = static_cast<float>(B(row, col));
+    }
+    m.a[row] = static_cast<float>(a(row));
+    m.b[row] = static_cast<float>(b(row));
+  }
+  m.time = -0.2f;
+  const Returns before = r;
+  recorder_kernels::mapReturns(n, m, r.x.data(), r.y.data(), r.z.data(), r.tau.data());
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector3d p(before.x[i], before.y[i], before.z[i]);
+    const double tau = before.tau[i];
+    const Eigen::Vector3d w = A * p + a + tau * (B * p + b);
+    // Float rounding of 7-digit products at up to 150 m.
+    EXPECT_NEAR(r.x[i], w.x(), 1e-4) << i;
+    EXPECT_NEAR(r.y[i], w.y(), 1e-4) << i;
+    EXPECT_NEAR(r.z[i], w.z(), 1e-4) << i;
+    EXPECT_EQ(r.tau[i], -0.2f + before.tau[i]) << i;
+  }
+}
+
+}  // namespace
+}  // namespace freeinit::detail
