@@ -510,9 +510,9 @@ class JointPipeline final : public Pipeline {
     if (span_sum_.size() != RestCells::kCells) {
       span_sum_.assign(RestCells::kCells, 0.0);
       span_count_.assign(RestCells::kCells, 0);
+      span_coherent_.assign(RestCells::kCells, 0);
     }
-    std::vector<std::size_t> filed;  // the span's returns
-    std::vector<std::uint32_t> touched;
+    std::vector<std::uint32_t> touched;  // the span's cells
     std::vector<std::size_t> coherent;
     std::size_t i = 0;
     while (i < count) {
@@ -520,7 +520,7 @@ class JointPipeline final : public Pipeline {
       // motion summed into its cell. The recorder holds the returns in node order; the residual
       // is computed in float, as the recorder keeps it.
       const double t_begin = imu[k_first_ + rec.tag(i).node].t;
-      filed.clear();
+      const std::size_t span_begin = i;
       touched.clear();
       double sumsq = 0;
       std::size_t total = 0;
@@ -545,23 +545,32 @@ class JointPipeline final : public Pipeline {
           span_sum_[c] += res[j];
           sumsq += static_cast<double>(res[j]) * res[j];
           ++total;
-          filed.push_back(nr.begin + j);
         }
       }
       // The test of RestCells::coherent, per span: the std from the Doppler noise or, when
-      // larger, the span's residual RMS.
+      // larger, the span's residual RMS. It is a cell's: cell by cell, then (only if a cell
+      // fails it) the returns summed above that are in such a cell, in order.
+      bool any = false;
       if (total > 0) {
         const double var = std::max(sigma * sigma, sumsq / static_cast<double>(total));
         const double k = kSigmas * kSigmas * var;
-        for (const std::size_t f : filed) {
-          const std::uint32_t n = span_count_[rec.tag(f).cell];
-          const double sum = span_sum_[rec.tag(f).cell];
-          if (n >= kMinCount && sum * sum > k * static_cast<double>(n)) coherent.push_back(f);
+        for (const std::uint32_t c : touched) {
+          const std::uint32_t n = span_count_[c];
+          const double sum = span_sum_[c];
+          const bool coherent_cell = n >= kMinCount && sum * sum > k * static_cast<double>(n);
+          span_coherent_[c] = coherent_cell ? 1 : 0;
+          any = any || coherent_cell;
         }
+      }
+      for (std::size_t f = span_begin; any && f < i; ++f) {
+        const WindowRecorder::Tag& tag = rec.tag(f);
+        if (!tag.accepted || (tag.node < node_rest_.size() && node_rest_[tag.node])) continue;
+        if (span_coherent_[tag.cell] != 0) coherent.push_back(f);
       }
       for (const std::uint32_t c : touched) {
         span_sum_[c] = 0;
         span_count_[c] = 0;
+        span_coherent_[c] = 0;
       }
     }
     // Cells of the world pass the test by chance now and then (development seeds: none in most
@@ -769,6 +778,7 @@ class JointPipeline final : public Pipeline {
   std::vector<double> span_sum_;           ///< rejectMovingCells: residual sums of one span's cells
   std::vector<std::uint32_t> span_count_;  ///< ... and their counts (zero between spans)
   std::vector<float> span_residual_;       ///< rejectMovingCells: a node's residuals
+  std::vector<std::uint8_t> span_coherent_;  ///< ... whether a cell of the span fails the test
 };
 
 }  // namespace
