@@ -44,12 +44,15 @@ class UsablePoints {
       hi2_ = kInf;  // no range too far
     else if (past > 0)
       hi2_ = std::nextafter(past, 0.0f);
+    finite_limit_ = hi2_ < kInf;
   }
   bool operator()(const DopplerPoint& p) const {
     const float x = p.p_l.x(), y = p.p_l.y(), z = p.p_l.z(), d = p.doppler, t = p.time_offset;
-    // x - x is 0 for a finite x, NaN for an infinity or a NaN: the sum is 0 when all five are
-    // finite.
-    const float finite = (x - x) + (y - y) + (z - z) + (d - d) + (t - t);
+    // x - x is 0 for a finite x, NaN for an infinity or a NaN: the sum is 0 when all are
+    // finite. A squared range within a finite limit has finite coordinates (with an infinity or
+    // a NaN among them it is inf or NaN): they need the test only without one.
+    float finite = (d - d) + (t - t);
+    if (!finite_limit_) finite += (x - x) + (y - y) + (z - z);
     const float r2 = p.p_l.squaredNorm();
     return finite == 0.0f && r2 >= lo2_ && r2 <= hi2_;
   }
@@ -78,6 +81,7 @@ class UsablePoints {
     return value(a);
   }
   float lo2_ = kNone, hi2_ = kNone;  ///< a usable squared range is in [lo2_, hi2_]
+  bool finite_limit_ = false;        ///< hi2_ is finite
 };
 
 /// The point stride that brings the point rate of the first frame with a measurable span closest
