@@ -121,22 +121,33 @@ class JointPipeline final : public Pipeline {
     // that it does not depend on how far the IMU stream happens to be ahead.
     if (k_last + 2 >= imu.size() && !seq_.finished()) return;
 
-    // Returns of the span, evenly thinned to bootstrap_points.
+    // Returns of the span, evenly thinned to bootstrap_points: the usable ones found in one
+    // pass (in time order, up to the first return after the span), then every thin-th.
     const double t_end = imu[k_last].t;
-    std::size_t usable = 0;
-    for (MeasurementSequencer::Cursor q = c; seq_.normalize(q) && seq_.time(q) <= t_end; ++q.p)
-      if (seq_.time(q) >= t_ref && usable_(seq_.point(q))) ++usable;
+    struct SpanReturn {
+      const DopplerPoint* p;
+      double t;
+    };
+    std::vector<SpanReturn> usable;
+    const auto& frames = seq_.frames();
+    for (std::size_t f = c.f; f < frames.size(); ++f) {
+      const DopplerPoint* fp = frames[f].points->data();
+      const std::size_t n = frames[f].points->size();
+      std::size_t q = f == c.f ? c.p : 0;
+      for (; q < n; ++q) {
+        const double t = frames[f].stamp + static_cast<double>(fp[q].time_offset);
+        if (t > t_end) break;
+        if (t >= t_ref && usable_(fp[q])) usable.push_back({fp + q, t});
+      }
+      if (q < n) break;
+    }
     const std::size_t thin = std::max<std::size_t>(
-        1, usable / static_cast<std::size_t>(cfg_.estimator.bootstrap_points));
+        1, usable.size() / static_cast<std::size_t>(cfg_.estimator.bootstrap_points));
     std::vector<StartPoint> pts;
-    pts.reserve(usable / thin + 1);
-    std::size_t n = 0;
-    for (MeasurementSequencer::Cursor q = c; seq_.normalize(q) && seq_.time(q) <= t_end; ++q.p) {
-      const double t = seq_.time(q);
-      const DopplerPoint& p = seq_.point(q);
-      if (t < t_ref || !usable_(p)) continue;
-      if (n++ % thin != 0) continue;
-      pts.push_back({t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
+    pts.reserve(usable.size() / thin + 1);
+    for (std::size_t i = 0; i < usable.size(); i += thin) {
+      const DopplerPoint& p = *usable[i].p;
+      pts.push_back({usable[i].t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
     }
     const StartDecision d = decideStart(imu, k, k_last, pts, cfg_.extrinsics, vp.gyro_bias_prior,
                                         startDetectorParams(cfg_));
