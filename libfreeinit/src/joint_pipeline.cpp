@@ -259,33 +259,44 @@ class JointPipeline final : public Pipeline {
       const DopplerPoint* pts = frame.points->data();
       const std::size_t n = frame.points->size();
       const double stamp = frame.stamp;
-      std::size_t p = cursor_.p, run = p;
-      auto flush = [&](std::size_t end) {
-        if (end == run) return;
-        filter_->addPoints(pts + run, end - run, stamp, t_k);
-        recorder_.add(node, pts + run, end - run, stamp, t_k);
-        diag.points_seen += end - run;
+      // The frame's times do not decrease (the sequencer checks it): the end of the node's
+      // interval, and before it the returns before the window (passed over), by bisection.
+      auto time = [stamp](const DopplerPoint& q) {
+        return stamp + static_cast<double>(q.time_offset);
       };
-      for (; p < n; ++p) {
-        const double t = stamp + static_cast<double>(pts[p].time_offset);
-        if (last ? t > t_k : t >= hi) break;
-        if (t >= lo) {
-          bool use = true;
-          if constexpr (kStrided) {
-            use = stride_counter_ == 0;
-            if (++stride_counter_ == stride) stride_counter_ = 0;
-          }
-          if (use && usable_(pts[p])) continue;
+      const std::size_t end =
+          static_cast<std::size_t>(std::partition_point(pts + cursor_.p, pts + n,
+                                                        [&](const DopplerPoint& q) {
+                                                          const double t = time(q);
+                                                          return last ? !(t > t_k) : !(t >= hi);
+                                                        }) -
+                                   pts);
+      std::size_t p = static_cast<std::size_t>(
+          std::partition_point(pts + cursor_.p, pts + end,
+                               [&](const DopplerPoint& q) { return time(q) < lo; }) -
+          pts);
+      std::size_t run = p;
+      auto flush = [&](std::size_t stop) {
+        if (stop == run) return;
+        filter_->addPoints(pts + run, stop - run, stamp, t_k);
+        recorder_.add(node, pts + run, stop - run, stamp, t_k);
+        diag.points_seen += stop - run;
+      };
+      for (; p < end; ++p) {
+        bool use = true;
+        if constexpr (kStrided) {
+          use = stride_counter_ == 0;
+          if (++stride_counter_ == stride) stride_counter_ = 0;
         }
+        if (use && usable_(pts[p])) continue;
         flush(p);
         run = p + 1;
-        if (t < lo) continue;  // before the window
         ++diag.points_seen;
         ++diag.points_skipped;
       }
-      flush(p);
-      cursor_.p = p;
-      if (p < n) break;
+      flush(end);
+      cursor_.p = end;
+      if (end < n) break;
     }
   }
 
