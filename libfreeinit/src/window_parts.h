@@ -195,7 +195,7 @@ class WindowRecorder {
     r.rejected.reserve(tags_.size() - accepted);
     // Node by node: its returns mapped in place (as arrays), then copied out as MapPoints, the
     // accepted ones into the buffer's front (the write position never passes the node's own
-    // part, which is copied aside first), the others into r.rejected.
+    // part), the others into r.rejected.
     std::vector<float> part;
     std::size_t kept = 0;
     for (std::size_t k = 0; k + 1 < node_begin_.size(); ++k) {
@@ -220,9 +220,15 @@ class WindowRecorder {
       m.time = static_cast<float>(x.t - t_state);
       float* f = floats() + 7 * b;
       recorder_kernels::mapReturns(n, m, f, f + n, f + 2 * n, f + 5 * n);
-      part.assign(f, f + 7 * n);
-      const float *px = part.data(), *py = px + n, *pz = px + 2 * n, *pi = px + 3 * n,
-                  *pd = px + 4 * n, *pt = px + 5 * n, *pr = px + 6 * n;
+      // The node's part is copied aside only if the MapPoints written may reach it (once the
+      // returns rejected so far outnumber the node's, they end before it).
+      const float* src = f;
+      if (kept + n > b) {
+        part.assign(f, f + 7 * n);
+        src = part.data();
+      }
+      const float *px = src, *py = px + n, *pz = px + 2 * n, *pi = px + 3 * n, *pd = px + 4 * n,
+                  *pt = px + 5 * n, *pr = px + 6 * n;
       for (std::size_t j = 0; j < n; ++j) {
         MapPoint p;
         p.p_w = Eigen::Vector3f(px[j], py[j], pz[j]);
