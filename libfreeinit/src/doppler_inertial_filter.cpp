@@ -337,6 +337,14 @@ void DopplerInertialFilter::lagrangeWeights(const std::vector<ImuSample>& imu, d
 FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
                                              double tau, MatS* J) {
+  Vec3 gyro, accel;
+  return integrate(x, imu, k, tau, J, gyro, accel, nullptr);
+}
+
+FilterState DopplerInertialFilter::integrate(const FilterState& x,
+                                             const std::vector<ImuSample>& imu, std::size_t k,
+                                             double tau, MatS* J, Vec3& gyro, Vec3& accel,
+                                             Vec3* gyro_rate) {
   if (tau == 0) {  // what the formulas below give exactly, without their work
     FilterState y = x;
     y.t = imu[k].t;
@@ -350,7 +358,10 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
   w[0] = imu[k].gyro;
   f[0] = imu[k].accel;
   for (int i = 1; i < 4; ++i)
-    interpolateImu(imu, t + s[static_cast<std::size_t>(i)], w[i], f[i], k);
+    interpolateImu(imu, t + s[static_cast<std::size_t>(i)], w[i], f[i], k,
+                   i == 3 ? gyro_rate : nullptr);
+  gyro = w[3];
+  accel = f[3];
   for (int i = 0; i < 4; ++i) {
     w[static_cast<std::size_t>(i)] -= x.b_g;
     f[static_cast<std::size_t>(i)] -= x.b_a;
@@ -425,15 +436,27 @@ DopplerInertialFilter::MatS DopplerInertialFilter::numericalTransitionJacobian(
 Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
                                           std::size_t k, double tau,
                                           Eigen::Matrix<double, 3, kStateDim>* J) const {
+  const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
+  if (J == nullptr) return lidarVelocity(x, imu, k, tau, R_bl, nullptr, nullptr);
+  const Mat3 Jr_phi = rightJacobian(x.phi_bl);
+  return lidarVelocity(x, imu, k, tau, R_bl, &Jr_phi, J);
+}
+
+Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
+                                          std::size_t k, double tau, const Mat3& R_bl,
+                                          const Mat3* Jr_phi,
+                                          Eigen::Matrix<double, 3, kStateDim>* J) const {
   const double tau_true = tau - x.dt_l;
   MatS Js;
-  const FilterState y = integrate(x, imu, k, tau_true, J != nullptr ? &Js : nullptr);
+  // The IMU at the LiDAR time: the node's sample at tau_true = 0 (interpolated there too for the
+  // rate), otherwise the integration's own interpolation at its end (the same time and hint).
   Vec3 gyro = imu[k].gyro, accel = imu[k].accel, alpha = Vec3::Zero();
-  if (tau_true != 0 || J != nullptr)
-    interpolateImu(imu, imu[k].t + tau_true, gyro, accel, k, J != nullptr ? &alpha : nullptr);
+  const FilterState y = integrate(x, imu, k, tau_true, J != nullptr ? &Js : nullptr, gyro, accel,
+                                  J != nullptr ? &alpha : nullptr);
+  if (tau_true == 0 && J != nullptr)
+    interpolateImu(imu, imu[k].t + tau_true, gyro, accel, k, &alpha);
   const Vec3 omega = gyro - x.b_g;
   const Vec3 v_b = y.R_wb.transpose() * y.v_w;
-  const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
   const Vec3 v_l = R_bl.transpose() * (v_b + omega.cross(p_bl_));
   if (J != nullptr) {
     // dv_b = R^T dv_w + [v_b]x dtheta;  dv_l = R_bl^T (dv_b + [p_bl]x db_g) + [v_l]x dphi_bl
@@ -445,7 +468,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
     *J = Rlb * dvb;
     J->block<3, 3>(0, kBg) += Rlb * skew(p_bl_);
     // The correction is additive (phi_bl + dphi): Exp(phi + dphi) = Exp(phi) Exp(J_r(phi) dphi).
-    J->block<3, 3>(0, kRot) = skew(v_l) * rightJacobian(x.phi_bl);
+    J->block<3, 3>(0, kRot) = skew(v_l) * *Jr_phi;
     // dv_l/dt = R_bl^T (a_b - omega x v_b + alpha x p_bl), a_b = f - b_a + R^T g (the angular
     // acceleration alpha: the derivative of the interpolated gyro), and
     // dv_l/d(dt_l) = -dv_l/dt.
@@ -463,8 +486,13 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   Vec9 Q = Vec9::Zero();
   if (G != nullptr) G->setZero();
   Eigen::Matrix<double, 3, kStateDim> J;
+  // The corrected extrinsic rotation and its right Jacobian, alike at the three instants.
+  const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
+  Mat3 Jr_phi;
+  if (G != nullptr) Jr_phi = rightJacobian(x.phi_bl);
   for (int i = 0; i < 3; ++i) {
-    const Vec3 v = lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, G != nullptr ? &J : nullptr);
+    const Vec3 v = lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, R_bl,
+                                 G != nullptr ? &Jr_phi : nullptr, G != nullptr ? &J : nullptr);
     for (int m = 0; m < 3; ++m) {
       Q.segment<3>(3 * m) += Vinv(m, i) * v;
       if (G != nullptr) G->middleRows<3>(3 * m) += Vinv(m, i) * J;

@@ -368,6 +368,15 @@ class DopplerInertialFilter {
 
   /// Q = [q0; q1; q2] of node n at state x, optionally with its Jacobian dQ/ddx (9x19).
   Vec9 velocityPolynomial(const Node& n, const FilterState& x, Mat9xS* G) const;
+  /// integrate(), and (when tau != 0) the IMU interpolated at its end, as interpolateImu(imu,
+  /// imu[k].t + tau, gyro, accel, k, gyro_rate) gives them (gyro_rate may be null).
+  static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
+                               std::size_t k, double tau, MatS* J, Vec3& gyro, Vec3& accel,
+                               Vec3* gyro_rate);
+  /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given.
+  Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
+                     double tau, const Mat3& R_bl, const Mat3* Jr_phi,
+                     Eigen::Matrix<double, 3, kStateDim>* J) const;
   MatS processNoise(double dt) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
