@@ -319,6 +319,32 @@ std::size_t DopplerInertialFilter::interpolationSpan(const std::vector<ImuSample
 
 void DopplerInertialFilter::lagrangeWeights(const std::vector<ImuSample>& imu, double t,
                                             std::size_t lo, std::size_t hi, double* w, double* dw) {
+  constexpr std::size_t kMaxSpan = 4;  // what interpolationSpan() gives
+  const std::size_t span = hi - lo + 1;
+  if (span <= kMaxSpan) {
+    // The same operations as the general loop below, each difference and inverse once: t - t_m
+    // is alike for every i, and 1 / (t_m - t_i) = -(1 / (t_i - t_m)) exactly (IEEE rounding is
+    // symmetric), so the inverses of the pairs i > m are the negated ones of i < m.
+    double dt[kMaxSpan], inv[kMaxSpan][kMaxSpan];
+    for (std::size_t a = 0; a < span; ++a) dt[a] = t - imu[lo + a].t;
+    for (std::size_t a = 0; a < span; ++a)
+      for (std::size_t b = a + 1; b < span; ++b) {
+        inv[a][b] = 1.0 / (imu[lo + a].t - imu[lo + b].t);
+        inv[b][a] = -inv[a][b];
+      }
+    for (std::size_t a = 0; a < span; ++a) {
+      double wi = 1.0, dwi = 0.0;
+      for (std::size_t b = 0; b < span; ++b) {
+        if (b == a) continue;
+        const double f = dt[b] * inv[a][b];
+        dwi = dwi * f + wi * inv[a][b];
+        wi *= f;
+      }
+      w[a] = wi;
+      dw[a] = dwi;
+    }
+    return;
+  }
   for (std::size_t i = lo; i <= hi; ++i) {
     // Lagrange basis polynomial of node i at t, and its derivative (product rule).
     double wi = 1.0, dwi = 0.0;
