@@ -242,6 +242,35 @@ void startAtTruth(freeinit::DopplerInertialFilter& filter, const freeinit::sim::
   filter.start(x0, prior);
 }
 
+/// One forward pass of the filter over the window from the truth (startAtTruth) to node k_end:
+/// per node beginNode, take(filter, t_k, t_k + intervalAfter(), last) hands over the node's
+/// returns and gives their count, then update and predict. Returns the returns taken.
+template <class Take>
+std::int64_t forwardPass(const freeinit::sim::Recording& rec,
+                         const freeinit::DopplerInertialFilterParams& fp, std::size_t k_end,
+                         Take&& take) {
+  freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
+  startAtTruth(filter, rec, k_end);
+  std::int64_t points = 0;
+  for (std::size_t k = 0;; ++k) {
+    const bool last = k == k_end;
+    filter.beginNode(last);
+    const double t_k = rec.imu[k].t;
+    points += take(filter, t_k, t_k + filter.intervalAfter(), last);
+    filter.update();
+    if (last) break;
+    filter.predict();
+  }
+  benchmark::DoNotOptimize(filter.state(filter.nodes() - 1).v_w.data());
+  return points;
+}
+
+/// items_per_second: returns per second; "points": returns per iteration.
+void reportReturns(benchmark::State& state, std::int64_t points) {
+  state.SetItemsProcessed(points);
+  state.counters["points"] = static_cast<double>(points) / static_cast<double>(state.iterations());
+}
+
 /// The joint estimator's forward pass over the 0.5 s window alone (no start decision, no
 /// smoothing), started at the truth: per node beginNode, every return of its interval through
 /// addPoint (gate and sums), update (solve, second gate with the coherence test, solve again),
@@ -268,25 +297,20 @@ void BM_JointForwardPass(benchmark::State& state, const std::string& name, bool 
   const std::size_t k_end = lastNodeOfWindow(rec, cfg);
   std::int64_t points = 0;
   for (auto _ : state) {
-    freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
-    startAtTruth(filter, rec, k_end);
     std::size_t j = 0;
     while (j < returns.size() && returns[j].t < t0) ++j;
-    for (std::size_t k = 0;; ++k) {
-      const bool last = k == k_end;
-      filter.beginNode(last);
-      const double t_k = rec.imu[k].t, hi = t_k + filter.intervalAfter();
-      for (; with_points && j < returns.size() && (last ? returns[j].t <= t_k : returns[j].t < hi);
-           ++j, ++points)
-        filter.addPoint(returns[j].t - t_k, returns[j].p_l, returns[j].doppler);
-      filter.update();
-      if (last) break;
-      filter.predict();
-    }
-    benchmark::DoNotOptimize(filter.state(filter.nodes() - 1).v_w.data());
+    points +=
+        forwardPass(rec, fp, k_end,
+                    [&](freeinit::DopplerInertialFilter& filter, double t_k, double hi, bool last) {
+                      const std::size_t first = j;
+                      for (; with_points && j < returns.size() &&
+                             (last ? returns[j].t <= t_k : returns[j].t < hi);
+                           ++j)
+                        filter.addPoint(returns[j].t - t_k, returns[j].p_l, returns[j].doppler);
+                      return static_cast<std::int64_t>(j - first);
+                    });
   }
-  state.SetItemsProcessed(points);
-  state.counters["points"] = static_cast<double>(points) / static_cast<double>(state.iterations());
+  reportReturns(state, points);
 }
 
 /// BM_JointForwardPass with the returns handed over as the joint pipeline does with every point
@@ -307,37 +331,32 @@ void BM_JointForwardPassFrameRuns(benchmark::State& state, const std::string& na
   };
   std::int64_t points = 0;
   for (auto _ : state) {
-    freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
-    startAtTruth(filter, rec, k_end);
     std::size_t f = 0, j = 0;  // the next return: frame f, index j
-    for (std::size_t k = 0;; ++k) {
-      const bool last = k == k_end;
-      filter.beginNode(last);
-      const double t_k = rec.imu[k].t, hi = t_k + filter.intervalAfter();
+    auto take = [&](freeinit::DopplerInertialFilter& filter, double t_k, double hi, bool last) {
+      std::int64_t taken = 0;
       for (; f < rec.frames.size(); ++f, j = 0) {
         const auto& pts = rec.frames[f].points;
         const double stamp = rec.frames[f].stamp;
         std::size_t run = j;
+        auto flush = [&] {
+          if (j > run) filter.addPoints(&pts[run], j - run, stamp, t_k);
+          taken += static_cast<std::int64_t>(j - run);
+        };
         for (; j < pts.size(); ++j) {
           const double t = stamp + static_cast<double>(pts[j].time_offset);
           if (last ? t > t_k : t >= hi) break;
           if (t >= t0 && in_range(pts[j])) continue;
-          if (j > run) filter.addPoints(&pts[run], j - run, stamp, t_k);
-          points += static_cast<std::int64_t>(j - run);
+          flush();
           run = j + 1;
         }
-        if (j > run) filter.addPoints(&pts[run], j - run, stamp, t_k);
-        points += static_cast<std::int64_t>(j - run);
+        flush();
         if (j < pts.size()) break;
       }
-      filter.update();
-      if (last) break;
-      filter.predict();
-    }
-    benchmark::DoNotOptimize(filter.state(filter.nodes() - 1).v_w.data());
+      return taken;
+    };
+    points += forwardPass(rec, fp, k_end, take);
   }
-  state.SetItemsProcessed(points);
-  state.counters["points"] = static_cast<double>(points) / static_cast<double>(state.iterations());
+  reportReturns(state, points);
 }
 
 }  // namespace
