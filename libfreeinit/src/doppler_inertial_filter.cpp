@@ -851,12 +851,11 @@ void DopplerInertialFilter::marginalizeLeverNoise(const Node& n, Mat9& A, Vec9& 
 
 template <int D, int R>
 DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
-    const Eigen::Matrix<double, R, kStateDim>& H_full, const Eigen::Matrix<double, R, 1>& r0,
+    const Eigen::Matrix<double, R, D>& H, const Eigen::Matrix<double, R, 1>& r0,
     const VecS& dx_prior, MatS& P) {
   // On the first D components (the others constant, uncorrelated, and without effect here when
   // D < 19); residual r0 + H dx, unit noise. Coefficient-based products: at these sizes they
   // beat the blocked kernels.
-  const Eigen::Matrix<double, R, D> H = H_full.template leftCols<D>();
   const Eigen::Matrix<double, R, 1> innovation = -r0 - H * dx_prior.template head<D>();
   const Eigen::Matrix<double, R, D> HP = H.lazyProduct(P.template topLeftCorner<D, D>());
   Eigen::Matrix<double, R, R> S = HP.lazyProduct(H.transpose());
@@ -885,10 +884,15 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
   Vec9 y0 = Vec9::Zero();
   W.topRows(rows) = n.rows.W;
   y0.head(rows) = n.rows.y0;
-  const Mat9xS H = W.lazyProduct(G);
+  // H = W G on the components updated only (the calibration's columns are not needed when it
+  // is declared exact).
   const Vec9 r0 = W * Q + y0;
-  return active_ == kStateDim || full ? kalmanUpdate<kStateDim, 9>(H, r0, dx_prior, P)
-                                      : kalmanUpdate<kCoreDim, 9>(H, r0, dx_prior, P);
+  if (active_ == kStateDim || full) {
+    const Mat9xS H = W.lazyProduct(G);
+    return kalmanUpdate<kStateDim, 9>(H, r0, dx_prior, P);
+  }
+  const Eigen::Matrix<double, 9, kCoreDim> H = W.lazyProduct(G.leftCols<kCoreDim>());
+  return kalmanUpdate<kCoreDim, 9>(H, r0, dx_prior, P);
 }
 
 void DopplerInertialFilter::update() {
@@ -1033,8 +1037,11 @@ DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, con
     r.tail<3>() = -w * (gyro - x.b_g);
   }
   // The step is relative to x_lin + dx: its own prior mean is zero, then it is added to dx.
-  const VecS step = active_ == kStateDim || full ? kalmanUpdate<kStateDim, 6>(H, r, VecS::Zero(), P)
-                                                 : kalmanUpdate<kCoreDim, 6>(H, r, VecS::Zero(), P);
+  using HCore = Eigen::Matrix<double, 6, kCoreDim>;
+  const VecS step =
+      active_ == kStateDim || full
+          ? kalmanUpdate<kStateDim, 6>(H, r, VecS::Zero(), P)
+          : kalmanUpdate<kCoreDim, 6>(HCore(H.leftCols<kCoreDim>()), r, VecS::Zero(), P);
   return dx + step;
 }
 

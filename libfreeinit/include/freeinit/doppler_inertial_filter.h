@@ -396,9 +396,9 @@ class DopplerInertialFilter {
   /// Rest update of the error dx (relative to x_lin, covariance P) at node n.
   VecS restUpdate(const Node& n, const Vec3& gyro, const FilterState& x_lin, const VecS& dx,
                   MatS& P, bool full = false) const;
-  /// The update of the first D components with R whitened rows r0 + H dx.
+  /// The update of the first D components with R whitened rows r0 + H dx (H: their columns).
   template <int D, int R>
-  static VecS kalmanUpdate(const Eigen::Matrix<double, R, kStateDim>& H,
+  static VecS kalmanUpdate(const Eigen::Matrix<double, R, D>& H,
                            const Eigen::Matrix<double, R, 1>& r0, const VecS& dx_prior, MatS& P);
 
   DopplerInertialFilterParams params_;
