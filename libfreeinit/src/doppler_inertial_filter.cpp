@@ -371,6 +371,35 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
                                              double tau, MatS* J, Vec3& gyro, Vec3& accel,
                                              Vec3* gyro_rate) {
+  if (tau == 0) return integrate(x, imu, k, tau, J, ImuAlong{});
+  ImuAlong along;
+  sampleImu(imu, k, tau, along);
+  gyro = along.gyro[2];
+  accel = along.accel[2];
+  if (gyro_rate != nullptr) *gyro_rate = along.gyro_rate;
+  return integrate(x, imu, k, tau, J, along);
+}
+
+void DopplerInertialFilter::sampleImu(const std::vector<ImuSample>& imu, std::size_t k, double tau,
+                                      ImuAlong& along) {
+  const double t = imu[k].t;
+  const std::array<double, 3> s = {0.25 * tau, 0.5 * tau, tau};
+  for (std::size_t i = 0; i < 3; ++i)
+    interpolateImu(imu, t + s[i], along.gyro[i], along.accel[i], k,
+                   i == 2 ? &along.gyro_rate : nullptr);
+  along.tau = tau;
+  along.samples = imu.size();
+}
+
+const DopplerInertialFilter::ImuAlong& DopplerInertialFilter::imuAlong(
+    const std::vector<ImuSample>& imu, std::size_t k, double tau, ImuAlong& cache) {
+  if (!(cache.tau == tau && cache.samples == imu.size())) sampleImu(imu, k, tau, cache);
+  return cache;
+}
+
+FilterState DopplerInertialFilter::integrate(const FilterState& x,
+                                             const std::vector<ImuSample>& imu, std::size_t k,
+                                             double tau, MatS* J, const ImuAlong& along) {
   if (tau == 0) {  // what the formulas below give exactly, without their work
     FilterState y = x;
     y.t = imu[k].t;
@@ -380,14 +409,12 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
   // Rates at s = 0, tau/4, tau/2, tau (the node's own sample at s = 0).
   const double t = imu[k].t;
   std::array<Vec3, 4> w, f;
-  const std::array<double, 4> s = {0.0, 0.25 * tau, 0.5 * tau, tau};
   w[0] = imu[k].gyro;
   f[0] = imu[k].accel;
-  for (int i = 1; i < 4; ++i)
-    interpolateImu(imu, t + s[static_cast<std::size_t>(i)], w[i], f[i], k,
-                   i == 3 ? gyro_rate : nullptr);
-  gyro = w[3];
-  accel = f[3];
+  for (std::size_t i = 1; i < 4; ++i) {
+    w[i] = along.gyro[i - 1];
+    f[i] = along.accel[i - 1];
+  }
   for (int i = 0; i < 4; ++i) {
     w[static_cast<std::size_t>(i)] -= x.b_g;
     f[static_cast<std::size_t>(i)] -= x.b_a;
@@ -438,6 +465,13 @@ FilterState DopplerInertialFilter::propagate(const FilterState& x,
   return y;
 }
 
+FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x, MatS* F) const {
+  const double tau = imu_[n.k + 1].t - imu_[n.k].t;
+  FilterState y = integrate(x, imu_, n.k, tau, F, imuAlong(imu_, n.k, tau, n.step_imu));
+  y.t = imu_[n.k + 1].t;
+  return y;
+}
+
 DopplerInertialFilter::MatS DopplerInertialFilter::transitionJacobian(
     const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k) {
   MatS F;
@@ -463,22 +497,32 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
                                           std::size_t k, double tau,
                                           Eigen::Matrix<double, 3, kStateDim>* J) const {
   const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
-  if (J == nullptr) return lidarVelocity(x, imu, k, tau, R_bl, nullptr, nullptr);
+  if (J == nullptr) return lidarVelocity(x, imu, k, tau, R_bl, nullptr, nullptr, nullptr);
   const Mat3 Jr_phi = rightJacobian(x.phi_bl);
-  return lidarVelocity(x, imu, k, tau, R_bl, &Jr_phi, J);
+  return lidarVelocity(x, imu, k, tau, R_bl, &Jr_phi, J, nullptr);
 }
 
 Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
                                           std::size_t k, double tau, const Mat3& R_bl,
                                           const Mat3* Jr_phi,
-                                          Eigen::Matrix<double, 3, kStateDim>* J) const {
+                                          Eigen::Matrix<double, 3, kStateDim>* J,
+                                          ImuAlong* cache) const {
   const double tau_true = tau - x.dt_l;
   MatS Js;
   // The IMU at the LiDAR time: the node's sample at tau_true = 0 (interpolated there too for the
   // rate), otherwise the integration's own interpolation at its end (the same time and hint).
   Vec3 gyro = imu[k].gyro, accel = imu[k].accel, alpha = Vec3::Zero();
-  const FilterState y = integrate(x, imu, k, tau_true, J != nullptr ? &Js : nullptr, gyro, accel,
-                                  J != nullptr ? &alpha : nullptr);
+  MatS* Jy = J != nullptr ? &Js : nullptr;
+  FilterState y;
+  if (cache != nullptr && tau_true != 0) {
+    const ImuAlong& along = imuAlong(imu, k, tau_true, *cache);
+    y = integrate(x, imu, k, tau_true, Jy, along);
+    gyro = along.gyro[2];
+    accel = along.accel[2];
+    alpha = along.gyro_rate;
+  } else {
+    y = integrate(x, imu, k, tau_true, Jy, gyro, accel, J != nullptr ? &alpha : nullptr);
+  }
   if (tau_true == 0 && J != nullptr)
     interpolateImu(imu, imu[k].t + tau_true, gyro, accel, k, &alpha);
   const Vec3 omega = gyro - x.b_g;
@@ -517,8 +561,9 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   Mat3 Jr_phi;
   if (G != nullptr) Jr_phi = rightJacobian(x.phi_bl);
   for (int i = 0; i < 3; ++i) {
-    const Vec3 v = lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, R_bl,
-                                 G != nullptr ? &Jr_phi : nullptr, G != nullptr ? &J : nullptr);
+    const Vec3 v =
+        lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, R_bl, G != nullptr ? &Jr_phi : nullptr,
+                      G != nullptr ? &J : nullptr, &n.fit_imu[static_cast<std::size_t>(i)]);
     for (int m = 0; m < 3; ++m) {
       Q.segment<3>(3 * m) += Vinv(m, i) * v;
       if (G != nullptr) G->middleRows<3>(3 * m) += Vinv(m, i) * J;
@@ -617,7 +662,7 @@ void DopplerInertialFilter::predict() {
   Node n;
   n.k = cur.k + 1;
   MatS F;
-  n.x_pred = propagate(cur.x, imu_, cur.k, &F);
+  n.x_pred = propagate(cur, cur.x, &F);
   n.P = (active_ == kStateDim ? propagateCovariance<kStateDim>(F, cur.P)
                               : propagateCovariance<kCoreDim>(F, cur.P)) +
         processNoise(imu_[n.k].t - imu_[cur.k].t);
@@ -1089,7 +1134,7 @@ int DopplerInertialFilter::smooth() {
       P_f[k] = P;
       if (k + 1 == N) break;
       const Node& m = nodes_[k + 1];
-      const FilterState x_next = propagate(n.xs, imu_, n.k, &F[k]);
+      const FilterState x_next = propagate(n, n.xs, &F[k]);
       dx_p[k + 1] = F[k] * dx_f[k] + boxminus(x_next, m.xs);
       P_p[k + 1] = (active_ == kStateDim ? propagateCovariance<kStateDim>(F[k], P)
                                          : propagateCovariance<kCoreDim>(F[k], P)) +
@@ -1157,7 +1202,7 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
     if (k + 1 == N) break;
     const Node& m = nodes_[k + 1];
     MatS F;
-    const FilterState x_next = propagate(n.xs, imu_, n.k, &F);
+    const FilterState x_next = propagate(n, n.xs, &F);
     dx = F * dx + boxminus(x_next, m.xs);
     P = propagateCovariance<kStateDim>(F, P) + processNoise(imu_[m.k].t - imu_[n.k].t);
   }

@@ -48,6 +48,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace freeinit {
@@ -311,6 +312,20 @@ class DopplerInertialFilter {
     Eigen::Matrix<double, Eigen::Dynamic, 1, 0, 9, 1> y0;
   };
 
+  /// The IMU along one integration from a sample over tau (tau != 0): gyro and accelerometer
+  /// interpolated at tau / 4, tau / 2 and tau, the gyro's rate at tau; what integrate() reads.
+  struct ImuAlong {
+    double tau = std::numeric_limits<double>::quiet_NaN();  ///< [s] what it holds (NaN: nothing)
+    std::size_t samples = 0;  ///< the IMU samples there were (with fewer, lower orders)
+    std::array<Vec3, 3> gyro, accel;
+    Vec3 gyro_rate = Vec3::Zero();
+  };
+  static void sampleImu(const std::vector<ImuSample>& imu, std::size_t k, double tau,
+                        ImuAlong& along);
+  /// cache, sampled again unless it holds tau from sample k with as many samples as there are.
+  static const ImuAlong& imuAlong(const std::vector<ImuSample>& imu, std::size_t k, double tau,
+                                  ImuAlong& cache);
+
   struct Node {
     FilterState x;       ///< filtered
     FilterState xs;      ///< smoothed
@@ -327,6 +342,12 @@ class DopplerInertialFilter {
     double rest_velocity_sigma = 0;  ///< > 0: zero body velocity at the node
     double rest_rate_sigma = 0;      ///< > 0: the node's gyro sample measures the bias
     bool rows_stale = false;         ///< the sums changed after the rows were built
+    /// The IMU along the integrations every linearization of the node repeats (to its three fit
+    /// instants, to the next node): they depend on the IMU and the clock offset only, not on
+    /// the state, so the smoother's iterations sample it once (a cache; the filter is not for
+    /// concurrent use).
+    mutable std::array<ImuAlong, 3> fit_imu;
+    mutable ImuAlong step_imu;
   };
 
   /// Adds `count` returns (normalized time, unit direction, Doppler) to the sums.
@@ -373,10 +394,16 @@ class DopplerInertialFilter {
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
                                std::size_t k, double tau, MatS* J, Vec3& gyro, Vec3& accel,
                                Vec3* gyro_rate);
-  /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given.
+  /// integrate() with the IMU along the span given (sampled over tau from sample k).
+  static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
+                               std::size_t k, double tau, MatS* J, const ImuAlong& along);
+  /// propagate() from node n (its IMU sampled once).
+  FilterState propagate(const Node& n, const FilterState& x, MatS* F) const;
+  /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
+  /// given): the IMU along the integration, as imuAlong() keeps it.
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
                      double tau, const Mat3& R_bl, const Mat3* Jr_phi,
-                     Eigen::Matrix<double, 3, kStateDim>* J) const;
+                     Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache) const;
   MatS processNoise(double dt) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
