@@ -901,17 +901,25 @@ DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
   // On the first D components (the others constant, uncorrelated, and without effect here when
   // D < 19); residual r0 + H dx, unit noise. Coefficient-based products: at these sizes they
   // beat the blocked kernels.
+  // Neither the Doppler nor the rest depends on the position: H's position columns are zero,
+  // and the products skip them (a fifth of H P and of H P H^T).
+  constexpr int kAfter = D - kVel;  // the components after the position
+  const auto H_th = H.template leftCols<3>();
+  const auto H_af = H.template rightCols<kAfter>();
+  const auto P_d = P.template topLeftCorner<D, D>();
   const Eigen::Matrix<double, R, 1> innovation = -r0 - H * dx_prior.template head<D>();
-  const Eigen::Matrix<double, R, D> HP = H.lazyProduct(P.template topLeftCorner<D, D>());
-  Eigen::Matrix<double, R, R> S = HP.lazyProduct(H.transpose());
+  const Eigen::Matrix<double, R, D> HP = H_th.lazyProduct(P_d.template topRows<3>()) +
+                                         H_af.lazyProduct(P_d.template bottomRows<kAfter>());
+  Eigen::Matrix<double, R, R> S = HP.template leftCols<3>().lazyProduct(H_th.transpose()) +
+                                  HP.template rightCols<kAfter>().lazyProduct(H_af.transpose());
   S.diagonal().array() += 1.0;  // S >= I: the Cholesky factorization cannot fail
   Eigen::Matrix<double, D, R> K = HP.transpose();
   kalmanGainInPlace(S, K);
   VecS dx = dx_prior;
   dx.template head<D>() += K * innovation;
-  auto P_d = P.template topLeftCorner<D, D>();
-  P_d.noalias() -= K.lazyProduct(HP);
-  P_d = 0.5 * (P_d + P_d.transpose()).eval();
+  auto P_upd = P.template topLeftCorner<D, D>();
+  P_upd.noalias() -= K.lazyProduct(HP);
+  P_upd = 0.5 * (P_upd + P_upd.transpose()).eval();
   return dx;
 }
 
