@@ -81,12 +81,14 @@ struct DopplerInertialFilterParams {
   int max_iterations = 6;  ///< Gauss-Newton iterations after the forward pass, at most
   /// The smoother's iterations stop when no node moves by more than this many tolerances, or
   /// when the steps shrink tenfold or more and the next one, at the rate of the last two, would
-  /// be below (Gauss-Newton's convergence); the filter's own update iterations stop at a step
-  /// below them (at most two, and one after the second gate). The tolerances
-  /// being 1e-4 rad, 1e-3 m, 1e-4 m/s, 1e-5 rad/s, 1e-3 m/s^2 (for the calibration 1e-4 rad and
-  /// 1e-4 s): a twentieth or less of what the data resolve (the bounds of the randomized
-  /// scenarios are >= 0.002 m/s, 0.05 deg, 5e-4 rad/s and 0.01 m/s^2).
-  double convergence = 1.0;
+  /// be below (Gauss-Newton's convergence). The tolerances being 1e-4 rad, 1e-3 m, 1e-4 m/s,
+  /// 1e-5 rad/s, 1e-3 m/s^2 (for the calibration 1e-4 rad and 1e-4 s): a twentieth or less of
+  /// what the data resolve (the bounds of the randomized scenarios are >= 0.002 m/s, 0.05 deg,
+  /// 5e-4 rad/s and 0.01 m/s^2). Three of them: the step after a stop is far smaller than the
+  /// last (the convergence is quadratic); against one, the held-out seeds 15000001-200 moved by
+  /// at most 0.006 of their bound (most not at all), the presets by 0.007, for one smoother
+  /// iteration in eight fewer on dyna_05.
+  double convergence = 3.0;
 };
 
 /// The nominal state at one node.
