@@ -92,10 +92,6 @@ double stepInTolerances(const DopplerInertialFilter::VecS& dx) {
   return dx.cwiseAbs().cwiseQuotient(tol).maxCoeff();
 }
 
-bool negligibleStep(const DopplerInertialFilter::VecS& dx, double scale) {
-  return stepInTolerances(dx) < scale;
-}
-
 /// The velocity polynomial Q = [q0; q1; q2] and the covariance M of q0 that a node's returns
 /// are gated with, as scalars for the per-return loops.
 struct GatePrediction {
@@ -949,38 +945,29 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
 }
 
 void DopplerInertialFilter::update() {
-  // Iterations of each solve: the smoother re-linearizes every node afterwards, so the forward
-  // pass needs its update for the gates only. One, and one after the second gate (a step from the
-  // first solve), against two and one: median difference of error/bound 1e-4 (held-out seeds
+  // One Gauss-Newton step per solve: the smoother re-linearizes every node afterwards, so the
+  // forward pass needs its update for the gates only. One step, and one more from it after the
+  // second gate, against two and one: median difference of error/bound 1e-4 (held-out seeds
   // 15000001-300: no status changed, the same wrong results flagged; a few ill-posed ones that
-  // are flagged either way moved), for 5 % fewer instructions; three and three cost a quarter
-  // more forward work.
-  constexpr int kFirstIt = 1, kSecondIt = 1;
+  // are flagged either way moved), for 5 % fewer instructions.
   Node& n = nodes_.back();
   gateAndSum(n);
   const MatS P_pred = n.P;
-  // Iterated update: re-linearize at the updated state while the correction moves it by more
-  // than the tolerances, from x_start (the prediction, or the first solve's
-  // result when the second gate dropped a few points).
-  auto solve = [&](FilterState& x_out, MatS& P_out, const FilterState& x_start, int iterations) {
+  // The update linearized at x_start (the prediction, or the first solve's result when the
+  // second gate dropped a few points).
+  auto solve = [&](FilterState& x_out, MatS& P_out, const FilterState& x_start) {
     buildRows(n);
     P_out = P_pred;
     if (n.rows.W.rows() == 0) {
       x_out = n.x_pred;
       return;
     }
-    x_out = x_start;
-    for (int it = 0; it < iterations; ++it) {
-      P_out = P_pred;
-      const VecS dx_prior = boxminus(n.x_pred, x_out);
-      const VecS dx = dopplerUpdate(n, x_out, dx_prior, P_out);
-      x_out = boxplus(x_out, dx);
-      if (negligibleStep(dx, params_.convergence)) break;
-    }
+    const VecS dx = dopplerUpdate(n, x_start, boxminus(n.x_pred, x_start), P_out);
+    x_out = boxplus(x_start, dx);
   };
   FilterState x;
   MatS P;
-  solve(x, P, n.x_pred, kFirstIt);
+  solve(x, P, n.x_pred);
   // Second gate, against the update: the first one, against the prediction, must be wide where
   // the prediction is uncertain (the first nodes) and lets slow moving objects through; the
   // points are gated again at regate_sigma of their residual's std after the update (no floor,
@@ -1060,7 +1047,7 @@ void DopplerInertialFilter::update() {
     }
     if (dropped > 0) {
       const FilterState x_first = x;
-      solve(x, P, x_first, kSecondIt);
+      solve(x, P, x_first);
     }
   }
   n.x = n.xs = x;
