@@ -360,13 +360,17 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
                                              double tau, MatS* J) {
   Vec3 gyro, accel;
-  return integrate(x, imu, k, tau, J, gyro, accel, nullptr);
+  IntegrationJacobian blocks;
+  const FilterState y =
+      integrate(x, imu, k, tau, J != nullptr ? &blocks : nullptr, gyro, accel, nullptr);
+  if (J != nullptr) *J = blocks.matrix();
+  return y;
 }
 
 FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
-                                             double tau, MatS* J, Vec3& gyro, Vec3& accel,
-                                             Vec3* gyro_rate) {
+                                             double tau, IntegrationJacobian* J, Vec3& gyro,
+                                             Vec3& accel, Vec3* gyro_rate) {
   if (tau == 0) return integrate(x, imu, k, tau, J, ImuAlong{});
   ImuAlong along;
   sampleImu(imu, k, tau, along);
@@ -374,6 +378,20 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
   accel = along.accel[2];
   if (gyro_rate != nullptr) *gyro_rate = along.gyro_rate;
   return integrate(x, imu, k, tau, J, along);
+}
+
+DopplerInertialFilter::MatS DopplerInertialFilter::IntegrationJacobian::matrix() const {
+  MatS J = MatS::Identity();  // the biases and the calibration do not change between samples
+  J.block<3, 3>(kTheta, kTheta) = th_th;
+  J.block<3, 3>(kTheta, kBg) = th_bg;
+  J.block<3, 3>(kVel, kTheta) = v_th;
+  J.block<3, 3>(kVel, kBg) = v_bg;
+  J.block<3, 3>(kVel, kBa) = v_ba;
+  J.block<3, 3>(kPos, kVel) = tau * Mat3::Identity();
+  J.block<3, 3>(kPos, kTheta) = p_th;
+  J.block<3, 3>(kPos, kBg) = p_bg;
+  J.block<3, 3>(kPos, kBa) = p_ba;
+  return J;
 }
 
 void DopplerInertialFilter::sampleImu(const std::vector<ImuSample>& imu, std::size_t k, double tau,
@@ -395,11 +413,12 @@ const DopplerInertialFilter::ImuAlong& DopplerInertialFilter::imuAlong(
 
 FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
-                                             double tau, MatS* J, const ImuAlong& along) {
+                                             double tau, IntegrationJacobian* J,
+                                             const ImuAlong& along) {
   if (tau == 0) {  // what the formulas below give exactly, without their work
     FilterState y = x;
     y.t = imu[k].t;
-    if (J != nullptr) J->setIdentity();
+    if (J != nullptr) *J = IntegrationJacobian{};
     return y;
   }
   // Rates at s = 0, tau/4, tau/2, tau (the node's own sample at s = 0).
@@ -438,17 +457,16 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
     const Mat3 a0_th = -x.R_wb * skew(f[0]), a0_ba = -x.R_wb;
     const Mat3 ah_th = -R_h * skew(f[2]) * th_h, ah_bg = -R_h * skew(f[2]) * bg_h, ah_ba = -R_h;
     const Mat3 a1_th = -R_1 * skew(f[3]) * th_1, a1_bg = -R_1 * skew(f[3]) * bg_1, a1_ba = -R_1;
-    J->setIdentity();  // the biases and the calibration do not change between samples
-    J->block<3, 3>(0, 0) = th_1;
-    J->block<3, 3>(0, 9) = bg_1;
+    J->tau = tau;
+    J->th_th = th_1;
+    J->th_bg = bg_1;
     const double cv = tau / 6.0, cp = tau * tau / 6.0;
-    J->block<3, 3>(6, 0) = cv * (a0_th + 4.0 * ah_th + a1_th);
-    J->block<3, 3>(6, 9) = cv * (4.0 * ah_bg + a1_bg);
-    J->block<3, 3>(6, 12) = cv * (a0_ba + 4.0 * ah_ba + a1_ba);
-    J->block<3, 3>(3, 6) = tau * Mat3::Identity();
-    J->block<3, 3>(3, 0) = cp * (a0_th + 2.0 * ah_th);
-    J->block<3, 3>(3, 9) = cp * 2.0 * ah_bg;
-    J->block<3, 3>(3, 12) = cp * (a0_ba + 2.0 * ah_ba);
+    J->v_th = cv * (a0_th + 4.0 * ah_th + a1_th);
+    J->v_bg = cv * (4.0 * ah_bg + a1_bg);
+    J->v_ba = cv * (a0_ba + 4.0 * ah_ba + a1_ba);
+    J->p_th = cp * (a0_th + 2.0 * ah_th);
+    J->p_bg = cp * 2.0 * ah_bg;
+    J->p_ba = cp * (a0_ba + 2.0 * ah_ba);
   }
   return y;
 }
@@ -463,7 +481,10 @@ FilterState DopplerInertialFilter::propagate(const FilterState& x,
 
 FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x, MatS* F) const {
   const double tau = imu_[n.k + 1].t - imu_[n.k].t;
-  FilterState y = integrate(x, imu_, n.k, tau, F, imuAlong(imu_, n.k, tau, n.step_imu));
+  IntegrationJacobian blocks;
+  FilterState y = integrate(x, imu_, n.k, tau, F != nullptr ? &blocks : nullptr,
+                            imuAlong(imu_, n.k, tau, n.step_imu));
+  if (F != nullptr) *F = blocks.matrix();
   y.t = imu_[n.k + 1].t;
   return y;
 }
@@ -504,11 +525,11 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
                                           Eigen::Matrix<double, 3, kStateDim>* J,
                                           ImuAlong* cache) const {
   const double tau_true = tau - x.dt_l;
-  MatS Js;
+  IntegrationJacobian Js;
   // The IMU at the LiDAR time: the node's sample at tau_true = 0 (interpolated there too for the
   // rate), otherwise the integration's own interpolation at its end (the same time and hint).
   Vec3 gyro = imu[k].gyro, accel = imu[k].accel, alpha = Vec3::Zero();
-  MatS* Jy = J != nullptr ? &Js : nullptr;
+  IntegrationJacobian* Jy = J != nullptr ? &Js : nullptr;
   FilterState y;
   if (cache != nullptr && tau_true != 0) {
     const ImuAlong& along = imuAlong(imu, k, tau_true, *cache);
@@ -527,11 +548,16 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   if (J != nullptr) {
     // dv_b = R^T dv_w + [v_b]x dtheta;  dv_l = R_bl^T (dv_b + [p_bl]x db_g) + [v_l]x dphi_bl
     // ((R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T); d/d(dt_l) = -dv_l/dtau.
+    // Only the attitude and velocity rows of the integration's Jacobian are read, and of those
+    // only the blocks of dtheta, dv, db_g and db_a are not zero.
     const Mat3 Rt = y.R_wb.transpose();
     const Mat3 Rlb = R_bl.transpose();
-    const Eigen::Matrix<double, 3, kStateDim> dvb =
-        Rt * Js.middleRows<3>(kVel) + skew(v_b) * Js.topRows<3>();
-    *J = Rlb * dvb;
+    const Mat3 S_vb = skew(v_b);
+    J->block<3, 3>(0, kPos).setZero();
+    J->block<3, 3>(0, kTheta) = Rlb * Mat3(Rt * Js.v_th + S_vb * Js.th_th);
+    J->block<3, 3>(0, kVel) = Rlb * Rt;
+    J->block<3, 3>(0, kBg) = Rlb * Mat3(Rt * Js.v_bg + S_vb * Js.th_bg);
+    J->block<3, 3>(0, kBa) = Rlb * Mat3(Rt * Js.v_ba);
     J->block<3, 3>(0, kBg) += Rlb * skew(p_bl_);
     // The correction is additive (phi_bl + dphi): Exp(phi + dphi) = Exp(phi) Exp(J_r(phi) dphi).
     J->block<3, 3>(0, kRot) = skew(v_l) * *Jr_phi;

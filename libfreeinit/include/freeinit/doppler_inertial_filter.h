@@ -391,14 +391,25 @@ class DopplerInertialFilter {
 
   /// Q = [q0; q1; q2] of node n at state x, optionally with its Jacobian dQ/ddx (9x19).
   Vec9 velocityPolynomial(const Node& n, const FilterState& x, Mat9xS* G) const;
+  /// The blocks of integrate()'s Jacobian that are not those of the identity: the rows of
+  /// dtheta, dp and dv against dtheta, db_g and db_a (dp against dv is tau I; every other block
+  /// is the identity's). Those who read a few rows (lidarVelocity) take them without the 19x19.
+  struct IntegrationJacobian {
+    Mat3 th_th = Mat3::Identity(), th_bg = Mat3::Zero();
+    Mat3 v_th = Mat3::Zero(), v_bg = Mat3::Zero(), v_ba = Mat3::Zero();
+    Mat3 p_th = Mat3::Zero(), p_bg = Mat3::Zero(), p_ba = Mat3::Zero();
+    double tau = 0;
+    MatS matrix() const;
+  };
   /// integrate(), and (when tau != 0) the IMU interpolated at its end, as interpolateImu(imu,
   /// imu[k].t + tau, gyro, accel, k, gyro_rate) gives them (gyro_rate may be null).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
-                               std::size_t k, double tau, MatS* J, Vec3& gyro, Vec3& accel,
-                               Vec3* gyro_rate);
+                               std::size_t k, double tau, IntegrationJacobian* J, Vec3& gyro,
+                               Vec3& accel, Vec3* gyro_rate);
   /// integrate() with the IMU along the span given (sampled over tau from sample k).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
-                               std::size_t k, double tau, MatS* J, const ImuAlong& along);
+                               std::size_t k, double tau, IntegrationJacobian* J,
+                               const ImuAlong& along);
   /// propagate() from node n (its IMU sampled once).
   FilterState propagate(const Node& n, const FilterState& x, MatS* F) const;
   /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
