@@ -369,6 +369,14 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
 
 FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
+                                             double tau, Vec3& gyro_end, Vec3& accel_end) {
+  gyro_end = imu[k].gyro;  // at tau = 0 the sample itself
+  accel_end = imu[k].accel;
+  return integrate(x, imu, k, tau, nullptr, gyro_end, accel_end, nullptr);
+}
+
+FilterState DopplerInertialFilter::integrate(const FilterState& x,
+                                             const std::vector<ImuSample>& imu, std::size_t k,
                                              double tau, IntegrationJacobian* J, Vec3& gyro,
                                              Vec3& accel, Vec3* gyro_rate) {
   if (tau == 0) return integrate(x, imu, k, tau, J, ImuAlong{});

@@ -445,9 +445,8 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
     if (sp.t < 0 || sp.t > T) continue;
     while (i + 1 < at.size() - 1 && imu[k_first + i + 1].t - t_ref <= sp.t) ++i;
     const double tau = sp.t - (imu[k_first + i].t - t_ref);
-    const FilterState xt = DopplerInertialFilter::integrate(at[i], span, j0 + i, tau);
-    Vec3 gyro, accel;
-    DopplerInertialFilter::interpolateImu(span, t_ref + sp.t, gyro, accel);
+    Vec3 gyro, accel;  // the IMU at the return, as the integration interpolated it
+    const FilterState xt = DopplerInertialFilter::integrate(at[i], span, j0 + i, tau, gyro, accel);
     gyro -= b_g_prior;
     const Mat3& R_t = xt.R_wb;
     const Vec3 C_t = xt.v_w - g_w * sp.t;
