@@ -359,10 +359,10 @@ void DopplerInertialFilter::lagrangeWeights(const std::vector<ImuSample>& imu, d
 FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
                                              double tau, MatS* J) {
-  Vec3 gyro, accel;
+  ImuAlong along;
+  if (tau != 0) sampleImu(imu, k, tau, along);
   IntegrationJacobian blocks;
-  const FilterState y =
-      integrate(x, imu, k, tau, J != nullptr ? &blocks : nullptr, gyro, accel, nullptr);
+  const FilterState y = integrate(x, imu, k, tau, J != nullptr ? &blocks : nullptr, along);
   if (J != nullptr) *J = blocks.matrix();
   return y;
 }
@@ -370,22 +370,15 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
 FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
                                              double tau, Vec3& gyro_end, Vec3& accel_end) {
+  ImuAlong along;
   gyro_end = imu[k].gyro;  // at tau = 0 the sample itself
   accel_end = imu[k].accel;
-  return integrate(x, imu, k, tau, nullptr, gyro_end, accel_end, nullptr);
-}
-
-FilterState DopplerInertialFilter::integrate(const FilterState& x,
-                                             const std::vector<ImuSample>& imu, std::size_t k,
-                                             double tau, IntegrationJacobian* J, Vec3& gyro,
-                                             Vec3& accel, Vec3* gyro_rate) {
-  if (tau == 0) return integrate(x, imu, k, tau, J, ImuAlong{});
-  ImuAlong along;
-  sampleImu(imu, k, tau, along);
-  gyro = along.gyro[2];
-  accel = along.accel[2];
-  if (gyro_rate != nullptr) *gyro_rate = along.gyro_rate;
-  return integrate(x, imu, k, tau, J, along);
+  if (tau != 0) {
+    sampleImu(imu, k, tau, along);
+    gyro_end = along.gyro[2];
+    accel_end = along.accel[2];
+  }
+  return integrate(x, imu, k, tau, nullptr, along);
 }
 
 DopplerInertialFilter::MatS DopplerInertialFilter::IntegrationJacobian::matrix() const {
@@ -539,17 +532,18 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   Vec3 gyro = imu[k].gyro, accel = imu[k].accel, alpha = Vec3::Zero();
   IntegrationJacobian* Jy = J != nullptr ? &Js : nullptr;
   FilterState y;
-  if (cache != nullptr && tau_true != 0) {
-    const ImuAlong& along = imuAlong(imu, k, tau_true, *cache);
+  if (tau_true == 0) {
+    y = integrate(x, imu, k, 0.0, Jy, ImuAlong{});
+    if (J != nullptr) interpolateImu(imu, imu[k].t, gyro, accel, k, &alpha);
+  } else {
+    ImuAlong sampled;
+    if (cache == nullptr) sampleImu(imu, k, tau_true, sampled);
+    const ImuAlong& along = cache != nullptr ? imuAlong(imu, k, tau_true, *cache) : sampled;
     y = integrate(x, imu, k, tau_true, Jy, along);
     gyro = along.gyro[2];
     accel = along.accel[2];
     alpha = along.gyro_rate;
-  } else {
-    y = integrate(x, imu, k, tau_true, Jy, gyro, accel, J != nullptr ? &alpha : nullptr);
   }
-  if (tau_true == 0 && J != nullptr)
-    interpolateImu(imu, imu[k].t + tau_true, gyro, accel, k, &alpha);
   const Vec3 omega = gyro - x.b_g;
   const Vec3 v_b = y.R_wb.transpose() * y.v_w;
   const Vec3 v_l = R_bl.transpose() * (v_b + omega.cross(p_bl_));

@@ -404,12 +404,8 @@ class DopplerInertialFilter {
     double tau = 0;
     MatS matrix() const;
   };
-  /// integrate(), and (when tau != 0) the IMU interpolated at its end, as interpolateImu(imu,
-  /// imu[k].t + tau, gyro, accel, k, gyro_rate) gives them (gyro_rate may be null).
-  static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
-                               std::size_t k, double tau, IntegrationJacobian* J, Vec3& gyro,
-                               Vec3& accel, Vec3* gyro_rate);
-  /// integrate() with the IMU along the span given (sampled over tau from sample k).
+  /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
+  /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
                                std::size_t k, double tau, IntegrationJacobian* J,
                                const ImuAlong& along);
