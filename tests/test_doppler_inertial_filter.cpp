@@ -316,6 +316,60 @@ TEST(DopplerInertialFilter, TakingPointsBackEqualsNeverGivingThem) {
   EXPECT_NEAR(a.residualSumOfSquares(), b.residualSumOfSquares(), 1e-3 * b.residualSumOfSquares());
 }
 
+TEST(DopplerInertialFilter, ReturnsAsArraysEqualTheirCopies) {
+  // The same node returns given one by one (addPoint) or as the caller's arrays (setReturns):
+  // the same gates, residuals and states, to the bit.
+  const test::AnalyticMotion m;
+  const Noise noise{0.002, 0.02, 0.03};
+  std::mt19937 rng(22);
+  const auto imu = imuOf(m, 0.6, noise, rng);
+  const Returns ret = returnsOf(m, 0.5, 6000, noise.doppler, 0.0, rng);
+  auto run = [&](bool arrays, std::vector<double>& residuals) {
+    Filter f(DopplerInertialFilterParams{}, test::testExtrinsics());
+    for (const ImuSample& s : imu) f.addImu(s);
+    f.start(truthAt(m, imu, 0), Filter::StartPrior{});
+    std::size_t cursor = 0;
+    std::vector<float> tau, x, y, z, d;
+    for (std::size_t k = 0;; ++k) {
+      const bool last = k == 80;
+      f.beginNode(last);
+      const double t_k = imu[k].t;
+      const double lo = t_k - f.intervalBefore(), hi = t_k + f.intervalAfter();
+      tau.clear(), x.clear(), y.clear(), z.clear(), d.clear();
+      for (; cursor < ret.t.size(); ++cursor) {
+        const double t = ret.t[cursor];
+        if (last ? t > t_k : t >= hi) break;
+        if (t < lo) continue;
+        if (!arrays) f.addPoint(t - t_k, ret.p_l[cursor], ret.z[cursor]);
+        tau.push_back(static_cast<float>(t - t_k));
+        x.push_back(ret.p_l[cursor].x());
+        y.push_back(ret.p_l[cursor].y());
+        z.push_back(ret.p_l[cursor].z());
+        d.push_back(static_cast<float>(ret.z[cursor]));
+      }
+      if (arrays) f.setReturns({tau.size(), tau.data(), x.data(), y.data(), z.data(), d.data()});
+      f.update();
+      for (std::size_t i = 0; i < tau.size(); ++i)
+        residuals.push_back(f.pointAccepted(i) ? f.pointResidual(i) : -1e9);
+      if (last) break;
+      f.predict();
+    }
+    f.smooth();
+    return f;
+  };
+  std::vector<double> ra, rb;
+  const Filter a = run(false, ra);
+  const Filter b = run(true, rb);
+  ASSERT_GT(ra.size(), 4000u);
+  EXPECT_EQ(ra, rb);
+  EXPECT_EQ(a.acceptedPointsTotal(), b.acceptedPointsTotal());
+  const FilterState &xa = a.state(a.nodes() - 1), &xb = b.state(b.nodes() - 1);
+  EXPECT_EQ(xa.v_w, xb.v_w);
+  EXPECT_EQ(xa.R_wb, xb.R_wb);
+  EXPECT_EQ(xa.b_g, xb.b_g);
+  EXPECT_EQ(a.covariance(), b.covariance());
+}
+
 /// Squared Mahalanobis distance of the estimate's error in attitude, velocity and both biases.
 double nees12(const WindowRun& r) {
   const Filter& f = r.filter;

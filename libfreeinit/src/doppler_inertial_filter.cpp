@@ -117,13 +117,14 @@ struct GatePrediction {
 #define FREEINIT_VECTOR_CLONES
 #endif
 
-/// The first gate of m returns (LiDAR time from the node, position, Doppler) against the
-/// prediction: normalized time, unit direction, residual, and whether |r| <= sqrt(max(gate_min^2,
+/// The first gate of m returns (LiDAR time from the node, position, Doppler: as the sensor gives
+/// them, in float) against the prediction: normalized time, Doppler (in double), unit direction,
+/// residual, and whether |r| <= sqrt(max(gate_min^2,
 /// gate_sigma^2 S)) + gate_rel |v_l| (without the root).
 FREEINIT_VECTOR_CLONES
-void gateReturns(std::size_t m, const GatePrediction& g, const double* __restrict tau,
-                 const double* __restrict px, const double* __restrict py,
-                 const double* __restrict pz, const double* __restrict z, double* __restrict s_out,
+void gateReturns(std::size_t m, const GatePrediction& g, const float* __restrict tau,
+                 const float* __restrict px, const float* __restrict py, const float* __restrict pz,
+                 const float* __restrict z, double* __restrict s_out, double* __restrict za_out,
                  double* __restrict dx_out, double* __restrict dy_out, double* __restrict dz_out,
                  double* __restrict res_out, std::int64_t* __restrict acc_out) {
   const double q00 = g.q[0], q01 = g.q[1], q02 = g.q[2], q10 = g.q[3], q11 = g.q[4], q12 = g.q[5],
@@ -132,19 +133,20 @@ void gateReturns(std::size_t m, const GatePrediction& g, const double* __restric
   const double inv_h = g.inv_h, r_doppler = g.r_doppler, speed = g.speed, gate_min2 = g.gate_min2,
                gate_k2 = g.gate_k2;
   for (std::size_t i = 0; i < m; ++i) {
-    const double x = px[i], y = py[i], w = pz[i];
+    const double x = px[i], y = py[i], w = pz[i], zi = z[i];
     const double norm = std::sqrt(x * x + y * y + w * w);
     const double dx = x / norm, dy = y / norm, dz = w / norm;
-    const double s = tau[i] * inv_h;
+    const double s = static_cast<double>(tau[i]) * inv_h;
     const double vx = q00 + s * (q10 + s * q20), vy = q01 + s * (q11 + s * q21),
                  vz = q02 + s * (q12 + s * q22);
-    const double r = z[i] + (dx * vx + dy * vy + dz * vz);
+    const double r = zi + (dx * vx + dy * vy + dz * vz);
     const double S = dx * (mxx * dx + mxy * dy + mxz * dz) + dy * (myy * dy + myz * dz) +
                      dz * (mzz * dz) + r_doppler;
     const double e = std::abs(r) - speed;
     const double kS = gate_k2 * S;
     const double bound = kS > gate_min2 ? kS : gate_min2;
     s_out[i] = s;
+    za_out[i] = zi;
     dx_out[i] = dx;
     dy_out[i] = dy;
     dz_out[i] = dz;
@@ -726,25 +728,64 @@ void DopplerInertialFilter::beginNode(bool last) {
   gate_speed_open_ = params_.gate_rel * q_open_.head<3>().norm();
 }
 
+void DopplerInertialFilter::addPoint(double tau, const Eigen::Vector3f& p_l, double doppler) {
+  OpenReturns& o = open_;
+  if (o.external) throw std::logic_error("DopplerInertialFilter::addPoint: after setReturns");
+  const std::size_t i = o.append(1);
+  o.tau[i] = static_cast<float>(tau);
+  o.px[i] = p_l.x();
+  o.py[i] = p_l.y();
+  o.pz[i] = p_l.z();
+  o.z[i] = static_cast<float>(doppler);
+}
+
 void DopplerInertialFilter::addPoints(const DopplerPoint* p, std::size_t count, double stamp,
                                       double t_node) {
   OpenReturns& o = open_;
-  const std::size_t m = o.given;
-  o.reserveGiven(m + count);
-  o.given = m + count;
-  double* __restrict tau = o.tau.data() + m;
-  double* __restrict px = o.px.data() + m;
-  double* __restrict py = o.py.data() + m;
-  double* __restrict pz = o.pz.data() + m;
-  double* __restrict z = o.z.data() + m;
+  if (o.external) throw std::logic_error("DopplerInertialFilter::addPoints: after setReturns");
+  const std::size_t m = o.append(count);
+  float* __restrict tau = o.tau.data() + m;
+  float* __restrict px = o.px.data() + m;
+  float* __restrict py = o.py.data() + m;
+  float* __restrict pz = o.pz.data() + m;
+  float* __restrict z = o.z.data() + m;
   for (std::size_t i = 0; i < count; ++i) {
     const double t = stamp + static_cast<double>(p[i].time_offset);
-    tau[i] = static_cast<double>(static_cast<float>(t - t_node));
+    tau[i] = static_cast<float>(t - t_node);
     px[i] = p[i].p_l.x();
     py[i] = p[i].p_l.y();
     pz[i] = p[i].p_l.z();
     z[i] = p[i].doppler;
   }
+}
+
+void DopplerInertialFilter::setReturns(const OpenArrays& returns) {
+  OpenReturns& o = open_;
+  if (o.given > 0) throw std::logic_error("DopplerInertialFilter::setReturns: after addPoint");
+  o.reserve(returns.count);
+  o.in = returns;
+  o.external = true;
+  o.given = returns.count;
+}
+
+std::size_t DopplerInertialFilter::OpenReturns::append(std::size_t count) {
+  const std::size_t m = given;
+  if (m + count > tau.size()) {
+    const std::size_t size = std::max(m + count, 2 * tau.size());
+    for (std::vector<float>* v : {&tau, &px, &py, &pz, &z}) v->resize(size);
+  }
+  reserve(m + count);
+  given = m + count;
+  in = {given, tau.data(), px.data(), py.data(), pz.data(), z.data()};
+  return m;
+}
+
+void DopplerInertialFilter::OpenReturns::reserve(std::size_t n) {
+  if (n <= s.size()) return;
+  const std::size_t size = std::max(n, 2 * s.size());
+  for (std::vector<double>* v : {&residual, &s, &dx, &dy, &dz, &za}) v->resize(size);
+  accepted.resize(size);
+  index.resize(size);
 }
 
 void DopplerInertialFilter::gateAndSum(Node& n) {
@@ -758,10 +799,9 @@ void DopplerInertialFilter::gateAndSum(Node& n) {
   g.speed = gate_speed_open_;
   g.gate_min2 = gate_min2_;
   g.gate_k2 = gate_k2_;
-  gateReturns(m, g, o.tau.data(), o.px.data(), o.py.data(), o.pz.data(), o.z.data(), o.s.data(),
+  gateReturns(m, g, o.in.tau, o.in.x, o.in.y, o.in.z, o.in.doppler, o.s.data(), o.za.data(),
               o.dx.data(), o.dy.data(), o.dz.data(), o.residual.data(), o.accepted.data());
   const std::int64_t* acc_out = o.accepted.data();
-  const double* z = o.z.data();
   // The accepted returns, packed in order.
   std::size_t na = 0;
   for (std::size_t i = 0; i < m; ++i) {
@@ -769,7 +809,7 @@ void DopplerInertialFilter::gateAndSum(Node& n) {
     o.dx[na] = o.dx[i];
     o.dy[na] = o.dy[i];
     o.dz[na] = o.dz[i];
-    o.za[na] = z[i];
+    o.za[na] = o.za[i];
     o.index[na] = static_cast<std::uint32_t>(i);
     na += acc_out[i] != 0 ? 1 : 0;
   }

@@ -247,9 +247,10 @@ class JointPipeline final : public Pipeline {
   }
 
   /// The open node's points received so far, those of [lo, hi) (the last node: [lo, t_k]): each
-  /// frame's run of used ones goes to the filter and the recorder at once, a run ending at a
-  /// return not used (not usable, or left out by the stride). `kStrided`: one return in stride_
-  /// (counted over the window's returns) is used, else every one.
+  /// frame's run of used ones goes to the recorder at once (the filter takes the node's returns
+  /// from it when the node closes), a run ending at a return not used (not usable, or left out by
+  /// the stride). `kStrided`: one return in stride_ (counted over the window's returns) is used,
+  /// else every one.
   template <bool kStrided>
   void takePoints(Diagnostics& diag, double t_k, double lo, double hi, bool last) {
     const std::size_t node = filter_->nodes() - 1;
@@ -278,7 +279,6 @@ class JointPipeline final : public Pipeline {
       std::size_t run = p;
       auto flush = [&](std::size_t stop) {
         if (stop == run) return;
-        filter_->addPoints(pts + run, stop - run, stamp, t_k);
         recorder_.add(node, pts + run, stop - run, stamp, t_k);
         diag.points_seen += stop - run;
       };
@@ -331,8 +331,9 @@ class JointPipeline final : public Pipeline {
       else
         takePoints<true>(r.diag, t_k, lo, hi, last);
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
-      filter_->update();
       const std::size_t node_points_begin = node_first_point_, node_points_end = recorder_.size();
+      filter_->setReturns(recorder_.closeNode(node_points_begin, node_points_end));
+      filter_->update();
       recorder_.judgeNode(node_points_begin, node_points_end, *filter_, r.diag.points_used,
                           r.diag.points_rejected);
       node_first_point_ = node_points_end;

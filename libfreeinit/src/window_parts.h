@@ -89,6 +89,10 @@ void dopplerResiduals(std::size_t n, const float (&q)[9], float inv_h, const flo
 class WindowRecorder {
  public:
   struct Tag {
+    // Left unset when made (judgeNode writes each once; no fill of the window's buffer first).
+    Tag() {}  // not = default, which would zero them in resize()
+    Tag(std::uint32_t node_, std::uint16_t cell_, bool accepted_, bool in_rest_cells_)
+        : node(node_), cell(cell_), accepted(accepted_), in_rest_cells(in_rest_cells_) {}
     std::uint32_t node;
     std::uint16_t cell;  ///< direction and range cell (RestCells) of an accepted return
     bool accepted;
@@ -104,14 +108,15 @@ class WindowRecorder {
     returns_.reserve(n);
     tags_.reserve(n);
   }
-  std::size_t size() const { return tags_.size(); }
+  std::size_t size() const { return given_; }  ///< returns given (judged or not)
   /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each at
   /// tau = stamp + time_offset - t_node from the node. The points must stay in place until the
   /// node is judged (the sequencer keeps its frames in place).
   void add(std::size_t node, const DopplerPoint* p, std::size_t count, double stamp,
            double t_node) {
     open_runs_.push_back({p, count, stamp, t_node});
-    tags_.resize(tags_.size() + count, {static_cast<std::uint32_t>(node), kNoCell, false, false});
+    open_node_ = static_cast<std::uint32_t>(node);
+    given_ += count;
   }
   const Tag& tag(std::size_t i) const { return tags_[i]; }
   Tag& tag(std::size_t i) { return tags_[i]; }
@@ -138,18 +143,16 @@ class WindowRecorder {
     return f[6 * n + j];
   }
   void reject(std::size_t i) { tags_[i].accepted = false; }
-  /// The verdicts on the returns [begin, end), the open node's in the order given to the
-  /// filter, after its update(): accepted or not, the residual, an accepted return's cell
-  /// (RestCells::cellOf); adds them to the counts. Nodes are judged in order, each once.
-  void judgeNode(std::size_t begin, std::size_t end, const DopplerInertialFilter& filter,
-                 std::size_t& used, std::size_t& rejected) {
+  /// Closes the open node, whose returns are [begin, end): copies them into the node's part of
+  /// the buffer, as arrays, and returns those (the filter's input for the node, in the order
+  /// given; valid until the next node is closed).
+  DopplerInertialFilter::OpenArrays closeNode(std::size_t begin, std::size_t end) {
     if (node_begin_.empty()) node_begin_.push_back(0);
     const std::size_t n = end - begin;
     returns_.resize(end);
     node_begin_.push_back(end);
     float* f = floats() + 7 * begin;
-    float *x = f, *y = f + n, *z = f + 2 * n, *in = f + 3 * n, *d = f + 4 * n, *tau = f + 5 * n,
-          *res = f + 6 * n;
+    float *x = f, *y = f + n, *z = f + 2 * n, *in = f + 3 * n, *d = f + 4 * n, *tau = f + 5 * n;
     std::size_t j = 0;
     for (const Run& run : open_runs_) {
       const DopplerPoint* p = run.points;
@@ -164,15 +167,26 @@ class WindowRecorder {
       }
     }
     open_runs_.clear();
+    return {n, tau, x, y, z, d};
+  }
+  /// The verdicts on the returns [begin, end) of the node closed last, after the filter's
+  /// update(): accepted or not, the residual, an accepted return's cell (RestCells::cellOf);
+  /// adds them to the counts. Nodes are judged in order, each once.
+  void judgeNode(std::size_t begin, std::size_t end, const DopplerInertialFilter& filter,
+                 std::size_t& used, std::size_t& rejected) {
+    const std::size_t n = end - begin;
+    tags_.resize(end);  // not initialized (Tag()): written once below
+    float* f = floats() + 7 * begin;
+    const float *x = f, *y = f + n, *z = f + 2 * n;
+    float* res = f + 6 * n;
     cells_.resize(std::max(cells_.size(), n));
     recorder_kernels::cellsOf(n, x, y, z, cells_.data());
     std::size_t accepted = 0;
     Tag* tags = tags_.data() + begin;
-    for (j = 0; j < n; ++j) {
+    for (std::size_t j = 0; j < n; ++j) {
       const bool a = filter.pointAccepted(j);
       accepted += a ? 1 : 0;
-      tags[j].accepted = a;
-      tags[j].cell = a ? cells_[j] : kNoCell;
+      tags[j] = {open_node_, a ? cells_[j] : kNoCell, a, false};
       res[j] = static_cast<float>(filter.pointResidual(j));
     }
     used += accepted;
@@ -247,6 +261,7 @@ class WindowRecorder {
     returns_ = {};
     tags_ = {};
     node_begin_ = {};
+    given_ = 0;
   }
 
  private:
@@ -270,8 +285,10 @@ class WindowRecorder {
 
   std::vector<MapPoint> returns_;        ///< the judged nodes' returns (see the class comment)
   std::vector<std::size_t> node_begin_;  ///< node k's returns: [node_begin_[k], node_begin_[k+1])
-  std::vector<Tag> tags_;                ///< every return's, the open node's included
+  std::vector<Tag> tags_;                ///< every judged return's
   std::vector<Run> open_runs_;           ///< the open node's returns, where the frames hold them
+  std::uint32_t open_node_ = 0;          ///< the node open_runs_ belong to
+  std::size_t given_ = 0;                ///< returns given, the open node's included
   std::vector<std::uint16_t> cells_;     ///< judgeNode's work space
 };
 

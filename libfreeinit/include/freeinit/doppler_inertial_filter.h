@@ -156,23 +156,23 @@ class DopplerInertialFilter {
   double intervalBefore() const { return before_; }
   double intervalAfter() const { return after_; }
 
-  /// One Doppler return of the open node: tau [s] from the node time, position in the LiDAR
-  /// frame (non-zero), Doppler [m/s]. Kept as given; update() gates the node's returns against
-  /// the prediction (all at once: the prediction does not change while the node is open) and
-  /// the accepted ones enter the node's sums.
-  void addPoint(double tau, const Eigen::Vector3f& p_l, double doppler) {
-    const std::size_t i = open_.given;
-    open_.reserveGiven(i + 1);
-    open_.tau[i] = static_cast<double>(static_cast<float>(tau));
-    open_.px[i] = p_l.x();
-    open_.py[i] = p_l.y();
-    open_.pz[i] = p_l.z();
-    open_.z[i] = doppler;
-    open_.given = i + 1;
-  }
+  /// One Doppler return of the open node: tau [s] from the node time (kept in float, the form
+  /// normalizedTime() rounds it to), position in the LiDAR frame (non-zero), Doppler [m/s] (in
+  /// float, as a DopplerPoint holds it). Kept as given; update() gates the node's returns against
+  /// the prediction (all at once: the prediction does not change while the node is open) and the
+  /// accepted ones enter the node's sums.
+  void addPoint(double tau, const Eigen::Vector3f& p_l, double doppler);
   /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each as
   /// addPoint(stamp + time_offset - t_node, p_l, doppler) takes it.
   void addPoints(const DopplerPoint* p, std::size_t count, double stamp, double t_node);
+  /// The open node's returns as arrays of `count` (tau [s] from the node time, position in the
+  /// LiDAR frame, Doppler [m/s]), held by the caller until update() returns: instead of
+  /// addPoint() or addPoints() (the same returns give the same results), without a copy.
+  struct OpenArrays {
+    std::size_t count = 0;
+    const float *tau = nullptr, *x = nullptr, *y = nullptr, *z = nullptr, *doppler = nullptr;
+  };
+  void setReturns(const OpenArrays& returns);
 
   /// Applies the open node's sums (iterated update of the node), then gates the node's points
   /// again against the update (regate_sigma) and solves the node again with those that pass.
@@ -361,32 +361,34 @@ class DopplerInertialFilter {
   /// Adds a point to the sums (w = 1) or takes it out (w = -1).
   static void accumulate(DopplerSums& sums, double s, const Vec3& d, double z, double w = 1.0);
 
-  /// The open node's returns, structure of arrays. As given (addPoint): tau (float, the form
-  /// normalizedTime() rounds it to), position, Doppler; after update()'s first gate, per return:
-  /// the residual (against the prediction, then against the update for those accepted) and
-  /// whether it is used; and the accepted ones, in order, as the sums see them: normalized
-  /// time, unit direction, Doppler and their index among the given ones.
+  /// The open node's returns, structure of arrays. As given: `in`, the caller's (setReturns) or
+  /// the node's own copies (addPoint, addPoints: tau, px, py, pz, z); after update()'s first gate,
+  /// per return: the residual (against the prediction, then against the update for those
+  /// accepted) and whether it is used; and the accepted ones, in order, as the sums see them:
+  /// normalized time, unit direction, Doppler and their index among the given ones.
   /// The arrays only grow (to what the largest node needed), so that no return is written
   /// twice; `given` and `used` count what is valid in them.
   struct OpenReturns {
-    // All 8 bytes wide, so that the loops over them vectorize without conversions.
-    std::vector<double> tau, px, py, pz, z;
+    std::vector<float> tau, px, py, pz, z;  ///< the copies
+    OpenArrays in;
+    bool external = false;  ///< `in` is the caller's
+    // The per-return results, all 8 bytes wide: the loops over them vectorize without
+    // conversions.
     std::vector<double> residual;
     std::vector<std::int64_t> accepted;
     std::vector<double> s, dx, dy, dz, za;
     std::vector<std::uint32_t> index;
     std::size_t given = 0;  ///< returns given to the node
     std::size_t used = 0;   ///< accepted by the first gate (s, dx, dy, dz, za, index)
-    void clear() { given = used = 0; }
-    /// Room for n given returns.
-    void reserveGiven(std::size_t n) {
-      if (n <= tau.size()) return;
-      const std::size_t size = std::max(n, 2 * tau.size());
-      for (std::vector<double>* v : {&tau, &px, &py, &pz, &z, &residual, &s, &dx, &dy, &dz, &za})
-        v->resize(size);
-      accepted.resize(size);
-      index.resize(size);
+    void clear() {
+      given = used = 0;
+      in = {};
+      external = false;
     }
+    /// Room for count more copies, counted as given; returns the first one's index.
+    std::size_t append(std::size_t count);
+    /// Room for the results of n given returns.
+    void reserve(std::size_t n);
   };
   /// The first gate of the open node's returns against the prediction, and the sums of those
   /// it accepts.
