@@ -728,17 +728,6 @@ void DopplerInertialFilter::beginNode(bool last) {
   gate_speed_open_ = params_.gate_rel * q_open_.head<3>().norm();
 }
 
-void DopplerInertialFilter::addPoint(double tau, const Eigen::Vector3f& p_l, double doppler) {
-  OpenReturns& o = open_;
-  if (o.external) throw std::logic_error("DopplerInertialFilter::addPoint: after setReturns");
-  const std::size_t i = o.append(1);
-  o.tau[i] = static_cast<float>(tau);
-  o.px[i] = p_l.x();
-  o.py[i] = p_l.y();
-  o.pz[i] = p_l.z();
-  o.z[i] = static_cast<float>(doppler);
-}
-
 void DopplerInertialFilter::addPoints(const DopplerPoint* p, std::size_t count, double stamp,
                                       double t_node) {
   OpenReturns& o = open_;
@@ -776,7 +765,6 @@ std::size_t DopplerInertialFilter::OpenReturns::append(std::size_t count) {
   }
   reserve(m + count);
   given = m + count;
-  in = {given, tau.data(), px.data(), py.data(), pz.data(), z.data()};
   return m;
 }
 
@@ -791,6 +779,7 @@ void DopplerInertialFilter::OpenReturns::reserve(std::size_t n) {
 void DopplerInertialFilter::gateAndSum(Node& n) {
   OpenReturns& o = open_;
   const std::size_t m = o.given;
+  if (!o.external) o.in = {m, o.tau.data(), o.px.data(), o.py.data(), o.pz.data(), o.z.data()};
   GatePrediction g;
   for (int i = 0; i < 9; ++i) g.q[i] = q_open_(i);
   g.setCovariance(M_open_);

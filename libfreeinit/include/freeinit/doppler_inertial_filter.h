@@ -49,6 +49,7 @@
 #include <array>
 #include <cstdint>
 #include <limits>
+#include <stdexcept>
 #include <vector>
 
 namespace freeinit {
@@ -161,7 +162,16 @@ class DopplerInertialFilter {
   /// float, as a DopplerPoint holds it). Kept as given; update() gates the node's returns against
   /// the prediction (all at once: the prediction does not change while the node is open) and the
   /// accepted ones enter the node's sums.
-  void addPoint(double tau, const Eigen::Vector3f& p_l, double doppler);
+  void addPoint(double tau, const Eigen::Vector3f& p_l, double doppler) {
+    OpenReturns& o = open_;
+    if (o.external) throw std::logic_error("DopplerInertialFilter::addPoint: after setReturns");
+    const std::size_t i = o.given < o.tau.size() && o.given < o.s.size() ? o.given++ : o.append(1);
+    o.tau[i] = static_cast<float>(tau);
+    o.px[i] = p_l.x();
+    o.py[i] = p_l.y();
+    o.pz[i] = p_l.z();
+    o.z[i] = static_cast<float>(doppler);
+  }
   /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each as
   /// addPoint(stamp + time_offset - t_node, p_l, doppler) takes it.
   void addPoints(const DopplerPoint* p, std::size_t count, double stamp, double t_node);
