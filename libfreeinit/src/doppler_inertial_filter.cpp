@@ -955,7 +955,10 @@ DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
   // D < 19); residual r0 + H dx, unit noise. Coefficient-based products: at these sizes they
   // beat the blocked kernels.
   // Neither the Doppler nor the rest depends on the position: H's position columns are zero,
-  // and the products skip them (a fifth of H P and of H P H^T).
+  // and the products skip them (a fifth of H P and of H P H^T). Checked (27 values), so that a
+  // measurement model that comes to depend on the position cannot be updated wrongly in silence.
+  if (!H.template middleCols<3>(kPos).isZero(0.0))
+    throw std::logic_error("DopplerInertialFilter::kalmanUpdate: H depends on the position");
   constexpr int kAfter = D - kVel;  // the components after the position
   const auto H_th = H.template leftCols<3>();
   const auto H_af = H.template rightCols<kAfter>();
