@@ -457,6 +457,9 @@ class DopplerInertialFilter {
   Vec3 p_bl_;
   std::vector<ImuSample> imu_;
   std::vector<Node> nodes_;
+  /// Nodes a smoothing has already been through (the first smoothed_ of nodes_): the later ones
+  /// start the next smoothing from the propagation of the last smoothed one (smooth()).
+  std::size_t smoothed_ = 0;
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;
