@@ -205,13 +205,16 @@ class WindowRecorder {
     const double t_state = filter.state(filter.nodes() - 1).t;
     std::size_t accepted = 0;
     for (const Tag& t : tags_) accepted += t.accepted ? 1 : 0;
-    r.rejected.clear();
-    r.rejected.reserve(tags_.size() - accepted);
+    // One slot more than the rejected returns: the copy below writes every return to both
+    // outputs and advances the one it belongs to (no branch on the verdict, which the compiler
+    // cannot predict where the rejected returns are scattered).
+    r.rejected.assign(tags_.size() - accepted + 1, MapPoint{});
     // Node by node: its returns mapped in place (as arrays), then copied out as MapPoints, the
     // accepted ones into the buffer's front (the write position never passes the node's own
     // part), the others into r.rejected.
     std::vector<float> part;
-    std::size_t kept = 0;
+    std::size_t kept = 0, dropped = 0;
+    MapPoint* rejected = r.rejected.data();
     for (std::size_t k = 0; k + 1 < node_begin_.size(); ++k) {
       const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
       if (n == 0) continue;
@@ -243,6 +246,8 @@ class WindowRecorder {
       }
       const float *px = src, *py = px + n, *pz = px + 2 * n, *pi = px + 3 * n, *pd = px + 4 * n,
                   *pt = px + 5 * n, *pr = px + 6 * n;
+      MapPoint* out = returns_.data();
+      const Tag* tags = tags_.data() + b;
       for (std::size_t j = 0; j < n; ++j) {
         MapPoint p;
         p.p_w = Eigen::Vector3f(px[j], py[j], pz[j]);
@@ -250,12 +255,14 @@ class WindowRecorder {
         p.residual = pr[j];
         p.doppler = pd[j];
         p.time = pt[j];
-        if (tags_[b + j].accepted)
-          returns_[kept++] = p;
-        else
-          r.rejected.push_back(p);
+        const std::size_t in_map = tags[j].accepted ? 1 : 0;
+        out[kept] = p;  // below the node's part, or that part was copied aside
+        rejected[dropped] = p;
+        kept += in_map;
+        dropped += 1 - in_map;
       }
     }
+    r.rejected.resize(dropped);
     returns_.resize(kept);
     r.static_map = std::move(returns_);
     returns_ = {};
