@@ -9,6 +9,8 @@
 #include <cstring>
 #include <stdexcept>
 
+#include "kalman_kernel.h"
+
 namespace freeinit {
 namespace {
 
@@ -53,34 +55,6 @@ DopplerInertialFilter::MatS propagateCovariance(const DopplerInertialFilter::Mat
   out.topLeftCorner<D, D>() =
       0.5 * (out.topLeftCorner<D, D>() + out.topLeftCorner<D, D>().transpose()).eval();
   return out;
-}
-
-/// The gain K = B S^-1 of a Kalman update, for S symmetric positive definite (9x9, overwritten by
-/// its Cholesky factor L, S = L L^T) and B = P H^T (n x 9), in place of B: K L = Y with Y L^T = B,
-/// by column operations on B (fixed-size, vectorized; at this size faster than Eigen's blocked
-/// triangular solves).
-template <int N, int R>
-void kalmanGainInPlace(Eigen::Matrix<double, R, R>& S, Eigen::Matrix<double, N, R>& B) {
-  constexpr int n = R;
-  for (int j = 0; j < n; ++j) {  // S = L L^T (lower triangle)
-    double d = S(j, j);
-    for (int k = 0; k < j; ++k) d -= S(j, k) * S(j, k);
-    d = std::sqrt(d);
-    S(j, j) = d;
-    for (int i = j + 1; i < n; ++i) {
-      double v = S(i, j);
-      for (int k = 0; k < j; ++k) v -= S(i, k) * S(j, k);
-      S(i, j) = v / d;
-    }
-  }
-  for (int j = 0; j < n; ++j) {  // Y: B(:, j) = sum_{i <= j} L(j, i) Y(:, i)
-    for (int i = 0; i < j; ++i) B.col(j) -= S(j, i) * B.col(i);
-    B.col(j) /= S(j, j);
-  }
-  for (int j = n; j-- > 0;) {  // K: Y(:, j) = sum_{i >= j} K(:, i) L(i, j)
-    for (int i = j + 1; i < n; ++i) B.col(j) -= S(i, j) * B.col(i);
-    B.col(j) /= S(j, j);
-  }
 }
 
 /// The largest block of a Gauss-Newton step in units of its tolerance
@@ -953,30 +927,17 @@ DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
     const Eigen::Matrix<double, R, D>& H, const Eigen::Matrix<double, R, 1>& r0,
     const VecS& dx_prior, MatS& P) {
   // On the first D components (the others constant, uncorrelated, and without effect here when
-  // D < 19); residual r0 + H dx, unit noise. Coefficient-based products: at these sizes they
-  // beat the blocked kernels.
+  // D < 19); residual r0 + H dx, unit noise. The products as vector code (kalman_kernel.h).
   // Neither the Doppler nor the rest depends on the position: H's position columns are zero,
   // and the products skip them (a fifth of H P and of H P H^T). Checked (27 values), so that a
   // measurement model that comes to depend on the position cannot be updated wrongly in silence.
+  static_assert(D <= detail::kKalmanMaxStates && R <= detail::kKalmanMaxRows);
   if (!H.template middleCols<3>(kPos).isZero(0.0))
     throw std::logic_error("DopplerInertialFilter::kalmanUpdate: H depends on the position");
-  constexpr int kAfter = D - kVel;  // the components after the position
-  const auto H_th = H.template leftCols<3>();
-  const auto H_af = H.template rightCols<kAfter>();
-  const auto P_d = P.template topLeftCorner<D, D>();
   const Eigen::Matrix<double, R, 1> innovation = -r0 - H * dx_prior.template head<D>();
-  const Eigen::Matrix<double, R, D> HP = H_th.lazyProduct(P_d.template topRows<3>()) +
-                                         H_af.lazyProduct(P_d.template bottomRows<kAfter>());
-  Eigen::Matrix<double, R, R> S = HP.template leftCols<3>().lazyProduct(H_th.transpose()) +
-                                  HP.template rightCols<kAfter>().lazyProduct(H_af.transpose());
-  S.diagonal().array() += 1.0;  // S >= I: the Cholesky factorization cannot fail
-  Eigen::Matrix<double, D, R> K = HP.transpose();
-  kalmanGainInPlace(S, K);
   VecS dx = dx_prior;
-  dx.template head<D>() += K * innovation;
-  auto P_upd = P.template topLeftCorner<D, D>();
-  P_upd.noalias() -= K.lazyProduct(HP);
-  P_upd = 0.5 * (P_upd + P_upd.transpose()).eval();
+  detail::kalmanUpdateKernel(D, R, P.data(), kStateDim, H.data(), innovation.data(), dx.data(),
+                             kPos, kPos + 3);
   return dx;
 }
 
