@@ -91,21 +91,138 @@ struct GatePrediction {
 #define FREEINIT_VECTOR_CLONES
 #endif
 
+typedef double V4 __attribute__((vector_size(32)));
+
+/// The Doppler sums: S (6 x 5, column-major: the upper triangle of s^m d d^T, m = 0..4), bz
+/// (3 x 3, column-major: s^m z d, m = 0..2), c (z^2).
+constexpr int kSumCount = 40;
+
 /// The first gate of m returns (LiDAR time from the node, position, Doppler: as the sensor gives
-/// them, in float) against the prediction: normalized time, Doppler (in double), unit direction,
-/// residual, and whether |r| <= sqrt(max(gate_min^2,
-/// gate_sigma^2 S)) + gate_rel |v_l| (without the root).
+/// them, in float) against the prediction, and the sums of those it accepts: per return the
+/// residual and whether |r| <= sqrt(max(gate_min^2, gate_sigma^2 S)) + gate_rel |v_l| (without
+/// the root); a rejected return adds its terms times zero (exact zeros). Block by block: the gate
+/// in a loop the compiler vectorizes, its directions kept in the block's arrays (in the first-level
+/// cache), then the sums over them, each in four partial sums (return i in lane i % 4) added at
+/// the end: the lanes are independent and fixed by the vector type, so the vector code reorders
+/// no sum within a lane, whatever the instruction set.
 FREEINIT_VECTOR_CLONES
-void gateReturns(std::size_t m, const GatePrediction& g, const float* __restrict tau,
-                 const float* __restrict px, const float* __restrict py, const float* __restrict pz,
-                 const float* __restrict z, double* __restrict s_out, double* __restrict za_out,
-                 double* __restrict dx_out, double* __restrict dy_out, double* __restrict dz_out,
-                 double* __restrict res_out, std::int64_t* __restrict acc_out) {
+std::size_t gateAndSumReturns(std::size_t m, const GatePrediction& g, const float* __restrict tau,
+                              const float* __restrict px, const float* __restrict py,
+                              const float* __restrict pz, const float* __restrict z,
+                              double* __restrict res_out, std::int64_t* __restrict acc_out,
+                              double* __restrict total) {
   const double q00 = g.q[0], q01 = g.q[1], q02 = g.q[2], q10 = g.q[3], q11 = g.q[4], q12 = g.q[5],
                q20 = g.q[6], q21 = g.q[7], q22 = g.q[8];
   const double mxx = g.mxx, myy = g.myy, mzz = g.mzz, mxy = g.mxy, mxz = g.mxz, myz = g.myz;
   const double inv_h = g.inv_h, r_doppler = g.r_doppler, speed = g.speed, gate_min2 = g.gate_min2,
                gate_k2 = g.gate_k2;
+  constexpr std::size_t kBlock = 128;
+  alignas(32) double bs[kBlock], bx[kBlock], by[kBlock], bz[kBlock], bzi[kBlock], bw[kBlock];
+  V4 acc[kSumCount];
+  for (V4& a : acc) a = V4{0, 0, 0, 0};
+  std::size_t accepted = 0;
+  for (std::size_t b = 0; b < m; b += kBlock) {
+    const std::size_t n = std::min(kBlock, m - b);
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::size_t i = b + j;
+      const double x = px[i], y = py[i], w = pz[i], zi = z[i];
+      const double norm = std::sqrt(x * x + y * y + w * w);
+      const double dx = x / norm, dy = y / norm, dz = w / norm;
+      const double s = static_cast<double>(tau[i]) * inv_h;
+      const double vx = q00 + s * (q10 + s * q20), vy = q01 + s * (q11 + s * q21),
+                   vz = q02 + s * (q12 + s * q22);
+      const double r = zi + (dx * vx + dy * vy + dz * vz);
+      const double S = dx * (mxx * dx + mxy * dy + mxz * dz) + dy * (myy * dy + myz * dz) +
+                       dz * (mzz * dz) + r_doppler;
+      const double e = std::abs(r) - speed;
+      const double kS = gate_k2 * S;
+      const double bound = kS > gate_min2 ? kS : gate_min2;
+      const bool accept = (e <= 0) | (e * e <= bound);
+      res_out[i] = r;
+      acc_out[i] = accept;
+      accepted += accept;
+      bs[j] = s;
+      bx[j] = dx;
+      by[j] = dy;
+      bz[j] = dz;
+      bzi[j] = zi;
+      bw[j] = accept ? 1.0 : 0.0;
+    }
+    for (std::size_t j = n; j % 4 != 0; ++j)  // the last lanes add zeros
+      bs[j] = bx[j] = by[j] = bz[j] = bzi[j] = bw[j] = 0.0;
+    for (std::size_t j = 0; j < n; j += 4) {
+      V4 s, x, y, u, zi, w;
+      std::memcpy(&s, bs + j, sizeof s);
+      std::memcpy(&x, bx + j, sizeof x);
+      std::memcpy(&y, by + j, sizeof y);
+      std::memcpy(&u, bz + j, sizeof u);
+      std::memcpy(&zi, bzi + j, sizeof zi);
+      std::memcpy(&w, bw + j, sizeof w);
+      // Each term times the weight (x w = x exactly for an accepted return).
+      const V4 xw = x * w, yw = y * w, uw = u * w;
+      const V4 s2 = s * s, s3 = s2 * s, s4 = s2 * s2;
+      const V4 dd[6] = {xw * x, xw * y, xw * u, yw * y, yw * u, uw * u};
+      for (int k = 0; k < 6; ++k) {
+        acc[k] += dd[k];
+        acc[6 + k] += dd[k] * s;
+        acc[12 + k] += dd[k] * s2;
+        acc[18 + k] += dd[k] * s3;
+        acc[24 + k] += dd[k] * s4;
+      }
+      const V4 zd[3] = {zi * xw, zi * yw, zi * uw};
+      for (int k = 0; k < 3; ++k) {
+        acc[30 + k] += zd[k];
+        acc[33 + k] += zd[k] * s;
+        acc[36 + k] += zd[k] * s2;
+      }
+      acc[39] += (zi * w) * zi;
+    }
+  }
+  for (int k = 0; k < kSumCount; ++k) total[k] = (acc[k][0] + acc[k][1]) + (acc[k][2] + acc[k][3]);
+  return accepted;
+}
+
+/// The coherence test of n returns from the prefix sums of their residuals (cum_r) and of the
+/// residuals' variances (cum_v), n + 1 values each: whether the neighbourhood [j - half,
+/// j + half] (cut at the ends, tested only if it holds at least min_count returns) has
+/// sum^2 > c2 var.
+FREEINIT_VECTOR_CLONES
+void coherenceTest(std::size_t n, std::size_t half, std::size_t min_count, double c2,
+                   const double* __restrict cum_r, const double* __restrict cum_v,
+                   std::int64_t* __restrict coherent) {
+  auto test = [&](std::size_t j, std::size_t lo, std::size_t hi) {
+    const double sum = cum_r[hi] - cum_r[lo];
+    const double var = cum_v[hi] - cum_v[lo];  // of the sum
+    coherent[j] = (hi - lo >= min_count) & (sum * sum > c2 * var);
+  };
+  // The ends, where the neighbourhood is cut, then the inside (no cut: a loop the compiler
+  // vectorizes).
+  const std::size_t inside_begin = std::min(half, n), inside_end = n > half ? n - half : 0;
+  for (std::size_t j = 0; j < inside_begin; ++j) test(j, 0, std::min(n, j + half + 1));
+  for (std::size_t j = inside_begin; j < inside_end; ++j) {
+    const double sum = cum_r[j + half + 1] - cum_r[j - half];
+    const double var = cum_v[j + half + 1] - cum_v[j - half];
+    coherent[j] = (2 * half + 1 >= min_count) & (sum * sum > c2 * var);
+  }
+  for (std::size_t j = std::max(inside_begin, inside_end); j < n; ++j)
+    test(j, j >= half ? j - half : 0, std::min(n, j + half + 1));
+}
+
+/// The second gate of the m returns the first accepted (acc), against the update: residual, its
+/// variance, and whether r^2 <= k2 var (never for a return the first gate rejected, whose
+/// residual stays the first gate's). The direction as gateAndSumReturns computes it.
+FREEINIT_VECTOR_CLONES
+void regateReturns(std::size_t m, const GatePrediction& g, double k2, const float* __restrict tau,
+                   const float* __restrict px, const float* __restrict py,
+                   const float* __restrict pz, const float* __restrict z,
+                   const std::int64_t* __restrict acc, double* __restrict res,
+                   double* __restrict res2_out, double* __restrict var_out,
+                   std::int64_t* __restrict pass_out) {
+  const double q00 = g.q[0], q01 = g.q[1], q02 = g.q[2], q10 = g.q[3], q11 = g.q[4], q12 = g.q[5],
+               q20 = g.q[6], q21 = g.q[7], q22 = g.q[8];
+  const double mxx = g.mxx, myy = g.myy, mzz = g.mzz, mxy = g.mxy, mxz = g.mxz, myz = g.myz;
+  const double r_doppler = g.r_doppler;
+  const double inv_h = g.inv_h;
   for (std::size_t i = 0; i < m; ++i) {
     const double x = px[i], y = py[i], w = pz[i], zi = z[i];
     const double norm = std::sqrt(x * x + y * y + w * w);
@@ -114,99 +231,14 @@ void gateReturns(std::size_t m, const GatePrediction& g, const float* __restrict
     const double vx = q00 + s * (q10 + s * q20), vy = q01 + s * (q11 + s * q21),
                  vz = q02 + s * (q12 + s * q22);
     const double r = zi + (dx * vx + dy * vy + dz * vz);
-    const double S = dx * (mxx * dx + mxy * dy + mxz * dz) + dy * (myy * dy + myz * dz) +
-                     dz * (mzz * dz) + r_doppler;
-    const double e = std::abs(r) - speed;
-    const double kS = gate_k2 * S;
-    const double bound = kS > gate_min2 ? kS : gate_min2;
-    s_out[i] = s;
-    za_out[i] = zi;
-    dx_out[i] = dx;
-    dy_out[i] = dy;
-    dz_out[i] = dz;
-    res_out[i] = r;
-    acc_out[i] = (e <= 0) | (e * e <= bound);
-  }
-}
-
-/// The second gate of m accepted returns against the update: residual, its variance, and
-/// whether r^2 <= k2 var.
-FREEINIT_VECTOR_CLONES
-void regateReturns(std::size_t m, const GatePrediction& g, double k2, const double* __restrict s,
-                   const double* __restrict dx, const double* __restrict dy,
-                   const double* __restrict dz, const double* __restrict z,
-                   double* __restrict res_out, double* __restrict var_out,
-                   char* __restrict pass_out) {
-  const double q00 = g.q[0], q01 = g.q[1], q02 = g.q[2], q10 = g.q[3], q11 = g.q[4], q12 = g.q[5],
-               q20 = g.q[6], q21 = g.q[7], q22 = g.q[8];
-  const double mxx = g.mxx, myy = g.myy, mzz = g.mzz, mxy = g.mxy, mxz = g.mxz, myz = g.myz;
-  const double r_doppler = g.r_doppler;
-  for (std::size_t i = 0; i < m; ++i) {
-    const double si = s[i], ux = dx[i], uy = dy[i], uz = dz[i];
-    const double vx = q00 + si * (q10 + si * q20), vy = q01 + si * (q11 + si * q21),
-                 vz = q02 + si * (q12 + si * q22);
-    const double r = z[i] + (ux * vx + uy * vy + uz * vz);
-    const double var = ux * (mxx * ux + mxy * uy + mxz * uz) + uy * (myy * uy + myz * uz) +
-                       uz * (mzz * uz) + r_doppler;
-    res_out[i] = r;
+    const double var = dx * (mxx * dx + mxy * dy + mxz * dz) + dy * (myy * dy + myz * dz) +
+                       dz * (mzz * dz) + r_doppler;
+    const bool first = acc[i] != 0;
+    res[i] = first ? r : res[i];
+    res2_out[i] = r;
     var_out[i] = var;
-    pass_out[i] = r * r <= k2 * var;
+    pass_out[i] = first & (r * r <= k2 * var);
   }
-}
-
-/// The 40 Doppler sums of `count` returns: S (6 x 5, column-major: the upper triangle of s^m d
-/// d^T, m = 0..4), bz (3 x 3, column-major: s^m z d, m = 0..2), c (z^2). Each sum in four
-/// partial sums (return i in lane i % 4, four returns per vector of four lanes), added at the
-/// end: the lanes are independent, so the vector code reorders no sum within a lane, and the
-/// lanes are the same whatever the vector width.
-constexpr int kSumCount = 40;
-FREEINIT_VECTOR_CLONES
-void sumKernel(std::size_t count, const double* __restrict s, const double* __restrict dx,
-               const double* __restrict dy, const double* __restrict dz, const double* __restrict z,
-               double* __restrict total) {
-  typedef double V4 __attribute__((vector_size(32)));
-  V4 acc[kSumCount];
-  for (V4& a : acc) a = V4{0, 0, 0, 0};
-  auto add = [&acc](const V4& s1, const V4& x, const V4& y, const V4& w, const V4& zi) {
-    const V4 s2 = s1 * s1, s3 = s2 * s1, s4 = s2 * s2;
-    const V4 dd[6] = {x * x, x * y, x * w, y * y, y * w, w * w};
-    for (int r = 0; r < 6; ++r) {
-      acc[r] += dd[r];
-      acc[6 + r] += dd[r] * s1;
-      acc[12 + r] += dd[r] * s2;
-      acc[18 + r] += dd[r] * s3;
-      acc[24 + r] += dd[r] * s4;
-    }
-    const V4 zd[3] = {zi * x, zi * y, zi * w};
-    for (int r = 0; r < 3; ++r) {
-      acc[30 + r] += zd[r];
-      acc[33 + r] += zd[r] * s1;
-      acc[36 + r] += zd[r] * s2;
-    }
-    acc[39] += zi * zi;
-  };
-  std::size_t i = 0;
-  for (; i + 4 <= count; i += 4) {
-    V4 s1, x, y, w, zi;
-    std::memcpy(&s1, s + i, sizeof(V4));
-    std::memcpy(&x, dx + i, sizeof(V4));
-    std::memcpy(&y, dy + i, sizeof(V4));
-    std::memcpy(&w, dz + i, sizeof(V4));
-    std::memcpy(&zi, z + i, sizeof(V4));
-    add(s1, x, y, w, zi);
-  }
-  if (i < count) {  // the last returns, the other lanes zero (which adds exact zeros)
-    V4 s1 = {0, 0, 0, 0}, x = s1, y = s1, w = s1, zi = s1;
-    for (std::size_t l = 0; i + l < count; ++l) {
-      s1[l] = s[i + l];
-      x[l] = dx[i + l];
-      y[l] = dy[i + l];
-      w[l] = dz[i + l];
-      zi[l] = z[i + l];
-    }
-    add(s1, x, y, w, zi);
-  }
-  for (int k = 0; k < kSumCount; ++k) total[k] = (acc[k][0] + acc[k][1]) + (acc[k][2] + acc[k][3]);
 }
 
 }  // namespace
@@ -744,10 +776,14 @@ std::size_t DopplerInertialFilter::OpenReturns::append(std::size_t count) {
 }
 
 void DopplerInertialFilter::OpenReturns::reserve(std::size_t n) {
-  if (n <= s.size()) return;
-  const std::size_t size = std::max(n, 2 * s.size());
-  for (std::vector<double>* v : {&residual, &s, &dx, &dy, &dz, &za}) v->resize(size);
+  if (n <= residual.size()) return;
+  const std::size_t size = std::max(n, 2 * residual.size());
+  for (std::vector<double>* v : {&residual, &residual2, &variance2}) v->resize(size);
+  cum_r.resize(size + 1);
+  cum_v.resize(size + 1);
   accepted.resize(size);
+  passed.resize(size);
+  coherent.resize(size);
   index.resize(size);
 }
 
@@ -763,35 +799,17 @@ void DopplerInertialFilter::gateAndSum(Node& n) {
   g.speed = gate_speed_open_;
   g.gate_min2 = gate_min2_;
   g.gate_k2 = gate_k2_;
-  gateReturns(m, g, o.in.tau, o.in.x, o.in.y, o.in.z, o.in.doppler, o.s.data(), o.za.data(),
-              o.dx.data(), o.dy.data(), o.dz.data(), o.residual.data(), o.accepted.data());
-  const std::int64_t* acc_out = o.accepted.data();
-  // The accepted returns, packed in order.
-  std::size_t na = 0;
-  for (std::size_t i = 0; i < m; ++i) {
-    o.s[na] = o.s[i];
-    o.dx[na] = o.dx[i];
-    o.dy[na] = o.dy[i];
-    o.dz[na] = o.dz[i];
-    o.za[na] = o.za[i];
-    o.index[na] = static_cast<std::uint32_t>(i);
-    na += acc_out[i] != 0 ? 1 : 0;
-  }
-  o.used = na;
-  sumReturns(n.sums, o.s.data(), o.dx.data(), o.dy.data(), o.dz.data(), o.za.data(), na);
-}
-
-void DopplerInertialFilter::sumReturns(DopplerSums& sums, const double* s, const double* dx,
-                                       const double* dy, const double* dz, const double* z,
-                                       std::size_t count) {
   double total[kSumCount];
-  sumKernel(count, s, dx, dy, dz, z, total);
+  const std::size_t used = gateAndSumReturns(m, g, o.in.tau, o.in.x, o.in.y, o.in.z, o.in.doppler,
+                                             o.residual.data(), o.accepted.data(), total);
+  o.used = used;
+  DopplerSums& sums = n.sums;
   for (int c = 0; c < 5; ++c)
     for (int r = 0; r < 6; ++r) sums.S(r, c) += total[6 * c + r];
   for (int c = 0; c < 3; ++c)
     for (int r = 0; r < 3; ++r) sums.bz(r, c) += total[30 + 3 * c + r];
   sums.c += total[39];
-  sums.n += count;
+  sums.n += used;
 }
 
 void DopplerInertialFilter::removePoint(std::size_t k, double tau, const Eigen::Vector3f& p_l,
@@ -1002,71 +1020,66 @@ void DopplerInertialFilter::update() {
     const Eigen::Matrix<double, 3, kStateDim> G0 = G.topRows<3>();
     const Mat3 M = G0 * P * G0.transpose();
     const double k2 = params_.regate_sigma * params_.regate_sigma;
-    // Residual and its variance against the update; which pass the point's own gate.
-    const std::size_t m = o.used;
-    std::vector<double>& res_r = scratch_r_;
-    std::vector<double>& res_var = scratch_var_;
-    std::vector<char>& pass = scratch_pass_;
-    if (res_r.size() < m) {  // grown only: the loop below writes the first m
-      res_r.resize(m);
-      res_var.resize(m);
-      pass.resize(m);
-    }
-    {
-      GatePrediction g;
-      for (int i = 0; i < 9; ++i) g.q[i] = q(i);
-      g.setCovariance(M);
-      g.r_doppler = r_doppler_;
-      regateReturns(m, g, k2, o.s.data(), o.dx.data(), o.dy.data(), o.dz.data(), o.za.data(),
-                    res_r.data(), res_var.data(), pass.data());
-      const double* rr = res_r.data();
-      for (std::size_t i = 0; i < m; ++i) o.residual[o.index[i]] = rr[i];
-    }
+    // Residual and its variance against the update; which of those the first gate accepted pass
+    // their own gate.
+    const std::size_t m = o.given;
+    GatePrediction g;
+    for (int i = 0; i < 9; ++i) g.q[i] = q(i);
+    g.setCovariance(M);
+    g.inv_h = n.inv_h;
+    g.r_doppler = r_doppler_;
+    regateReturns(m, g, k2, o.in.tau, o.in.x, o.in.y, o.in.z, o.in.doppler, o.accepted.data(),
+                  o.residual.data(), o.residual2.data(), o.variance2.data(), o.passed.data());
+    std::int64_t* pass = o.passed.data();
     // Coherence: the returns of an object moving slowly along the line of sight each pass the
     // gate, but neighbours in the scan (consecutive returns) share its residual's sign and size.
     // A point whose neighbourhood's mean residual is significantly non-zero is dropped (a static
     // world leaves white residuals against the update).
     const int K = params_.coherence_window;
-    if (K > 1 && m >= static_cast<std::size_t>(K)) {
-      std::vector<double>& cum_r = scratch_cum_r_;
-      std::vector<double>& cum_v = scratch_cum_v_;
-      std::vector<std::size_t>& idx = scratch_idx_;
-      if (idx.size() < m) idx.resize(m);
-      std::size_t np = 0;
-      for (std::size_t i = 0; i < m; ++i) {  // those that passed, packed without branches
-        idx[np] = i;
-        np += pass[i] != 0 ? 1 : 0;
-      }
-      if (cum_r.size() < np + 1) {
-        cum_r.resize(np + 1);
-        cum_v.resize(np + 1);
-      }
+    if (K > 1 && o.used >= static_cast<std::size_t>(K)) {
+      // Those that passed, in order: their indices among the given ones and the prefix sums of
+      // their residuals and variances, packed without branches (a return that did not pass adds
+      // zero, and its slot is written again by the next one that does).
+      std::uint32_t* idx = o.index.data();
+      double* cum_r = o.cum_r.data();
+      double* cum_v = o.cum_v.data();
+      const double* r2 = o.residual2.data();
+      const double* v2 = o.variance2.data();
+      double run_r = 0, run_v = 0;
       cum_r[0] = cum_v[0] = 0.0;
-      for (std::size_t j = 0; j < np; ++j) {
-        cum_r[j + 1] = cum_r[j] + res_r[idx[j]];
-        cum_v[j + 1] = cum_v[j] + res_var[idx[j]];
+      std::size_t np = 0;
+      for (std::size_t i = 0; i < m; ++i) {
+        const bool p = pass[i] != 0;
+        run_r += p ? r2[i] : 0.0;
+        run_v += p ? v2[i] : 0.0;
+        idx[np] = static_cast<std::uint32_t>(i);
+        np += p ? 1 : 0;
+        cum_r[np] = run_r;
+        cum_v[np] = run_v;
       }
+      // The test reads the prefix sums only: a point's verdict does not change its neighbours'.
+      // A neighbourhood is [j - half, j + half], cut at the ends, and tested if it holds K / 2
+      // returns or more.
       const std::size_t half = static_cast<std::size_t>(K / 2);
       const double c2 = params_.coherence_sigma * params_.coherence_sigma;
-      // The test reads the prefix sums only: a point's verdict does not change its neighbours'.
-      for (std::size_t j = 0; j < np; ++j) {
-        const std::size_t lo = j >= half ? j - half : 0;
-        const std::size_t hi = std::min(np, j + half + 1);
-        if (hi - lo < static_cast<std::size_t>(K) / 2) continue;
-        const double sum = cum_r[hi] - cum_r[lo];
-        const double var = cum_v[hi] - cum_v[lo];  // of the sum
-        if (sum * sum > c2 * var) pass[idx[j]] = 0;
-      }
+      std::int64_t* coherent = o.coherent.data();
+      coherenceTest(np, half, static_cast<std::size_t>(K) / 2, c2, cum_r, cum_v, coherent);
+      for (std::size_t j = 0; j < np; ++j)
+        if (coherent[j] != 0) pass[idx[j]] = 0;
     }
     // The dropped points leave the sums (a small share: taking them out is cheaper than summing
-    // the kept ones again).
+    // the kept ones again), in the order given, each as the first gate summed it.
     std::size_t dropped = 0;
     for (std::size_t i = 0; i < m; ++i) {
-      if (pass[i]) continue;
-      o.accepted[o.index[i]] = 0;
-      accumulate(n.sums, o.s[i], Vec3(o.dx[i], o.dy[i], o.dz[i]), o.za[i], -1.0);
+      if (o.accepted[i] == 0 || pass[i] != 0) continue;
+      o.accepted[i] = 0;
+      const Vec3 p(o.in.x[i], o.in.y[i], o.in.z[i]);
+      accumulate(n.sums, static_cast<double>(o.in.tau[i]) * n.inv_h,
+                 p / std::sqrt(p.x() * p.x() + p.y() * p.y() + p.z() * p.z()),
+                 static_cast<double>(o.in.doppler[i]), -1.0);
       ++dropped;
     }
+    o.used -= dropped;
     if (dropped > 0) {
       const FilterState x_first = x;
       solve(x, P, x_first);

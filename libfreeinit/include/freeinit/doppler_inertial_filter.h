@@ -165,7 +165,8 @@ class DopplerInertialFilter {
   void addPoint(double tau, const Eigen::Vector3f& p_l, double doppler) {
     OpenReturns& o = open_;
     if (o.external) throw std::logic_error("DopplerInertialFilter::addPoint: after setReturns");
-    const std::size_t i = o.given < o.tau.size() && o.given < o.s.size() ? o.given++ : o.append(1);
+    const std::size_t i =
+        o.given < o.tau.size() && o.given < o.residual.size() ? o.given++ : o.append(1);
     o.tau[i] = static_cast<float>(tau);
     o.px[i] = p_l.x();
     o.py[i] = p_l.y();
@@ -365,31 +366,30 @@ class DopplerInertialFilter {
     mutable ImuAlong step_imu;
   };
 
-  /// Adds `count` returns (normalized time, unit direction, Doppler) to the sums.
-  static void sumReturns(DopplerSums& sums, const double* s, const double* dx, const double* dy,
-                         const double* dz, const double* z, std::size_t count);
   /// Adds a point to the sums (w = 1) or takes it out (w = -1).
   static void accumulate(DopplerSums& sums, double s, const Vec3& d, double z, double w = 1.0);
 
   /// The open node's returns, structure of arrays. As given: `in`, the caller's (setReturns) or
-  /// the node's own copies (addPoint, addPoints: tau, px, py, pz, z); after update()'s first gate,
-  /// per return: the residual (against the prediction, then against the update for those
-  /// accepted) and whether it is used; and the accepted ones, in order, as the sums see them:
-  /// normalized time, unit direction, Doppler and their index among the given ones.
-  /// The arrays only grow (to what the largest node needed), so that no return is written
-  /// twice; `given` and `used` count what is valid in them.
+  /// the node's own copies (addPoint, addPoints: tau, px, py, pz, z); after update()'s gates,
+  /// per return in the order given: the residual (against the prediction, then against the
+  /// update for those the first gate accepted), whether it is used, and the second gate's
+  /// residual, its variance and verdict. The arrays only grow (to what the largest node needed),
+  /// so that no return is written twice; `given` and `used` count what is valid in them.
   struct OpenReturns {
     std::vector<float> tau, px, py, pz, z;  ///< the copies
     OpenArrays in;
     bool external = false;  ///< `in` is the caller's
     // The per-return results, all 8 bytes wide: the loops over them vectorize without
     // conversions.
-    std::vector<double> residual;
-    std::vector<std::int64_t> accepted;
-    std::vector<double> s, dx, dy, dz, za;
+    std::vector<double> residual, residual2, variance2;
+    std::vector<std::int64_t> accepted, passed;
+    // The coherence test's, over the returns the second gate passed, in order: their index
+    // among the given ones, the prefix sums of their residuals and variances, the verdict.
     std::vector<std::uint32_t> index;
+    std::vector<double> cum_r, cum_v;
+    std::vector<std::int64_t> coherent;
     std::size_t given = 0;  ///< returns given to the node
-    std::size_t used = 0;   ///< accepted by the first gate (s, dx, dy, dz, za, index)
+    std::size_t used = 0;   ///< accepted by the first gate
     void clear() {
       given = used = 0;
       in = {};
@@ -463,10 +463,6 @@ class DopplerInertialFilter {
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;
-  // Work buffers of update(), kept to avoid allocations per node.
-  std::vector<double> scratch_r_, scratch_var_, scratch_cum_r_, scratch_cum_v_;
-  std::vector<char> scratch_pass_;
-  std::vector<std::size_t> scratch_idx_;
   // The open node's prediction for gating.
   Vec9 q_open_ = Vec9::Zero();
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction
