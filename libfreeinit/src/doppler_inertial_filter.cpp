@@ -949,13 +949,12 @@ DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
   // Neither the Doppler nor the rest depends on the position: H's position columns are zero,
   // and the products skip them (a fifth of H P and of H P H^T). Checked (27 values), so that a
   // measurement model that comes to depend on the position cannot be updated wrongly in silence.
-  static_assert(D <= detail::kKalmanMaxStates && R <= detail::kKalmanMaxRows);
+  static_assert(kPos == 3 && kStateDim == 19, "the layout kalman_kernel.h assumes");
   if (!H.template middleCols<3>(kPos).isZero(0.0))
     throw std::logic_error("DopplerInertialFilter::kalmanUpdate: H depends on the position");
   const Eigen::Matrix<double, R, 1> innovation = -r0 - H * dx_prior.template head<D>();
   VecS dx = dx_prior;
-  detail::kalmanUpdateKernel(D, R, P.data(), kStateDim, H.data(), innovation.data(), dx.data(),
-                             kPos, kPos + 3);
+  detail::kalmanUpdateKernel<D, R>(P.data(), H.data(), innovation.data(), dx.data());
   return dx;
 }
 
