@@ -9,7 +9,7 @@
 #include <cstring>
 #include <stdexcept>
 
-#include "kalman_kernel.h"
+#include "filter_kernels.h"
 
 namespace freeinit {
 namespace {
@@ -32,29 +32,6 @@ Mat3 rightJacobian(const Vec3& phi) {
 /// gyro - b_g; Simpson's middle weights change the first term's form, not its derivative).
 Mat3 incrementBiasJacobian(const Vec3& w0, const Vec3& w1, double tau) {
   return -tau * Mat3::Identity() - (tau * tau / 12.0) * skew(Vec3(w0 - w1));
-}
-
-/// F P F^T for a transition F whose rows below the first 9 (attitude, position, velocity) are
-/// those of the identity (the biases and the calibration do not change between samples), on the
-/// first D components of the state: the others are constant and uncorrelated with them (D = 15:
-/// a calibration declared exact) or included (D = 19). Symmetric by construction.
-template <int D>
-DopplerInertialFilter::MatS propagateCovariance(const DopplerInertialFilter::MatS& F,
-                                                const DopplerInertialFilter::MatS& P) {
-  constexpr int kM = D - 9;
-  DopplerInertialFilter::MatS out = P;
-  const Eigen::Matrix<double, 9, D> FP =
-      F.topLeftCorner<9, 9>().lazyProduct(P.topLeftCorner<9, D>()) +
-      F.block<9, kM>(0, 9).lazyProduct(P.block<kM, D>(9, 0));
-  const Eigen::Matrix<double, 9, 9> FP_a = FP.template leftCols<9>();
-  const Eigen::Matrix<double, 9, kM> FP_b = FP.template rightCols<kM>();
-  out.topLeftCorner<9, 9>() = FP_a.lazyProduct(F.topLeftCorner<9, 9>().transpose()) +
-                              FP_b.lazyProduct(F.block<9, kM>(0, 9).transpose());
-  out.block<9, kM>(0, 9) = FP_b;
-  out.block<kM, 9>(9, 0) = FP_b.transpose();
-  out.topLeftCorner<D, D>() =
-      0.5 * (out.topLeftCorner<D, D>() + out.topLeftCorner<D, D>().transpose()).eval();
-  return out;
 }
 
 /// The largest block of a Gauss-Newton step in units of its tolerance
@@ -488,14 +465,60 @@ FilterState DopplerInertialFilter::propagate(const FilterState& x,
   return y;
 }
 
-FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x, MatS* F) const {
+FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x,
+                                             IntegrationJacobian* F) const {
   const double tau = imu_[n.k + 1].t - imu_[n.k].t;
-  IntegrationJacobian blocks;
-  FilterState y = integrate(x, imu_, n.k, tau, F != nullptr ? &blocks : nullptr,
-                            imuAlong(imu_, n.k, tau, n.step_imu));
-  if (F != nullptr) *F = blocks.matrix();
+  FilterState y = integrate(x, imu_, n.k, tau, F, imuAlong(imu_, n.k, tau, n.step_imu));
   y.t = imu_[n.k + 1].t;
   return y;
+}
+
+DopplerInertialFilter::VecS DopplerInertialFilter::IntegrationJacobian::times(
+    const VecS& dx) const {
+  const auto th = dx.segment<3>(kTheta), v = dx.segment<3>(kVel), bg = dx.segment<3>(kBg),
+             ba = dx.segment<3>(kBa);
+  VecS y = dx;
+  y.segment<3>(kTheta) = th_th * th + th_bg * bg;
+  y.segment<3>(kPos) += tau * v + p_th * th + p_bg * bg + p_ba * ba;
+  y.segment<3>(kVel) += v_th * th + v_bg * bg + v_ba * ba;
+  return y;
+}
+
+DopplerInertialFilter::VecS DopplerInertialFilter::IntegrationJacobian::transposeTimes(
+    const VecS& y) const {
+  const auto th = y.segment<3>(kTheta), p = y.segment<3>(kPos), v = y.segment<3>(kVel);
+  VecS z = y;
+  z.segment<3>(kTheta) = th_th.transpose() * th + p_th.transpose() * p + v_th.transpose() * v;
+  z.segment<3>(kVel) += tau * p;
+  z.segment<3>(kBg) += th_bg.transpose() * th + p_bg.transpose() * p + v_bg.transpose() * v;
+  z.segment<3>(kBa) += p_ba.transpose() * p + v_ba.transpose() * v;
+  return z;
+}
+
+DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const IntegrationJacobian& F,
+                                                                       const MatS& P, double dt,
+                                                                       bool full) const {
+  const detail::TransitionBlocks blocks{F.th_th.data(), F.th_bg.data(), F.p_th.data(),
+                                        F.p_bg.data(),  F.p_ba.data(),  F.v_th.data(),
+                                        F.v_bg.data(),  F.v_ba.data(),  F.tau};
+  // The IMU white noises are the process noise (sigma^2 dt^2 per step for the per-sample noise
+  // sigma at the IMU rate): velocity qa, the position integrating it (dt/2 per step, fully
+  // correlated within the step); the biases may walk.
+  const double qg = params_.gyro_sigma * params_.gyro_sigma * dt * dt;
+  const double qa = params_.accel_sigma * params_.accel_sigma * dt * dt;
+  const detail::ProcessNoiseBlocks Q{
+      qg,
+      qa * dt * dt / 4.0,
+      qa * dt / 2.0,
+      qa,
+      params_.gyro_bias_random_walk * params_.gyro_bias_random_walk * dt,
+      params_.accel_bias_random_walk * params_.accel_bias_random_walk * dt};
+  MatS out;
+  if (full || active_ == kStateDim)
+    detail::propagateCovarianceKernel<kStateDim>(blocks, Q, P.data(), out.data());
+  else
+    detail::propagateCovarianceKernel<kCoreDim>(blocks, Q, P.data(), out.data());
+  return out;
 }
 
 DopplerInertialFilter::MatS DopplerInertialFilter::transitionJacobian(
@@ -604,23 +627,6 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   return Q;
 }
 
-DopplerInertialFilter::MatS DopplerInertialFilter::processNoise(double dt) const {
-  MatS Q = MatS::Zero();
-  const double qg = params_.gyro_sigma * params_.gyro_sigma * dt * dt;
-  const double qa = params_.accel_sigma * params_.accel_sigma * dt * dt;
-  Q.block<3, 3>(0, 0).diagonal().setConstant(qg);
-  // Velocity noise qa; position integrates it (dt/2 per step, fully correlated within the step).
-  Q.block<3, 3>(6, 6).diagonal().setConstant(qa);
-  Q.block<3, 3>(3, 3).diagonal().setConstant(qa * dt * dt / 4.0);
-  Q.block<3, 3>(3, 6).diagonal().setConstant(qa * dt / 2.0);
-  Q.block<3, 3>(6, 3).diagonal().setConstant(qa * dt / 2.0);
-  Q.block<3, 3>(9, 9).diagonal().setConstant(params_.gyro_bias_random_walk *
-                                             params_.gyro_bias_random_walk * dt);
-  Q.block<3, 3>(12, 12).diagonal().setConstant(params_.accel_bias_random_walk *
-                                               params_.accel_bias_random_walk * dt);
-  return Q;
-}
-
 void DopplerInertialFilter::addImu(const ImuSample& s) {
   if (!imu_.empty() && !(s.t > imu_.back().t))
     throw std::invalid_argument("DopplerInertialFilter::addImu: time does not increase");
@@ -694,12 +700,9 @@ void DopplerInertialFilter::predict() {
     throw std::logic_error("DopplerInertialFilter::predict: no IMU sample after the node");
   Node n;
   n.k = cur.k + 1;
-  MatS F;
+  IntegrationJacobian F;
   n.x_pred = propagate(cur, cur.x, &F);
-  n.P = (active_ == kStateDim ? propagateCovariance<kStateDim>(F, cur.P)
-                              : propagateCovariance<kCoreDim>(F, cur.P)) +
-        processNoise(imu_[n.k].t - imu_[cur.k].t);
-  n.P = 0.5 * (n.P + n.P.transpose()).eval();
+  n.P = propagateCovariance(F, cur.P, imu_[n.k].t - imu_[cur.k].t);
   n.x = n.xs = n.x_pred;
   nodes_.push_back(n);
 }
@@ -945,11 +948,11 @@ DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
     const Eigen::Matrix<double, R, D>& H, const Eigen::Matrix<double, R, 1>& r0,
     const VecS& dx_prior, MatS& P) {
   // On the first D components (the others constant, uncorrelated, and without effect here when
-  // D < 19); residual r0 + H dx, unit noise. The products as vector code (kalman_kernel.h).
+  // D < 19); residual r0 + H dx, unit noise. The products as vector code (filter_kernels.h).
   // Neither the Doppler nor the rest depends on the position: H's position columns are zero,
   // and the products skip them (a fifth of H P and of H P H^T). Checked (27 values), so that a
   // measurement model that comes to depend on the position cannot be updated wrongly in silence.
-  static_assert(kPos == 3 && kStateDim == 19, "the layout kalman_kernel.h assumes");
+  static_assert(kPos == 3 && kStateDim == 19, "the layout filter_kernels.h assumes");
   if (!H.template middleCols<3>(kPos).isZero(0.0))
     throw std::logic_error("DopplerInertialFilter::kalmanUpdate: H depends on the position");
   const Eigen::Matrix<double, R, 1> innovation = -r0 - H * dx_prior.template head<D>();
@@ -972,15 +975,18 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
   Vec9 y0 = Vec9::Zero();
   W.topRows(rows) = n.rows.W;
   y0.head(rows) = n.rows.y0;
-  // H = W G on the components updated only (the calibration's columns are not needed when it
-  // is declared exact).
+  // H = W G (formed by the kernel) on the components updated only (the calibration's columns
+  // are not needed when it is declared exact). The Doppler does not depend on the position: the
+  // kernel skips G's position columns, checked here (see kalmanUpdate()).
   const Vec9 r0 = W * Q + y0;
-  if (active_ == kStateDim || full) {
-    const Mat9xS H = W.lazyProduct(G);
-    return kalmanUpdate<kStateDim, 9>(H, r0, dx_prior, P);
-  }
-  const Eigen::Matrix<double, 9, kCoreDim> H = W.lazyProduct(G.leftCols<kCoreDim>());
-  return kalmanUpdate<kCoreDim, 9>(H, r0, dx_prior, P);
+  if (!G.middleCols<3>(kPos).isZero(0.0))
+    throw std::logic_error("DopplerInertialFilter::dopplerUpdate: G depends on the position");
+  VecS dx = dx_prior;
+  if (active_ == kStateDim || full)
+    detail::dopplerUpdateKernel<kStateDim>(P.data(), W.data(), G.data(), r0.data(), dx.data());
+  else
+    detail::dopplerUpdateKernel<kCoreDim>(P.data(), W.data(), G.data(), r0.data(), dx.data());
+  return dx;
 }
 
 void DopplerInertialFilter::update() {
@@ -1159,7 +1165,8 @@ int DopplerInertialFilter::smooth() {
       nodes_[k].xs = propagate(nodes_[k - 1], nodes_[k - 1].xs, nullptr);
   smoothed_ = N;
   std::vector<VecS> dx_f(N), dx_p(N), dxs(N);
-  std::vector<MatS> P_f(N), P_p(N), F(N > 0 ? N - 1 : 0);
+  std::vector<MatS> P_f(N), P_p(N);
+  std::vector<IntegrationJacobian> F(N > 0 ? N - 1 : 0);
   int iterations = 0;
   double previous_step = 0;  // none yet: no evidence of the convergence rate
   for (int it = 0; it < params_.max_iterations; ++it) {
@@ -1177,27 +1184,30 @@ int DopplerInertialFilter::smooth() {
       if (k + 1 == N) break;
       const Node& m = nodes_[k + 1];
       const FilterState x_next = propagate(n, n.xs, &F[k]);
-      dx_p[k + 1] = F[k] * dx_f[k] + boxminus(x_next, m.xs);
-      P_p[k + 1] = (active_ == kStateDim ? propagateCovariance<kStateDim>(F[k], P)
-                                         : propagateCovariance<kCoreDim>(F[k], P)) +
-                   processNoise(imu_[m.k].t - imu_[n.k].t);
+      dx_p[k + 1] = F[k].times(dx_f[k]) + boxminus(x_next, m.xs);
+      P_p[k + 1] = propagateCovariance(F[k], P, imu_[m.k].t - imu_[n.k].t);
     }
     // Backward: Rauch-Tung-Striebel, dxs_k = dx_f_k + P_f_k F_k^T P_p_k+1^-1 (dxs_k+1 - dx_p_k+1),
     // evaluated right to left (one solve with a vector; the smoothed covariances are not needed).
     nodes_[N - 1].P = P_f[N - 1];
     dxs[N - 1] = dx_f[N - 1];
     for (std::size_t k = N - 1; k-- > 0;) {
+      // y = P_p^-1 (dxs - dx_p), by Cholesky: with the calibration constant, its part of y is
+      // zero and its step dx_f's.
+      VecS y = dxs[k + 1] - dx_p[k + 1];
       if (active_ == kStateDim) {
-        const VecS y = P_p[k + 1].ldlt().solve(VecS(dxs[k + 1] - dx_p[k + 1]));
-        dxs[k] = dx_f[k] + P_f[k] * (F[k].transpose() * y);
-      } else {  // the calibration is constant: its part of y is zero, its step dx_f's
-        using VecC = Eigen::Matrix<double, kCoreDim, 1>;
-        const VecC y = P_p[k + 1].topLeftCorner<kCoreDim, kCoreDim>().ldlt().solve(
-            VecC((dxs[k + 1] - dx_p[k + 1]).head<kCoreDim>()));
-        dxs[k] = dx_f[k];
-        dxs[k].head<kCoreDim>() += P_f[k].topLeftCorner<kCoreDim, kCoreDim>() *
-                                   (F[k].topLeftCorner<kCoreDim, kCoreDim>().transpose() * y);
+        detail::choleskySolveKernel<kStateDim>(P_p[k + 1].data(), y.data());
+      } else {
+        detail::choleskySolveKernel<kCoreDim>(P_p[k + 1].data(), y.data());
+        y.tail<kStateDim - kCoreDim>().setZero();
       }
+      const VecS Fty = F[k].transposeTimes(y);
+      dxs[k] = dx_f[k];
+      if (active_ == kStateDim)
+        dxs[k] += P_f[k] * Fty;
+      else
+        dxs[k].head<kCoreDim>() +=
+            P_f[k].topLeftCorner<kCoreDim, kCoreDim>() * Fty.head<kCoreDim>();
       nodes_[k].P = P_f[k];
     }
     // Converged when no node moves by more than the tolerance of its block (scaled), or when the
@@ -1243,10 +1253,10 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
     dx = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, n.xs, dx, P, true), P, true);
     if (k + 1 == N) break;
     const Node& m = nodes_[k + 1];
-    MatS F;
+    IntegrationJacobian F;
     const FilterState x_next = propagate(n, n.xs, &F);
-    dx = F * dx + boxminus(x_next, m.xs);
-    P = propagateCovariance<kStateDim>(F, P) + processNoise(imu_[m.k].t - imu_[n.k].t);
+    dx = F.times(dx) + boxminus(x_next, m.xs);
+    P = propagateCovariance(F, P, imu_[m.k].t - imu_[n.k].t, true);
   }
   out.correction = dx;
   out.covariance = P;

@@ -415,20 +415,25 @@ class DopplerInertialFilter {
     Mat3 p_th = Mat3::Zero(), p_bg = Mat3::Zero(), p_ba = Mat3::Zero();
     double tau = 0;
     MatS matrix() const;
+    /// F dx and F^T y, with the blocks.
+    VecS times(const VecS& dx) const;
+    VecS transposeTimes(const VecS& y) const;
   };
   /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
   /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
                                std::size_t k, double tau, IntegrationJacobian* J,
                                const ImuAlong& along);
-  /// propagate() from node n (its IMU sampled once).
-  FilterState propagate(const Node& n, const FilterState& x, MatS* F) const;
+  /// propagate() from node n (its IMU sampled once), with the transition's blocks (if F).
+  FilterState propagate(const Node& n, const FilterState& x, IntegrationJacobian* F) const;
+  /// F P F^T plus the process noise over dt, on the components updated (all 19: full).
+  MatS propagateCovariance(const IntegrationJacobian& F, const MatS& P, double dt,
+                           bool full = false) const;
   /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
   /// given): the IMU along the integration, as imuAlong() keeps it.
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
                      double tau, const Mat3& R_bl, const Mat3* Jr_phi,
                      Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache) const;
-  MatS processNoise(double dt) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
   /// .. k + 2), and dQ/dn for their noise (column block j: sample k - 2 + j; fewer at the ends).
