@@ -34,6 +34,30 @@ Mat3 incrementBiasJacobian(const Vec3& w0, const Vec3& w1, double tau) {
   return -tau * Mat3::Identity() - (tau * tau / 12.0) * skew(Vec3(w0 - w1));
 }
 
+/// X := Y^-1 X for a 9 x 9 Y, by Gaussian elimination with partial pivoting (as
+/// Eigen::PartialPivLU, whose blocked triangular solves cost more than the whole at this size).
+template <int C>
+void solveInPlace(Eigen::Matrix<double, 9, 9> Y, Eigen::Matrix<double, 9, C>& X) {
+  for (int j = 0; j < 9; ++j) {
+    int p = j;
+    for (int i = j + 1; i < 9; ++i)
+      if (std::abs(Y(i, j)) > std::abs(Y(p, j))) p = i;
+    if (p != j) {
+      Y.row(j).swap(Y.row(p));
+      X.row(j).swap(X.row(p));
+    }
+    for (int i = j + 1; i < 9; ++i) {
+      const double f = Y(i, j) / Y(j, j);
+      for (int k = j + 1; k < 9; ++k) Y(i, k) -= f * Y(j, k);
+      X.row(i) -= f * X.row(j);
+    }
+  }
+  for (int j = 8; j >= 0; --j) {
+    X.row(j) /= Y(j, j);
+    for (int i = 0; i < j; ++i) X.row(i) -= Y(i, j) * X.row(j);
+  }
+}
+
 /// The largest block of a Gauss-Newton step in units of its tolerance
 /// (DopplerInertialFilterParams::convergence).
 double stepInTolerances(const DopplerInertialFilter::VecS& dx) {
@@ -731,9 +755,9 @@ void DopplerInertialFilter::beginNode(bool last) {
   Mat9xS G;
   q_open_ = velocityPolynomial(n, n.x_pred, &G);
   const Eigen::Matrix<double, 3, kStateDim> G0 = G.topRows<3>();
-  M_open_ = G0 *
-            (nodes_.size() == 1 ? priorCovariance(n.x_pred, prior_.gate_velocity_scale) : n.P) *
-            G0.transpose();
+  const MatS& P_gate =
+      nodes_.size() == 1 ? priorCovariance(n.x_pred, prior_.gate_velocity_scale) : n.P;
+  M_open_ = G0.lazyProduct(P_gate).lazyProduct(G0.transpose());
   n.inv_h = 1.0 / n.h;
   gate_speed_open_ = params_.gate_rel * q_open_.head<3>().norm();
 }
@@ -932,13 +956,13 @@ void DopplerInertialFilter::marginalizeLeverNoise(const Node& n, Mat9& A, Vec9& 
   // Not modelled: the correlation between neighbouring nodes (they share samples) and with the
   // same samples' noise in the attitude propagation (its process noise).
   const LeverNoise E = leverNoise(n);
-  const Mat9 C_scaled = (E * E.transpose()) / lever_ratio_;  // C / sigma_d^2
-  Mat9 Y = A * C_scaled;
+  // Coefficient-based products (lazyProduct): at these sizes Eigen's blocked kernels cost more.
+  const Mat9 C_scaled = E.lazyProduct(E.transpose()) / lever_ratio_;  // C / sigma_d^2
+  Mat9 Y = A.lazyProduct(C_scaled);
   Y.diagonal().array() += 1.0;
-  const Eigen::PartialPivLU<Mat9> lu(Y);
-  Eigen::Matrix<double, 9, 10> Ab;
-  Ab << A, b;
-  const Eigen::Matrix<double, 9, 10> X = lu.solve(Ab);
+  Eigen::Matrix<double, 9, 10> X;
+  X << A, b;
+  solveInPlace(Y, X);
   A = 0.5 * (X.leftCols<9>() + X.leftCols<9>().transpose());
   b = X.col(9);
 }
@@ -1023,7 +1047,7 @@ void DopplerInertialFilter::update() {
     Mat9xS G;
     const Vec9 q = velocityPolynomial(n, x, &G);
     const Eigen::Matrix<double, 3, kStateDim> G0 = G.topRows<3>();
-    const Mat3 M = G0 * P * G0.transpose();
+    const Mat3 M = G0.lazyProduct(P).lazyProduct(G0.transpose());
     const double k2 = params_.regate_sigma * params_.regate_sigma;
     // Residual and its variance against the update; which of those the first gate accepted pass
     // their own gate.
@@ -1314,8 +1338,8 @@ DopplerInertialFilter::NodeResiduals DopplerInertialFilter::nodeResiduals(
     if (lever_ratio_ > 0) {  // g moves by [S0 S1 S2] E n with the gyro noise n
       Eigen::Matrix<double, 3, 9> G;
       for (int m = 0; m < 3; ++m) G.middleCols<3>(3 * m) = n.sums.moment(m);
-      const Eigen::Matrix<double, 3, kLeverDim> GE = G * leverNoise(n);
-      cov += var_g * GE * GE.transpose();
+      const Eigen::Matrix<double, 3, kLeverDim> GE = G.lazyProduct(leverNoise(n));
+      cov += var_g * GE.lazyProduct(GE.transpose());
     }
     const Eigen::LDLT<Mat3> ldlt(cov);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) continue;
