@@ -10,6 +10,7 @@
 #include <stdexcept>
 
 #include "filter_kernels.h"
+#include "vector_clones.h"
 
 namespace freeinit {
 namespace {
@@ -84,13 +85,7 @@ struct GatePrediction {
 };
 
 // The per-return loops: without branches and over arrays that do not overlap (__restrict), so
-// that the compiler vectorizes them; built for AVX2 as well as the baseline, chosen at load time
-// (the same operations in the same order: the same results on either).
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define FREEINIT_VECTOR_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FREEINIT_VECTOR_CLONES
-#endif
+// that the compiler vectorizes them; built for several instruction sets (vector_clones.h).
 
 typedef double V4 __attribute__((vector_size(32)));
 

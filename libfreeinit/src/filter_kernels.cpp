@@ -5,14 +5,15 @@
 #include <cstdint>
 #include <cstring>
 
+#include "vector_clones.h"
+
 namespace freeinit::detail {
 namespace {
 
 // Four doubles: an AVX register, or two SSE2 ones in the baseline build. The code below runs the
-// same operations in the same order per lane whatever the width (no fused multiply-add in
-// either), so both builds give the same results; built for both, chosen at load time. The sizes
-// are template parameters: every loop below has a known trip count and is unrolled, and every
-// lane it reads is known at compile time.
+// same operations in the same order per lane whatever the width (vector_clones.h), so every
+// build gives the same results. The sizes are template parameters: every loop below has a known
+// trip count and is unrolled, and every lane it reads is known at compile time.
 typedef double V4 __attribute__((vector_size(32)));
 
 constexpr int kLd = 19;        ///< P's leading dimension (DopplerInertialFilter::kStateDim)
@@ -356,19 +357,13 @@ __attribute__((always_inline)) inline void choleskySolve(const double* A, double
 
 }  // namespace
 
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define FREEINIT_KALMAN_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FREEINIT_KALMAN_CLONES
-#endif
-
-// One function per size, each built for AVX2 and the baseline (target_clones does not apply to
-// templates).
-FREEINIT_KALMAN_CLONES
+// One function per size, each built for several instruction sets (vector_clones.h;
+// target_clones does not apply to templates).
+FREEINIT_VECTOR_CLONES
 void kalmanUpdate15x6(double* P, const double* H, const double* innovation, double* dx) {
   updateFromH<15, 6>(P, H, innovation, dx);
 }
-FREEINIT_KALMAN_CLONES
+FREEINIT_VECTOR_CLONES
 void kalmanUpdate19x6(double* P, const double* H, const double* innovation, double* dx) {
   updateFromH<19, 6>(P, H, innovation, dx);
 }
@@ -386,11 +381,11 @@ void kalmanUpdateKernel<19, 6>(double* P, const double* H, const double* innovat
 
 namespace freeinit::detail {
 
-FREEINIT_KALMAN_CLONES
+FREEINIT_VECTOR_CLONES
 void dopplerUpdate15(double* P, const double* W, const double* G, const double* r0, double* dx) {
   updateFromRows<15>(P, W, G, r0, dx);
 }
-FREEINIT_KALMAN_CLONES
+FREEINIT_VECTOR_CLONES
 void dopplerUpdate19(double* P, const double* W, const double* G, const double* r0, double* dx) {
   updateFromRows<19>(P, W, G, r0, dx);
 }
@@ -405,19 +400,19 @@ void dopplerUpdateKernel<19>(double* P, const double* W, const double* G, const 
   dopplerUpdate19(P, W, G, r0, dx);
 }
 
-FREEINIT_KALMAN_CLONES
+FREEINIT_VECTOR_CLONES
 void propagateCovariance15(const TransitionBlocks& F, const ProcessNoiseBlocks& Q, const double* P,
                            double* out) {
   propagate<15>(F, Q, P, out);
 }
-FREEINIT_KALMAN_CLONES
+FREEINIT_VECTOR_CLONES
 void propagateCovariance19(const TransitionBlocks& F, const ProcessNoiseBlocks& Q, const double* P,
                            double* out) {
   propagate<19>(F, Q, P, out);
 }
-FREEINIT_KALMAN_CLONES
+FREEINIT_VECTOR_CLONES
 void choleskySolve15(const double* A, double* b) { choleskySolve<15>(A, b); }
-FREEINIT_KALMAN_CLONES
+FREEINIT_VECTOR_CLONES
 void choleskySolve19(const double* A, double* b) { choleskySolve<19>(A, b); }
 
 template <>
