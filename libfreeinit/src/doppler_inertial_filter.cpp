@@ -747,9 +747,8 @@ void DopplerInertialFilter::beginNode(bool last) {
   n.V_inv = V.inverse();
   n.sums = DopplerSums{};
   open_.clear();
-  Mat9xS G;
-  q_open_ = velocityPolynomial(n, n.x_pred, &G);
-  const Eigen::Matrix<double, 3, kStateDim> G0 = G.topRows<3>();
+  q_open_ = velocityPolynomial(n, n.x_pred, &G_open_);
+  const Eigen::Matrix<double, 3, kStateDim> G0 = G_open_.topRows<3>();
   const MatS& P_gate =
       nodes_.size() == 1 ? priorCovariance(n.x_pred, prior_.gate_velocity_scale) : n.P;
   M_open_ = G0.lazyProduct(P_gate).lazyProduct(G0.transpose());
@@ -984,10 +983,18 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
                                                                  const FilterState& x_lin,
                                                                  const VecS& dx_prior, MatS& P,
                                                                  bool full) const {
-  const int rows = static_cast<int>(n.rows.W.rows());
-  if (rows == 0) return dx_prior;
+  if (n.rows.W.rows() == 0) return dx_prior;
   Mat9xS G;
   const Vec9 Q = velocityPolynomial(n, x_lin, &G);
+  return dopplerUpdate(n, Q, G, dx_prior, P, full);
+}
+
+DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n, const Vec9& Q,
+                                                                 const Mat9xS& G,
+                                                                 const VecS& dx_prior, MatS& P,
+                                                                 bool full) const {
+  const int rows = static_cast<int>(n.rows.W.rows());
+  if (rows == 0) return dx_prior;
   // Fixed-size 9-row form (rows beyond the node's rank are zero: they add an identity block to
   // S and nothing else), so that every product below is unrolled at compile time.
   Mat9 W = Mat9::Zero();
@@ -1031,7 +1038,13 @@ void DopplerInertialFilter::update() {
   };
   FilterState x;
   MatS P;
-  solve(x, P, n.x_pred);
+  // The first solve, at the prediction: beginNode() linearized the node there for its gate.
+  buildRows(n);
+  P = P_pred;
+  x = n.x_pred;
+  if (n.rows.W.rows() > 0)
+    x = boxplus(n.x_pred,
+                dopplerUpdate(n, q_open_, G_open_, boxminus(n.x_pred, n.x_pred), P, false));
   // Second gate, against the update: the first one, against the prediction, must be wide where
   // the prediction is uncertain (the first nodes) and lets slow moving objects through; the
   // points are gated again at regate_sigma of their residual's std after the update (no floor,

@@ -449,6 +449,9 @@ class DopplerInertialFilter {
   /// all 19 components even when the calibration is declared exact.
   VecS dopplerUpdate(const Node& n, const FilterState& x_lin, const VecS& dx_prior, MatS& P,
                      bool full = false) const;
+  /// The same with node n's velocity polynomial Q and its Jacobian G at x_lin given.
+  VecS dopplerUpdate(const Node& n, const Vec9& Q, const Mat9xS& G, const VecS& dx_prior, MatS& P,
+                     bool full) const;
   /// Rest update of the error dx (relative to x_lin, covariance P) at node n.
   VecS restUpdate(const Node& n, const Vec3& gyro, const FilterState& x_lin, const VecS& dx,
                   MatS& P, bool full = false) const;
@@ -468,8 +471,10 @@ class DopplerInertialFilter {
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;
-  // The open node's prediction for gating.
+  // The open node's prediction for gating, and the Jacobian of q_open_ (the linearization of
+  // the node's first solve, at the same state).
   Vec9 q_open_ = Vec9::Zero();
+  Mat9xS G_open_ = Mat9xS::Zero();
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction
   double gate_speed_open_ = 0;  ///< [m/s] the gate's share of the LiDAR speed
   bool node_open_ = false;      ///< between beginNode() and update()
