@@ -29,6 +29,26 @@ Mat3 rightJacobian(const Vec3& phi) {
   return Mat3::Identity() - (1.0 - std::cos(t)) / t2 * K + (t - std::sin(t)) / (t2 * t) * K * K;
 }
 
+/// Exp(phi) and J_r(phi) with one sine and cosine: the same operations as Exp() and
+/// rightJacobian() (and so the same values).
+void expAndRightJacobian(const Vec3& phi, Mat3& E, Mat3& Jr) {
+  const double t2 = phi.squaredNorm();
+  const Mat3 K = skew(phi);
+  double t = 0, sin_t = 0, cos_t = 1;
+  if (t2 >= 1e-10) {
+    t = std::sqrt(t2);
+    sin_t = std::sin(t);
+    cos_t = std::cos(t);
+  }
+  const double a = t2 < 1e-10 ? 1.0 - t2 / 6.0 : sin_t / t;
+  const double b = t2 < 1e-10 ? 0.5 - t2 / 24.0 : (1.0 - cos_t) / t2;
+  E = Mat3::Identity() + a * K + b * (K * K);
+  if (t2 < 1e-8)
+    Jr = Mat3::Identity() - 0.5 * K + (1.0 / 6.0) * K * K;
+  else
+    Jr = Mat3::Identity() - (1.0 - cos_t) / t2 * K + (t - sin_t) / (t2 * t) * K * K;
+}
+
 /// d phi / d b_g of the rotation vector (w0 + w1) tau / 2 + (w0 x w1) tau^2 / 12 (both rates are
 /// gyro - b_g; Simpson's middle weights change the first term's form, not its derivative).
 Mat3 incrementBiasJacobian(const Vec3& w0, const Vec3& w1, double tau) {
@@ -443,7 +463,14 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
   const Vec3 phi_h =
       (0.5 * tau / 6.0) * (w[0] + 4.0 * w[1] + w[2]) + w[0].cross(w[2]) * (0.25 * tau * tau / 12.0);
   const Vec3 phi = (tau / 6.0) * (w[0] + 4.0 * w[2] + w[3]) + w[0].cross(w[3]) * (tau * tau / 12.0);
-  const Mat3 E_h = Exp(phi_h), E = Exp(phi);
+  Mat3 E_h, E, Jr_h, Jr_1;
+  if (J != nullptr) {
+    expAndRightJacobian(phi_h, E_h, Jr_h);
+    expAndRightJacobian(phi, E, Jr_1);
+  } else {
+    E_h = Exp(phi_h);
+    E = Exp(phi);
+  }
   const Mat3 R_h = x.R_wb * E_h, R_1 = x.R_wb * E;
   const Vec3 a0 = x.R_wb * f[0] + kGravityW, ah = R_h * f[2] + kGravityW,
              a1 = R_1 * f[3] + kGravityW;
@@ -457,8 +484,8 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
     // da_s = -R_s [f_s]x dtheta_s - R_s db_a;  dv' = dv + tau/6 (da_0 + 4 da_h + da_1)
     // dp' = dp + tau dv + tau^2/6 (da_0 + 2 da_h)
     const Mat3 th_h = E_h.transpose(), th_1 = E.transpose();
-    const Mat3 bg_h = rightJacobian(phi_h) * incrementBiasJacobian(w[0], w[2], 0.5 * tau);
-    const Mat3 bg_1 = rightJacobian(phi) * incrementBiasJacobian(w[0], w[3], tau);
+    const Mat3 bg_h = Jr_h * incrementBiasJacobian(w[0], w[2], 0.5 * tau);
+    const Mat3 bg_1 = Jr_1 * incrementBiasJacobian(w[0], w[3], tau);
     const Mat3 a0_th = -x.R_wb * skew(f[0]), a0_ba = -x.R_wb;
     const Mat3 ah_th = -R_h * skew(f[2]) * th_h, ah_bg = -R_h * skew(f[2]) * bg_h, ah_ba = -R_h;
     const Mat3 a1_th = -R_1 * skew(f[3]) * th_1, a1_bg = -R_1 * skew(f[3]) * bg_1, a1_ba = -R_1;
