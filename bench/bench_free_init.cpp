@@ -3,6 +3,8 @@
 //                          (their difference: the per-point stage; items_per_second = returns/s).
 //   BM_JointForwardPassFrameRuns  the same with the returns handed over as the pipeline does
 //                          with every point used: a frame's run of them per node at once.
+//   BM_JointForwardPassArrays  the same with each node's returns as the arrays the pipeline's
+//                          recorder lays out (setReturns: the filter's stage without a copy).
 //   BM_VelocimeterDoppler  Doppler point updates per second through the velocimeter alone
 //                          (propagate + updateDoppler, gyro updates interleaved at 200 Hz as in the
 //                          real stream). items_per_second = points/s; target >= 3,000,000.
@@ -250,6 +252,7 @@ std::int64_t forwardPass(const freeinit::sim::Recording& rec,
                          const freeinit::DopplerInertialFilterParams& fp, std::size_t k_end,
                          Take&& take) {
   freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
+  filter.reserveNodes(k_end + 1);
   startAtTruth(filter, rec, k_end);
   std::int64_t points = 0;
   for (std::size_t k = 0;; ++k) {
@@ -359,9 +362,57 @@ void BM_JointForwardPassFrameRuns(benchmark::State& state, const std::string& na
   reportReturns(state, points);
 }
 
+/// BM_JointForwardPass with each node's returns handed over as the joint pipeline's recorder
+/// lays them out: arrays of the node's returns (time from the node, position, Doppler), made
+/// before the timed loop (setReturns(): no copy in the filter). The filter's own per-return stage,
+/// without the layout, which BM_FreeInitRun counts.
+void BM_JointForwardPassArrays(benchmark::State& state, const std::string& name) {
+  const freeinit::sim::Recording& rec = recording(name);
+  const freeinit::FreeInitConfig cfg;
+  const double t0 = rec.imu.front().t;
+  freeinit::DopplerInertialFilterParams fp;
+  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  const std::size_t k_end = lastNodeOfWindow(rec, cfg);
+  // Node k's returns: time in [t_k - dt_before / 2, t_k + dt_after / 2) (the last node's up to
+  // t_k), in range, as the filter's intervals have them.
+  struct NodeArrays {
+    std::vector<float> tau, x, y, z, doppler;
+  };
+  std::vector<NodeArrays> nodes(k_end + 1);
+  for (const auto& f : rec.frames)
+    for (const auto& p : f.points) {
+      const double r = p.p_l.norm();
+      if (r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range) continue;
+      const double t = f.stamp + p.time_offset;
+      if (t < t0 || t > rec.imu[k_end].t) continue;
+      std::size_t k = 0;
+      while (k < k_end && t >= rec.imu[k].t + 0.5 * (rec.imu[k + 1].t - rec.imu[k].t)) ++k;
+      NodeArrays& n = nodes[k];
+      n.tau.push_back(static_cast<float>(t - rec.imu[k].t));
+      n.x.push_back(p.p_l.x());
+      n.y.push_back(p.p_l.y());
+      n.z.push_back(p.p_l.z());
+      n.doppler.push_back(p.doppler);
+    }
+  std::int64_t points = 0;
+  for (auto _ : state) {
+    std::size_t k = 0;
+    points += forwardPass(
+        rec, fp, k_end, [&](freeinit::DopplerInertialFilter& filter, double, double, bool) {
+          const NodeArrays& n = nodes[k++];
+          filter.setReturns(
+              {n.tau.size(), n.tau.data(), n.x.data(), n.y.data(), n.z.data(), n.doppler.data()});
+          return static_cast<std::int64_t>(n.tau.size());
+        });
+  }
+  reportReturns(state, points);
+}
+
 }  // namespace
 
 BENCHMARK_CAPTURE(BM_JointForwardPassFrameRuns, dyna_05_every_point, std::string("dyna_05"))
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_JointForwardPassArrays, dyna_05_every_point, std::string("dyna_05"))
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_JointForwardPass, dyna_05_every_point, std::string("dyna_05"), true)
     ->Unit(benchmark::kMillisecond);

@@ -233,6 +233,16 @@ class JointPipeline final : public Pipeline {
     prior.rotation_sigma = cfg_.estimator.calibration_rotation_sigma_deg * kPi / 180.0;
     prior.time_sigma = cfg_.estimator.time_offset_sigma;
     filter_.emplace(filterParams(), cfg_.extrinsics);
+    // The window's nodes at the IMU rate of the start span (a few more if the rate varies: the
+    // nodes then grow as needed).
+    const auto& imu = seq_.imu();
+    const std::size_t k_last = std::min(imu.size() - 1, k_first_ + 10);
+    if (k_last > k_first_) {
+      const double dt = (imu[k_last].t - imu[k_first_].t) / static_cast<double>(k_last - k_first_);
+      constexpr double kMostNodes = 1e5;
+      filter_->reserveNodes(
+          static_cast<std::size_t>(std::min(kMostNodes, 1.1 * cfg_.window.duration / dt)) + 4);
+    }
     fed_ = k_first_;
     feedImu(k_first_ + 2);
     filter_->start(x0, prior);

@@ -142,6 +142,9 @@ class DopplerInertialFilter {
   };
   /// Starts with node 0 at the first IMU sample (x0.t is set to its time) with the prior mean x0.
   void start(const FilterState& x0, const StartPrior& prior);
+  /// Room for n nodes, when the caller knows how many the window will have: a node is a few
+  /// kilobytes, and growing the nodes by doubling copies them and touches new memory each time.
+  void reserveNodes(std::size_t n) { nodes_.reserve(n); }
   /// The prior covariance of node 0 expressed at state x (velocity block scaled by v_scale).
   MatS priorCovariance(const FilterState& x, double v_scale = 1.0) const;
   /// The start's prior as the mean of an error at x (what priorCovariance(x) is the covariance of).
