@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <cstring>
 #include <optional>
 #include <random>
 #include <utility>
@@ -24,7 +25,7 @@ double chi2Quantile(double dof, double z) {
 }
 
 /// The returns as linear equations in theta = (v_b0, g_b0, db_g), one array per quantity: the
-/// refinement sweeps them seven times per hypothesis, and Eigen vectorizes sweeps over arrays.
+/// refinement sweeps them seven times per hypothesis, four returns per vector operation.
 /// With s = v_b0 + t g_b0 a return of direction w = R_0t u in b0 reads
 ///   e = -w^T s + c^T db_g + noise,   c = c0 + K s,
 /// where c = p_bl x u - t v_b(t) x u is the gyro-bias column (refine() says why) and, from
@@ -133,85 +134,211 @@ class CoverageGrid {
   std::array<int, kCells> totals_;
 };
 
+// The sweeps of the refinement over the returns run four returns (or two rows of the normal
+// equations' products) per vector operation, built for AVX2 as well as the baseline and chosen at
+// load time. Each lane does one return's operations in the order the scalar formulas give them
+// (no fused multiply-add in either build), so both builds give the same results.
+#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
+#define FREEINIT_START_CLONES __attribute__((target_clones("avx2", "default")))
+#define FREEINIT_START_INLINE __attribute__((always_inline)) inline
+#else
+#define FREEINIT_START_CLONES
+#define FREEINIT_START_INLINE inline
+#endif
+// The helpers below return vectors by value. They are always inlined into the sweeps, so the
+// calling convention such a vector would have across a call (which differs between the builds)
+// never applies. (GCC reports it at the end of the file: the note is off from here on.)
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic ignored "-Wpsabi"
+#endif
+
+/// The weighted equations q (a^T, e) of a return, 10 values per return, kept two returns to a
+/// block of 20: value c of return r at [20 (r / 2) + 2 c + r % 2]. Two returns' values of one
+/// column are side by side and two columns of a pair of returns are four consecutive values: the
+/// products of a column with two others are one vector operation (gramBlocks()).
+constexpr std::size_t kBlock = 20;
+
 /// Buffers of the refinement, kept across its calls (no allocation per iteration).
 struct RefineWork {
-  explicit RefineWork(Eigen::Index n) : sx(n), sy(n), sz(n), res(n), q(n), M(n, 10) {}
-  Eigen::ArrayXd sx, sy, sz, res, q;
-  /// The weighted equations: q a^T and q e per return. M^T M holds the normal equations
-  /// (sum of w a a^T, w = q^2) and their right-hand side (sum of w e a) at once.
-  Eigen::Matrix<double, Eigen::Dynamic, 10> M;
+  explicit RefineWork(Eigen::Index n)
+      : res(n),
+        cx(n),
+        cy(n),
+        cz(n),
+        blocks(static_cast<Eigen::Index>(kBlock) * 2 * ((n + 3) / 4)) {}
+  /// The residuals e - a^T theta and the gyro-bias columns c, unweighted (finalResiduals()).
+  Eigen::ArrayXd res, cx, cy, cz;
+  /// The weighted equations (kBlock). Their products hold the normal equations (sum of w a a^T,
+  /// w = q^2) and their right-hand side (sum of w e a) at once.
+  Eigen::ArrayXd blocks;  // (not zeroed: what is read is written first)
 };
 
-/// Residuals e - a^T theta (in `wk.res`) of the first `rows.size()` entries of the buffers, and
-/// the gyro-bias columns c, unweighted, in columns 6..8 of `wk.M` (normalEquations() weighs them).
-void residuals(const Rows& rows, const Vec3& v, const Vec3& g, const Vec3& db, RefineWork& wk) {
-  const Eigen::Index n = rows.size();
-  auto sx = wk.sx.head(n), sy = wk.sy.head(n), sz = wk.sz.head(n);
-  auto cx = wk.M.col(6).head(n).array(), cy = wk.M.col(7).head(n).array(),
-       cz = wk.M.col(8).head(n).array();
-  sx = v.x() + rows.t * g.x();
-  sy = v.y() + rows.t * g.y();
-  sz = v.z() + rows.t * g.z();
-  const auto& K = rows.K;
-  cx = rows.c0x + K.col(0) * sx + K.col(1) * sy + K.col(2) * sz;
-  cy = rows.c0y + K.col(3) * sx + K.col(4) * sy + K.col(5) * sz;
-  cz = rows.c0z + K.col(6) * sx + K.col(7) * sy + K.col(8) * sz;
-  wk.res.head(n) = rows.e + (rows.wx * sx + rows.wy * sy + rows.wz * sz) -
-                   (cx * db.x() + cy * db.y() + cz * db.z());
+// Four doubles: an AVX register, or two SSE2 ones in the baseline build.
+typedef double V4 __attribute__((vector_size(32)));
+typedef double V2 __attribute__((vector_size(16)));
+
+FREEINIT_START_INLINE V4 load4(const double* p) {
+  V4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
 }
 
-/// Column I of the lower triangle of M^T M over rows [0, n2) (n2 even): its 10 - I sums stay in
-/// registers, two rows per vector operation.
-template <int I>
-void gramColumn(const Eigen::Matrix<double, Eigen::Dynamic, 10>& M, Eigen::Index n2,
-                Eigen::Matrix<double, 10, 10>& N) {
-  constexpr int kSums = 10 - I;
-  using Pair = Eigen::Map<const Eigen::Array2d>;
-  const double* col = M.data();
-  const Eigen::Index ld = M.rows();
-  std::array<Eigen::Array2d, kSums> sum;
-  for (Eigen::Array2d& x : sum) x.setZero();
-  for (Eigen::Index r = 0; r < n2; r += 2) {
-    const Eigen::Array2d a = Pair(col + I * ld + r);
-    for (int j = 0; j < kSums; ++j) sum[j] += a * Pair(col + (I + j) * ld + r);
+/// The returns' equations as the sweeps read them: Rows' arrays, or a copy of their last few.
+struct RowArrays {
+  static constexpr int kArrays = 20;
+  enum Array : int { T, E, WX, WY, WZ, TWX, TWY, TWZ, C0X, C0Y, C0Z, K0 };  // K0..K0 + 8: K
+  std::array<const double*, kArrays> a;
+  explicit RowArrays(const Rows& r)
+      : a{r.t.data(),   r.e.data(),   r.wx.data(),  r.wy.data(),  r.wz.data(),  r.twx.data(),
+          r.twy.data(), r.twz.data(), r.c0x.data(), r.c0y.data(), r.c0z.data(), r.K.data()} {
+    for (int j = 1; j < 9; ++j) a[static_cast<std::size_t>(K0 + j)] = r.K.col(j).data();
   }
-  for (int j = 0; j < kSums; ++j) N(I + j, I) = sum[j].sum();
+  /// Rows [i, i + count) (count < 4) of `o`, zero-padded to four, in `room`.
+  RowArrays(const RowArrays& o, std::size_t i, std::size_t count,
+            std::array<std::array<double, 4>, kArrays>& room) {
+    for (std::size_t k = 0; k < a.size(); ++k) {
+      room[k].fill(0.0);
+      std::copy(o.a[k] + i, o.a[k] + i + count, room[k].begin());
+      a[k] = room[k].data();
+    }
+  }
+};
+
+/// Returns i..i+3 of one of the arrays.
+FREEINIT_START_INLINE V4 at(const RowArrays& r, int array, std::size_t i) {
+  return load4(r.a[static_cast<std::size_t>(array)] + i);
+}
+
+/// The gyro-bias columns c of returns i..i+3 at s = v + t g, and their residuals e - a^T theta,
+/// theta = (v_b0, g_b0, db_g).
+struct FourRows {
+  V4 cx, cy, cz, res;
+};
+FREEINIT_START_INLINE FourRows fourRows(const RowArrays& r, std::size_t i, const double* theta) {
+  using A = RowArrays::Array;
+  const V4 t = at(r, A::T, i);
+  const V4 sx = theta[0] + t * theta[3], sy = theta[1] + t * theta[4], sz = theta[2] + t * theta[5];
+  const int K = A::K0;
+  FourRows o;
+  o.cx = at(r, A::C0X, i) + at(r, K, i) * sx + at(r, K + 1, i) * sy + at(r, K + 2, i) * sz;
+  o.cy = at(r, A::C0Y, i) + at(r, K + 3, i) * sx + at(r, K + 4, i) * sy + at(r, K + 5, i) * sz;
+  o.cz = at(r, A::C0Z, i) + at(r, K + 6, i) * sx + at(r, K + 7, i) * sy + at(r, K + 8, i) * sz;
+  o.res = (at(r, A::E, i) + (at(r, A::WX, i) * sx + at(r, A::WY, i) * sy + at(r, A::WZ, i) * sz)) -
+          (o.cx * theta[6] + o.cy * theta[7] + o.cz * theta[8]);
+  return o;
+}
+
+/// Residuals e - a^T theta of rows [0, n) and their gyro-bias columns c, unweighted.
+FREEINIT_START_CLONES
+void finalResiduals(const RowArrays& r, std::size_t n, const double* theta, double* __restrict res,
+                    double* __restrict cx, double* __restrict cy, double* __restrict cz) {
+  const auto store = [&](const FourRows& o, std::size_t i, std::size_t count) {
+    for (std::size_t k = 0; k < count; ++k) {
+      res[i + k] = o.res[k];
+      cx[i + k] = o.cx[k];
+      cy[i + k] = o.cy[k];
+      cz[i + k] = o.cz[k];
+    }
+  };
+  const std::size_t full = n - n % 4;
+  for (std::size_t i = 0; i < full; i += 4) store(fourRows(r, i, theta), i, 4);
+  if (full < n) {
+    std::array<std::array<double, 4>, RowArrays::kArrays> room;
+    const RowArrays last(r, full, n - full, room);
+    store(fourRows(last, 0, theta), full, n - full);
+  }
+}
+
+/// The weighted equations of returns i..i+3 (of `r`) as blocks (kBlock) at `out`: the Cauchy
+/// weight's root q = q_num / (1 + (residual inv_scale)^2), a = (-w, -t w, c), q (a^T, e).
+FREEINIT_START_INLINE void weighFour(const RowArrays& r, std::size_t i, const double* theta,
+                                     double q_num, double inv_scale, double* out) {
+  using A = RowArrays::Array;
+  const FourRows o = fourRows(r, i, theta);
+  const V4 u = o.res * inv_scale;
+  const V4 q = q_num / (1.0 + u * u);
+  const V4 nq = -q;
+  const V4 m[10] = {nq * at(r, A::WX, i),
+                    nq * at(r, A::WY, i),
+                    nq * at(r, A::WZ, i),
+                    nq * at(r, A::TWX, i),
+                    nq * at(r, A::TWY, i),
+                    nq * at(r, A::TWZ, i),
+                    o.cx * q,
+                    o.cy * q,
+                    o.cz * q,
+                    q * at(r, A::E, i)};
+  // Returns i, i + 1 to one block, i + 2, i + 3 to the next.
+  for (int c = 0; c < 10; ++c) {
+    out[2 * c] = m[c][0];
+    out[2 * c + 1] = m[c][1];
+    out[kBlock + 2 * c] = m[c][2];
+    out[kBlock + 2 * c + 1] = m[c][3];
+  }
+}
+
+/// The weighted equations of rows [0, n) at theta as blocks (kBlock; room for a multiple of four
+/// rows).
+FREEINIT_START_CLONES
+void weighRows(const RowArrays& r, std::size_t n, const double* theta, double q_num,
+               double inv_scale, double* __restrict blocks) {
+  const std::size_t full = n - n % 4;
+  for (std::size_t i = 0; i < full; i += 4)
+    weighFour(r, i, theta, q_num, inv_scale, blocks + kBlock * (i / 2));
+  if (full < n) {
+    std::array<std::array<double, 4>, RowArrays::kArrays> room;
+    const RowArrays last(r, full, n - full, room);
+    weighFour(last, 0, theta, q_num, inv_scale, blocks + kBlock * (full / 2));
+  }
+}
+
+/// Column I of the lower triangle of the blocks' products over their first nb blocks: one sum per
+/// pair of columns (2 p, 2 p + 1) from the pair that holds I on, its lanes (column 2 p's even and
+/// odd rows, then column 2 p + 1's), kept in registers. N column-major 10x10.
+template <int I>
+FREEINIT_START_INLINE void gramColumn(const double* blocks, std::size_t nb, double* N) {
+  constexpr int kFirst = I / 2, kPairs = 5 - kFirst;
+  V4 sum[kPairs];
+  for (V4& s : sum) s = V4{0, 0, 0, 0};
+#pragma GCC unroll 2
+  for (std::size_t b = 0; b < nb; ++b) {
+    const double* x = blocks + kBlock * b;
+    V2 a2;  // column I of the two rows, twice
+    std::memcpy(&a2, x + 2 * I, sizeof a2);
+    const V4 a = __builtin_shufflevector(a2, a2, 0, 1, 0, 1);
+    for (int p = 0; p < kPairs; ++p) sum[p] += a * load4(x + 4 * (kFirst + p));
+  }
+  for (int p = 0; p < kPairs; ++p) {
+    const int j = 2 * (kFirst + p);
+    if (j >= I) N[10 * I + j] = sum[p][0] + sum[p][1];
+    N[10 * I + j + 1] = sum[p][2] + sum[p][3];
+  }
 }
 
 template <std::size_t... I>
-void gramColumns(const Eigen::Matrix<double, Eigen::Dynamic, 10>& M, Eigen::Index n2,
-                 Eigen::Matrix<double, 10, 10>& N, std::index_sequence<I...>) {
-  (gramColumn<static_cast<int>(I)>(M, n2, N), ...);
+FREEINIT_START_INLINE void gramColumns(const double* blocks, std::size_t nb, double* N,
+                                       std::index_sequence<I...>) {
+  (gramColumn<static_cast<int>(I)>(blocks, nb, N), ...);
 }
 
-/// M^T M over the first n rows of `wk.M`, lower triangle only (half the products of a full one).
-/// Column by column: Eigen's rank update first copies both operands into blocks, which for a
-/// matrix this thin costs as much as the products.
-Eigen::Matrix<double, 10, 10> gram(const RefineWork& wk, Eigen::Index n) {
+/// Columns 0..8 of the lower triangle of the blocks' products (the (9, 9) entry is not needed).
+FREEINIT_START_CLONES
+void gramBlocks(const double* blocks, std::size_t nb, double* N) {
+  gramColumns(blocks, nb, N, std::make_index_sequence<9>{});
+}
+
+/// The products of the first n weighted equations (kBlock), lower triangle only (half the
+/// products of a full one): rows 2 k and 2 k + 1 summed apart, then added, and an odd last row
+/// added to that.
+Eigen::Matrix<double, 10, 10> gram(const RefineWork& wk, std::size_t n) {
   Eigen::Matrix<double, 10, 10> N = Eigen::Matrix<double, 10, 10>::Zero();
-  const Eigen::Index n2 = n - n % 2;
-  gramColumns(wk.M, n2, N, std::make_index_sequence<10>{});
-  if (n2 < n) N.selfadjointView<Eigen::Lower>().rankUpdate(wk.M.row(n2).transpose());
+  gramBlocks(wk.blocks.data(), n / 2, N.data());
+  if (n % 2 != 0) {
+    const double* x = wk.blocks.data() + kBlock * (n / 2);
+    for (int i = 0; i < 10; ++i)
+      for (int j = i; j < 10; ++j) N(j, i) += x[2 * i] * x[2 * j];
+  }
   return N;
-}
-
-/// sum of q^2 (a a^T, e a) over the first `rows.size()` entries, q in `wk.q`, the columns c from
-/// residuals(): the 9x9 normal matrix and the right-hand side in the last row (lower triangle).
-Eigen::Matrix<double, 10, 10> normalEquations(const Rows& rows, RefineWork& wk) {
-  const Eigen::Index n = rows.size();
-  const auto q = wk.q.head(n);
-  auto M = wk.M.topRows(n);
-  M.col(0).array() = -q * rows.wx;
-  M.col(1).array() = -q * rows.wy;
-  M.col(2).array() = -q * rows.wz;
-  M.col(3).array() = -q * rows.twx;
-  M.col(4).array() = -q * rows.twy;
-  M.col(5).array() = -q * rows.twz;
-  M.col(6).array() *= q;
-  M.col(7).array() *= q;
-  M.col(8).array() *= q;
-  M.col(9).array() = q * rows.e;
-  return gram(wk, n);
 }
 
 /// The refinements' states after their first, thinned iterations. Two refinements that get there
@@ -252,7 +379,9 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
                                       double g_sigma_max = 4.0, EarlyStates* early = nullptr) {
   using Vec9 = Eigen::Matrix<double, 9, 1>;
   using Mat9 = Eigen::Matrix<double, 9, 9>;
-  Vec3 v = v_start, g = g_prior, db = Vec3::Zero();
+  Vec9 theta;  // (v, g, db)
+  theta << v_start, g_prior, Vec3::Zero();
+  const RowArrays all(rows), thinned(sub);
   const double inv_r = 1.0 / (p.doppler_sigma * p.doppler_sigma);
   // Gravity prior: the mean specific force is within a few m/s^2 of it on any real platform in
   // motion; at rest it is gravity minus the accelerometer bias, held.
@@ -272,12 +401,12 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
     const Rows& r = thin ? sub : rows;
     const double step = thin ? 3.0 : 1.0;
     const double g_var = at_rest ? g_prior_var : std::min(g_sigma * g_sigma, g_prior_var);
-    residuals(r, v, g, db, wk);
     // Cauchy weight w = step / (sigma^2 (1 + u^2)^2), u = residual / scale: its square root.
     const double inv_scale = 1.0 / std::max(c, 3.0 * p.doppler_sigma);
-    wk.q.head(r.size()) =
-        std::sqrt(step * inv_r) / (1.0 + (wk.res.head(r.size()) * inv_scale).square());
-    const Eigen::Matrix<double, 10, 10> N = normalEquations(r, wk);
+    const std::size_t n_r = static_cast<std::size_t>(r.size());
+    weighRows(thin ? thinned : all, n_r, theta.data(), std::sqrt(step * inv_r), inv_scale,
+              wk.blocks.data());
+    const Eigen::Matrix<double, 10, 10> N = gram(wk, n_r);
     // Lower triangle only (what the solvers below read): the right-hand side is the last row.
     Mat9 A = N.topLeftCorner<9, 9>();
     Vec9 b = N.row(9).head<9>().transpose();
@@ -288,11 +417,9 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
       A.topLeftCorner<3, 3>().diagonal().array() += 1e12;
       b.head<3>() += v_start * 1e12;
     }
-    const Vec9 theta = A.ldlt().solve(b);
-    if (!theta.allFinite()) break;
-    v = theta.head<3>();
-    g = theta.segment<3>(3);
-    db = theta.tail<3>();
+    const Vec9 next = A.ldlt().solve(b);
+    if (!next.allFinite()) break;
+    theta = next;
     if (early != nullptr && iteration == kEarly) {
       for (const Vec9& o : early->seen)
         if (early->same(theta, o, p.doppler_sigma)) return std::nullopt;
@@ -300,25 +427,29 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
     }
   }
   StartHypothesis h;
+  const Vec3 v = theta.head<3>();
   h.v_b0 = v;
-  h.g_b0 = g;
-  // The inliers' information (weight 1/sigma^2 each), their equations gathered at the top of M:
-  // the motion of a small object explains a few returns of thousands.
+  h.g_b0 = theta.segment<3>(3);
+  // The inliers' information (weight 1/sigma^2 each), their equations gathered first: the motion
+  // of a small object explains a few returns of thousands.
   const Eigen::Index n = rows.size();
-  residuals(rows, v, g, db, wk);
+  finalResiduals(all, static_cast<std::size_t>(n), theta.data(), wk.res.data(), wk.cx.data(),
+                 wk.cy.data(), wk.cz.data());
   const auto res = wk.res.head(n);
   const Eigen::Array<bool, Eigen::Dynamic, 1> inl = !(res.abs() > p.gate);  // within the gate
-  h.inliers = static_cast<std::size_t>(inl.count());
   const double ss = inl.select(res.square(), 0.0).sum();
   const double s = std::sqrt(inv_r);
-  Eigen::Index m = 0;
+  std::size_t m = 0;
   for (Eigen::Index i = 0; i < n; ++i) {
     if (!inl(i)) continue;
-    const double cx = wk.M(i, 6), cy = wk.M(i, 7), cz = wk.M(i, 8);  // row m <= i is overwritten
-    wk.M.row(m) << -s * rows.wx[i], -s * rows.wy[i], -s * rows.wz[i], -s * rows.twx[i],
-        -s * rows.twy[i], -s * rows.twz[i], s * cx, s * cy, s * cz, s * rows.e[i];
+    const std::array<double, 10> x = {
+        -s * rows.wx[i],  -s * rows.wy[i], -s * rows.wz[i], -s * rows.twx[i], -s * rows.twy[i],
+        -s * rows.twz[i], s * wk.cx[i],    s * wk.cy[i],    s * wk.cz[i],     s * rows.e[i]};
+    double* block = wk.blocks.data() + kBlock * (m / 2) + m % 2;
+    for (std::size_t c = 0; c < 10; ++c) block[2 * c] = x[c];
     ++m;
   }
+  h.inliers = m;
   Mat9 info = gram(wk, m).topLeftCorner<9, 9>();
   info.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_prior_var;
   info.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_prior_var;
