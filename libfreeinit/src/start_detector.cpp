@@ -327,6 +327,44 @@ void gramBlocks(const double* blocks, std::size_t nb, double* N) {
   gramColumns(blocks, nb, N, std::make_index_sequence<9>{});
 }
 
+/// RANSAC's candidate motions are scored on a pool of returns as arrays: e, w (x, y, z) and the
+/// gravity term t w^T g, which RANSAC holds.
+struct PoolArrays {
+  const double *e, *wx, *wy, *wz, *tg;
+};
+
+/// How many of the pool's first m returns the motion v explains (|e + w^T v + t w^T g| < gate),
+/// four returns per vector operation; as soon as the returns left could not bring the count above
+/// `best`, the count so far (which does not exceed it either).
+FREEINIT_START_CLONES
+std::size_t countWithin(const PoolArrays& pool, std::size_t m, const double* v, double gate,
+                        std::size_t best) {
+  const double vx = v[0], vy = v[1], vz = v[2];
+  const V4 hi = {gate, gate, gate, gate}, lo = -hi;
+  using Mask = decltype(hi < lo);  // -1 where true
+  Mask in = {0, 0, 0, 0};
+  const std::size_t full = m - m % 4;
+  constexpr std::size_t kChunk = 64;  // returns between two looks at the count
+  std::size_t i = 0;
+  while (i < full) {
+    for (const std::size_t end = std::min(full, i + kChunk); i < end; i += 4) {
+      const V4 r = (load4(pool.e + i) +
+                    (load4(pool.wx + i) * vx + load4(pool.wy + i) * vy + load4(pool.wz + i) * vz)) +
+                   load4(pool.tg + i);
+      in -= (r < hi) & (r > lo);
+    }
+    const std::size_t count = static_cast<std::size_t>((in[0] + in[1]) + (in[2] + in[3]));
+    if (count + (m - i) <= best) return count;
+  }
+  std::size_t count = static_cast<std::size_t>((in[0] + in[1]) + (in[2] + in[3]));
+  for (; i < m; ++i) {
+    const double r =
+        (pool.e[i] + (pool.wx[i] * vx + pool.wy[i] * vy + pool.wz[i] * vz)) + pool.tg[i];
+    if (std::abs(r) < gate) ++count;
+  }
+  return count;
+}
+
 /// The products of the first n weighted equations (kBlock), lower triangle only (half the
 /// products of a full one): rows 2 k and 2 k + 1 summed apart, then added, and an odd last row
 /// added to that.
@@ -657,13 +695,13 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
         ptg[k] = rows.t[j] * rows.w(j).dot(g_mean);
       }
       // |residual| < ransac_gate for each of the pool's returns, the gyro bias at its prior.
-      // (The residuals are stored first: a count over the whole expression would not vectorize.)
       const auto within = [&](const Vec3& v) {
         pres.head(m) = pe.head(m) +
                        (pwx.head(m) * v.x() + pwy.head(m) * v.y() + pwz.head(m) * v.z()) +
                        ptg.head(m);
         return pres.head(m).abs() < ransac_gate;
       };
+      const PoolArrays candidates{pe.data(), pwx.data(), pwy.data(), pwz.data(), ptg.data()};
       std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
       std::size_t best = 0;
       Vec3 best_v = Vec3::Zero();
@@ -678,7 +716,8 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
         }
         if (std::abs(W.determinant()) < 1e-3) continue;
         const Vec3 v = -W.inverse() * e;
-        const std::size_t count = static_cast<std::size_t>(within(v).count());
+        // (Counted without the candidates that cannot beat the best: they change nothing.)
+        const std::size_t count = countWithin(candidates, pool.size(), v.data(), ransac_gate, best);
         if (count > best) {
           best = count;
           best_v = v;
