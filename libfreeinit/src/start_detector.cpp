@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
+#include <iterator>
 #include <optional>
 #include <random>
 #include <utility>
@@ -38,12 +39,6 @@ struct Rows {
     for (Eigen::ArrayXd* a : {&t, &e, &wx, &wy, &wz, &twx, &twy, &twz, &c0x, &c0y, &c0z})
       a->resize(n);
     K.resize(n, 9);
-  }
-  /// Keeps the first n rows.
-  void shrink(Eigen::Index n) {
-    for (Eigen::ArrayXd* a : {&t, &e, &wx, &wy, &wz, &twx, &twy, &twz, &c0x, &c0y, &c0z})
-      a->conservativeResize(n);
-    K.conservativeResize(n, 9);
   }
   /// Every `step`-th row of `o`.
   static Rows every(const Rows& o, Eigen::Index step) {
@@ -379,6 +374,241 @@ Eigen::Matrix<double, 10, 10> gram(const RefineWork& wk, std::size_t n) {
   return N;
 }
 
+/// The strapdown motion over one IMU interval, from sample k at t_k to sample k + 1, from the
+/// interpolants the integrator uses (integrate(): the cubics in the time s from t_k through the
+/// samples around the interval), kept as monomial coefficients. Along the interval the
+/// integrator's result for a time tau is, with W(s) the gyro minus its bias, F(s) the specific
+/// force and the rotation vectors by Simpson's rule with the coning correction,
+///   phi(tau) = tau/6 (W(0) + 4 W(tau/2) + W(tau)) + tau^2/12 W(0) x W(tau),
+///   phi_h = tau/12 (W(0) + 4 W(tau/4) + W(tau/2)) + tau^2/48 W(0) x W(tau/2),
+///   R(tau) = R_k Exp(phi(tau)) and, gravity cancelling between v(t) and g t,
+///   C(t_k + tau) = C(t_k) + tau/6 R_k (F(0) + 4 Exp(phi_h) F(tau/2) + Exp(phi(tau)) F(tau)).
+/// The integrator evaluates the interpolants at the absolute times t_k + s, rounded to the
+/// precision of the time stamps (0.2 us for a time stamp of 1.7e9 s), so W and F are taken at
+/// those rounded offsets here too: the results are the integrator's up to the rounding of the
+/// arithmetic.
+struct IntervalMotion {
+  double t_k = 0;                          ///< [s] the sample's time stamp
+  std::array<double, 9> R;                 ///< R_0k, row-major
+  std::array<double, 3> C;                 ///< [m/s] C(t_k)
+  std::array<std::array<double, 3>, 4> W;  ///< [rad/s^(m+1)] the gyro minus its bias, s^m
+  std::array<std::array<double, 3>, 4> F;  ///< [m/s^(m+2)] the specific force, s^m
+};
+
+/// The interval from sample k of `imu`, with the integrator's state x there (its biases are
+/// removed) and t_k [s] its time from the window start.
+IntervalMotion intervalMotion(const std::vector<ImuSample>& imu, std::size_t k,
+                              const FilterState& x, double t_k) {
+  // The interpolants' monomial coefficients: sum over the samples a of the Lagrange basis
+  // polynomial L_a(s) = prod_(b != a) (s - s_b) / (s_a - s_b) times the sample, s from imu[k].t.
+  std::size_t lo = 0;
+  const std::size_t hi =
+      DopplerInertialFilter::interpolationSpan(imu, imu[k].t, k, lo);  // what integrate() uses
+  std::array<Vec3, 4> w, f;
+  for (std::size_t m = 0; m < 4; ++m) w[m] = f[m] = Vec3::Zero();
+  for (std::size_t a = lo; a <= hi; ++a) {
+    std::array<double, 4> L = {1, 0, 0, 0};
+    for (std::size_t b = lo; b <= hi; ++b) {
+      if (b == a) continue;
+      const double s_b = imu[b].t - imu[k].t, inv = 1.0 / (imu[a].t - imu[b].t);
+      for (std::size_t m = 3; m > 0; --m) L[m] = (L[m - 1] - s_b * L[m]) * inv;
+      L[0] = -s_b * L[0] * inv;
+    }
+    for (std::size_t m = 1; m < 4; ++m) {
+      w[m] += L[m] * imu[a].gyro;
+      f[m] += L[m] * imu[a].accel;
+    }
+  }
+  // At s = 0 the sample itself, as the integrator takes it.
+  w[0] = imu[k].gyro - x.b_g;
+  f[0] = imu[k].accel - x.b_a;
+  IntervalMotion im;
+  im.t_k = imu[k].t;
+  const Vec3 C = x.v_w - Vec3(0, 0, -kGravity) * t_k;
+  for (int r = 0; r < 3; ++r) {
+    im.C[static_cast<std::size_t>(r)] = C(r);
+    for (int c = 0; c < 3; ++c) im.R[static_cast<std::size_t>(3 * r + c)] = x.R_wb(r, c);
+    for (std::size_t m = 0; m < 4; ++m) {
+      im.W[m][static_cast<std::size_t>(r)] = w[m](r);
+      im.F[m][static_cast<std::size_t>(r)] = f[m](r);
+    }
+  }
+  return im;
+}
+
+/// Returns of the span as they are given (times from the window start, tau from their interval's
+/// sample, direction in the LiDAR frame, Doppler), one array per quantity.
+struct ReturnArrays {
+  const double *t, *tau, *dx, *dy, *dz, *z;
+};
+
+/// The equations' arrays (Rows) from a given row on.
+struct RowOutputs {
+  std::array<double*, RowArrays::kArrays> a;  // in RowArrays::Array's order
+  RowOutputs(Rows& r, Eigen::Index from) {
+    double* const first[] = {r.t.data(),   r.e.data(),   r.wx.data(),  r.wy.data(),
+                             r.wz.data(),  r.twx.data(), r.twy.data(), r.twz.data(),
+                             r.c0x.data(), r.c0y.data(), r.c0z.data()};
+    for (std::size_t k = 0; k < std::size(first); ++k) a[k] = first[k] + from;
+    for (int j = 0; j < 9; ++j)
+      a[static_cast<std::size_t>(RowArrays::K0 + j)] = r.K.col(j).data() + from;
+  }
+};
+
+/// Exp(phi) = I + a [phi]x + b [phi]x^2 of four rotation vectors: a = sin(theta) / theta and
+/// b = (1 - cos(theta)) / theta^2 (theta^2 = x) by their Taylor series up to x^6, within half a
+/// unit of the last place for theta <= 0.5 (far more than any platform turns within one IMU
+/// interval); beyond, from the sine and the cosine.
+FREEINIT_START_INLINE void expCoefficients(V4 x, V4& a, V4& b) {
+  a = 1.0 +
+      x * (-1.0 / 6 +
+           x * (1.0 / 120 + x * (-1.0 / 5040 + x * (1.0 / 362880 + x * (-1.0 / 39916800 +
+                                                                        x * (1.0 / 6227020800))))));
+  b = 0.5 + x * (-1.0 / 24 +
+                 x * (1.0 / 720 +
+                      x * (-1.0 / 40320 + x * (1.0 / 3628800 +
+                                               x * (-1.0 / 479001600 + x * (1.0 / 87178291200))))));
+  for (int l = 0; l < 4; ++l) {
+    if (!(x[l] > 0.25)) continue;
+    const double theta = std::sqrt(x[l]);
+    a[l] = std::sin(theta) / theta;
+    b[l] = (1.0 - std::cos(theta)) / x[l];
+  }
+}
+
+/// sum_m c[m] s^m (kTerms >= 2) of each of three components, by Horner's rule.
+template <std::size_t kTerms>
+FREEINIT_START_INLINE void polynomial(const std::array<std::array<double, 3>, kTerms>& c, V4 s,
+                                      V4 (&out)[3]) {
+  for (std::size_t r = 0; r < 3; ++r) {
+    V4 y = s * c[kTerms - 1][r] + c[kTerms - 2][r];
+    for (std::size_t m = kTerms - 2; m-- > 0;) y = y * s + c[m][r];
+    out[r] = y;
+  }
+}
+
+/// p[0..3], or its first `count` values and zeros (finite values in the unused lanes).
+template <bool kFull>
+FREEINIT_START_INLINE V4 loadSome(const double* p, std::size_t count) {
+  if (kFull) return load4(p);
+  double padded[4] = {};
+  std::copy(p, p + count, padded);
+  return load4(padded);
+}
+
+/// The equations of four returns (the first `count` of them valid) of one interval: the rotation
+/// and C at each return from the interval's polynomials, then Rows' quantities (see there).
+template <bool kFull>
+FREEINIT_START_INLINE void fourEquations(const IntervalMotion& im, const Extrinsics& ex,
+                                         const ReturnArrays& in, std::size_t i, std::size_t count,
+                                         const RowOutputs& out) {
+  const V4 t = loadSome<kFull>(in.t + i, count), tau = loadSome<kFull>(in.tau + i, count),
+           dx = loadSome<kFull>(in.dx + i, count), dy = loadSome<kFull>(in.dy + i, count),
+           dz = loadSome<kFull>(in.dz + i, count), z = loadSome<kFull>(in.z + i, count);
+  const auto& R = im.R;
+  // The interpolants at the offsets the integrator takes them at (IntervalMotion).
+  const V4 s1 = (im.t_k + 0.25 * tau) - im.t_k, s2 = (im.t_k + 0.5 * tau) - im.t_k,
+           s3 = (im.t_k + tau) - im.t_k;
+  V4 W1[3], W2[3], W3[3], F[3], F_h[3];
+  polynomial(im.W, s1, W1);
+  polynomial(im.W, s2, W2);
+  polynomial(im.W, s3, W3);
+  polynomial(im.F, s2, F_h);
+  polynomial(im.F, s3, F);
+  const auto& W0 = im.W[0];
+  // Rotation vectors over [0, tau/2] and [0, tau]: Exp(phi) as a matrix E, Exp(phi_h) applied to
+  // F(tau/2) only (Rodrigues).
+  const V4 ch = 0.5 * tau / 6.0, cc_h = 0.25 * tau * tau / 12.0, c1 = tau / 6.0,
+           cc = tau * tau / 12.0;
+  const V4 phi_h[3] = {
+      ch * ((W0[0] + 4.0 * W1[0]) + W2[0]) + (W0[1] * W2[2] - W0[2] * W2[1]) * cc_h,
+      ch * ((W0[1] + 4.0 * W1[1]) + W2[1]) + (W0[2] * W2[0] - W0[0] * W2[2]) * cc_h,
+      ch * ((W0[2] + 4.0 * W1[2]) + W2[2]) + (W0[0] * W2[1] - W0[1] * W2[0]) * cc_h};
+  const V4 phi[3] = {c1 * ((W0[0] + 4.0 * W2[0]) + W3[0]) + (W0[1] * W3[2] - W0[2] * W3[1]) * cc,
+                     c1 * ((W0[1] + 4.0 * W2[1]) + W3[1]) + (W0[2] * W3[0] - W0[0] * W3[2]) * cc,
+                     c1 * ((W0[2] + 4.0 * W2[2]) + W3[2]) + (W0[0] * W3[1] - W0[1] * W3[0]) * cc};
+  const V4 sq = phi[0] * phi[0] + phi[1] * phi[1] + phi[2] * phi[2];
+  V4 a, b, a_h, b_h;
+  expCoefficients(sq, a, b);
+  expCoefficients(phi_h[0] * phi_h[0] + phi_h[1] * phi_h[1] + phi_h[2] * phi_h[2], a_h, b_h);
+  V4 E[3][3];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) E[r][c] = b * (phi[r] * phi[c]);
+    E[r][r] += 1.0 - b * sq;
+  }
+  E[0][1] -= a * phi[2];
+  E[1][0] += a * phi[2];
+  E[0][2] += a * phi[1];
+  E[2][0] -= a * phi[1];
+  E[1][2] -= a * phi[0];
+  E[2][1] += a * phi[0];
+  // Exp(phi_h) F_h = F_h + a_h phi_h x F_h + b_h phi_h x (phi_h x F_h).
+  const V4 p1[3] = {phi_h[1] * F_h[2] - phi_h[2] * F_h[1], phi_h[2] * F_h[0] - phi_h[0] * F_h[2],
+                    phi_h[0] * F_h[1] - phi_h[1] * F_h[0]};
+  const V4 p2[3] = {phi_h[1] * p1[2] - phi_h[2] * p1[1], phi_h[2] * p1[0] - phi_h[0] * p1[2],
+                    phi_h[0] * p1[1] - phi_h[1] * p1[0]};
+  V4 S[3];  // F(0) + 4 Exp(phi_h) F_h + E F
+  for (int r = 0; r < 3; ++r)
+    S[r] = im.F[0][static_cast<std::size_t>(r)] + 4.0 * (F_h[r] + a_h * p1[r] + b_h * p2[r]) +
+           (E[r][0] * F[0] + E[r][1] * F[1] + E[r][2] * F[2]);
+  V4 Rt[3][3], C[3];  // R(tau) = R_k E, C(tau)
+  for (int r = 0; r < 3; ++r) {
+    const double r0 = R[3 * r], r1 = R[3 * r + 1], r2 = R[3 * r + 2];
+    for (int c = 0; c < 3; ++c) Rt[r][c] = r0 * E[0][c] + r1 * E[1][c] + r2 * E[2][c];
+    C[r] = im.C[static_cast<std::size_t>(r)] + c1 * (r0 * S[0] + r1 * S[1] + r2 * S[2]);
+  }
+  // The return's equation.
+  const Mat3& Rbl = ex.R_bl;
+  const V4 u[3] = {Rbl(0, 0) * dx + Rbl(0, 1) * dy + Rbl(0, 2) * dz,
+                   Rbl(1, 0) * dx + Rbl(1, 1) * dy + Rbl(1, 2) * dz,
+                   Rbl(2, 0) * dx + Rbl(2, 1) * dy + Rbl(2, 2) * dz};
+  const Vec3& p = ex.p_bl;
+  const V4 pu[3] = {p.y() * u[2] - p.z() * u[1], p.z() * u[0] - p.x() * u[2],
+                    p.x() * u[1] - p.y() * u[0]};  // p_bl x u
+  V4 w[3], RtC[3];                                 // R u, R^T C
+  for (int r = 0; r < 3; ++r) {
+    w[r] = Rt[r][0] * u[0] + Rt[r][1] * u[1] + Rt[r][2] * u[2];
+    RtC[r] = Rt[0][r] * C[0] + Rt[1][r] * C[1] + Rt[2][r] * C[2];
+  }
+  V4 o[RowArrays::kArrays];
+  using A = RowArrays::Array;
+  o[A::T] = t;
+  // u^T (omega x p_bl) = omega^T (p_bl x u)
+  o[A::E] = z + (W3[0] * pu[0] + W3[1] * pu[1] + W3[2] * pu[2]) +
+            (w[0] * C[0] + w[1] * C[1] + w[2] * C[2]);
+  for (int r = 0; r < 3; ++r) {
+    o[A::WX + r] = w[r];
+    o[A::TWX + r] = t * w[r];
+  }
+  // c0 = p_bl x u - t (R^T C) x u
+  o[A::C0X] = pu[0] - t * (RtC[1] * u[2] - RtC[2] * u[1]);
+  o[A::C0Y] = pu[1] - t * (RtC[2] * u[0] - RtC[0] * u[2]);
+  o[A::C0Z] = pu[2] - t * (RtC[0] * u[1] - RtC[1] * u[0]);
+  // K = t [u]x R^T: its column c is t u x (row c of R); row-major in the arrays.
+  for (int c = 0; c < 3; ++c) {
+    o[A::K0 + c] = t * (u[1] * Rt[c][2] - u[2] * Rt[c][1]);
+    o[A::K0 + 3 + c] = t * (u[2] * Rt[c][0] - u[0] * Rt[c][2]);
+    o[A::K0 + 6 + c] = t * (u[0] * Rt[c][1] - u[1] * Rt[c][0]);
+  }
+#pragma GCC unroll 20
+  for (std::size_t k = 0; k < RowArrays::kArrays; ++k) {
+    if (kFull) {
+      std::memcpy(out.a[k] + i, &o[k], sizeof(V4));
+    } else {
+      for (std::size_t l = 0; l < count; ++l) out.a[k][i + l] = o[k][l];
+    }
+  }
+}
+
+/// The equations of the n returns `in` of one interval into `out`.
+FREEINIT_START_CLONES
+void intervalEquations(const IntervalMotion& im, const Extrinsics& ex, const ReturnArrays& in,
+                       std::size_t n, const RowOutputs& out) {
+  const std::size_t full = n - n % 4;
+  for (std::size_t i = 0; i < full; i += 4) fourEquations<true>(im, ex, in, i, 4, out);
+  if (full < n) fourEquations<false>(im, ex, in, full, n - full, out);
+}
+
 /// The refinements' states after their first, thinned iterations. Two refinements that get there
 /// so close that no return's residual differs by a tenth of the Doppler noise end at the same
 /// hypothesis: the remaining iterations contract their difference (the refinements of one motion
@@ -603,46 +833,78 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
                                                        // acceleration otherwise
   out.imu_still = imuShowsRest(imu, k_first, k_last + 1, p.gyro_sigma, p.accel_sigma);
 
-  // Every return as a linear equation.
-  Rows rows;
-  rows.resize(static_cast<Eigen::Index>(points.size()));
+  // Every return as a linear equation: the returns of the span with their interval, then the
+  // returns of each interval at once, from its motion's polynomials (in time order, the returns
+  // of an interval are consecutive).
+  std::vector<std::size_t> interval;
+  std::vector<double> r_t, r_tau, r_dx, r_dy, r_dz, r_z;
+  for (auto* v : {&r_t, &r_tau, &r_dx, &r_dy, &r_dz, &r_z}) v->reserve(points.size());
   std::vector<Vec3> d_l;  // the directions in the LiDAR frame, for the coverage grid
   d_l.reserve(points.size());
-  Eigen::Index n = 0;
   std::size_t i = 0;
   for (const StartPoint& sp : points) {
     if (sp.t < 0 || sp.t > T) continue;
     while (i + 1 < at.size() - 1 && imu[k_first + i + 1].t - t_ref <= sp.t) ++i;
-    const double tau = sp.t - (imu[k_first + i].t - t_ref);
-    Vec3 gyro, accel;  // the IMU at the return, as the integration interpolated it
-    const FilterState xt = DopplerInertialFilter::integrate(at[i], span, j0 + i, tau, gyro, accel);
-    gyro -= b_g_prior;
-    const Mat3& R_t = xt.R_wb;
-    const Vec3 C_t = xt.v_w - g_w * sp.t;
-    const Vec3 u = extrinsics.R_bl * sp.d_l;
-    const Vec3 w = R_t * u;
-    const Vec3 c0 = extrinsics.p_bl.cross(u) - sp.t * (R_t.transpose() * C_t).cross(u);
-    const Mat3 K = sp.t * skew(u) * R_t.transpose();
-    rows.t[n] = sp.t;
-    rows.e[n] = sp.doppler + u.dot(gyro.cross(extrinsics.p_bl)) + w.dot(C_t);
-    rows.wx[n] = w.x();
-    rows.wy[n] = w.y();
-    rows.wz[n] = w.z();
-    rows.twx[n] = sp.t * w.x();
-    rows.twy[n] = sp.t * w.y();
-    rows.twz[n] = sp.t * w.z();
-    rows.c0x[n] = c0.x();
-    rows.c0y[n] = c0.y();
-    rows.c0z[n] = c0.z();
-    for (int j = 0; j < 9; ++j) rows.K(n, j) = K(j / 3, j % 3);
+    interval.push_back(i);
+    r_t.push_back(sp.t);
+    r_tau.push_back(sp.t - (imu[k_first + i].t - t_ref));
+    r_dx.push_back(sp.d_l.x());
+    r_dy.push_back(sp.d_l.y());
+    r_dz.push_back(sp.d_l.z());
+    r_z.push_back(sp.doppler);
     d_l.push_back(sp.d_l);
-    ++n;
   }
+  const Eigen::Index n = static_cast<Eigen::Index>(d_l.size());
   if (n < 10) {
     out.message = "fewer than 10 usable LiDAR returns at the start of the window";
     return out;
   }
-  rows.shrink(n);  // the returns outside the span are not equations
+  Rows rows;
+  rows.resize(n);
+  std::vector<IntervalMotion> motion;
+  motion.reserve(at.size() - 1);
+  for (std::size_t k = 0; k + 1 < at.size(); ++k)
+    motion.push_back(intervalMotion(span, j0 + k, at[k], imu[k_first + k].t - t_ref));
+  for (std::size_t begin = 0; begin < d_l.size();) {
+    const std::size_t k = interval[begin];
+    if (r_tau[begin] < 0) {
+      // Out of time order, before its interval's sample: the integrator's own answer (it
+      // interpolates around that sample, as no interval's polynomials do).
+      Vec3 gyro, accel;  // the IMU at the return, as the integration interpolated it
+      const FilterState xt =
+          DopplerInertialFilter::integrate(at[k], span, j0 + k, r_tau[begin], gyro, accel);
+      gyro -= b_g_prior;
+      const double t = r_t[begin];
+      const Mat3& R_t = xt.R_wb;
+      const Vec3 C_t = xt.v_w - g_w * t;
+      const Vec3 u = extrinsics.R_bl * d_l[begin];
+      const Vec3 w = R_t * u;
+      const Vec3 c0 = extrinsics.p_bl.cross(u) - t * (R_t.transpose() * C_t).cross(u);
+      const Mat3 K = t * skew(u) * R_t.transpose();
+      const Eigen::Index j = static_cast<Eigen::Index>(begin);
+      rows.t[j] = t;
+      rows.e[j] = r_z[begin] + u.dot(gyro.cross(extrinsics.p_bl)) + w.dot(C_t);
+      rows.wx[j] = w.x();
+      rows.wy[j] = w.y();
+      rows.wz[j] = w.z();
+      rows.twx[j] = t * w.x();
+      rows.twy[j] = t * w.y();
+      rows.twz[j] = t * w.z();
+      rows.c0x[j] = c0.x();
+      rows.c0y[j] = c0.y();
+      rows.c0z[j] = c0.z();
+      for (int c = 0; c < 9; ++c) rows.K(j, c) = K(c / 3, c % 3);
+      ++begin;
+      continue;
+    }
+    std::size_t end = begin + 1;
+    while (end < d_l.size() && interval[end] == k && !(r_tau[end] < 0)) ++end;
+    const ReturnArrays in{r_t.data() + begin,  r_tau.data() + begin, r_dx.data() + begin,
+                          r_dy.data() + begin, r_dz.data() + begin,  r_z.data() + begin};
+    intervalEquations(motion[k], extrinsics, in, end - begin,
+                      RowOutputs(rows, static_cast<Eigen::Index>(begin)));
+    begin = end;
+  }
   // The returns' directions must constrain a 3-D velocity at all.
   Mat3 info = Mat3::Zero();
   for (Eigen::Index j = 0; j < n; ++j) {
