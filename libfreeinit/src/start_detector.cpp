@@ -129,10 +129,11 @@ class CoverageGrid {
   std::array<int, kCells> totals_;
 };
 
-// The sweeps of the refinement over the returns run four returns (or two rows of the normal
-// equations' products) per vector operation, built for AVX2 as well as the baseline and chosen at
-// load time. Each lane does one return's operations in the order the scalar formulas give them
-// (no fused multiply-add in either build), so both builds give the same results.
+// The sweeps over the returns (the returns' equations, RANSAC's counts, the refinement's
+// iterations) run four returns (or two rows of the normal equations' products) per vector
+// operation, built for AVX2 as well as the baseline and chosen at load time. Each lane does one
+// return's operations in the order the scalar formulas give them (no fused multiply-add in either
+// build), so both builds give the same results.
 #if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
 #define FREEINIT_START_CLONES __attribute__((target_clones("avx2", "default")))
 #define FREEINIT_START_INLINE __attribute__((always_inline)) inline
