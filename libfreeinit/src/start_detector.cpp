@@ -15,6 +15,8 @@
 #include <random>
 #include <utility>
 
+#include "vector_clones.h"
+
 namespace freeinit {
 namespace {
 
@@ -131,14 +133,12 @@ class CoverageGrid {
 
 // The sweeps over the returns (the returns' equations, RANSAC's counts, the refinement's
 // iterations) run four returns (or two rows of the normal equations' products) per vector
-// operation, built for AVX2 as well as the baseline and chosen at load time. Each lane does one
-// return's operations in the order the scalar formulas give them (no fused multiply-add in either
-// build), so both builds give the same results.
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define FREEINIT_START_CLONES __attribute__((target_clones("avx2", "default")))
+// operation, built for several instruction sets and chosen at load time (vector_clones.h). Each
+// lane does one return's operations in the order the scalar formulas give them, so every build
+// gives the same results.
+#if defined(__GNUC__) && !defined(__clang__)
 #define FREEINIT_START_INLINE __attribute__((always_inline)) inline
 #else
-#define FREEINIT_START_CLONES
 #define FREEINIT_START_INLINE inline
 #endif
 // The helpers below return vectors by value. They are always inlined into the sweeps, so the
@@ -225,7 +225,7 @@ FREEINIT_START_INLINE FourRows fourRows(const RowArrays& r, std::size_t i, const
 }
 
 /// Residuals e - a^T theta of rows [0, n) and their gyro-bias columns c, unweighted.
-FREEINIT_START_CLONES
+FREEINIT_VECTOR_CLONES
 void finalResiduals(const RowArrays& r, std::size_t n, const double* theta, double* __restrict res,
                     double* __restrict cx, double* __restrict cy, double* __restrict cz) {
   const auto store = [&](const FourRows& o, std::size_t i, std::size_t count) {
@@ -275,7 +275,7 @@ FREEINIT_START_INLINE void weighFour(const RowArrays& r, std::size_t i, const do
 
 /// The weighted equations of rows [0, n) at theta as blocks (kBlock; room for a multiple of four
 /// rows).
-FREEINIT_START_CLONES
+FREEINIT_VECTOR_CLONES
 void weighRows(const RowArrays& r, std::size_t n, const double* theta, double q_num,
                double inv_scale, double* __restrict blocks) {
   const std::size_t full = n - n % 4;
@@ -318,7 +318,7 @@ FREEINIT_START_INLINE void gramColumns(const double* blocks, std::size_t nb, dou
 }
 
 /// Columns 0..8 of the lower triangle of the blocks' products (the (9, 9) entry is not needed).
-FREEINIT_START_CLONES
+FREEINIT_VECTOR_CLONES
 void gramBlocks(const double* blocks, std::size_t nb, double* N) {
   gramColumns(blocks, nb, N, std::make_index_sequence<9>{});
 }
@@ -332,7 +332,7 @@ struct PoolArrays {
 /// How many of the pool's first m returns the motion v explains (|e + w^T v + t w^T g| < gate),
 /// four returns per vector operation; as soon as the returns left could not bring the count above
 /// `best`, the count so far (which does not exceed it either).
-FREEINIT_START_CLONES
+FREEINIT_VECTOR_CLONES
 std::size_t countWithin(const PoolArrays& pool, std::size_t m, const double* v, double gate,
                         std::size_t best) {
   const double vx = v[0], vy = v[1], vz = v[2];
@@ -460,7 +460,7 @@ struct RowOutputs {
 /// b = (1 - cos(theta)) / theta^2 (theta^2 = x) by their Taylor series up to x^6, within half a
 /// unit of the last place for theta <= 0.5 (far more than any platform turns within one IMU
 /// interval); beyond, from the sine and the cosine.
-FREEINIT_START_INLINE void expCoefficients(V4 x, V4& a, V4& b) {
+FREEINIT_START_INLINE void expCoefficients(const V4& x, V4& a, V4& b) {
   a = 1.0 +
       x * (-1.0 / 6 +
            x * (1.0 / 120 + x * (-1.0 / 5040 + x * (1.0 / 362880 + x * (-1.0 / 39916800 +
@@ -479,8 +479,8 @@ FREEINIT_START_INLINE void expCoefficients(V4 x, V4& a, V4& b) {
 
 /// sum_m c[m] s^m (kTerms >= 2) of each of three components, by Horner's rule.
 template <std::size_t kTerms>
-FREEINIT_START_INLINE void polynomial(const std::array<std::array<double, 3>, kTerms>& c, V4 s,
-                                      V4 (&out)[3]) {
+FREEINIT_START_INLINE void polynomial(const std::array<std::array<double, 3>, kTerms>& c,
+                                      const V4& s, V4 (&out)[3]) {
   for (std::size_t r = 0; r < 3; ++r) {
     V4 y = s * c[kTerms - 1][r] + c[kTerms - 2][r];
     for (std::size_t m = kTerms - 2; m-- > 0;) y = y * s + c[m][r];
@@ -602,7 +602,7 @@ FREEINIT_START_INLINE void fourEquations(const IntervalMotion& im, const Extrins
 }
 
 /// The equations of the n returns `in` of one interval into `out`.
-FREEINIT_START_CLONES
+FREEINIT_VECTOR_CLONES
 void intervalEquations(const IntervalMotion& im, const Extrinsics& ex, const ReturnArrays& in,
                        std::size_t n, const RowOutputs& out) {
   const std::size_t full = n - n % 4;
