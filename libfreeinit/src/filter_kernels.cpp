@@ -84,19 +84,22 @@ __attribute__((always_inline)) inline void update(double* P, const V4 (&Hc)[D][(
     for (int i = 0; i < R; ++i) S[i][j] = s[i / 4][i % 4];
     S[j][j] += 1.0;
   }
+  // The factorization is a chain of dependent operations: one division per column (its inverse
+  // diagonal), multiplications elsewhere.
+  double inv_diag[R];
   FREEINIT_UNROLL
   for (int j = 0; j < R; ++j) {
     double diag = S[j][j];
     FREEINIT_UNROLL
     for (int k = 0; k < j; ++k) diag -= S[j][k] * S[j][k];
     diag = std::sqrt(diag);
-    S[j][j] = diag;
+    inv_diag[j] = 1.0 / diag;
     FREEINIT_UNROLL
     for (int i = j + 1; i < R; ++i) {
       double v = S[i][j];
       FREEINIT_UNROLL
       for (int k = 0; k < j; ++k) v -= S[i][k] * S[j][k];
-      S[i][j] = v / diag;
+      S[i][j] = v * inv_diag[j];
     }
   }
   // Y = A L^-T (in A), z = L^-1 innovation.
@@ -112,8 +115,8 @@ __attribute__((always_inline)) inline void update(double* P, const V4 (&Hc)[D][(
       zj -= l * z[i];
     }
     FREEINIT_UNROLL
-    for (int q = 0; q < kQ; ++q) A[j][q] /= S[j][j];
-    z[j] = zj / S[j][j];
+    for (int q = 0; q < kQ; ++q) A[j][q] *= inv_diag[j];
+    z[j] = zj * inv_diag[j];
   }
   // dx += Y z; P -= Y Y^T, element (i, c) summed over j in the same order as (c, i).
   FREEINIT_UNROLL
@@ -301,9 +304,10 @@ template <int D>
 __attribute__((always_inline)) inline void choleskySolve(const double* A, double* b) {
   constexpr int kQ = (D + 3) / 4;
   // A's columns; column j becomes L's below the diagonal (lanes at and above it zero), its
-  // diagonal kept apart.
+  // diagonal kept apart as its inverse (one division per column in the chain of dependent
+  // operations, multiplications elsewhere).
   V4 L[D][kQ];
-  double diag[D];
+  double inv_diag[D];
   FREEINIT_UNROLL
   for (int c = 0; c < D; ++c) {
     FREEINIT_UNROLL
@@ -311,15 +315,15 @@ __attribute__((always_inline)) inline void choleskySolve(const double* A, double
   }
   FREEINIT_UNROLL
   for (int j = 0; j < D; ++j) {
-    const double d = std::sqrt(L[j][j / 4][j % 4]);
-    diag[j] = d;
+    const double inv_d = 1.0 / std::sqrt(L[j][j / 4][j % 4]);
+    inv_diag[j] = inv_d;
     FREEINIT_UNROLL
     for (int q = 0; q < kQ; ++q) {
       if (q < j / 4) {
         L[j][q] = V4{0, 0, 0, 0};
         continue;
       }
-      L[j][q] /= d;
+      L[j][q] *= inv_d;
       if (q == j / 4) {
         FREEINIT_UNROLL
         for (int l = 0; l <= j % 4; ++l) L[j][q][l] = 0.0;
@@ -339,7 +343,7 @@ __attribute__((always_inline)) inline void choleskySolve(const double* A, double
   for (int q = 0; q < kQ; ++q) load(b + 4 * q, rows(D, q), y[q]);
   FREEINIT_UNROLL
   for (int j = 0; j < D; ++j) {
-    const double yj = y[j / 4][j % 4] / diag[j];
+    const double yj = y[j / 4][j % 4] * inv_diag[j];
     y[j / 4][j % 4] = yj;
     FREEINIT_UNROLL
     for (int q = j / 4; q < kQ; ++q) y[q] -= L[j][q] * yj;
@@ -349,7 +353,7 @@ __attribute__((always_inline)) inline void choleskySolve(const double* A, double
     V4 dot = V4{0, 0, 0, 0};
     FREEINIT_UNROLL
     for (int q = j / 4; q < kQ; ++q) dot += L[j][q] * y[q];
-    y[j / 4][j % 4] = (y[j / 4][j % 4] - ((dot[0] + dot[1]) + (dot[2] + dot[3]))) / diag[j];
+    y[j / 4][j % 4] = (y[j / 4][j % 4] - ((dot[0] + dot[1]) + (dot[2] + dot[3]))) * inv_diag[j];
   }
   FREEINIT_UNROLL
   for (int q = 0; q < kQ; ++q) store(y[q], rows(D, q), b + 4 * q);
