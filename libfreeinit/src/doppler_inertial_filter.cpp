@@ -88,6 +88,17 @@ double stepInTolerances(const DopplerInertialFilter::VecS& dx) {
   return dx.cwiseAbs().cwiseQuotient(tol).maxCoeff();
 }
 
+/// A return's unit direction from its position in the LiDAR frame (float, as the sensor gives it),
+/// in double: one division (the inverse norm), then products. Every computation of a return's
+/// direction in the filter goes through here, so that a return taken out of a node's sums
+/// (removePoint) takes out exactly what it added.
+inline void unitDirection(double x, double y, double z, double& dx, double& dy, double& dz) {
+  const double inv_norm = 1.0 / std::sqrt(x * x + y * y + z * z);
+  dx = x * inv_norm;
+  dy = y * inv_norm;
+  dz = z * inv_norm;
+}
+
 /// The velocity polynomial Q = [q0; q1; q2] and the covariance M of q0 that a node's returns
 /// are gated with, as scalars for the per-return loops.
 struct GatePrediction {
@@ -142,8 +153,8 @@ std::size_t gateAndSumReturns(std::size_t m, const GatePrediction& g, const floa
     for (std::size_t j = 0; j < n; ++j) {
       const std::size_t i = b + j;
       const double x = px[i], y = py[i], w = pz[i], zi = z[i];
-      const double norm = std::sqrt(x * x + y * y + w * w);
-      const double dx = x / norm, dy = y / norm, dz = w / norm;
+      double dx, dy, dz;
+      unitDirection(x, y, w, dx, dy, dz);
       const double s = static_cast<double>(tau[i]) * inv_h;
       const double vx = q00 + s * (q10 + s * q20), vy = q01 + s * (q11 + s * q21),
                    vz = q02 + s * (q12 + s * q22);
@@ -241,8 +252,8 @@ void regateReturns(std::size_t m, const GatePrediction& g, double k2, const floa
   const double inv_h = g.inv_h;
   for (std::size_t i = 0; i < m; ++i) {
     const double x = px[i], y = py[i], w = pz[i], zi = z[i];
-    const double norm = std::sqrt(x * x + y * y + w * w);
-    const double dx = x / norm, dy = y / norm, dz = w / norm;
+    double dx, dy, dz;
+    unitDirection(x, y, w, dx, dy, dz);
     const double s = static_cast<double>(tau[i]) * inv_h;
     const double vx = q00 + s * (q10 + s * q20), vy = q01 + s * (q11 + s * q21),
                  vz = q02 + s * (q12 + s * q22);
@@ -868,7 +879,9 @@ void DopplerInertialFilter::removePoint(std::size_t k, double tau, const Eigen::
   if (n.sums.n == 0)
     throw std::logic_error("DopplerInertialFilter::removePoint: the node has no point left");
   const Vec3 p = p_l.cast<double>();
-  accumulate(n.sums, normalizedTime(k, tau), p / p.norm(), doppler, -1.0);
+  Vec3 d;
+  unitDirection(p.x(), p.y(), p.z(), d.x(), d.y(), d.z());
+  accumulate(n.sums, normalizedTime(k, tau), d, doppler, -1.0);
   n.rows_stale = true;
 }
 
@@ -1137,9 +1150,9 @@ void DopplerInertialFilter::update() {
     for (std::size_t i = 0; i < m; ++i) {
       if (o.accepted[i] == 0 || pass[i] != 0) continue;
       o.accepted[i] = 0;
-      const Vec3 p(o.in.x[i], o.in.y[i], o.in.z[i]);
-      accumulate(n.sums, static_cast<double>(o.in.tau[i]) * n.inv_h,
-                 p / std::sqrt(p.x() * p.x() + p.y() * p.y() + p.z() * p.z()),
+      Vec3 direction;
+      unitDirection(o.in.x[i], o.in.y[i], o.in.z[i], direction.x(), direction.y(), direction.z());
+      accumulate(n.sums, static_cast<double>(o.in.tau[i]) * n.inv_h, direction,
                  static_cast<double>(o.in.doppler[i]), -1.0);
       ++dropped;
     }
