@@ -63,6 +63,8 @@ class JointPipeline final : public Pipeline {
     if (phase_ == Phase::Running) run(r);
     if (phase_ != Phase::Done) r.diag.time_velocimeter += wallSeconds() - t0;
     if (phase_ == Phase::Running && seq_.finished()) {
+      // The open node's returns were counted as seen; those not usable count as skipped.
+      r.diag.points_skipped += recorder_.openUnusable(usable_);
       std::ostringstream window;
       window << cfg_.window.duration;
       fail(r, InitStatus::NotEnoughData,
@@ -257,13 +259,11 @@ class JointPipeline final : public Pipeline {
   }
 
   /// The open node's points received so far, those of [lo, hi) (the last node: [lo, t_k]): each
-  /// frame's run of used ones goes to the recorder at once (the filter takes the node's returns
-  /// from it when the node closes), a run ending at a return not used (not usable, or left out by
-  /// the stride). `kStrided`: one return in stride_ (counted over the window's returns) is used,
-  /// else every one.
+  /// frame's part goes to the recorder at once, the usability test comes when the node closes.
+  /// `kStrided`: one return in stride_ (counted over the window's returns) is used, else every
+  /// one.
   template <bool kStrided>
   void takePoints(Diagnostics& diag, double t_k, double lo, double hi, bool last) {
-    const std::size_t node = filter_->nodes() - 1;
     const std::size_t stride = static_cast<std::size_t>(stride_);
     while (seq_.normalize(cursor_)) {
       const MeasurementSequencer::FrameRef& frame = seq_.frames()[cursor_.f];
@@ -282,29 +282,22 @@ class JointPipeline final : public Pipeline {
                                                           return last ? !(t > t_k) : !(t >= hi);
                                                         }) -
                                    pts);
-      std::size_t p = static_cast<std::size_t>(
+      const std::size_t p = static_cast<std::size_t>(
           std::partition_point(pts + cursor_.p, pts + end,
                                [&](const DopplerPoint& q) { return time(q) < lo; }) -
           pts);
-      std::size_t run = p;
-      auto flush = [&](std::size_t stop) {
-        if (stop == run) return;
-        recorder_.add(node, pts + run, stop - run, stamp, t_k);
-        diag.points_seen += stop - run;
-      };
-      for (; p < end; ++p) {
-        bool use = true;
-        if constexpr (kStrided) {
-          use = stride_counter_ == 0;
-          if (++stride_counter_ == stride) stride_counter_ = 0;
-        }
-        if (use && usable_(pts[p])) continue;
-        flush(p);
-        run = p + 1;
-        ++diag.points_seen;
-        ++diag.points_skipped;
+      const std::size_t count = end - p;
+      diag.points_seen += count;
+      if constexpr (kStrided) {
+        // The returns the stride uses: those at which the counter is zero, stride apart.
+        const std::size_t first = (stride - stride_counter_) % stride;
+        const std::size_t used = first < count ? (count - first + stride - 1) / stride : 0;
+        if (used > 0) recorder_.add(pts + p + first, used, stride, stamp, t_k);
+        diag.points_skipped += count - used;
+        stride_counter_ = (stride_counter_ + count) % stride;
+      } else {
+        if (count > 0) recorder_.add(pts + p, count, 1, stamp, t_k);
       }
-      flush(end);
       cursor_.p = end;
       if (end < n) break;
     }
@@ -341,28 +334,27 @@ class JointPipeline final : public Pipeline {
       else
         takePoints<true>(r.diag, t_k, lo, hi, last);
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
-      const std::size_t node_points_begin = node_first_point_, node_points_end = recorder_.size();
-      filter_->setReturns(recorder_.closeNode(node_points_begin, node_points_end));
+      filter_->setReturns(recorder_.closeNode(usable_, r.diag.points_skipped));
       filter_->update();
-      recorder_.judgeNode(node_points_begin, node_points_end, *filter_, r.diag.points_used,
-                          r.diag.points_rejected);
-      node_first_point_ = node_points_end;
+      recorder_.judgeNode(*filter_, r.diag.points_used, r.diag.points_rejected);
+      const std::size_t node = recorder_.nodes() - 1;
       const bool was_rest = rest_.atRest();
       const bool rest = rest_.update(imu[k]);
       if (was_rest && !rest) {
         // The IMU shows motion only once it has grown beyond its noise: the last nodes held at
         // rest may already have moved (a gentle start). The smoother does without their rest.
         filter_->cancelRestFrom(t_k - kRestBackdating);
-        for (std::size_t j = node_rest_.size();
-             j-- > 0 && imu[k_first_ + j].t >= t_k - kRestBackdating;)
-          node_rest_[j] = false;
-        // Their returns were not seen from a standing sensor after all: out of the rest cells.
-        for (std::size_t i = recorder_.size(); i-- > 0;) {
-          WindowRecorder::Tag& p = recorder_.tag(i);
-          if (p.node < node_rest_.size() && node_rest_[p.node]) break;
-          if (!p.in_rest_cells) continue;
-          rest_cells_.remove(p.cell, recorder_.residual(i));
-          p.in_rest_cells = false;
+        // Every node before this one was at rest (the rest ends once).
+        std::size_t backdated = node_rest_.size();
+        while (backdated > 0 && imu[k_first_ + backdated - 1].t >= t_k - kRestBackdating)
+          node_rest_[--backdated] = false;
+        // Their returns were not seen from a standing sensor after all: their accepted ones out
+        // of the rest cells, last first.
+        for (std::size_t j = node_rest_.size(); j-- > backdated;) {
+          const WindowRecorder::NodeReturns nr = recorder_.node(j);
+          for (std::size_t i = nr.end - nr.begin; i-- > 0;)
+            if (nr.cell[i] != WindowRecorder::kNoCell)
+              rest_cells_.remove(nr.cell[i], static_cast<double>(nr.residual[i]));
         }
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
       }
@@ -371,13 +363,12 @@ class JointPipeline final : public Pipeline {
                             cfg_.estimator.zero_rate_at_rest ? vp.gyro_sigma : 0.0);
       if (rest) r.diag.static_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
+      // A rest node's accepted returns are in the rest cells as long as it stays one.
       if (rest) {
-        for (std::size_t i = node_points_begin; i < node_points_end; ++i) {
-          WindowRecorder::Tag& p = recorder_.tag(i);
-          if (!p.accepted) continue;
-          p.in_rest_cells = true;
-          rest_cells_.add(p.cell, recorder_.residual(i));
-        }
+        const WindowRecorder::NodeReturns nr = recorder_.node(node);
+        for (std::size_t i = 0; i < nr.end - nr.begin; ++i)
+          if (nr.cell[i] != WindowRecorder::kNoCell)
+            rest_cells_.add(nr.cell[i], static_cast<double>(nr.residual[i]));
       }
       ++r.diag.gyro_updates;
       node_open_ = false;
@@ -539,45 +530,58 @@ class JointPipeline final : public Pipeline {
     const double sigma = cfg_.velocimeter.doppler_sigma;
     const auto& imu = seq_.imu();
     const WindowRecorder& rec = recorder_;
-    const std::size_t count = rec.size();
-    if (span_sum_.size() != RestCells::kCells) {
-      span_sum_.assign(RestCells::kCells, 0.0);
-      span_count_.assign(RestCells::kCells, 0);
-      span_coherent_.assign(RestCells::kCells, 0);
+    const std::size_t nodes = rec.nodes();
+    // The cells and a spare slot (WindowRecorder::kNoCell) where the returns not accepted go,
+    // so that every return is added to its cell without a branch on its verdict; the spare one
+    // is never tested.
+    constexpr std::size_t kSlots = RestCells::kCells + 1;
+    static_assert(WindowRecorder::kNoCell == RestCells::kCells);
+    if (span_sum_.size() != kSlots) {
+      span_sum_.assign(kSlots, 0.0);
+      span_count_.assign(kSlots, 0);
+      span_coherent_.assign(kSlots, 0);
+      span_touched_.assign(kSlots, 0);
     }
-    std::vector<std::uint32_t> touched;  // the span's cells
+    std::uint32_t* touched = span_touched_.data();  // the span's slots, in the order first seen
     std::vector<std::size_t> coherent;
-    std::size_t i = 0;
-    while (i < count) {
-      // One span: each accepted return of a moving node, its residual against the smoothed
-      // motion summed into its cell. The recorder holds the returns in node order; the residual
-      // is computed in float, as the recorder keeps it.
-      const double t_begin = imu[k_first_ + rec.tag(i).node].t;
-      const std::size_t span_begin = i;
-      touched.clear();
+    auto moving = [this](std::size_t k) { return !(k < node_rest_.size() && node_rest_[k]); };
+    std::size_t k = 0;
+    while (k < nodes) {
+      // One span, from a node with returns: each accepted return of a moving node, its
+      // residual against the smoothed motion summed into its cell. The residual is computed in
+      // float, as the recorder keeps it.
+      if (rec.node(k).begin == rec.node(k).end) {
+        ++k;
+        continue;
+      }
+      const double t_begin = imu[k_first_ + k].t;
+      const std::size_t span_first = k;
+      std::size_t slots = 0;
       double sumsq = 0;
       std::size_t total = 0;
-      while (i < count && imu[k_first_ + rec.tag(i).node].t < t_begin + kSpan) {
-        const std::uint32_t node = rec.tag(i).node;
-        const WindowRecorder::NodeReturns nr = rec.node(node);
-        i = nr.end;
-        if (node < node_rest_.size() && node_rest_[node]) continue;
-        const Eigen::Matrix<float, 9, 1> Q = filter_->lidarVelocityPolynomial(node).cast<float>();
+      for (; k < nodes && imu[k_first_ + k].t < t_begin + kSpan; ++k) {
+        if (!moving(k)) continue;
+        const WindowRecorder::NodeReturns nr = rec.node(k);
+        const std::size_t n = nr.end - nr.begin;
+        if (n == 0) continue;
+        const Eigen::Matrix<float, 9, 1> Q = filter_->lidarVelocityPolynomial(k).cast<float>();
         float q[9];
         for (int j = 0; j < 9; ++j) q[j] = Q(j);
-        const float inv_h = static_cast<float>(filter_->normalizedTime(node, 1.0));
-        const std::size_t n = nr.end - nr.begin;
+        const float inv_h = static_cast<float>(filter_->normalizedTime(k, 1.0));
         span_residual_.resize(std::max(span_residual_.size(), n));
-        float* res = span_residual_.data();
-        recorder_kernels::dopplerResiduals(n, q, inv_h, nr.x, nr.y, nr.z, nr.tau, nr.doppler, res);
+        const float* res = span_residual_.data();
+        recorder_kernels::dopplerResiduals(n, q, inv_h, nr.x, nr.y, nr.z, nr.tau, nr.doppler,
+                                           span_residual_.data());
         for (std::size_t j = 0; j < n; ++j) {
-          const WindowRecorder::Tag& tag = rec.tag(nr.begin + j);
-          if (!tag.accepted) continue;
-          const std::uint32_t c = tag.cell;
-          if (span_count_[c]++ == 0) touched.push_back(c);
+          const std::uint32_t c = nr.cell[j];
+          const bool accepted = c != WindowRecorder::kNoCell;
+          touched[slots] = c;
+          slots += span_count_[c]++ == 0 ? 1 : 0;
           span_sum_[c] += res[j];
-          sumsq += static_cast<double>(res[j]) * res[j];
-          ++total;
+          // A rejected return adds an exact zero (sumsq is never -0).
+          const double r2 = static_cast<double>(res[j]) * res[j];
+          sumsq += accepted ? r2 : 0.0;
+          total += accepted ? 1 : 0;
         }
       }
       // The test of RestCells::coherent, per span: the std from the Doppler noise or, when
@@ -586,21 +590,25 @@ class JointPipeline final : public Pipeline {
       bool any = false;
       if (total > 0) {
         const double var = std::max(sigma * sigma, sumsq / static_cast<double>(total));
-        const double k = kSigmas * kSigmas * var;
-        for (const std::uint32_t c : touched) {
+        const double kk = kSigmas * kSigmas * var;
+        for (std::size_t t = 0; t < slots; ++t) {
+          const std::uint32_t c = touched[t];
+          if (c == WindowRecorder::kNoCell) continue;
           const std::uint32_t n = span_count_[c];
           const double sum = span_sum_[c];
-          const bool coherent_cell = n >= kMinCount && sum * sum > k * static_cast<double>(n);
+          const bool coherent_cell = n >= kMinCount && sum * sum > kk * static_cast<double>(n);
           span_coherent_[c] = coherent_cell ? 1 : 0;
           any = any || coherent_cell;
         }
       }
-      for (std::size_t f = span_begin; any && f < i; ++f) {
-        const WindowRecorder::Tag& tag = rec.tag(f);
-        if (!tag.accepted || (tag.node < node_rest_.size() && node_rest_[tag.node])) continue;
-        if (span_coherent_[tag.cell] != 0) coherent.push_back(f);
+      for (std::size_t f = span_first; any && f < k; ++f) {
+        if (!moving(f)) continue;
+        const WindowRecorder::NodeReturns nr = rec.node(f);
+        for (std::size_t j = 0; j < nr.end - nr.begin; ++j)
+          if (span_coherent_[nr.cell[j]] != 0) coherent.push_back(nr.begin + j);
       }
-      for (const std::uint32_t c : touched) {
+      for (std::size_t t = 0; t < slots; ++t) {
+        const std::uint32_t c = touched[t];
         span_sum_[c] = 0;
         span_count_[c] = 0;
         span_coherent_[c] = 0;
@@ -609,16 +617,22 @@ class JointPipeline final : public Pipeline {
     // Cells of the world pass the test by chance now and then (development seeds: none in most
     // windows, tens of returns in some): not worth another smoothing. An object's are thousands.
     if (coherent.size() < kMinReturns) return false;
-    for (const std::size_t k : coherent) {
-      removeReturn(k, r.diag);
+    std::size_t node = 0;
+    for (const std::size_t i : coherent) {
+      while (rec.node(node).end <= i) ++node;
+      removeReturn(node, i, r.diag);
     }
     return true;
   }
 
-  /// Takes the i-th recorded return out of the estimate (its node's sums) and out of the map.
-  void removeReturn(std::size_t i, Diagnostics& diag) {
-    filter_->removePoint(recorder_.tag(i).node, static_cast<double>(recorder_.tau(i)),
-                         recorder_.lidarPoint(i), static_cast<double>(recorder_.doppler(i)));
+  /// Takes the i-th recorded return, one of node k's, out of the estimate (its node's sums) and
+  /// out of the map.
+  void removeReturn(std::size_t k, std::size_t i, Diagnostics& diag) {
+    const WindowRecorder::NodeReturns nr = recorder_.node(k);
+    const std::size_t j = i - nr.begin;
+    filter_->removePoint(k, static_cast<double>(nr.tau[j]),
+                         Eigen::Vector3f(nr.x[j], nr.y[j], nr.z[j]),
+                         static_cast<double>(nr.doppler[j]));
     recorder_.reject(i);
     --diag.points_used;
     ++diag.points_rejected;
@@ -635,11 +649,16 @@ class JointPipeline final : public Pipeline {
     constexpr double kSigmas = 4.0;
     constexpr int kMinCount = 4;
     const double sigma = cfg_.velocimeter.doppler_sigma;
-    for (std::size_t i = 0; i < recorder_.size(); ++i) {
-      const WindowRecorder::Tag& p = recorder_.tag(i);
-      if (!p.accepted || !p.in_rest_cells) continue;
-      if (!rest_cells_.coherent(p.cell, sigma, kSigmas, kMinCount)) continue;
-      removeReturn(i, r.diag);
+    // The returns in the rest cells: the accepted ones of the nodes still at rest.
+    for (std::size_t k = 0; k < recorder_.nodes() && k < node_rest_.size(); ++k) {
+      if (!node_rest_[k]) continue;
+      const WindowRecorder::NodeReturns nr = recorder_.node(k);
+      for (std::size_t j = 0; j < nr.end - nr.begin; ++j) {
+        const std::uint16_t c = nr.cell[j];
+        if (c == WindowRecorder::kNoCell) continue;
+        if (!rest_cells_.coherent(c, sigma, kSigmas, kMinCount)) continue;
+        removeReturn(k, nr.begin + j, r.diag);
+      }
     }
   }
 
@@ -802,7 +821,6 @@ class JointPipeline final : public Pipeline {
   bool node_residuals_inflated_ = false;  ///< the covariance was scaled (testNodeResiduals)
   bool map_pending_ = false;              ///< a state is out, its map not yet (completeMap)
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
-  std::size_t node_first_point_ = 0;  ///< the open node's first point in the recorder
   std::optional<DopplerInertialFilter> filter_;
   RestTracker rest_;
   std::vector<bool> node_rest_;
@@ -812,6 +830,7 @@ class JointPipeline final : public Pipeline {
   std::vector<std::uint32_t> span_count_;  ///< ... and their counts (zero between spans)
   std::vector<float> span_residual_;       ///< rejectMovingCells: a node's residuals
   std::vector<std::uint8_t> span_coherent_;  ///< ... whether a cell of the span fails the test
+  std::vector<std::uint32_t> span_touched_;  ///< ... the cells the span touched
 };
 
 }  // namespace

@@ -12,8 +12,11 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cstring>
 #include <limits>
 #include <vector>
+
+#include "velocimeter_inputs.h"
 
 namespace freeinit::detail {
 
@@ -80,225 +83,6 @@ void dopplerResiduals(std::size_t n, const float (&q)[9], float inv_h, const flo
                       float* residual);
 }  // namespace recorder_kernels
 
-/// The returns of the window as the filter received them, judged once their node is updated and
-/// mapped into the world once the node states are final. The returns are kept in one buffer of
-/// the MapPoints they become, node after node, each node's part as arrays (its x, then its y,
-/// ..., each over the node's returns: the per-return loops run over contiguous arrays) until
-/// finish() maps them in place and turns each node's part into MapPoints, so that the window's
-/// largest buffer is never held twice. A small tag per return beside it.
-class WindowRecorder {
- public:
-  struct Tag {
-    // Left unset when made (judgeNode writes each once; no fill of the window's buffer first).
-    Tag() {}  // not = default, which would zero them in resize()
-    Tag(std::uint32_t node_, std::uint16_t cell_, bool accepted_, bool in_rest_cells_)
-        : node(node_), cell(cell_), accepted(accepted_), in_rest_cells(in_rest_cells_) {}
-    std::uint32_t node;
-    std::uint16_t cell;  ///< direction and range cell (RestCells) of an accepted return
-    bool accepted;
-    bool in_rest_cells;  ///< counted in the rest cells (seen from a standing sensor)
-  };
-  static constexpr std::uint16_t kNoCell = 0xffff;
-  /// One node's returns: global indices [begin, end), its fields as arrays of end - begin.
-  struct NodeReturns {
-    std::size_t begin, end;
-    const float *x, *y, *z, *intensity, *doppler, *tau, *residual;
-  };
-  void reserve(std::size_t n) {
-    returns_.reserve(n);
-    tags_.reserve(n);
-  }
-  std::size_t size() const { return given_; }  ///< returns given (judged or not)
-  /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each at
-  /// tau = stamp + time_offset - t_node from the node. The points must stay in place until the
-  /// node is judged (the sequencer keeps its frames in place).
-  void add(std::size_t node, const DopplerPoint* p, std::size_t count, double stamp,
-           double t_node) {
-    open_runs_.push_back({p, count, stamp, t_node});
-    open_node_ = static_cast<std::uint32_t>(node);
-    given_ += count;
-  }
-  const Tag& tag(std::size_t i) const { return tags_[i]; }
-  Tag& tag(std::size_t i) { return tags_[i]; }
-  /// The node's returns (after judgeNode).
-  NodeReturns node(std::size_t k) const {
-    const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
-    const float* f = floats() + 7 * b;
-    return {b, b + n, f, f + n, f + 2 * n, f + 3 * n, f + 4 * n, f + 5 * n, f + 6 * n};
-  }
-  Eigen::Vector3f lidarPoint(std::size_t i) const {
-    const auto [n, j, f] = field(i);
-    return {f[j], f[n + j], f[2 * n + j]};
-  }
-  float tau(std::size_t i) const {  ///< [s] from its node's time
-    const auto [n, j, f] = field(i);
-    return f[5 * n + j];
-  }
-  float doppler(std::size_t i) const {
-    const auto [n, j, f] = field(i);
-    return f[4 * n + j];
-  }
-  float residual(std::size_t i) const {
-    const auto [n, j, f] = field(i);
-    return f[6 * n + j];
-  }
-  void reject(std::size_t i) { tags_[i].accepted = false; }
-  /// Closes the open node, whose returns are [begin, end): copies them into the node's part of
-  /// the buffer, as arrays, and returns those (the filter's input for the node, in the order
-  /// given; valid until the next node is closed).
-  DopplerInertialFilter::OpenArrays closeNode(std::size_t begin, std::size_t end) {
-    if (node_begin_.empty()) node_begin_.push_back(0);
-    const std::size_t n = end - begin;
-    returns_.resize(end);
-    node_begin_.push_back(end);
-    float* f = floats() + 7 * begin;
-    float *x = f, *y = f + n, *z = f + 2 * n, *in = f + 3 * n, *d = f + 4 * n, *tau = f + 5 * n;
-    std::size_t j = 0;
-    for (const Run& run : open_runs_) {
-      const DopplerPoint* p = run.points;
-      for (std::size_t i = 0; i < run.count; ++i, ++j) {
-        const double t = run.stamp + static_cast<double>(p[i].time_offset);
-        x[j] = p[i].p_l.x();
-        y[j] = p[i].p_l.y();
-        z[j] = p[i].p_l.z();
-        in[j] = p[i].intensity;
-        d[j] = p[i].doppler;
-        tau[j] = static_cast<float>(t - run.t_node);
-      }
-    }
-    open_runs_.clear();
-    return {n, tau, x, y, z, d};
-  }
-  /// The verdicts on the returns [begin, end) of the node closed last, after the filter's
-  /// update(): accepted or not, the residual, an accepted return's cell (RestCells::cellOf);
-  /// adds them to the counts. Nodes are judged in order, each once.
-  void judgeNode(std::size_t begin, std::size_t end, const DopplerInertialFilter& filter,
-                 std::size_t& used, std::size_t& rejected) {
-    const std::size_t n = end - begin;
-    tags_.resize(end);  // not initialized (Tag()): written once below
-    float* f = floats() + 7 * begin;
-    const float *x = f, *y = f + n, *z = f + 2 * n;
-    float* res = f + 6 * n;
-    cells_.resize(std::max(cells_.size(), n));
-    recorder_kernels::cellsOf(n, x, y, z, cells_.data());
-    std::size_t accepted = 0;
-    Tag* tags = tags_.data() + begin;
-    for (std::size_t j = 0; j < n; ++j) {
-      const bool a = filter.pointAccepted(j);
-      accepted += a ? 1 : 0;
-      tags[j] = {open_node_, a ? cells_[j] : kNoCell, a, false};
-      res[j] = static_cast<float>(filter.pointResidual(j));
-    }
-    used += accepted;
-    rejected += n - accepted;
-  }
-  /// Maps every return with the final node states (the body moved by tau, its angular and
-  /// linear velocity at the node, between the node and the return), the accepted ones into
-  /// r.static_map (the recorder's own buffer, moved), the others into r.rejected. The recorder
-  /// is empty afterwards.
-  void finish(const DopplerInertialFilter& filter, const std::vector<ImuSample>& imu,
-              std::size_t k_first, const Extrinsics& ext, InitResult& r) {
-    // In float, as the map is kept: at 100 m its rounding is 0.01 mm. A return at tau from its
-    // node is at x_b = p_b + tau (omega x p_b + v_b) in the node's body frame (p_b = R_bl p_l +
-    // p_bl), so in the world p_w = A p_l + a + tau (B p_l + b) with, per node, A = R R_bl,
-    // a = R p_bl + p, B = R [omega]x R_bl and b = R (omega x p_bl + v_b).
-    const double t_state = filter.state(filter.nodes() - 1).t;
-    std::size_t accepted = 0;
-    for (const Tag& t : tags_) accepted += t.accepted ? 1 : 0;
-    // One slot more than the rejected returns: the copy below writes every return to both
-    // outputs and advances the one it belongs to (no branch on the verdict, which the compiler
-    // cannot predict where the rejected returns are scattered).
-    r.rejected.assign(tags_.size() - accepted + 1, MapPoint{});
-    // Node by node: its returns mapped in place (as arrays), then copied out as MapPoints, the
-    // accepted ones into the buffer's front (the write position never passes the node's own
-    // part), the others into r.rejected.
-    std::vector<float> part;
-    std::size_t kept = 0, dropped = 0;
-    MapPoint* rejected = r.rejected.data();
-    for (std::size_t k = 0; k + 1 < node_begin_.size(); ++k) {
-      const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
-      if (n == 0) continue;
-      const FilterState& x = filter.state(k);
-      const Vec3 omega = imu[k_first + k].gyro - x.b_g;
-      const Vec3 v_b = x.R_wb.transpose() * x.v_w;
-      const Eigen::Matrix3f A = (x.R_wb * ext.R_bl).cast<float>();
-      const Eigen::Matrix3f B = (x.R_wb * skew(omega) * ext.R_bl).cast<float>();
-      const Eigen::Vector3f a = (x.R_wb * ext.p_bl + x.p_w).cast<float>();
-      const Eigen::Vector3f bv = (x.R_wb * (omega.cross(ext.p_bl) + v_b)).cast<float>();
-      recorder_kernels::NodeMap m;
-      for (int row = 0; row < 3; ++row) {
-        for (int col = 0; col < 3; ++col) {
-          m.A[3 * row + col] = A(row, col);
-          m.B[3 * row + col] = B(row, col);
-        }
-        m.a[row] = a(row);
-        m.b[row] = bv(row);
-      }
-      m.time = static_cast<float>(x.t - t_state);
-      float* f = floats() + 7 * b;
-      recorder_kernels::mapReturns(n, m, f, f + n, f + 2 * n, f + 5 * n);
-      // The node's part is copied aside only if the MapPoints written may reach it (once the
-      // returns rejected so far outnumber the node's, they end before it).
-      const float* src = f;
-      if (kept + n > b) {
-        part.assign(f, f + 7 * n);
-        src = part.data();
-      }
-      const float *px = src, *py = px + n, *pz = px + 2 * n, *pi = px + 3 * n, *pd = px + 4 * n,
-                  *pt = px + 5 * n, *pr = px + 6 * n;
-      MapPoint* out = returns_.data();
-      const Tag* tags = tags_.data() + b;
-      for (std::size_t j = 0; j < n; ++j) {
-        MapPoint p;
-        p.p_w = Eigen::Vector3f(px[j], py[j], pz[j]);
-        p.intensity = pi[j];
-        p.residual = pr[j];
-        p.doppler = pd[j];
-        p.time = pt[j];
-        const std::size_t in_map = tags[j].accepted ? 1 : 0;
-        out[kept] = p;  // below the node's part, or that part was copied aside
-        rejected[dropped] = p;
-        kept += in_map;
-        dropped += 1 - in_map;
-      }
-    }
-    r.rejected.resize(dropped);
-    returns_.resize(kept);
-    r.static_map = std::move(returns_);
-    returns_ = {};
-    tags_ = {};
-    node_begin_ = {};
-    given_ = 0;
-  }
-
- private:
-  struct Run {
-    const DopplerPoint* points;
-    std::size_t count;
-    double stamp, t_node;
-  };
-  // The buffer seen as floats: a MapPoint is seven floats.
-  static_assert(sizeof(MapPoint) == 7 * sizeof(float) && alignof(MapPoint) == alignof(float));
-  float* floats() { return reinterpret_cast<float*>(returns_.data()); }
-  const float* floats() const { return reinterpret_cast<const float*>(returns_.data()); }
-  struct Field {
-    std::size_t n, j;  ///< the node's count, the return's index in its node
-    const float* f;    ///< the node's part of the buffer
-  };
-  Field field(std::size_t i) const {
-    const std::size_t b = node_begin_[tags_[i].node], n = node_begin_[tags_[i].node + 1] - b;
-    return {n, i - b, floats() + 7 * b};
-  }
-
-  std::vector<MapPoint> returns_;        ///< the judged nodes' returns (see the class comment)
-  std::vector<std::size_t> node_begin_;  ///< node k's returns: [node_begin_[k], node_begin_[k+1])
-  std::vector<Tag> tags_;                ///< every judged return's
-  std::vector<Run> open_runs_;           ///< the open node's returns, where the frames hold them
-  std::uint32_t open_node_ = 0;          ///< the node open_runs_ belong to
-  std::size_t given_ = 0;                ///< returns given, the open node's included
-  std::vector<std::uint16_t> cells_;     ///< judgeNode's work space
-};
-
 /// The residuals of the returns while the sensor stands still, by direction: a standing sensor
 /// sees each part of the world in the same direction all window long, and the world's residuals
 /// there average to zero. A person walking by moves slowly along some lines of sight: each of
@@ -330,7 +114,6 @@ class RestCells {
     return e;
   }();
   static constexpr std::uint32_t kCells = kSide * kSide * kRangeBins;
-  static_assert(kCells < WindowRecorder::kNoCell, "a cell must fit the recorder's tag");
   RestCells() : sum_(kCells, 0.0), count_(kCells, 0) {}
   static std::uint32_t cellOf(const Eigen::Vector3f& p) {
     const float l1 = std::abs(p.x()) + std::abs(p.y()) + std::abs(p.z());
@@ -382,6 +165,222 @@ class RestCells {
   std::vector<std::uint32_t> count_;
   double sumsq_ = 0;
   std::size_t total_ = 0;
+};
+
+/// The returns of the window as the filter received them, judged once their node is updated and
+/// mapped into the world once the node states are final. The judged returns are kept in one
+/// buffer of the MapPoints they become, node after node, each node's part as arrays (its x, then
+/// its y, ..., each over the node's returns: the per-return loops run over contiguous arrays)
+/// until finish() maps them in place and turns each node's part into MapPoints, so that the
+/// window's largest buffer is never held twice. Beside it, per return, its cell (an accepted
+/// return's direction and range cell, RestCells) or kNoCell (not accepted).
+/// The open node's returns stay where the frames hold them until the node closes: they are then
+/// tested and laid out in one pass.
+class WindowRecorder {
+ public:
+  /// The cell of a return not accepted: one past RestCells' (a spare slot for loops that add
+  /// every return to its cell without a branch on the verdict).
+  static constexpr std::uint16_t kNoCell = RestCells::kCells;
+  static_assert(RestCells::kCells < 0xffff, "a cell and kNoCell must fit 16 bits");
+  /// One judged node's returns: global indices [begin, end), its fields as arrays of end - begin.
+  struct NodeReturns {
+    std::size_t begin, end;
+    const float *x, *y, *z, *intensity, *doppler, *tau, *residual;
+    const std::uint16_t* cell;
+  };
+  void reserve(std::size_t n) {
+    returns_.reserve(n);
+    cells_.reserve(n);
+  }
+  std::size_t size() const { return returns_.size(); }          ///< judged returns
+  std::size_t nodes() const { return node_begin_.size() - 1; }  ///< judged nodes
+  /// count returns of one frame (stamp [s]), every step-th from p on, given to the open node at
+  /// once, each at tau = stamp + time_offset - t_node from the node. The points must stay in
+  /// place until the node closes (the sequencer keeps its frames in place).
+  void add(const DopplerPoint* p, std::size_t count, std::size_t step, double stamp,
+           double t_node) {
+    open_runs_.push_back({p, count, step, stamp, t_node});
+    open_given_ += count;
+  }
+  /// Of the returns given to the open node, those `usable` rejects.
+  std::size_t openUnusable(const UsablePoints& usable) const {
+    std::size_t n = 0;
+    for (const Run& run : open_runs_)
+      for (std::size_t i = 0; i < run.count; ++i) n += usable(run.points[i * run.step]) ? 0 : 1;
+    return n;
+  }
+  /// Closes the open node: lays its usable returns out as arrays in the node's part of the
+  /// buffer, in the order given, adds the others to `skipped`, and returns the arrays (the
+  /// filter's input for the node, valid until the next node closes).
+  DopplerInertialFilter::OpenArrays closeNode(const UsablePoints& usable, std::size_t& skipped) {
+    const std::size_t begin = returns_.size(), m = open_given_;
+    returns_.resize(begin + m);
+    float* f = reinterpret_cast<float*>(returns_.data()) + 7 * begin;
+    float *x = f, *y = f + m, *z = f + 2 * m, *in = f + 3 * m, *d = f + 4 * m, *tau = f + 5 * m;
+    // Every return is written, and the write position advances past the usable ones only (no
+    // branch on the verdict): the arrays are m apart while they fill. The point is read once,
+    // before the float stores (which might otherwise reach it); the test is a copy, whose
+    // limits stay in registers.
+    const UsablePoints test = usable;
+    std::size_t j = 0;
+    for (const Run& run : open_runs_) {
+      const DopplerPoint* p = run.points;
+      for (std::size_t i = 0; i < run.count; ++i, p += run.step) {
+        const float px = p->p_l.x(), py = p->p_l.y(), pz = p->p_l.z(), pi = p->intensity,
+                    pd = p->doppler, dt = p->time_offset;
+        const std::size_t use = test(*p) ? 1 : 0;
+        x[j] = px;
+        y[j] = py;
+        z[j] = pz;
+        in[j] = pi;
+        d[j] = pd;
+        tau[j] = static_cast<float>(run.stamp + static_cast<double>(dt) - run.t_node);
+        j += use;
+      }
+    }
+    const std::size_t n = j;
+    // Some left out: each array moved down to n apart (each after the one before it, whose
+    // place it may take), and the part shortened to the usable ones.
+    if (n < m) {
+      for (std::size_t a = 1; a < 6; ++a) std::memmove(f + a * n, f + a * m, n * sizeof(float));
+      returns_.resize(begin + n);
+    }
+    skipped += m - n;
+    open_runs_.clear();
+    open_given_ = 0;
+    return {n, f + 5 * n, f, f + n, f + 2 * n, f + 4 * n};
+  }
+  /// The verdicts on the returns of the node closed last, after the filter's update(): accepted
+  /// or not, the residual, an accepted return's cell; adds them to the counts. Nodes are judged
+  /// in order, each once.
+  void judgeNode(const DopplerInertialFilter& filter, std::size_t& used, std::size_t& rejected) {
+    const std::size_t begin = node_begin_.back(), n = returns_.size() - begin;
+    float* f = reinterpret_cast<float*>(returns_.data()) + 7 * begin;
+    float* res = f + 6 * n;
+    cells_.resize(begin + n);
+    std::uint16_t* cell = cells_.data() + begin;
+    recorder_kernels::cellsOf(n, f, f + n, f + 2 * n, cell);
+    // The verdict as a mask, not a branch (the rejected returns are scattered); the count and
+    // the residuals in loops of their own, which the compiler vectorizes.
+    for (std::size_t j = 0; j < n; ++j) {
+      const std::uint16_t rejected_mask = filter.pointAccepted(j) ? 0 : 0xffff;
+      cell[j] = static_cast<std::uint16_t>((cell[j] & ~rejected_mask) | (kNoCell & rejected_mask));
+    }
+    std::size_t accepted = 0;
+    for (std::size_t j = 0; j < n; ++j) accepted += cell[j] != kNoCell ? 1 : 0;
+    for (std::size_t j = 0; j < n; ++j) res[j] = static_cast<float>(filter.pointResidual(j));
+    node_begin_.push_back(begin + n);
+    accepted_ += accepted;
+    used += accepted;
+    rejected += n - accepted;
+  }
+  /// Judged node k's returns.
+  NodeReturns node(std::size_t k) const {
+    const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
+    const float* f = reinterpret_cast<const float*>(returns_.data()) + 7 * b;
+    return {b,         b + n,     f,         f + n,     f + 2 * n,
+            f + 3 * n, f + 4 * n, f + 5 * n, f + 6 * n, cells_.data() + b};
+  }
+  bool accepted(std::size_t i) const { return cells_[i] != kNoCell; }
+  /// Takes an accepted return out of the map (into the rejected returns).
+  void reject(std::size_t i) {
+    if (cells_[i] == kNoCell) return;
+    cells_[i] = kNoCell;
+    --accepted_;
+  }
+  /// Maps every return with the final node states (the body moved by tau, its angular and
+  /// linear velocity at the node, between the node and the return), the accepted ones into
+  /// r.static_map (the recorder's own buffer, moved), the others into r.rejected. The recorder
+  /// is empty afterwards.
+  void finish(const DopplerInertialFilter& filter, const std::vector<ImuSample>& imu,
+              std::size_t k_first, const Extrinsics& ext, InitResult& r) {
+    // In float, as the map is kept: at 100 m its rounding is 0.01 mm. A return at tau from its
+    // node is at x_b = p_b + tau (omega x p_b + v_b) in the node's body frame (p_b = R_bl p_l +
+    // p_bl), so in the world p_w = A p_l + a + tau (B p_l + b) with, per node, A = R R_bl,
+    // a = R p_bl + p, B = R [omega]x R_bl and b = R (omega x p_bl + v_b).
+    const double t_state = filter.state(filter.nodes() - 1).t;
+    // One slot more than the rejected returns: the copy below writes every return to both
+    // outputs and advances the one it belongs to (no branch on the verdict, which the compiler
+    // cannot predict where the rejected returns are scattered).
+    r.rejected.assign(returns_.size() - accepted_ + 1, MapPoint{});
+    // Node by node: its returns mapped in place (as arrays), then copied out as MapPoints, the
+    // accepted ones into the buffer's front (the write position never passes the node's own
+    // part), the others into r.rejected.
+    std::vector<float> part;
+    std::size_t kept = 0, dropped = 0;
+    MapPoint* rejected = r.rejected.data();
+    for (std::size_t k = 0; k + 1 < node_begin_.size(); ++k) {
+      const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
+      if (n == 0) continue;
+      const FilterState& x = filter.state(k);
+      const Vec3 omega = imu[k_first + k].gyro - x.b_g;
+      const Vec3 v_b = x.R_wb.transpose() * x.v_w;
+      const Eigen::Matrix3f A = (x.R_wb * ext.R_bl).cast<float>();
+      const Eigen::Matrix3f B = (x.R_wb * skew(omega) * ext.R_bl).cast<float>();
+      const Eigen::Vector3f a = (x.R_wb * ext.p_bl + x.p_w).cast<float>();
+      const Eigen::Vector3f bv = (x.R_wb * (omega.cross(ext.p_bl) + v_b)).cast<float>();
+      recorder_kernels::NodeMap m;
+      for (int row = 0; row < 3; ++row) {
+        for (int col = 0; col < 3; ++col) {
+          m.A[3 * row + col] = A(row, col);
+          m.B[3 * row + col] = B(row, col);
+        }
+        m.a[row] = a(row);
+        m.b[row] = bv(row);
+      }
+      m.time = static_cast<float>(x.t - t_state);
+      float* f = reinterpret_cast<float*>(returns_.data()) + 7 * b;
+      recorder_kernels::mapReturns(n, m, f, f + n, f + 2 * n, f + 5 * n);
+      // The node's part is copied aside only if the MapPoints written may reach it (once the
+      // returns rejected so far outnumber the node's, they end before it).
+      const float* src = f;
+      if (kept + n > b) {
+        part.assign(f, f + 7 * n);
+        src = part.data();
+      }
+      const float *px = src, *py = px + n, *pz = px + 2 * n, *pi = px + 3 * n, *pd = px + 4 * n,
+                  *pt = px + 5 * n, *pr = px + 6 * n;
+      MapPoint* out = returns_.data();
+      const std::uint16_t* cells = cells_.data() + b;
+      for (std::size_t j = 0; j < n; ++j) {
+        MapPoint p;
+        p.p_w = Eigen::Vector3f(px[j], py[j], pz[j]);
+        p.intensity = pi[j];
+        p.residual = pr[j];
+        p.doppler = pd[j];
+        p.time = pt[j];
+        const std::size_t in_map = cells[j] != kNoCell ? 1 : 0;
+        out[kept] = p;  // below the node's part, or that part was copied aside
+        rejected[dropped] = p;
+        kept += in_map;
+        dropped += 1 - in_map;
+      }
+    }
+    r.rejected.resize(dropped);
+    returns_.resize(kept);
+    r.static_map = std::move(returns_);
+    returns_ = {};
+    cells_ = {};
+    node_begin_ = {0};
+    accepted_ = 0;
+  }
+
+ private:
+  struct Run {
+    const DopplerPoint* points;
+    std::size_t count, step;
+    double stamp, t_node;
+  };
+  // The buffers seen as floats: a MapPoint is seven floats.
+  static_assert(sizeof(MapPoint) == 7 * sizeof(float) && alignof(MapPoint) == alignof(float));
+
+  std::vector<MapPoint> returns_;     ///< the judged nodes' returns (see the class comment)
+  std::vector<std::uint16_t> cells_;  ///< every judged return's cell, kNoCell if not accepted
+  std::vector<std::size_t> node_begin_{
+      0};                       ///< node k's returns: [node_begin_[k], node_begin_[k+1])
+  std::size_t accepted_ = 0;    ///< judged returns accepted (not kNoCell)
+  std::vector<Run> open_runs_;  ///< the open node's returns, where the frames hold them
+  std::size_t open_given_ = 0;  ///< returns in open_runs_
 };
 
 }  // namespace freeinit::detail
