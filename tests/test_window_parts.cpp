@@ -1,6 +1,7 @@
 // The window recorder's vectorized per-return loops (window_parts.h) against the scalar forms they
-// replace: the rest cells of RestCells::cellOf, the Doppler residual as Eigen computes it, and
-// the map of a return (A p_l + a + tau (B p_l + b)).
+// replace: the rest cells of RestCells::cellOf, the Doppler residual as Eigen computes it, the
+// map of a return (A p_l + a + tau (B p_l + b)), and the split of a node's returns into the map
+// and the rejected ones.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -100,6 +101,37 @@ TEST(WindowParts, ReturnsMapThroughTheNodeMotion) {
     EXPECT_NEAR(r.y[i], w.y(), 1e-4) << i;
     EXPECT_NEAR(r.z[i], w.z(), 1e-4) << i;
     EXPECT_EQ(r.tau[i], -0.2f + before.tau[i]) << i;
+  }
+}
+
+TEST(WindowParts, SplitReturnsCopiesEachReturnToItsList) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> v(-100, 100);
+  // Runs of accepted returns of every length (the blocks of four and the ones around them),
+  // scattered rejected ones, and node sizes around the block size.
+  for (const std::size_t n : {0, 1, 3, 4, 5, 8, 9, 61, 1000}) {
+    std::vector<float> arrays(7 * n);
+    for (float& a : arrays) a = v(rng);
+    std::vector<std::uint16_t> cell(n);
+    std::bernoulli_distribution rejected(n % 2 == 0 ? 0.05 : 0.5);
+    for (std::size_t j = 0; j < n; ++j) cell[j] = rejected(rng) ? 7 : static_cast<std::uint16_t>(j);
+    std::vector<MapPoint> map(n), rejected_out(n + 1);
+    std::size_t dropped = 2;  // added to
+    const std::size_t kept = recorder_kernels::splitReturns(
+        n, arrays.data(), cell.data(), 7, map.data(), rejected_out.data(), dropped);
+    std::size_t k = 0, r = 0;
+    for (std::size_t j = 0; j < n; ++j) {
+      const MapPoint& p = cell[j] != 7 ? map[k++] : rejected_out[r++];
+      EXPECT_EQ(p.p_w.x(), arrays[j]) << n << " " << j;
+      EXPECT_EQ(p.p_w.y(), arrays[n + j]);
+      EXPECT_EQ(p.p_w.z(), arrays[2 * n + j]);
+      EXPECT_EQ(p.intensity, arrays[3 * n + j]);
+      EXPECT_EQ(p.doppler, arrays[4 * n + j]);
+      EXPECT_EQ(p.time, arrays[5 * n + j]);
+      EXPECT_EQ(p.residual, arrays[6 * n + j]);
+    }
+    EXPECT_EQ(kept, k);
+    EXPECT_EQ(dropped, 2 + r);
   }
 }
 

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 
 namespace freeinit::detail::recorder_kernels {
 
@@ -57,6 +58,95 @@ void mapReturns(std::size_t n, const NodeMap& m, float* __restrict x, float* __r
     z[i] = ((a20 * px + a21 * py) + a22 * pz) + az + t * (((b20 * px + b21 * py) + b22 * pz) + bz);
     tau[i] = t_node + t;
   }
+}
+
+namespace {
+
+// Four floats, an SSE register in either build: the transposes below move bits and compute
+// nothing, so their results are those of the scalar copy.
+typedef float V4 __attribute__((vector_size(16)));
+
+#if defined(__clang__)
+#define FREEINIT_SHUFFLE(a, b, i0, i1, i2, i3) __builtin_shufflevector(a, b, i0, i1, i2, i3)
+#else
+typedef int V4i __attribute__((vector_size(16)));
+#define FREEINIT_SHUFFLE(a, b, i0, i1, i2, i3) __builtin_shuffle(a, b, V4i{i0, i1, i2, i3})
+#endif
+
+/// Rows a, b, c, d of a 4 x 4 block into its columns: a = (a0, b0, c0, d0), b = (a1, b1, ...).
+inline void transpose(V4& a, V4& b, V4& c, V4& d) {
+  const V4 ab_lo = FREEINIT_SHUFFLE(a, b, 0, 4, 1, 5), ab_hi = FREEINIT_SHUFFLE(a, b, 2, 6, 3, 7);
+  const V4 cd_lo = FREEINIT_SHUFFLE(c, d, 0, 4, 1, 5), cd_hi = FREEINIT_SHUFFLE(c, d, 2, 6, 3, 7);
+  a = FREEINIT_SHUFFLE(ab_lo, cd_lo, 0, 1, 4, 5);
+  b = FREEINIT_SHUFFLE(ab_lo, cd_lo, 2, 3, 6, 7);
+  c = FREEINIT_SHUFFLE(ab_hi, cd_hi, 0, 1, 4, 5);
+  d = FREEINIT_SHUFFLE(ab_hi, cd_hi, 2, 3, 6, 7);
+}
+
+#undef FREEINIT_SHUFFLE
+
+V4 load4(const float* p) {
+  V4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+void store4(float* p, const V4& v) { std::memcpy(p, &v, sizeof v); }
+
+}  // namespace
+
+FREEINIT_RECORDER_CLONES
+std::size_t splitReturns(std::size_t n, const float* __restrict arrays,
+                         const std::uint16_t* __restrict cell, std::uint16_t no_cell,
+                         MapPoint* __restrict map, MapPoint* __restrict rejected,
+                         std::size_t& dropped) {
+  static_assert(sizeof(MapPoint) == 7 * sizeof(float));
+  const float *x = arrays, *y = x + n, *z = x + 2 * n, *in = x + 3 * n, *d = x + 4 * n,
+              *tau = x + 5 * n, *res = x + 6 * n;
+  float* out = reinterpret_cast<float*>(map);
+  float* out_rejected = reinterpret_cast<float*>(rejected);
+  std::size_t kept = 0, dropped_here = 0;
+  // One return: written to both lists (no branch on its verdict, which is as good as random
+  // where the rejected returns are scattered), the list it belongs to advancing.
+  auto one = [&](std::size_t j) {
+    const float p[7] = {x[j], y[j], z[j], in[j], res[j], d[j], tau[j]};
+    float *a = out + 7 * kept, *b = out_rejected + 7 * dropped_here;
+    for (int f = 0; f < 7; ++f) a[f] = p[f];
+    for (int f = 0; f < 7; ++f) b[f] = p[f];
+    const std::size_t in_map = cell[j] != no_cell ? 1 : 0;
+    kept += in_map;
+    dropped_here += 1 - in_map;
+  };
+  // Four returns all in the map (the usual case) at once: MapPoint k of them is (x, y, z,
+  // intensity) of return k and then (residual, Doppler, tau) of it and the x of return k + 1,
+  // which the next MapPoint writes again: two 4 x 4 transposes. A block needs a return after it
+  // (whose x the last write takes); the others go one by one.
+  std::size_t j = 0;
+  for (; j + 4 < n; j += 4) {
+    const bool all = (cell[j] != no_cell) & (cell[j + 1] != no_cell) & (cell[j + 2] != no_cell) &
+                     (cell[j + 3] != no_cell);
+    if (!all) {
+      for (std::size_t l = 0; l < 4; ++l) one(j + l);
+      continue;
+    }
+    V4 a0 = load4(x + j), a1 = load4(y + j), a2 = load4(z + j), a3 = load4(in + j);
+    V4 b0 = load4(res + j), b1 = load4(d + j), b2 = load4(tau + j), b3 = load4(x + j + 1);
+    transpose(a0, a1, a2, a3);
+    transpose(b0, b1, b2, b3);
+    float* o = out + 7 * kept;
+    store4(o, a0);
+    store4(o + 4, b0);
+    store4(o + 7, a1);
+    store4(o + 11, b1);
+    store4(o + 14, a2);
+    store4(o + 18, b2);
+    store4(o + 21, a3);
+    store4(o + 25, b3);
+    kept += 4;
+  }
+  for (; j < n; ++j) one(j);
+  dropped += dropped_here;
+  return kept;
 }
 
 FREEINIT_RECORDER_CLONES

@@ -76,6 +76,15 @@ struct NodeMap {
 /// Maps n returns in place: (x, y, z) from the LiDAR frame into the world, tau into the time
 /// from the state.
 void mapReturns(std::size_t n, const NodeMap& m, float* x, float* y, float* z, float* tau);
+/// Writes n returns of a node, given as its arrays (x, y, z, intensity, Doppler, tau, residual,
+/// each n long, one after the other from `arrays`), out as MapPoints: those whose cell is not
+/// `no_cell` to map[0, 1, ...], the others to rejected[0, 1, ...]. Returns how many went to the
+/// map and adds the others to `dropped`. Each one is also written once more, to the next slot of
+/// the list it does not belong to (overwritten by the next one there): map needs room for n,
+/// rejected for one more than the rejected ones. map may not overlap the arrays.
+std::size_t splitReturns(std::size_t n, const float* arrays, const std::uint16_t* cell,
+                         std::uint16_t no_cell, MapPoint* map, MapPoint* rejected,
+                         std::size_t& dropped);
 /// The Doppler residual of n returns against a LiDAR velocity v(s) = q0 + s (q1 + s q2),
 /// s = tau inv_h (DopplerInertialFilter::lidarVelocityPolynomial): doppler + p_l.v / |p_l|.
 void dopplerResiduals(std::size_t n, const float (&q)[9], float inv_h, const float* x,
@@ -299,9 +308,8 @@ class WindowRecorder {
     // p_bl), so in the world p_w = A p_l + a + tau (B p_l + b) with, per node, A = R R_bl,
     // a = R p_bl + p, B = R [omega]x R_bl and b = R (omega x p_bl + v_b).
     const double t_state = filter.state(filter.nodes() - 1).t;
-    // One slot more than the rejected returns: the copy below writes every return to both
-    // outputs and advances the one it belongs to (no branch on the verdict, which the compiler
-    // cannot predict where the rejected returns are scattered).
+    // One slot more than the rejected returns: splitReturns writes a return it takes one by one
+    // to both outputs and advances the one it belongs to.
     r.rejected.assign(returns_.size() - accepted_ + 1, MapPoint{});
     // Node by node: its returns mapped in place (as arrays), then copied out as MapPoints, the
     // accepted ones into the buffer's front (the write position never passes the node's own
@@ -338,23 +346,8 @@ class WindowRecorder {
         part.assign(f, f + 7 * n);
         src = part.data();
       }
-      const float *px = src, *py = px + n, *pz = px + 2 * n, *pi = px + 3 * n, *pd = px + 4 * n,
-                  *pt = px + 5 * n, *pr = px + 6 * n;
-      MapPoint* out = returns_.data();
-      const std::uint16_t* cells = cells_.data() + b;
-      for (std::size_t j = 0; j < n; ++j) {
-        MapPoint p;
-        p.p_w = Eigen::Vector3f(px[j], py[j], pz[j]);
-        p.intensity = pi[j];
-        p.residual = pr[j];
-        p.doppler = pd[j];
-        p.time = pt[j];
-        const std::size_t in_map = cells[j] != kNoCell ? 1 : 0;
-        out[kept] = p;  // below the node's part, or that part was copied aside
-        rejected[dropped] = p;
-        kept += in_map;
-        dropped += 1 - in_map;
-      }
+      kept += recorder_kernels::splitReturns(n, src, cells_.data() + b, kNoCell,
+                                             returns_.data() + kept, rejected + dropped, dropped);
     }
     r.rejected.resize(dropped);
     returns_.resize(kept);
