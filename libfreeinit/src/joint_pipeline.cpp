@@ -569,20 +569,11 @@ class JointPipeline final : public Pipeline {
         for (int j = 0; j < 9; ++j) q[j] = Q(j);
         const float inv_h = static_cast<float>(filter_->normalizedTime(k, 1.0));
         span_residual_.resize(std::max(span_residual_.size(), n));
-        const float* res = span_residual_.data();
-        recorder_kernels::dopplerResiduals(n, q, inv_h, nr.x, nr.y, nr.z, nr.tau, nr.doppler,
-                                           span_residual_.data());
-        for (std::size_t j = 0; j < n; ++j) {
-          const std::uint32_t c = nr.cell[j];
-          const bool accepted = c != WindowRecorder::kNoCell;
-          touched[slots] = c;
-          slots += span_count_[c]++ == 0 ? 1 : 0;
-          span_sum_[c] += res[j];
-          // A rejected return adds an exact zero (sumsq is never -0).
-          const double r2 = static_cast<double>(res[j]) * res[j];
-          sumsq += accepted ? r2 : 0.0;
-          total += accepted ? 1 : 0;
-        }
+        float* res = span_residual_.data();
+        recorder_kernels::dopplerResiduals(n, q, inv_h, nr.x, nr.y, nr.z, nr.tau, nr.doppler, res);
+        total += recorder_kernels::sumIntoCells(n, nr.cell, WindowRecorder::kNoCell, res,
+                                                span_sum_.data(), span_count_.data(), touched,
+                                                slots, sumsq);
       }
       // The test of RestCells::coherent, per span: the std from the Doppler noise or, when
       // larger, the span's residual RMS. It is a cell's: cell by cell, then (only if a cell
