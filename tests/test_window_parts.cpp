@@ -1,9 +1,10 @@
 // The window recorder's vectorized per-return loops (window_parts.h) against the scalar forms they
 // replace: the rest cells of RestCells::cellOf, the Doppler residual as Eigen computes it, the
-// map of a return (A p_l + a + tau (B p_l + b)), and the split of a node's returns into the map
-// and the rejected ones.
+// map of a return (A p_l + a + tau (B p_l + b)), the split of a node's returns into the map
+// and the rejected ones, and the sums of the moving-cell test.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -133,6 +134,48 @@ TEST(WindowParts, SplitReturnsCopiesEachReturnToItsList) {
     EXPECT_EQ(kept, k);
     EXPECT_EQ(dropped, 2 + r);
   }
+}
+
+TEST(WindowParts, SumIntoCellsAddsInOrder) {
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<float> v(-0.3f, 0.3f);
+  std::uniform_int_distribution<int> cell_of(0, 40), run(1, 12);
+  constexpr std::uint16_t kNo = 50;
+  std::vector<double> sum(kNo + 1, 0.0), sum_ref(kNo + 1, 0.0);
+  std::vector<std::uint32_t> count(kNo + 1, 0), count_ref(kNo + 1, 0), touched(kNo + 2);
+  std::vector<std::uint32_t> touched_ref;
+  double squares = 0, squares_ref = 0;
+  std::size_t slots = 0, in_cells_ref = 0, in_cells = 0;
+  // Several calls (nodes) into the same sums: runs of one cell, rejected returns among them.
+  for (const std::size_t n : {0, 1, 7, 100, 333}) {
+    std::vector<std::uint16_t> cell;
+    while (cell.size() < n) {
+      const std::uint16_t c = std::bernoulli_distribution(0.1)(rng) ? kNo : cell_of(rng);
+      for (int k = run(rng); k > 0 && cell.size() < n; --k) cell.push_back(c);
+    }
+    std::vector<float> residual(n);
+    for (float& r : residual) r = v(rng);
+    in_cells += recorder_kernels::sumIntoCells(n, cell.data(), kNo, residual.data(), sum.data(),
+                                               count.data(), touched.data(), slots, squares);
+    for (std::size_t j = 0; j < n; ++j) {  // the scalar form it replaces
+      if (cell[j] == kNo) continue;
+      if (count_ref[cell[j]]++ == 0) touched_ref.push_back(cell[j]);
+      sum_ref[cell[j]] += residual[j];
+      squares_ref += static_cast<double>(residual[j]) * residual[j];
+      ++in_cells_ref;
+    }
+  }
+  EXPECT_EQ(squares, squares_ref);
+  EXPECT_EQ(in_cells, in_cells_ref);
+  for (std::uint16_t c = 0; c < kNo; ++c) {
+    EXPECT_EQ(sum[c], sum_ref[c]) << c;
+    EXPECT_EQ(count[c], count_ref[c]) << c;
+  }
+  EXPECT_EQ(sum[kNo], 0.0);  // only exact zeros added to the spare slot
+  // Each touched cell once, in the order first seen; the spare slot may be among them.
+  std::vector<std::uint32_t> seen(touched.begin(), touched.begin() + static_cast<long>(slots));
+  seen.erase(std::remove(seen.begin(), seen.end(), kNo), seen.end());
+  EXPECT_EQ(seen, touched_ref);
 }
 
 }  // namespace
