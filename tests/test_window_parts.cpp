@@ -1,11 +1,14 @@
 // The window recorder's vectorized per-return loops (window_parts.h) against the scalar forms they
-// replace: the rest cells of RestCells::cellOf, the Doppler residual as Eigen computes it, the
-// map of a return (A p_l + a + tau (B p_l + b)), the split of a node's returns into the map
-// and the rejected ones, and the sums of the moving-cell test.
+// replace: a node's returns laid out and tested (usablePoint), the rest cells of RestCells::cellOf,
+// the Doppler residual as Eigen computes it, the map of a return (A p_l + a + tau (B p_l + b)), the
+// split of a node's returns into the map and the rejected ones, and the sums of the moving-cell
+// test.
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
 #include <vector>
 
@@ -46,6 +49,61 @@ Returns someReturns() {
     for (const float sy : {-1.0f, 1.0f})
       for (const float sz : {-1.0f, 0.0f, 1.0f}) add(Eigen::Vector3f(3 * sx, 2 * sy, 5 * sz));
   return r;
+}
+
+TEST(WindowParts, LayOutCopiesAndTestsEachReturn) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> c(-200.0f, 200.0f), t(0.0f, 0.1f);
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  const float odd[] = {kInf, -kInf, std::numeric_limits<float>::quiet_NaN(), 0.0f, 1e30f};
+  std::vector<DopplerPoint> frame(1000);
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    DopplerPoint& p = frame[i];
+    p.p_l = Eigen::Vector3f(c(rng), c(rng), c(rng)) * (i % 7 == 0 ? 0.001f : 1.0f);
+    p.doppler = c(rng);
+    p.time_offset = t(rng);
+    p.intensity = c(rng);
+    p.line = static_cast<std::uint16_t>(i);
+    if (i % 13 == 0) p.p_l[static_cast<int>(i % 3)] = odd[i % 5];  // non-finite coordinates
+    if (i % 17 == 0) p.doppler = odd[i % 5];
+    if (i % 19 == 0) p.time_offset = odd[(i + 1) % 5];
+  }
+  for (const double max_range : {150.0, std::numeric_limits<double>::infinity()}) {
+    VelocimeterParams vp;
+    vp.min_range = 0.5;
+    vp.max_range = max_range;
+    const UsablePoints usable(vp);
+    const double stamp = 1.7e9, t_node = 1.7e9 + 0.05;
+    // Runs of every length around the block of four, from the frame's start or its middle,
+    // consecutive or strided.
+    for (const std::size_t step : {1, 3})
+      for (const std::size_t count : {0, 1, 4, 5, 8, 9, 250})
+        for (const std::size_t first : {0, 101}) {
+          std::vector<float> a(6 * count);
+          std::vector<std::uint8_t> u(count);
+          float *x = a.data(), *y = x + count, *z = y + count, *in = z + count, *d = in + count,
+                *tau = d + count;
+          const std::size_t n =
+              recorder_kernels::layOut(frame.data() + first, count, step, stamp, t_node, usable, x,
+                                       y, z, in, d, tau, u.data());
+          std::size_t passed = 0;
+          for (std::size_t i = 0; i < count; ++i) {
+            const DopplerPoint& p = frame[first + i * step];
+            const bool usable_point = usablePoint(p, vp);
+            passed += usable_point ? 1 : 0;
+            ASSERT_EQ(u[i], usable_point ? 1 : 0) << step << " " << count << " " << i;
+            // Bits, not values: a NaN copied is a NaN.
+            const float fields[] = {p.p_l.x(), p.p_l.y(), p.p_l.z(), p.intensity, p.doppler};
+            const float* arrays[] = {x, y, z, in, d};
+            for (int k = 0; k < 5; ++k)
+              ASSERT_EQ(std::memcmp(&arrays[k][i], &fields[k], sizeof(float)), 0) << k << " " << i;
+            const float tau_i =
+                static_cast<float>(stamp + static_cast<double>(p.time_offset) - t_node);
+            ASSERT_EQ(std::memcmp(&tau[i], &tau_i, sizeof(float)), 0) << i;
+          }
+          EXPECT_EQ(n, passed);
+        }
+  }
 }
 
 TEST(WindowParts, CellsAreThoseOfRestCells) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <cstring>
 
 namespace freeinit::detail::recorder_kernels {
@@ -16,6 +17,97 @@ namespace freeinit::detail::recorder_kernels {
 #else
 #define FREEINIT_RECORDER_CLONES
 #endif
+
+namespace {
+
+// Four floats, an SSE register in either build: the transposes below move bits and compute
+// nothing, so their results are those of the scalar copy.
+typedef float V4 __attribute__((vector_size(16)));
+
+#if defined(__clang__)
+#define FREEINIT_SHUFFLE(a, b, i0, i1, i2, i3) __builtin_shufflevector(a, b, i0, i1, i2, i3)
+#else
+typedef int V4i __attribute__((vector_size(16)));
+#define FREEINIT_SHUFFLE(a, b, i0, i1, i2, i3) __builtin_shuffle(a, b, V4i{i0, i1, i2, i3})
+#endif
+
+/// Rows a, b, c, d of a 4 x 4 block into its columns: a = (a0, b0, c0, d0), b = (a1, b1, ...).
+inline void transpose(V4& a, V4& b, V4& c, V4& d) {
+  const V4 ab_lo = FREEINIT_SHUFFLE(a, b, 0, 4, 1, 5), ab_hi = FREEINIT_SHUFFLE(a, b, 2, 6, 3, 7);
+  const V4 cd_lo = FREEINIT_SHUFFLE(c, d, 0, 4, 1, 5), cd_hi = FREEINIT_SHUFFLE(c, d, 2, 6, 3, 7);
+  a = FREEINIT_SHUFFLE(ab_lo, cd_lo, 0, 1, 4, 5);
+  b = FREEINIT_SHUFFLE(ab_lo, cd_lo, 2, 3, 6, 7);
+  c = FREEINIT_SHUFFLE(ab_hi, cd_hi, 0, 1, 4, 5);
+  d = FREEINIT_SHUFFLE(ab_hi, cd_hi, 2, 3, 6, 7);
+}
+
+#undef FREEINIT_SHUFFLE
+
+V4 load4(const float* p) {
+  V4 v;
+  std::memcpy(&v, p, sizeof v);
+  return v;
+}
+
+void store4(float* p, const V4& v) { std::memcpy(p, &v, sizeof v); }
+
+}  // namespace
+
+FREEINIT_RECORDER_CLONES
+std::size_t layOut(const DopplerPoint* __restrict p, std::size_t count, std::size_t step,
+                   double stamp, double t_node, const UsablePoints& usable, float* __restrict x,
+                   float* __restrict y, float* __restrict z, float* __restrict intensity,
+                   float* __restrict doppler, float* __restrict tau,
+                   std::uint8_t* __restrict usable_out) {
+  // First the fields, the time offset into tau; then, over those arrays, tau and the verdict in
+  // a loop the compiler vectorizes (over the points themselves, 28 bytes apart, it would gather
+  // each lane).
+  static_assert(sizeof(DopplerPoint) == 7 * sizeof(float) &&
+                offsetof(DopplerPoint, doppler) == 3 * sizeof(float) &&
+                offsetof(DopplerPoint, time_offset) == 4 * sizeof(float) &&
+                offsetof(DopplerPoint, intensity) == 5 * sizeof(float));
+  std::size_t i = 0;
+  if (step == 1) {
+    // Four consecutive points are 28 floats: (x, y, z, Doppler) of each at 7 k and (time
+    // offset, intensity, ...) at 7 k + 4, two 4 x 4 transposes. A block needs a point after it
+    // (the last of those loads reaches one float into it).
+    const float* f = reinterpret_cast<const float*>(p);
+    for (; i + 4 < count; i += 4, f += 28) {
+      V4 a0 = load4(f), a1 = load4(f + 7), a2 = load4(f + 14), a3 = load4(f + 21);
+      V4 b0 = load4(f + 4), b1 = load4(f + 11), b2 = load4(f + 18), b3 = load4(f + 25);
+      transpose(a0, a1, a2, a3);
+      transpose(b0, b1, b2, b3);
+      store4(x + i, a0);
+      store4(y + i, a1);
+      store4(z + i, a2);
+      store4(doppler + i, a3);
+      store4(tau + i, b0);
+      store4(intensity + i, b1);
+    }
+  }
+  for (; i < count; ++i) {
+    const DopplerPoint& q = p[i * step];
+    x[i] = q.p_l.x();
+    y[i] = q.p_l.y();
+    z[i] = q.p_l.z();
+    doppler[i] = q.doppler;
+    tau[i] = q.time_offset;
+    intensity[i] = q.intensity;
+  }
+  const UsablePoints test = usable;  // a copy: its limits stay in registers
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    DopplerPoint q;
+    q.p_l = Eigen::Vector3f(x[k], y[k], z[k]);
+    q.doppler = doppler[k];
+    q.time_offset = tau[k];
+    const std::uint8_t u = test(q) ? 1 : 0;
+    usable_out[k] = u;
+    n += u;
+    tau[k] = static_cast<float>(stamp + static_cast<double>(q.time_offset) - t_node);
+  }
+  return n;
+}
 
 FREEINIT_RECORDER_CLONES
 void cellsOf(std::size_t n, const float* __restrict x, const float* __restrict y,
@@ -107,41 +199,6 @@ void mapReturns(std::size_t n, const NodeMap& m, float* __restrict x, float* __r
     tau[i] = t_node + t;
   }
 }
-
-namespace {
-
-// Four floats, an SSE register in either build: the transposes below move bits and compute
-// nothing, so their results are those of the scalar copy.
-typedef float V4 __attribute__((vector_size(16)));
-
-#if defined(__clang__)
-#define FREEINIT_SHUFFLE(a, b, i0, i1, i2, i3) __builtin_shufflevector(a, b, i0, i1, i2, i3)
-#else
-typedef int V4i __attribute__((vector_size(16)));
-#define FREEINIT_SHUFFLE(a, b, i0, i1, i2, i3) __builtin_shuffle(a, b, V4i{i0, i1, i2, i3})
-#endif
-
-/// Rows a, b, c, d of a 4 x 4 block into its columns: a = (a0, b0, c0, d0), b = (a1, b1, ...).
-inline void transpose(V4& a, V4& b, V4& c, V4& d) {
-  const V4 ab_lo = FREEINIT_SHUFFLE(a, b, 0, 4, 1, 5), ab_hi = FREEINIT_SHUFFLE(a, b, 2, 6, 3, 7);
-  const V4 cd_lo = FREEINIT_SHUFFLE(c, d, 0, 4, 1, 5), cd_hi = FREEINIT_SHUFFLE(c, d, 2, 6, 3, 7);
-  a = FREEINIT_SHUFFLE(ab_lo, cd_lo, 0, 1, 4, 5);
-  b = FREEINIT_SHUFFLE(ab_lo, cd_lo, 2, 3, 6, 7);
-  c = FREEINIT_SHUFFLE(ab_hi, cd_hi, 0, 1, 4, 5);
-  d = FREEINIT_SHUFFLE(ab_hi, cd_hi, 2, 3, 6, 7);
-}
-
-#undef FREEINIT_SHUFFLE
-
-V4 load4(const float* p) {
-  V4 v;
-  std::memcpy(&v, p, sizeof v);
-  return v;
-}
-
-void store4(float* p, const V4& v) { std::memcpy(p, &v, sizeof v); }
-
-}  // namespace
 
 FREEINIT_RECORDER_CLONES
 std::size_t splitReturns(std::size_t n, const float* __restrict arrays,

@@ -64,6 +64,13 @@ class RestTracker {
 /// The per-return loops of the recorder (window_parts.cpp), over one node's returns as arrays;
 /// vectorized, with the same results as the scalar forms they replace.
 namespace recorder_kernels {
+/// Lays count returns out as arrays, p[0], p[step], ... (one frame's, whose stamp [s] is
+/// `stamp`): position, intensity, Doppler, tau = stamp + time_offset - t_node (in double,
+/// rounded to float), and usable[i] = 1 where `usable` passes the return, else 0. Returns how
+/// many it passes.
+std::size_t layOut(const DopplerPoint* p, std::size_t count, std::size_t step, double stamp,
+                   double t_node, const UsablePoints& usable, float* x, float* y, float* z,
+                   float* intensity, float* doppler, float* tau, std::uint8_t* usable_out);
 /// RestCells::cellOf of each of n returns at (x, y, z).
 void cellsOf(std::size_t n, const float* x, const float* y, const float* z, std::uint16_t* cell);
 /// A node's map: a return at tau from its node maps to A p_l + a + tau (B p_l + b), at time
@@ -235,32 +242,28 @@ class WindowRecorder {
     returns_.resize(begin + m);
     float* f = reinterpret_cast<float*>(returns_.data()) + 7 * begin;
     float *x = f, *y = f + m, *z = f + 2 * m, *in = f + 3 * m, *d = f + 4 * m, *tau = f + 5 * m;
-    // Every return is written, and the write position advances past the usable ones only (no
-    // branch on the verdict): the arrays are m apart while they fill. The point is read once,
-    // before the float stores (which might otherwise reach it); the test is a copy, whose
-    // limits stay in registers.
-    const UsablePoints test = usable;
-    std::size_t j = 0;
+    // Each run laid out and tested in a loop the compiler vectorizes; the arrays are m apart
+    // while they fill.
+    if (usable_.size() < m) usable_.resize(m);
+    std::size_t j = 0, n = 0;
     for (const Run& run : open_runs_) {
-      const DopplerPoint* p = run.points;
-      for (std::size_t i = 0; i < run.count; ++i, p += run.step) {
-        const float px = p->p_l.x(), py = p->p_l.y(), pz = p->p_l.z(), pi = p->intensity,
-                    pd = p->doppler, dt = p->time_offset;
-        const std::size_t use = test(*p) ? 1 : 0;
-        x[j] = px;
-        y[j] = py;
-        z[j] = pz;
-        in[j] = pi;
-        d[j] = pd;
-        tau[j] = static_cast<float>(run.stamp + static_cast<double>(dt) - run.t_node);
-        j += use;
-      }
+      n +=
+          recorder_kernels::layOut(run.points, run.count, run.step, run.stamp, run.t_node, usable,
+                                   x + j, y + j, z + j, in + j, d + j, tau + j, usable_.data() + j);
+      j += run.count;
     }
-    const std::size_t n = j;
-    // Some left out: each array moved down to n apart (each after the one before it, whose
-    // place it may take), and the part shortened to the usable ones.
+    // Some not usable: each array's usable returns moved down, n apart (each array after the one
+    // before it, whose place it may take; each return to the same place or before it).
     if (n < m) {
-      for (std::size_t a = 1; a < 6; ++a) std::memmove(f + a * n, f + a * m, n * sizeof(float));
+      for (std::size_t a = 0; a < 6; ++a) {
+        const float* from = f + a * m;
+        float* to = f + a * n;
+        std::size_t w = 0;
+        for (std::size_t i = 0; i < m; ++i) {
+          to[w] = from[i];
+          w += usable_[i];
+        }
+      }
       returns_.resize(begin + n);
     }
     skipped += m - n;
@@ -379,10 +382,11 @@ class WindowRecorder {
   std::vector<MapPoint> returns_;     ///< the judged nodes' returns (see the class comment)
   std::vector<std::uint16_t> cells_;  ///< every judged return's cell, kNoCell if not accepted
   std::vector<std::size_t> node_begin_{
-      0};                       ///< node k's returns: [node_begin_[k], node_begin_[k+1])
-  std::size_t accepted_ = 0;    ///< judged returns accepted (not kNoCell)
-  std::vector<Run> open_runs_;  ///< the open node's returns, where the frames hold them
-  std::size_t open_given_ = 0;  ///< returns in open_runs_
+      0};                             ///< node k's returns: [node_begin_[k], node_begin_[k+1])
+  std::size_t accepted_ = 0;          ///< judged returns accepted (not kNoCell)
+  std::vector<Run> open_runs_;        ///< the open node's returns, where the frames hold them
+  std::size_t open_given_ = 0;        ///< returns in open_runs_
+  std::vector<std::uint8_t> usable_;  ///< closeNode's work space: each return's verdict
 };
 
 }  // namespace freeinit::detail
