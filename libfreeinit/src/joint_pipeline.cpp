@@ -123,25 +123,55 @@ class JointPipeline final : public Pipeline {
     // that it does not depend on how far the IMU stream happens to be ahead.
     if (k_last + 2 >= imu.size() && !seq_.finished()) return;
 
-    // Returns of the span, evenly thinned to bootstrap_points: the usable ones found in one
-    // pass (in time order, up to the first return after the span), then every thin-th.
+    // Returns of the span, evenly thinned to bootstrap_points: the usable ones (in time order,
+    // up to the first return after the span), then every thin-th. A frame's times do not
+    // decrease (the sequencer checks it): its part of the span is found by bisection, and the
+    // verdicts on that part come from the recorder's vectorized layout, a block at a time.
     const double t_end = imu[k_last].t;
+    struct FramePart {
+      std::size_t f, begin, end;
+    };
+    std::vector<FramePart> parts;
+    std::size_t span_returns = 0;
+    const auto& frames = seq_.frames();
+    for (std::size_t f = c.f; f < frames.size(); ++f) {
+      const DopplerPoint* fp = frames[f].points->data();
+      const std::size_t n = frames[f].points->size();
+      const double stamp = frames[f].stamp;
+      auto time = [stamp](const DopplerPoint& q) {
+        return stamp + static_cast<double>(q.time_offset);
+      };
+      const DopplerPoint* first = fp + (f == c.f ? c.p : 0);
+      const DopplerPoint* end = std::partition_point(
+          first, fp + n, [&](const DopplerPoint& q) { return !(time(q) > t_end); });
+      const DopplerPoint* begin =
+          std::partition_point(first, end, [&](const DopplerPoint& q) { return time(q) < t_ref; });
+      parts.push_back(
+          {f, static_cast<std::size_t>(begin - fp), static_cast<std::size_t>(end - fp)});
+      span_returns += static_cast<std::size_t>(end - begin);
+      if (end < fp + n) break;
+    }
     struct SpanReturn {
       const DopplerPoint* p;
       double t;
     };
     std::vector<SpanReturn> usable;
-    const auto& frames = seq_.frames();
-    for (std::size_t f = c.f; f < frames.size(); ++f) {
-      const DopplerPoint* fp = frames[f].points->data();
-      const std::size_t n = frames[f].points->size();
-      std::size_t q = f == c.f ? c.p : 0;
-      for (; q < n; ++q) {
-        const double t = frames[f].stamp + static_cast<double>(fp[q].time_offset);
-        if (t > t_end) break;
-        if (t >= t_ref && usable_(fp[q])) usable.push_back({fp + q, t});
+    usable.reserve(span_returns);
+    constexpr std::size_t kBlock = 1024;
+    std::vector<float> block(6 * kBlock);
+    std::vector<std::uint8_t> verdict(kBlock);
+    float* a = block.data();
+    for (const FramePart& part : parts) {
+      const DopplerPoint* fp = frames[part.f].points->data();
+      const double stamp = frames[part.f].stamp;
+      for (std::size_t b = part.begin; b < part.end; b += kBlock) {
+        const std::size_t m = std::min(kBlock, part.end - b);
+        recorder_kernels::layOut(fp + b, m, 1, stamp, t_ref, usable_, a, a + kBlock, a + 2 * kBlock,
+                                 a + 3 * kBlock, a + 4 * kBlock, a + 5 * kBlock, verdict.data());
+        for (std::size_t i = 0; i < m; ++i)
+          if (verdict[i] != 0)
+            usable.push_back({fp + b + i, stamp + static_cast<double>(fp[b + i].time_offset)});
       }
-      if (q < n) break;
     }
     const std::size_t thin = std::max<std::size_t>(
         1, usable.size() / static_cast<std::size_t>(cfg_.estimator.bootstrap_points));
