@@ -232,7 +232,11 @@ class JointPipeline final : public Pipeline {
     // Frames stamped closer than their rate would suggest must not reserve without bound: the
     // buffer grows as needed beyond this.
     constexpr double kMostReserved = 4e6;
-    recorder_.reserve(static_cast<std::size_t>(std::min(1.05 * expected, kMostReserved)) + 1024);
+    const double reserved = std::min(1.05 * expected, kMostReserved);
+    // In front, 2 % of that (two nodes' returns where the window has 100 nodes): room for the
+    // map to be written behind the node it is read from, without copying the node aside.
+    recorder_.reserve(static_cast<std::size_t>(reserved) + 1024,
+                      static_cast<std::size_t>(0.02 * reserved));
   }
 
   /// Frames as the automatic stride wants them (anything with a `points` vector).

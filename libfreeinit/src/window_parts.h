@@ -197,10 +197,11 @@ class RestCells {
 /// buffer of the MapPoints they become, node after node, each node's part as arrays (its x, then
 /// its y, ..., each over the node's returns: the per-return loops run over contiguous arrays)
 /// until finish() maps them in place and turns each node's part into MapPoints, so that the
-/// window's largest buffer is never held twice. Beside it, per return, its cell (an accepted
-/// return's direction and range cell, RestCells) or kNoCell (not accepted).
-/// The open node's returns stay where the frames hold them until the node closes: they are then
-/// tested and laid out in one pass.
+/// window's largest buffer is never held twice (a few unused slots before the first node let
+/// the map be written behind the node being read, see reserve()). Beside it, per return, its cell
+/// (an accepted return's direction and range cell, RestCells) or kNoCell (not accepted). The open
+/// node's returns stay where the frames hold them until the node closes: they are then tested and
+/// laid out in one pass.
 class WindowRecorder {
  public:
   /// The cell of a return not accepted: one past RestCells' (a spare slot for loops that add
@@ -213,12 +214,19 @@ class WindowRecorder {
     const float *x, *y, *z, *intensity, *doppler, *tau, *residual;
     const std::uint16_t* cell;
   };
-  void reserve(std::size_t n) {
-    returns_.reserve(n);
+  /// Room for n returns, and `front` unused slots before the first node's part (before any
+  /// node is added): finish() writes the map from the buffer's start, and where it stays `front`
+  /// returns or more behind the node it reads, that node's part is read in place rather than
+  /// copied aside first.
+  void reserve(std::size_t n, std::size_t front) {
+    returns_.reserve(front + n);
+    returns_.resize(front);
+    node_begin_ = {front};
+    front_ = front;
     cells_.reserve(n);
   }
-  std::size_t size() const { return returns_.size(); }          ///< judged returns
-  std::size_t nodes() const { return node_begin_.size() - 1; }  ///< judged nodes
+  std::size_t size() const { return node_begin_.back() - front_; }  ///< judged returns
+  std::size_t nodes() const { return node_begin_.size() - 1; }      ///< judged nodes
   /// count returns of one frame (stamp [s]), every step-th from p on, given to the open node at
   /// once, each at tau = stamp + time_offset - t_node from the node. The points must stay in
   /// place until the node closes (the sequencer keeps its frames in place).
@@ -278,8 +286,8 @@ class WindowRecorder {
     const std::size_t begin = node_begin_.back(), n = returns_.size() - begin;
     float* f = reinterpret_cast<float*>(returns_.data()) + 7 * begin;
     float* res = f + 6 * n;
-    cells_.resize(begin + n);
-    std::uint16_t* cell = cells_.data() + begin;
+    cells_.resize(begin - front_ + n);
+    std::uint16_t* cell = cells_.data() + (begin - front_);
     recorder_kernels::cellsOf(n, f, f + n, f + 2 * n, cell);
     // The verdict as a mask, not a branch (the rejected returns are scattered); the count and
     // the residuals in loops of their own, which the compiler vectorizes.
@@ -297,10 +305,10 @@ class WindowRecorder {
   }
   /// Judged node k's returns.
   NodeReturns node(std::size_t k) const {
-    const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
+    const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b, i = b - front_;
     const float* f = reinterpret_cast<const float*>(returns_.data()) + 7 * b;
-    return {b,         b + n,     f,         f + n,     f + 2 * n,
-            f + 3 * n, f + 4 * n, f + 5 * n, f + 6 * n, cells_.data() + b};
+    return {i,         i + n,     f,         f + n,     f + 2 * n,
+            f + 3 * n, f + 4 * n, f + 5 * n, f + 6 * n, cells_.data() + i};
   }
   bool accepted(std::size_t i) const { return cells_[i] != kNoCell; }
   /// Takes an accepted return out of the map (into the rejected returns).
@@ -322,7 +330,7 @@ class WindowRecorder {
     const double t_state = filter.state(filter.nodes() - 1).t;
     // One slot more than the rejected returns: splitReturns writes a return it takes one by one
     // to both outputs and advances the one it belongs to.
-    r.rejected.assign(returns_.size() - accepted_ + 1, MapPoint{});
+    r.rejected.assign(size() - accepted_ + 1, MapPoint{});
     // Node by node: its returns mapped in place (as arrays), then copied out as MapPoints, the
     // accepted ones into the buffer's front (the write position never passes the node's own
     // part), the others into r.rejected.
@@ -358,7 +366,7 @@ class WindowRecorder {
         part.assign(f, f + 7 * n);
         src = part.data();
       }
-      kept += recorder_kernels::splitReturns(n, src, cells_.data() + b, kNoCell,
+      kept += recorder_kernels::splitReturns(n, src, cells_.data() + (b - front_), kNoCell,
                                              returns_.data() + kept, rejected + dropped, dropped);
     }
     r.rejected.resize(dropped);
@@ -367,6 +375,7 @@ class WindowRecorder {
     returns_ = {};
     cells_ = {};
     node_begin_ = {0};
+    front_ = 0;
     accepted_ = 0;
   }
 
@@ -384,6 +393,7 @@ class WindowRecorder {
   std::vector<std::size_t> node_begin_{
       0};                             ///< node k's returns: [node_begin_[k], node_begin_[k+1])
   std::size_t accepted_ = 0;          ///< judged returns accepted (not kNoCell)
+  std::size_t front_ = 0;             ///< unused slots before the first node's part (reserve)
   std::vector<Run> open_runs_;        ///< the open node's returns, where the frames hold them
   std::size_t open_given_ = 0;        ///< returns in open_runs_
   std::vector<std::uint8_t> usable_;  ///< closeNode's work space: each return's verdict
