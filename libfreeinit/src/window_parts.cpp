@@ -201,6 +201,21 @@ void mapReturns(std::size_t n, const NodeMap& m, float* __restrict x, float* __r
 }
 
 FREEINIT_RECORDER_CLONES
+std::size_t verdicts(std::size_t n, const DopplerInertialFilter& filter, std::uint16_t no_cell,
+                     std::uint16_t* __restrict cell, float* __restrict residual) {
+  // Three loops the compiler vectorizes; the verdict as a mask, not a branch (the rejected
+  // returns are scattered).
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::uint16_t rejected = filter.pointAccepted(j) ? 0 : 0xffff;
+    cell[j] = static_cast<std::uint16_t>((cell[j] & ~rejected) | (no_cell & rejected));
+  }
+  std::size_t accepted = 0;
+  for (std::size_t j = 0; j < n; ++j) accepted += cell[j] != no_cell ? 1 : 0;
+  for (std::size_t j = 0; j < n; ++j) residual[j] = static_cast<float>(filter.pointResidual(j));
+  return accepted;
+}
+
+FREEINIT_RECORDER_CLONES
 std::size_t splitReturns(std::size_t n, const float* __restrict arrays,
                          const std::uint16_t* __restrict cell, std::uint16_t no_cell,
                          MapPoint* __restrict map, MapPoint* __restrict rejected,

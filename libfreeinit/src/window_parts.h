@@ -83,6 +83,11 @@ struct NodeMap {
 /// Maps n returns in place: (x, y, z) from the LiDAR frame into the world, tau into the time
 /// from the state.
 void mapReturns(std::size_t n, const NodeMap& m, float* x, float* y, float* z, float* tau);
+/// The filter's verdicts on the n returns of its open node, after update(): a rejected
+/// return's cell set to no_cell, each residual (rounded to float) into residual. Returns how
+/// many it accepted.
+std::size_t verdicts(std::size_t n, const DopplerInertialFilter& filter, std::uint16_t no_cell,
+                     std::uint16_t* cell, float* residual);
 /// Writes n returns of a node, given as its arrays (x, y, z, intensity, Doppler, tau, residual,
 /// each n long, one after the other from `arrays`), out as MapPoints: those whose cell is not
 /// `no_cell` to map[0, 1, ...], the others to rejected[0, 1, ...]. Returns how many went to the
@@ -289,15 +294,7 @@ class WindowRecorder {
     cells_.resize(begin - front_ + n);
     std::uint16_t* cell = cells_.data() + (begin - front_);
     recorder_kernels::cellsOf(n, f, f + n, f + 2 * n, cell);
-    // The verdict as a mask, not a branch (the rejected returns are scattered); the count and
-    // the residuals in loops of their own, which the compiler vectorizes.
-    for (std::size_t j = 0; j < n; ++j) {
-      const std::uint16_t rejected_mask = filter.pointAccepted(j) ? 0 : 0xffff;
-      cell[j] = static_cast<std::uint16_t>((cell[j] & ~rejected_mask) | (kNoCell & rejected_mask));
-    }
-    std::size_t accepted = 0;
-    for (std::size_t j = 0; j < n; ++j) accepted += cell[j] != kNoCell ? 1 : 0;
-    for (std::size_t j = 0; j < n; ++j) res[j] = static_cast<float>(filter.pointResidual(j));
+    const std::size_t accepted = recorder_kernels::verdicts(n, filter, kNoCell, cell, res);
     node_begin_.push_back(begin + n);
     accepted_ += accepted;
     used += accepted;
