@@ -269,17 +269,29 @@ std::size_t splitReturns(std::size_t n, const float* __restrict arrays,
   return kept;
 }
 
+FREEINIT_RECORDER_CLONES
 std::size_t sumIntoCells(std::size_t n, const std::uint16_t* __restrict cell, std::uint16_t no_cell,
-                         const float* __restrict residual, double* __restrict sum,
+                         float* __restrict residual, double* __restrict sum,
                          std::uint32_t* __restrict count, std::uint32_t* __restrict touched,
                          std::size_t& slots, double& squares) {
   if (n == 0) return 0;
-  double sq = squares;
-  std::size_t s = slots, in_cells = 0;
+  // First, in a loop the compiler vectorizes, the residuals outside the cells cleared (their
+  // bits: +0) and the others counted.
+  std::size_t in_cells = 0;
+  for (std::size_t j = 0; j < n; ++j) {
+    const std::uint32_t keep = cell[j] != no_cell ? 0xffffffffu : 0u;
+    std::uint32_t bits;
+    std::memcpy(&bits, residual + j, sizeof bits);
+    bits &= keep;
+    std::memcpy(residual + j, &bits, sizeof bits);
+    in_cells += keep & 1u;
+  }
   // Consecutive returns mostly share a cell (a scan line sweeps a cell's few degrees in tens of
   // returns): the cell's sum and count are held here while they do, and written back when the
   // cell changes, instead of each addition waiting for the one before it through memory. The
   // same additions in the same order.
+  double sq = squares;
+  std::size_t s = slots;
   std::uint32_t c = cell[0];
   double c_sum = sum[c];
   std::uint32_t c_count = count[c];
@@ -296,17 +308,10 @@ std::size_t sumIntoCells(std::size_t n, const std::uint16_t* __restrict cell, st
       touched[s] = c;
       s += c_count == 0 ? 1 : 0;
     }
-    // The residual's bits cleared outside the cells (no branch on the verdict).
-    const std::uint32_t keep = c != no_cell ? 0xffffffffu : 0u;
-    std::uint32_t bits;
-    std::memcpy(&bits, residual + j, sizeof bits);
-    bits &= keep;
-    float r;
-    std::memcpy(&r, &bits, sizeof r);
+    const float r = residual[j];
     c_sum += r;
     ++c_count;
     sq += static_cast<double>(r) * r;
-    in_cells += keep & 1u;
   }
   sum[c] = c_sum;
   count[c] = c_count;

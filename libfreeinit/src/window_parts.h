@@ -99,13 +99,13 @@ std::size_t splitReturns(std::size_t n, const float* arrays, const std::uint16_t
                          std::size_t& dropped);
 /// Adds n returns to the cells they are in, in order: sum[cell] += residual, count[cell] += 1,
 /// squares += residual^2, and a cell seen for the first time (its count was zero) appended to
-/// touched[slots++]. A return whose cell is no_cell counts as a zero residual: exact zeros added
-/// to the sums (squares is never -0) and to that slot's. Returns how many are in cells. (A
-/// function of its own, so that its sums stay in registers: in the caller's loop, which calls
-/// out, the compiler keeps them on the stack.)
+/// touched[slots++]. A return whose cell is no_cell counts as a zero residual (its residual is
+/// set to +0): exact zeros added to the sums (squares is never -0) and to that slot's. Returns
+/// how many are in cells. (A function of its own, so that its sums stay in registers: in the
+/// caller's loop, which calls out, the compiler keeps them on the stack.)
 std::size_t sumIntoCells(std::size_t n, const std::uint16_t* cell, std::uint16_t no_cell,
-                         const float* residual, double* sum, std::uint32_t* count,
-                         std::uint32_t* touched, std::size_t& slots, double& squares);
+                         float* residual, double* sum, std::uint32_t* count, std::uint32_t* touched,
+                         std::size_t& slots, double& squares);
 /// The Doppler residual of n returns against a LiDAR velocity v(s) = q0 + s (q1 + s q2),
 /// s = tau inv_h (DopplerInertialFilter::lidarVelocityPolynomial): doppler + p_l.v / |p_l|.
 void dopplerResiduals(std::size_t n, const float (&q)[9], float inv_h, const float* x,
