@@ -51,20 +51,22 @@ class UsablePoints {
     // A squared range within a finite limit has finite coordinates (with an infinity or a NaN
     // among them it is inf or NaN): they need the test only without one. Bit tests and
     // comparisons joined with & (no branch), so that the loops that call it vectorize.
-    const bool finite = isFinite(p.doppler) & isFinite(p.time_offset) &
-                        (finite_limit_ | (isFinite(x) & isFinite(y) & isFinite(z)));
+    const unsigned all_finite =
+        finite(p.doppler) & finite(p.time_offset) &
+        (static_cast<unsigned>(finite_limit_) | (finite(x) & finite(y) & finite(z)));
     const float r2 = p.p_l.squaredNorm();
-    return finite & (r2 >= lo2_) & (r2 <= hi2_);
+    return (all_finite & static_cast<unsigned>(r2 >= lo2_) & static_cast<unsigned>(r2 <= hi2_)) !=
+           0;
   }
 
  private:
   static constexpr float kInf = std::numeric_limits<float>::infinity();
   static constexpr float kNone = std::numeric_limits<float>::quiet_NaN();  ///< nothing passes
-  /// Whether v is finite: its exponent bits are not all ones (no floating-point operation).
-  static bool isFinite(float v) {
+  /// 1 if v is finite (its exponent bits are not all ones: no floating-point operation), else 0.
+  static unsigned finite(float v) {
     std::uint32_t bits;
     std::memcpy(&bits, &v, sizeof bits);
-    return (bits & 0x7f800000u) != 0x7f800000u;
+    return (bits & 0x7f800000u) != 0x7f800000u ? 1u : 0u;
   }
   /// The smallest float in [0, inf] at which `pass` holds (false below it, true from it on),
   /// NaN if it holds nowhere.
