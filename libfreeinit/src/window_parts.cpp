@@ -1,8 +1,8 @@
 // The window recorder's per-return loops (window_parts.h): without branches and over arrays that
-// do not overlap (__restrict), so that the compiler vectorizes them; built for AVX2 as well as the
-// baseline, chosen at load time. The same float operations in the same order as the scalar forms
-// (RestCells::cellOf, the map and residual formulas) and no FMA contraction (AVX2 alone does not
-// enable FMA): the same results on either build.
+// do not overlap (__restrict), so that the compiler vectorizes them; built for AVX-512 and AVX2 as
+// well as the baseline, chosen at load time (vector_clones.h). The same float operations in the
+// same order as the scalar forms (RestCells::cellOf, the map and residual formulas) and no FMA
+// contraction: the same results on every build.
 #include "window_parts.h"
 
 #include <algorithm>
@@ -10,13 +10,9 @@
 #include <cstddef>
 #include <cstring>
 
-namespace freeinit::detail::recorder_kernels {
+#include "vector_clones.h"
 
-#if defined(__GNUC__) && defined(__x86_64__) && !defined(__clang__)
-#define FREEINIT_RECORDER_CLONES __attribute__((target_clones("avx2", "default")))
-#else
-#define FREEINIT_RECORDER_CLONES
-#endif
+namespace freeinit::detail::recorder_kernels {
 
 namespace {
 
@@ -53,7 +49,7 @@ void store4(float* p, const V4& v) { std::memcpy(p, &v, sizeof v); }
 
 }  // namespace
 
-FREEINIT_RECORDER_CLONES
+FREEINIT_VECTOR_CLONES
 std::size_t layOut(const DopplerPoint* __restrict p, std::size_t count, std::size_t step,
                    double stamp, double t_node, const UsablePoints& usable, float* __restrict x,
                    float* __restrict y, float* __restrict z, float* __restrict intensity,
@@ -109,7 +105,7 @@ std::size_t layOut(const DopplerPoint* __restrict p, std::size_t count, std::siz
   return n;
 }
 
-FREEINIT_RECORDER_CLONES
+FREEINIT_VECTOR_CLONES
 void cellsOf(std::size_t n, const float* __restrict x, const float* __restrict y,
              const float* __restrict z, std::uint16_t* __restrict cell) {
   // Eight returns at a time as vector code (an AVX register, or two SSE2 ones in the baseline
@@ -181,7 +177,7 @@ void cellsOf(std::size_t n, const float* __restrict x, const float* __restrict y
   }
 }
 
-FREEINIT_RECORDER_CLONES
+FREEINIT_VECTOR_CLONES
 void mapReturns(std::size_t n, const NodeMap& m, float* __restrict x, float* __restrict y,
                 float* __restrict z, float* __restrict tau) {
   const float a00 = m.A[0], a01 = m.A[1], a02 = m.A[2], a10 = m.A[3], a11 = m.A[4], a12 = m.A[5],
@@ -200,7 +196,7 @@ void mapReturns(std::size_t n, const NodeMap& m, float* __restrict x, float* __r
   }
 }
 
-FREEINIT_RECORDER_CLONES
+FREEINIT_VECTOR_CLONES
 std::size_t verdicts(std::size_t n, const DopplerInertialFilter& filter, std::uint16_t no_cell,
                      std::uint16_t* __restrict cell, float* __restrict residual) {
   // Three loops the compiler vectorizes; the verdict as a mask, not a branch (the rejected
@@ -215,7 +211,7 @@ std::size_t verdicts(std::size_t n, const DopplerInertialFilter& filter, std::ui
   return accepted;
 }
 
-FREEINIT_RECORDER_CLONES
+FREEINIT_VECTOR_CLONES
 std::size_t splitReturns(std::size_t n, const float* __restrict arrays,
                          const std::uint16_t* __restrict cell, std::uint16_t no_cell,
                          MapPoint* __restrict map, MapPoint* __restrict rejected,
@@ -269,7 +265,7 @@ std::size_t splitReturns(std::size_t n, const float* __restrict arrays,
   return kept;
 }
 
-FREEINIT_RECORDER_CLONES
+FREEINIT_VECTOR_CLONES
 std::size_t sumIntoCells(std::size_t n, const std::uint16_t* __restrict cell, std::uint16_t no_cell,
                          float* __restrict residual, double* __restrict sum,
                          std::uint32_t* __restrict count, std::uint32_t* __restrict touched,
@@ -320,7 +316,7 @@ std::size_t sumIntoCells(std::size_t n, const std::uint16_t* __restrict cell, st
   return in_cells;
 }
 
-FREEINIT_RECORDER_CLONES
+FREEINIT_VECTOR_CLONES
 void dopplerResiduals(std::size_t n, const float (&q)[9], float inv_h, const float* __restrict x,
                       const float* __restrict y, const float* __restrict z,
                       const float* __restrict tau, const float* __restrict doppler,
