@@ -325,9 +325,11 @@ __attribute__((always_inline)) inline void choleskySolve(const double* A, double
       }
       L[j][q] *= inv_d;
       if (q == j / 4) {
-        FREEINIT_UNROLL  // a constant trip count: the annotation holds at every -O level
-        for (int l = 0; l < 4; ++l)
+        // A constant trip count, so that the annotation holds at every -O level.
+        FREEINIT_UNROLL
+        for (int l = 0; l < 4; ++l) {
           if (l <= j % 4) L[j][q][l] = 0.0;
+        }
       }
     }
     // The columns right of j lose L(:, j) L(k, j) (their rows at and below k are read).
