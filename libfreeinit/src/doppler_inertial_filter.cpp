@@ -113,6 +113,17 @@ struct GatePrediction {
     mxz = M(0, 2) + M(2, 0);
     myz = M(1, 2) + M(2, 1);
   }
+  /// A return's residual against the prediction (r = z + d . v(s), v a quadratic in s = tau /
+  /// h) and the residual's variance (d^T M d + the Doppler noise), d its unit direction: the
+  /// numbers both gates test. Called on a local copy of the prediction, so that the compiler
+  /// keeps its coefficients in registers across a vectorized loop.
+  void residual(double s, double dx, double dy, double dz, double z, double& r, double& var) const {
+    const double vx = q[0] + s * (q[3] + s * q[6]), vy = q[1] + s * (q[4] + s * q[7]),
+                 vz = q[2] + s * (q[5] + s * q[8]);
+    r = z + (dx * vx + dy * vy + dz * vz);
+    var = dx * (mxx * dx + mxy * dy + mxz * dz) + dy * (myy * dy + myz * dz) + dz * (mzz * dz) +
+          r_doppler;
+  }
 };
 
 // The per-return loops: without branches and over arrays that do not overlap (__restrict), so
@@ -138,11 +149,8 @@ std::size_t gateAndSumReturns(std::size_t m, const GatePrediction& g, const floa
                               const float* __restrict pz, const float* __restrict z,
                               double* __restrict res_out, std::int64_t* __restrict acc_out,
                               double* __restrict total) {
-  const double q00 = g.q[0], q01 = g.q[1], q02 = g.q[2], q10 = g.q[3], q11 = g.q[4], q12 = g.q[5],
-               q20 = g.q[6], q21 = g.q[7], q22 = g.q[8];
-  const double mxx = g.mxx, myy = g.myy, mzz = g.mzz, mxy = g.mxy, mxz = g.mxz, myz = g.myz;
-  const double inv_h = g.inv_h, r_doppler = g.r_doppler, speed = g.speed, gate_min2 = g.gate_min2,
-               gate_k2 = g.gate_k2;
+  const GatePrediction c = g;
+  const double inv_h = c.inv_h, speed = c.speed, gate_min2 = c.gate_min2, gate_k2 = c.gate_k2;
   constexpr std::size_t kBlock = 128;
   alignas(32) double bs[kBlock], bx[kBlock], by[kBlock], bz[kBlock], bzi[kBlock], bw[kBlock];
   V4 acc[kSumCount];
@@ -156,11 +164,8 @@ std::size_t gateAndSumReturns(std::size_t m, const GatePrediction& g, const floa
       double dx, dy, dz;
       unitDirection(x, y, w, dx, dy, dz);
       const double s = static_cast<double>(tau[i]) * inv_h;
-      const double vx = q00 + s * (q10 + s * q20), vy = q01 + s * (q11 + s * q21),
-                   vz = q02 + s * (q12 + s * q22);
-      const double r = zi + (dx * vx + dy * vy + dz * vz);
-      const double S = dx * (mxx * dx + mxy * dy + mxz * dz) + dy * (myy * dy + myz * dz) +
-                       dz * (mzz * dz) + r_doppler;
+      double r, S;
+      c.residual(s, dx, dy, dz, zi, r, S);
       const double e = std::abs(r) - speed;
       const double kS = gate_k2 * S;
       const double bound = kS > gate_min2 ? kS : gate_min2;
@@ -245,21 +250,15 @@ void regateReturns(std::size_t m, const GatePrediction& g, double k2, const floa
                    const std::int64_t* __restrict acc, double* __restrict res,
                    double* __restrict res2_out, double* __restrict var_out,
                    std::int64_t* __restrict pass_out) {
-  const double q00 = g.q[0], q01 = g.q[1], q02 = g.q[2], q10 = g.q[3], q11 = g.q[4], q12 = g.q[5],
-               q20 = g.q[6], q21 = g.q[7], q22 = g.q[8];
-  const double mxx = g.mxx, myy = g.myy, mzz = g.mzz, mxy = g.mxy, mxz = g.mxz, myz = g.myz;
-  const double r_doppler = g.r_doppler;
-  const double inv_h = g.inv_h;
+  const GatePrediction c = g;
+  const double inv_h = c.inv_h;
   for (std::size_t i = 0; i < m; ++i) {
     const double x = px[i], y = py[i], w = pz[i], zi = z[i];
     double dx, dy, dz;
     unitDirection(x, y, w, dx, dy, dz);
     const double s = static_cast<double>(tau[i]) * inv_h;
-    const double vx = q00 + s * (q10 + s * q20), vy = q01 + s * (q11 + s * q21),
-                 vz = q02 + s * (q12 + s * q22);
-    const double r = zi + (dx * vx + dy * vy + dz * vz);
-    const double var = dx * (mxx * dx + mxy * dy + mxz * dz) + dy * (myy * dy + myz * dz) +
-                       dz * (mzz * dz) + r_doppler;
+    double r, var;
+    c.residual(s, dx, dy, dz, zi, r, var);
     const bool first = acc[i] != 0;
     res[i] = first ? r : res[i];
     res2_out[i] = r;
