@@ -222,13 +222,15 @@ class WindowRecorder {
   /// Room for n returns, and `front` unused slots before the first node's part (before any
   /// node is added): finish() writes the map from the buffer's start, and where it stays `front`
   /// returns or more behind the node it reads, that node's part is read in place rather than
-  /// copied aside first.
+  /// copied aside first. The room is initialized here, at the start, so that its pages are
+  /// mapped before the window's nodes are laid out: growing the buffer node by node put a
+  /// page fault and a fill into every node, the last one too (what a live user waits for).
   void reserve(std::size_t n, std::size_t front) {
-    returns_.reserve(front + n);
-    returns_.resize(front);
+    returns_.assign(front + n, MapPoint{});
+    end_ = front;
     node_begin_ = {front};
     front_ = front;
-    cells_.reserve(n);
+    cells_.assign(n, kNoCell);
   }
   std::size_t size() const { return node_begin_.back() - front_; }  ///< judged returns
   std::size_t nodes() const { return node_begin_.size() - 1; }      ///< judged nodes
@@ -251,8 +253,8 @@ class WindowRecorder {
   /// buffer, in the order given, adds the others to `skipped`, and returns the arrays (the
   /// filter's input for the node, valid until the next node closes).
   DopplerInertialFilter::OpenArrays closeNode(const UsablePoints& usable, std::size_t& skipped) {
-    const std::size_t begin = returns_.size(), m = open_given_;
-    returns_.resize(begin + m);
+    const std::size_t begin = end_, m = open_given_;
+    holdAtLeast(returns_, begin + m);
     float* f = reinterpret_cast<float*>(returns_.data()) + 7 * begin;
     float *x = f, *y = f + m, *z = f + 2 * m, *in = f + 3 * m, *d = f + 4 * m, *tau = f + 5 * m;
     // Each run laid out and tested in a loop the compiler vectorizes; the arrays are m apart
@@ -277,8 +279,8 @@ class WindowRecorder {
           w += usable_[i];
         }
       }
-      returns_.resize(begin + n);
     }
+    end_ = begin + n;
     skipped += m - n;
     open_runs_.clear();
     open_given_ = 0;
@@ -288,10 +290,10 @@ class WindowRecorder {
   /// or not, the residual, an accepted return's cell; adds them to the counts. Nodes are judged
   /// in order, each once.
   void judgeNode(const DopplerInertialFilter& filter, std::size_t& used, std::size_t& rejected) {
-    const std::size_t begin = node_begin_.back(), n = returns_.size() - begin;
+    const std::size_t begin = node_begin_.back(), n = end_ - begin;
     float* f = reinterpret_cast<float*>(returns_.data()) + 7 * begin;
     float* res = f + 6 * n;
-    cells_.resize(begin - front_ + n);
+    holdAtLeast(cells_, begin - front_ + n);
     std::uint16_t* cell = cells_.data() + (begin - front_);
     recorder_kernels::cellsOf(n, f, f + n, f + 2 * n, cell);
     const std::size_t accepted = recorder_kernels::verdicts(n, filter, kNoCell, cell, res);
@@ -373,6 +375,7 @@ class WindowRecorder {
     cells_ = {};
     node_begin_ = {0};
     front_ = 0;
+    end_ = 0;
     accepted_ = 0;
   }
 
@@ -382,17 +385,24 @@ class WindowRecorder {
     std::size_t count, step;
     double stamp, t_node;
   };
+  /// v holds at least n elements: beyond the room reserve() made, half as many again each time
+  /// (so that a window longer than foreseen is copied a few times, not at every node).
+  template <class T>
+  static void holdAtLeast(std::vector<T>& v, std::size_t n) {
+    if (v.size() < n) v.resize(std::max(n, v.size() + v.size() / 2));
+  }
   // The buffers seen as floats: a MapPoint is seven floats.
   static_assert(sizeof(MapPoint) == 7 * sizeof(float) && alignof(MapPoint) == alignof(float));
 
   std::vector<MapPoint> returns_;     ///< the judged nodes' returns (see the class comment)
   std::vector<std::uint16_t> cells_;  ///< every judged return's cell, kNoCell if not accepted
   std::vector<std::size_t> node_begin_{
-      0};                             ///< node k's returns: [node_begin_[k], node_begin_[k+1])
-  std::size_t accepted_ = 0;          ///< judged returns accepted (not kNoCell)
-  std::size_t front_ = 0;             ///< unused slots before the first node's part (reserve)
-  std::vector<Run> open_runs_;        ///< the open node's returns, where the frames hold them
-  std::size_t open_given_ = 0;        ///< returns in open_runs_
+      0};                       ///< node k's returns: [node_begin_[k], node_begin_[k+1])
+  std::size_t accepted_ = 0;    ///< judged returns accepted (not kNoCell)
+  std::size_t front_ = 0;       ///< unused slots before the first node's part (reserve)
+  std::size_t end_ = 0;         ///< the end of the laid-out returns in returns_ (the rest is room)
+  std::vector<Run> open_runs_;  ///< the open node's returns, where the frames hold them
+  std::size_t open_given_ = 0;  ///< returns in open_runs_
   std::vector<std::uint8_t> usable_;  ///< closeNode's work space: each return's verdict
 };
 
