@@ -221,6 +221,14 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   state.counters["updates_per_s_of_data"] = rate_hz;
 }
 
+/// The filter's parameters in the forward-pass benchmarks: the defaults with the configuration's
+/// Doppler noise, as the joint pipeline sets them.
+freeinit::DopplerInertialFilterParams forwardPassParams(const freeinit::FreeInitConfig& cfg) {
+  freeinit::DopplerInertialFilterParams fp;
+  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  return fp;
+}
+
 /// The last IMU sample of the window that starts at the recording's first (two samples after it
 /// stay available to the filter's interpolation).
 std::size_t lastNodeOfWindow(const freeinit::sim::Recording& rec,
@@ -295,8 +303,7 @@ void BM_JointForwardPass(benchmark::State& state, const std::string& name, bool 
       if (r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range) continue;
       returns.push_back({f.stamp + p.time_offset, p.p_l, p.doppler});
     }
-  freeinit::DopplerInertialFilterParams fp;
-  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  const freeinit::DopplerInertialFilterParams fp = forwardPassParams(cfg);
   const std::size_t k_end = lastNodeOfWindow(rec, cfg);
   std::int64_t points = 0;
   for (auto _ : state) {
@@ -322,8 +329,7 @@ void BM_JointForwardPassFrameRuns(benchmark::State& state, const std::string& na
   const freeinit::sim::Recording& rec = recording(name);
   const freeinit::FreeInitConfig cfg;
   const double t0 = rec.imu.front().t;
-  freeinit::DopplerInertialFilterParams fp;
-  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  const freeinit::DopplerInertialFilterParams fp = forwardPassParams(cfg);
   const std::size_t k_end = lastNodeOfWindow(rec, cfg);
   // The range test on the squared range, as the pipeline's (no root per return).
   const float lo2 = static_cast<float>(cfg.velocimeter.min_range * cfg.velocimeter.min_range);
@@ -370,8 +376,7 @@ void BM_JointForwardPassArrays(benchmark::State& state, const std::string& name)
   const freeinit::sim::Recording& rec = recording(name);
   const freeinit::FreeInitConfig cfg;
   const double t0 = rec.imu.front().t;
-  freeinit::DopplerInertialFilterParams fp;
-  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  const freeinit::DopplerInertialFilterParams fp = forwardPassParams(cfg);
   const std::size_t k_end = lastNodeOfWindow(rec, cfg);
   // Node k's returns: time in [t_k - dt_before / 2, t_k + dt_after / 2) (the last node's up to
   // t_k), in range, as the filter's intervals have them.
