@@ -1219,6 +1219,17 @@ void DopplerInertialFilter::cancelRestFrom(double t) {
   }
 }
 
+void DopplerInertialFilter::reserveNodes(std::size_t n) {
+  nodes_.reserve(n);
+  // The smoother's covariances made now for windows of usual length (a node's two are 5.8 kB);
+  // a longer one's are made by the smoothing that needs them.
+  constexpr std::size_t kMostPrepared = 1000;
+  if (n <= kMostPrepared && smoother_P_f_.size() < n) {
+    smoother_P_f_.assign(n, MatS::Zero());
+    smoother_P_p_.assign(n, MatS::Zero());
+  }
+}
+
 int DopplerInertialFilter::smooth() {
   const std::size_t N = nodes_.size();
   if (N == 0) return 0;
@@ -1239,7 +1250,12 @@ int DopplerInertialFilter::smooth() {
       nodes_[k].xs = propagate(nodes_[k - 1], nodes_[k - 1].xs, nullptr);
   smoothed_ = N;
   std::vector<VecS> dx_f(N), dx_p(N), dxs(N);
-  std::vector<MatS> P_f(N), P_p(N);
+  if (smoother_P_f_.size() < N) {
+    smoother_P_f_.resize(N);
+    smoother_P_p_.resize(N);
+  }
+  std::vector<MatS>& P_f = smoother_P_f_;  // every element read below is written first
+  std::vector<MatS>& P_p = smoother_P_p_;
   std::vector<IntegrationJacobian> F(N > 0 ? N - 1 : 0);
   int iterations = 0;
   double previous_step = 0;  // none yet: no evidence of the convergence rate

@@ -279,6 +279,7 @@ class JointPipeline final : public Pipeline {
       filter_->reserveNodes(
           static_cast<std::size_t>(std::min(kMostNodes, 1.1 * cfg_.window.duration / dt)) + 4);
     }
+    prepareMovingCellSums();
     fed_ = k_first_;
     feedImu(k_first_ + 2);
     filter_->start(x0, prior);
@@ -548,6 +549,21 @@ class JointPipeline final : public Pipeline {
     return v_b.dot(C.ldlt().solve(v_b)) > kChi2Quantile999Dof3;
   }
 
+  /// rejectMovingCells' per-cell sums, zero, made at the start rather than in the call that
+  /// closes the window (their first pages would be faulted in there).
+  void prepareMovingCellSums() {
+    // The cells and a spare slot (WindowRecorder::kNoCell) where the returns not accepted go,
+    // so that every return is added to its cell without a branch on its verdict; the spare one
+    // is never tested.
+    constexpr std::size_t kSlots = RestCells::kCells + 1;
+    static_assert(WindowRecorder::kNoCell == RestCells::kCells);
+    if (span_sum_.size() == kSlots) return;
+    span_sum_.assign(kSlots, 0.0);
+    span_count_.assign(kSlots, 0);
+    span_coherent_.assign(kSlots, 0);
+    span_touched_.assign(kSlots, 0);
+  }
+
   /// The moving sensor's counterpart of rejectMovingDirections, after a smoothing: within a short
   /// span (kSpan) a moving sensor sees each part of the world in nearly the same direction too,
   /// and the world's residuals against the smoothed motion average to zero there. The returns of
@@ -565,17 +581,7 @@ class JointPipeline final : public Pipeline {
     const auto& imu = seq_.imu();
     const WindowRecorder& rec = recorder_;
     const std::size_t nodes = rec.nodes();
-    // The cells and a spare slot (WindowRecorder::kNoCell) where the returns not accepted go,
-    // so that every return is added to its cell without a branch on its verdict; the spare one
-    // is never tested.
-    constexpr std::size_t kSlots = RestCells::kCells + 1;
-    static_assert(WindowRecorder::kNoCell == RestCells::kCells);
-    if (span_sum_.size() != kSlots) {
-      span_sum_.assign(kSlots, 0.0);
-      span_count_.assign(kSlots, 0);
-      span_coherent_.assign(kSlots, 0);
-      span_touched_.assign(kSlots, 0);
-    }
+    prepareMovingCellSums();
     std::uint32_t* touched = span_touched_.data();  // the span's slots, in the order first seen
     std::vector<std::size_t> coherent;
     auto moving = [this](std::size_t k) { return !(k < node_rest_.size() && node_rest_[k]); };

@@ -144,7 +144,9 @@ class DopplerInertialFilter {
   void start(const FilterState& x0, const StartPrior& prior);
   /// Room for n nodes, when the caller knows how many the window will have: a node is a few
   /// kilobytes, and growing the nodes by doubling copies them and touches new memory each time.
-  void reserveNodes(std::size_t n) { nodes_.reserve(n); }
+  /// The smoother's covariances for n nodes are made (and their memory touched) here too, so
+  /// that no smoothing, the final one included, waits for new memory.
+  void reserveNodes(std::size_t n);
   /// The prior covariance of node 0 expressed at state x (velocity block scaled by v_scale).
   MatS priorCovariance(const FilterState& x, double v_scale = 1.0) const;
   /// The start's prior as the mean of an error at x (what priorCovariance(x) is the covariance of).
@@ -471,6 +473,9 @@ class DopplerInertialFilter {
   /// Nodes a smoothing has already been through (the first smoothed_ of nodes_): the later ones
   /// start the next smoothing from the propagation of the last smoothed one (smooth()).
   std::size_t smoothed_ = 0;
+  /// smooth()'s filtered and predicted covariances per node, kept from one smoothing to the
+  /// next (a few hundred kilobytes: allocated anew, every smoothing touched fresh pages).
+  std::vector<MatS> smoother_P_f_, smoother_P_p_;
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;
