@@ -1219,10 +1219,7 @@ void DopplerInertialFilter::cancelRestFrom(double t) {
   }
 }
 
-void DopplerInertialFilter::reserveNodes(std::size_t n) {
-  nodes_.reserve(n);
-  // The smoother's covariances made now for windows of usual length (a node's two are 5.8 kB);
-  // a longer one's are made by the smoothing that needs them.
+void DopplerInertialFilter::prepareSmoothing(std::size_t n) {
   constexpr std::size_t kMostPrepared = 1000;
   if (n <= kMostPrepared && smoother_P_f_.size() < n) {
     smoother_P_f_.assign(n, MatS::Zero());

@@ -276,8 +276,10 @@ class JointPipeline final : public Pipeline {
     if (k_last > k_first_) {
       const double dt = (imu[k_last].t - imu[k_first_].t) / static_cast<double>(k_last - k_first_);
       constexpr double kMostNodes = 1e5;
-      filter_->reserveNodes(
-          static_cast<std::size_t>(std::min(kMostNodes, 1.1 * cfg_.window.duration / dt)) + 4);
+      const std::size_t nodes =
+          static_cast<std::size_t>(std::min(kMostNodes, 1.1 * cfg_.window.duration / dt)) + 4;
+      filter_->reserveNodes(nodes);
+      filter_->prepareSmoothing(nodes);
     }
     prepareMovingCellSums();
     fed_ = k_first_;

@@ -144,9 +144,11 @@ class DopplerInertialFilter {
   void start(const FilterState& x0, const StartPrior& prior);
   /// Room for n nodes, when the caller knows how many the window will have: a node is a few
   /// kilobytes, and growing the nodes by doubling copies them and touches new memory each time.
-  /// The smoother's covariances for n nodes are made (and their memory touched) here too, so
-  /// that no smoothing, the final one included, waits for new memory.
-  void reserveNodes(std::size_t n);
+  void reserveNodes(std::size_t n) { nodes_.reserve(n); }
+  /// The smoother's work space for n nodes made now (and its memory touched), so that no
+  /// smoothing, the final one included, waits for new memory: for windows of usual length
+  /// (up to 1,000 nodes; a node's part is 5.8 kB); a longer one's is made by the smoothing.
+  void prepareSmoothing(std::size_t n);
   /// The prior covariance of node 0 expressed at state x (velocity block scaled by v_scale).
   MatS priorCovariance(const FilterState& x, double v_scale = 1.0) const;
   /// The start's prior as the mean of an error at x (what priorCovariance(x) is the covariance of).
