@@ -20,13 +20,19 @@ const Vec3 kGravityW(0, 0, -kGravity);
 /// m/s^2; the functions are smooth and O(1-100) in these units).
 constexpr double kJacobianStep = 1e-6;
 
+/// Right Jacobian of SO(3) from K = [phi]x, t2 = |phi|^2 and, where the series does not serve
+/// (t2 >= 1e-8), t = |phi| with its sine and cosine.
+Mat3 rightJacobianOf(const Mat3& K, double t2, double t, double sin_t, double cos_t) {
+  if (t2 < 1e-8) return Mat3::Identity() - 0.5 * K + (1.0 / 6.0) * K * K;
+  return Mat3::Identity() - (1.0 - cos_t) / t2 * K + (t - sin_t) / (t2 * t) * K * K;
+}
+
 /// Right Jacobian of SO(3): Exp(phi + dphi) = Exp(phi) Exp(J_r(phi) dphi) to first order.
 Mat3 rightJacobian(const Vec3& phi) {
   const double t2 = phi.squaredNorm();
-  const Mat3 K = skew(phi);
-  if (t2 < 1e-8) return Mat3::Identity() - 0.5 * K + (1.0 / 6.0) * K * K;
+  if (t2 < 1e-8) return rightJacobianOf(skew(phi), t2, 0.0, 0.0, 1.0);
   const double t = std::sqrt(t2);
-  return Mat3::Identity() - (1.0 - std::cos(t)) / t2 * K + (t - std::sin(t)) / (t2 * t) * K * K;
+  return rightJacobianOf(skew(phi), t2, t, std::sin(t), std::cos(t));
 }
 
 /// Exp(phi) and J_r(phi) with one sine and cosine: the same operations as Exp() and
@@ -43,10 +49,7 @@ void expAndRightJacobian(const Vec3& phi, Mat3& E, Mat3& Jr) {
   const double a = t2 < 1e-10 ? 1.0 - t2 / 6.0 : sin_t / t;
   const double b = t2 < 1e-10 ? 0.5 - t2 / 24.0 : (1.0 - cos_t) / t2;
   E = Mat3::Identity() + a * K + b * (K * K);
-  if (t2 < 1e-8)
-    Jr = Mat3::Identity() - 0.5 * K + (1.0 / 6.0) * K * K;
-  else
-    Jr = Mat3::Identity() - (1.0 - cos_t) / t2 * K + (t - sin_t) / (t2 * t) * K * K;
+  Jr = rightJacobianOf(K, t2, t, sin_t, cos_t);
 }
 
 /// d phi / d b_g of the rotation vector (w0 + w1) tau / 2 + (w0 x w1) tau^2 / 12 (both rates are
@@ -1066,27 +1069,25 @@ void DopplerInertialFilter::update() {
   Node& n = nodes_.back();
   gateAndSum(n);
   const MatS P_pred = n.P;
-  // The update linearized at x_start (the prediction, or the first solve's result when the
-  // second gate dropped a few points).
-  auto solve = [&](FilterState& x_out, MatS& P_out, const FilterState& x_start) {
+  // The update linearized at x_start: the prediction, where beginNode() linearized the node
+  // for its gate (q_open_, G_open_), or the first solve's result when the second gate dropped a
+  // few points.
+  auto solve = [&](FilterState& x_out, MatS& P_out, const FilterState& x_start,
+                   bool at_prediction) {
     buildRows(n);
     P_out = P_pred;
     if (n.rows.W.rows() == 0) {
       x_out = n.x_pred;
       return;
     }
-    const VecS dx = dopplerUpdate(n, x_start, boxminus(n.x_pred, x_start), P_out);
+    const VecS dx_prior = boxminus(n.x_pred, x_start);
+    const VecS dx = at_prediction ? dopplerUpdate(n, q_open_, G_open_, dx_prior, P_out, false)
+                                  : dopplerUpdate(n, x_start, dx_prior, P_out);
     x_out = boxplus(x_start, dx);
   };
   FilterState x;
   MatS P;
-  // The first solve, at the prediction: beginNode() linearized the node there for its gate.
-  buildRows(n);
-  P = P_pred;
-  x = n.x_pred;
-  if (n.rows.W.rows() > 0)
-    x = boxplus(n.x_pred,
-                dopplerUpdate(n, q_open_, G_open_, boxminus(n.x_pred, n.x_pred), P, false));
+  solve(x, P, n.x_pred, true);
   // Second gate, against the update: the first one, against the prediction, must be wide where
   // the prediction is uncertain (the first nodes) and lets slow moving objects through; the
   // points are gated again at regate_sigma of their residual's std after the update (no floor,
@@ -1161,7 +1162,7 @@ void DopplerInertialFilter::update() {
     o.used -= dropped;
     if (dropped > 0) {
       const FilterState x_first = x;
-      solve(x, P, x_first);
+      solve(x, P, x_first, false);
     }
   }
   n.x = n.xs = x;
