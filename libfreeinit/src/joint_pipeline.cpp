@@ -554,11 +554,10 @@ class JointPipeline final : public Pipeline {
   /// rejectMovingCells' per-cell sums, zero, made at the start rather than in the call that
   /// closes the window (their first pages would be faulted in there).
   void prepareMovingCellSums() {
-    // The cells and a spare slot (WindowRecorder::kNoCell) where the returns not accepted go,
-    // so that every return is added to its cell without a branch on its verdict; the spare one
-    // is never tested.
+    // The cells and a spare slot (WindowRecorder::kNoCell, one past them) where the returns
+    // not accepted go, so that every return is added to its cell without a branch on its
+    // verdict; the spare one is never tested.
     constexpr std::size_t kSlots = RestCells::kCells + 1;
-    static_assert(WindowRecorder::kNoCell == RestCells::kCells);
     if (span_sum_.size() == kSlots) return;
     span_sum_.assign(kSlots, 0.0);
     span_count_.assign(kSlots, 0);

@@ -16,7 +16,7 @@ namespace freeinit::detail::recorder_kernels {
 
 namespace {
 
-// Four floats, an SSE register in either build: the transposes below move bits and compute
+// Four floats, an SSE register in every build: the transposes below move bits and compute
 // nothing, so their results are those of the scalar copy.
 typedef float V4 __attribute__((vector_size(16)));
 
@@ -117,7 +117,7 @@ void cellsOf(std::size_t n, const float* __restrict x, const float* __restrict y
   constexpr int kSide = RestCells::kSide;
   const V8 zero = V8{} + 0.0f, one = zero + 1.0f, minus_one = zero - 1.0f;
   // (Helpers write through references: a vector returned by value would change the ABI
-  // between the two builds.)
+  // between the builds.)
   auto abs = [](const V8& v, V8& a) {
     V8i b;
     std::memcpy(&b, &v, sizeof b);

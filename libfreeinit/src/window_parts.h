@@ -259,12 +259,12 @@ class WindowRecorder {
     float *x = f, *y = f + m, *z = f + 2 * m, *in = f + 3 * m, *d = f + 4 * m, *tau = f + 5 * m;
     // Each run laid out and tested in a loop the compiler vectorizes; the arrays are m apart
     // while they fill.
-    if (usable_.size() < m) usable_.resize(m);
+    if (verdict_.size() < m) verdict_.resize(m);
     std::size_t j = 0, n = 0;
     for (const Run& run : open_runs_) {
-      n +=
-          recorder_kernels::layOut(run.points, run.count, run.step, run.stamp, run.t_node, usable,
-                                   x + j, y + j, z + j, in + j, d + j, tau + j, usable_.data() + j);
+      n += recorder_kernels::layOut(run.points, run.count, run.step, run.stamp, run.t_node, usable,
+                                    x + j, y + j, z + j, in + j, d + j, tau + j,
+                                    verdict_.data() + j);
       j += run.count;
     }
     // Some not usable: each array's usable returns moved down, n apart (each array after the one
@@ -276,7 +276,7 @@ class WindowRecorder {
         std::size_t w = 0;
         for (std::size_t i = 0; i < m; ++i) {
           to[w] = from[i];
-          w += usable_[i];
+          w += verdict_[i];
         }
       }
     }
@@ -309,7 +309,6 @@ class WindowRecorder {
     return {i,         i + n,     f,         f + n,     f + 2 * n,
             f + 3 * n, f + 4 * n, f + 5 * n, f + 6 * n, cells_.data() + i};
   }
-  bool accepted(std::size_t i) const { return cells_[i] != kNoCell; }
   /// Takes an accepted return out of the map (into the rejected returns).
   void reject(std::size_t i) {
     if (cells_[i] == kNoCell) return;
@@ -358,8 +357,9 @@ class WindowRecorder {
       m.time = static_cast<float>(x.t - t_state);
       float* f = reinterpret_cast<float*>(returns_.data()) + 7 * b;
       recorder_kernels::mapReturns(n, m, f, f + n, f + 2 * n, f + 5 * n);
-      // The node's part is copied aside only if the MapPoints written may reach it (once the
-      // returns rejected so far outnumber the node's, they end before it).
+      // The node's part is copied aside only if the MapPoints written may reach it: they end
+      // before it once the unused slots in front and the returns rejected so far outnumber the
+      // node's (b = front + those written + those rejected).
       const float* src = f;
       if (kept + n > b) {
         part.assign(f, f + 7 * n);
@@ -403,7 +403,7 @@ class WindowRecorder {
   std::size_t end_ = 0;         ///< the end of the laid-out returns in returns_ (the rest is room)
   std::vector<Run> open_runs_;  ///< the open node's returns, where the frames hold them
   std::size_t open_given_ = 0;  ///< returns in open_runs_
-  std::vector<std::uint8_t> usable_;  ///< closeNode's work space: each return's verdict
+  std::vector<std::uint8_t> verdict_;  ///< closeNode's work space: each return usable or not
 };
 
 }  // namespace freeinit::detail
