@@ -1228,7 +1228,7 @@ void DopplerInertialFilter::prepareSmoothing(std::size_t n) {
   }
 }
 
-int DopplerInertialFilter::smooth() {
+int DopplerInertialFilter::smooth(double looseness) {
   const std::size_t N = nodes_.size();
   if (N == 0) return 0;
   for (Node& n : nodes_)
@@ -1308,7 +1308,7 @@ int DopplerInertialFilter::smooth() {
       nodes_[k].xs = boxplus(nodes_[k].xs, dxs[k]);
       step = std::max(step, stepInTolerances(dxs[k]));
     }
-    const double c = params_.convergence;
+    const double c = params_.convergence * looseness;
     if (step < c || (step < 0.1 * previous_step && step * (step / previous_step) < c)) break;
     previous_step = step;
   }

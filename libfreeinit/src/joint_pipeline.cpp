@@ -33,6 +33,12 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kRestBackdating = 0.1;
 /// Share of the window after which what has been received is smoothed once.
 constexpr double kEarlySmoothing = 0.8;
+/// That early smoothing is the final one's starting point, not a result: it stops once its next
+/// step would be below this many times the final one's threshold (DopplerInertialFilter::smooth).
+/// Held-out seeds 17000001-200 and 18000001-200: 13 % and 10 % fewer early iterations, 2 % fewer
+/// final ones, no status change; 90 % of the states the same to 1e-4 of their bound, all within
+/// 0.04 of it but in the runs confidently wrong either way (their answers depend on the path).
+constexpr double kEarlyLooseness = 100.0;
 
 double wallSeconds() {
   using Clock = std::chrono::steady_clock;
@@ -417,7 +423,7 @@ class JointPipeline final : public Pipeline {
       // smoothing (what an online user waits for) starts from a good linearization.
       if (!early_smoothed_ && t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration) {
         const double t0 = wallSeconds();
-        filter_->smooth();
+        filter_->smooth(kEarlyLooseness);
         r.diag.time_solver += wallSeconds() - t0;
         early_smoothed_ = true;
       }

@@ -222,7 +222,9 @@ class DopplerInertialFilter {
   /// Iterated smoothing over the nodes so far, after the last one was updated. Returns the number
   /// of iterations run. The filter may go on afterwards (predict()), from the smoothed last node:
   /// smoothing once while the window is received leaves the final smoothing little to do.
-  int smooth();
+  /// `looseness` (>= 1) multiplies the threshold DopplerInertialFilterParams::convergence: an
+  /// early smoothing is the final one's starting point, and the final one converges on its own.
+  int smooth(double looseness = 1.0);
 
   /// What the data say of the calibration: after smooth(), one more forward pass around the
   /// smoothed trajectory with the calibration's prior std set to these (rad, s).
