@@ -745,6 +745,7 @@ void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior
   active_ = prior.rotation_sigma > 0 || prior.time_sigma > 0 ? kStateDim : kCoreDim;
   nodes_.clear();
   smoothed_ = 0;
+  linearized_ = 0;
   x0_prior_ = x0;
   x0_prior_.t = imu_.front().t;
   Node n;
@@ -1225,7 +1226,15 @@ void DopplerInertialFilter::prepareSmoothing(std::size_t n) {
   if (n <= kMostPrepared && smoother_P_f_.size() < n) {
     smoother_P_f_.assign(n, MatS::Zero());
     smoother_P_p_.assign(n, MatS::Zero());
+    linearization_.assign(n, Linearization{});
   }
+}
+
+void DopplerInertialFilter::linearize(std::size_t k, Linearization& L) const {
+  const Node& n = nodes_[k];
+  L.x = n.xs;
+  if (n.rows.W.rows() > 0) L.Q = velocityPolynomial(n, n.xs, &L.G);
+  if (k + 1 < nodes_.size()) L.x_next = propagate(n, n.xs, &L.F);
 }
 
 int DopplerInertialFilter::smooth(double looseness) {
@@ -1251,10 +1260,12 @@ int DopplerInertialFilter::smooth(double looseness) {
   if (smoother_P_f_.size() < N) {
     smoother_P_f_.resize(N);
     smoother_P_p_.resize(N);
+    linearization_.resize(N);
   }
   std::vector<MatS>& P_f = smoother_P_f_;  // every element read below is written first
   std::vector<MatS>& P_p = smoother_P_p_;
-  std::vector<IntegrationJacobian> F(N > 0 ? N - 1 : 0);
+  std::vector<Linearization>& lin = linearization_;
+  linearized_ = 0;
   int iterations = 0;
   double previous_step = 0;  // none yet: no evidence of the convergence rate
   for (int it = 0; it < params_.max_iterations; ++it) {
@@ -1266,14 +1277,16 @@ int DopplerInertialFilter::smooth(double looseness) {
     P_p[0] = priorCovariance(nodes_[0].xs);
     for (std::size_t k = 0; k < N; ++k) {
       Node& n = nodes_[k];
+      Linearization& L = lin[k];
+      linearize(k, L);
       MatS P = P_p[k];
-      dx_f[k] = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, n.xs, dx_p[k], P), P);
+      dx_f[k] =
+          restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, L.Q, L.G, dx_p[k], P, false), P);
       P_f[k] = P;
       if (k + 1 == N) break;
       const Node& m = nodes_[k + 1];
-      const FilterState x_next = propagate(n, n.xs, &F[k]);
-      dx_p[k + 1] = F[k].times(dx_f[k]) + boxminus(x_next, m.xs);
-      P_p[k + 1] = propagateCovariance(F[k], P, imu_[m.k].t - imu_[n.k].t);
+      dx_p[k + 1] = L.F.times(dx_f[k]) + boxminus(L.x_next, m.xs);
+      P_p[k + 1] = propagateCovariance(L.F, P, imu_[m.k].t - imu_[n.k].t);
     }
     // Backward: Rauch-Tung-Striebel, dxs_k = dx_f_k + P_f_k F_k^T P_p_k+1^-1 (dxs_k+1 - dx_p_k+1),
     // evaluated right to left (one solve with a vector; the smoothed covariances are not needed).
@@ -1289,7 +1302,7 @@ int DopplerInertialFilter::smooth(double looseness) {
         detail::choleskySolveKernel<kCoreDim>(P_p[k + 1].data(), y.data());
         y.tail<kStateDim - kCoreDim>().setZero();
       }
-      const VecS Fty = F[k].transposeTimes(y);
+      const VecS Fty = lin[k].F.transposeTimes(y);
       dxs[k] = dx_f[k];
       if (active_ == kStateDim)
         dxs[k] += P_f[k] * Fty;
@@ -1309,7 +1322,10 @@ int DopplerInertialFilter::smooth(double looseness) {
       step = std::max(step, stepInTolerances(dxs[k]));
     }
     const double c = params_.convergence * looseness;
-    if (step < c || (step < 0.1 * previous_step && step * (step / previous_step) < c)) break;
+    if (step < c || (step < 0.1 * previous_step && step * (step / previous_step) < c)) {
+      linearized_ = N;
+      break;
+    }
     previous_step = step;
   }
   // The filter can go on from the last node (an early smoothing while the window is received).
@@ -1331,20 +1347,26 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
   for (const Node& n : nodes_)
     if (n.rows_stale)
       throw std::logic_error("DopplerInertialFilter::testCalibration: removePoint without smooth");
+  std::vector<Linearization> fresh;
+  const Linearization* lin = linearization_.data();
+  if (linearized_ != N) {
+    fresh.resize(N);
+    for (std::size_t k = 0; k < N; ++k) linearize(k, fresh[k]);
+    lin = fresh.data();
+  }
   constexpr double kUninformedVelocity = 1e6;
-  MatS P = priorCovariance(nodes_[0].xs, kUninformedVelocity);
+  MatS P = priorCovariance(lin[0].x, kUninformedVelocity);
   P.block<3, 3>(kRot, kRot).diagonal().setConstant(rotation_sigma * rotation_sigma);
   P(kTime, kTime) = time_sigma * time_sigma;
-  VecS dx = priorMean(nodes_[0].xs);
+  VecS dx = priorMean(lin[0].x);
   for (std::size_t k = 0; k < N; ++k) {
     const Node& n = nodes_[k];
-    dx = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, n.xs, dx, P, true), P, true);
+    const Linearization& L = lin[k];
+    dx = restUpdate(n, imu_[n.k].gyro, L.x, dopplerUpdate(n, L.Q, L.G, dx, P, true), P, true);
     if (k + 1 == N) break;
     const Node& m = nodes_[k + 1];
-    IntegrationJacobian F;
-    const FilterState x_next = propagate(n, n.xs, &F);
-    dx = F.times(dx) + boxminus(x_next, m.xs);
-    P = propagateCovariance(F, P, imu_[m.k].t - imu_[n.k].t, true);
+    dx = L.F.times(dx) + boxminus(L.x_next, lin[k + 1].x);
+    P = propagateCovariance(L.F, P, imu_[m.k].t - imu_[n.k].t, true);
   }
   out.correction = dx;
   out.covariance = P;

@@ -227,10 +227,13 @@ class DopplerInertialFilter {
   int smooth(double looseness = 1.0);
 
   /// What the data say of the calibration: after smooth(), one more forward pass around the
-  /// smoothed trajectory with the calibration's prior std set to these (rad, s).
+  /// smoothed trajectory with the calibration's prior std set to these (rad, s). When that
+  /// smoothing converged, around the linearization of its last iteration (its polynomials,
+  /// Jacobians and transitions, kept), which lies within the convergence threshold of the
+  /// smoothed states; otherwise around the smoothed states themselves.
   struct CalibrationTest {
     bool ok = false;
-    VecS correction = VecS::Zero();  ///< at the last node, relative to the smoothed state
+    VecS correction = VecS::Zero();  ///< at the last node, relative to the linearization
     MatS covariance = MatS::Identity();
     double mahalanobis2 = 0;  ///< of the calibration correction (4 dof)
   };
@@ -428,6 +431,16 @@ class DopplerInertialFilter {
     VecS times(const VecS& dx) const;
     VecS transposeTimes(const VecS& y) const;
   };
+  /// Node k's part of a forward pass around the states xs: the state, its velocity polynomial
+  /// and Jacobian (if the node has rows), and the transition to the next node (if any).
+  struct Linearization {
+    FilterState x;
+    Vec9 Q;
+    Mat9xS G;
+    IntegrationJacobian F;
+    FilterState x_next;
+  };
+  void linearize(std::size_t k, Linearization& L) const;
   /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
   /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
@@ -480,6 +493,10 @@ class DopplerInertialFilter {
   /// smooth()'s filtered and predicted covariances per node, kept from one smoothing to the
   /// next (a few hundred kilobytes: allocated anew, every smoothing touched fresh pages).
   std::vector<MatS> smoother_P_f_, smoother_P_p_;
+  /// The linearization of smooth()'s last iteration, node by node, and for how many nodes it
+  /// holds (0: none; set when a smoothing converges, for testCalibration()).
+  std::vector<Linearization> linearization_;
+  std::size_t linearized_ = 0;
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;
