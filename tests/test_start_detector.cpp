@@ -6,6 +6,9 @@
 
 #include <cmath>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace freeinit {
@@ -66,6 +69,20 @@ Scene scene(const Vec3& v_world, const Vec3& v_object, double object_azimuth, un
 StartDecision decide(const Scene& s) {
   return decideStart(s.imu, 0, s.imu.size() - 1, s.points, Extrinsics{}, Vec3::Zero(),
                      StartDetectorParams{});
+}
+
+TEST(StartDetector, ReturnsOutOfTimeOrderAreRefused) {
+  // The decision cuts the returns into the IMU intervals in one sweep: a return earlier than
+  // the one before it is a caller's error, named.
+  Scene s = scene(Vec3(5.0, 0.5, 0.0), Vec3::Zero(), -kPi, 2);
+  std::swap(s.points[1000], s.points[1001]);
+  try {
+    decide(s);
+    FAIL() << "no exception";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("return 1001 is not in time order"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(StartDetector, MovingThroughTheWorldPastASmallObject) {

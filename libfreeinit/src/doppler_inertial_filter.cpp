@@ -404,20 +404,6 @@ FilterState DopplerInertialFilter::integrate(const FilterState& x,
   return y;
 }
 
-FilterState DopplerInertialFilter::integrate(const FilterState& x,
-                                             const std::vector<ImuSample>& imu, std::size_t k,
-                                             double tau, Vec3& gyro_end, Vec3& accel_end) {
-  ImuAlong along;
-  gyro_end = imu[k].gyro;  // at tau = 0 the sample itself
-  accel_end = imu[k].accel;
-  if (tau != 0) {
-    sampleImu(imu, k, tau, along);
-    gyro_end = along.gyro[2];
-    accel_end = along.accel[2];
-  }
-  return integrate(x, imu, k, tau, nullptr, along);
-}
-
 DopplerInertialFilter::MatS DopplerInertialFilter::IntegrationJacobian::matrix() const {
   MatS J = MatS::Identity();  // the biases and the calibration do not change between samples
   J.block<3, 3>(kTheta, kTheta) = th_th;

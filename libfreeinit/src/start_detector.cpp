@@ -13,6 +13,8 @@
 #include <iterator>
 #include <optional>
 #include <random>
+#include <stdexcept>
+#include <string>
 #include <utility>
 
 #include "vector_clones.h"
@@ -842,6 +844,10 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
   for (auto* v : {&r_t, &r_tau, &r_dx, &r_dy, &r_dz, &r_z}) v->reserve(points.size());
   std::vector<Vec3> d_l;  // the directions in the LiDAR frame, for the coverage grid
   d_l.reserve(points.size());
+  for (std::size_t j = 1; j < points.size(); ++j)
+    if (!(points[j].t >= points[j - 1].t))
+      throw std::invalid_argument("decideStart: return " + std::to_string(j) +
+                                  " is not in time order");
   std::size_t i = 0;
   for (const StartPoint& sp : points) {
     if (sp.t < 0 || sp.t > T) continue;
@@ -868,38 +874,8 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
     motion.push_back(intervalMotion(span, j0 + k, at[k], imu[k_first + k].t - t_ref));
   for (std::size_t begin = 0; begin < d_l.size();) {
     const std::size_t k = interval[begin];
-    if (r_tau[begin] < 0) {
-      // Out of time order, before its interval's sample: the integrator's own answer (it
-      // interpolates around that sample, as no interval's polynomials do).
-      Vec3 gyro, accel;  // the IMU at the return, as the integration interpolated it
-      const FilterState xt =
-          DopplerInertialFilter::integrate(at[k], span, j0 + k, r_tau[begin], gyro, accel);
-      gyro -= b_g_prior;
-      const double t = r_t[begin];
-      const Mat3& R_t = xt.R_wb;
-      const Vec3 C_t = xt.v_w - g_w * t;
-      const Vec3 u = extrinsics.R_bl * d_l[begin];
-      const Vec3 w = R_t * u;
-      const Vec3 c0 = extrinsics.p_bl.cross(u) - t * (R_t.transpose() * C_t).cross(u);
-      const Mat3 K = t * skew(u) * R_t.transpose();
-      const Eigen::Index j = static_cast<Eigen::Index>(begin);
-      rows.t[j] = t;
-      rows.e[j] = r_z[begin] + u.dot(gyro.cross(extrinsics.p_bl)) + w.dot(C_t);
-      rows.wx[j] = w.x();
-      rows.wy[j] = w.y();
-      rows.wz[j] = w.z();
-      rows.twx[j] = t * w.x();
-      rows.twy[j] = t * w.y();
-      rows.twz[j] = t * w.z();
-      rows.c0x[j] = c0.x();
-      rows.c0y[j] = c0.y();
-      rows.c0z[j] = c0.z();
-      for (int c = 0; c < 9; ++c) rows.K(j, c) = K(c / 3, c % 3);
-      ++begin;
-      continue;
-    }
     std::size_t end = begin + 1;
-    while (end < d_l.size() && interval[end] == k && !(r_tau[end] < 0)) ++end;
+    while (end < d_l.size() && interval[end] == k) ++end;
     const ReturnArrays in{r_t.data() + begin,  r_tau.data() + begin, r_dx.data() + begin,
                           r_dy.data() + begin, r_dz.data() + begin,  r_z.data() + begin};
     intervalEquations(motion[k], extrinsics, in, end - begin,

@@ -280,9 +280,6 @@ class DopplerInertialFilter {
   /// then the biases and the calibration) with respect to x's.
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
                                std::size_t k, double tau, MatS* J = nullptr);
-  /// integrate(), with the IMU at the end (imu[k].t + tau) that the integration interpolated.
-  static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
-                               std::size_t k, double tau, Vec3& gyro_end, Vec3& accel_end);
   /// Nominal propagation of x from sample k to sample k + 1; F (if given): its transition
   /// Jacobian (analytic, first order).
   static FilterState propagate(const FilterState& x, const std::vector<ImuSample>& imu,

@@ -114,7 +114,8 @@ StartDetectorParams startDetectorParams(const FreeInitConfig& cfg);
 
 /// Decides the motion at the window start from the IMU samples `imu[k_first..k_last]` (times
 /// absolute; imu[k_first].t is the window start) and the returns of [imu[k_first].t, imu[k_last].t]
-/// (times relative to the window start). `b_g_prior` is removed from the gyro. Deterministic.
+/// (times relative to the window start, in time order: std::invalid_argument otherwise).
+/// `b_g_prior` is removed from the gyro. Deterministic.
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first,
                           std::size_t k_last, const std::vector<StartPoint>& points,
                           const Extrinsics& extrinsics, const Vec3& b_g_prior,
