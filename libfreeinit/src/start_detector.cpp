@@ -38,42 +38,27 @@ double chi2Quantile(double dof, double z) {
 ///   c0 = p_bl x u - t (R_0t^T C(t)) x u,   K = t [u]x R_0t^T.
 /// The column is linear in s: no rotation is applied per return and iteration.
 struct Rows {
-  Eigen::Index size() const { return t.size(); }
-  void resize(Eigen::Index n) {
-    for (Eigen::ArrayXd* a : {&t, &e, &wx, &wy, &wz, &twx, &twy, &twz, &c0x, &c0y, &c0z})
-      a->resize(n);
-    K.resize(n, 9);
-  }
+  /// The columns, one value per return: time [s], the equation's left-hand side [m/s], the
+  /// direction w in b0, t w, the gyro-bias column at s = 0 (c0), and K, row-major (K0..K0 + 8).
+  enum Column : int { T, E, WX, WY, WZ, TWX, TWY, TWZ, C0X, C0Y, C0Z, K0, kColumns = K0 + 9 };
+  Eigen::Index size() const { return a.rows(); }
+  void resize(Eigen::Index n) { a.resize(n, kColumns); }
   /// Every `step`-th row of `o`.
   static Rows every(const Rows& o, Eigen::Index step) {
-    using Strided = Eigen::Map<const Eigen::ArrayXd, 0, Eigen::InnerStride<>>;
     const Eigen::Index n = (o.size() + step - 1) / step;
-    const auto take = [&](const double* src) {
-      return Strided(src, n, Eigen::InnerStride<>(step));
-    };
     Rows r;
     r.resize(n);
-    r.t = take(o.t.data());
-    r.e = take(o.e.data());
-    r.wx = take(o.wx.data());
-    r.wy = take(o.wy.data());
-    r.wz = take(o.wz.data());
-    r.twx = take(o.twx.data());
-    r.twy = take(o.twy.data());
-    r.twz = take(o.twz.data());
-    r.c0x = take(o.c0x.data());
-    r.c0y = take(o.c0y.data());
-    r.c0z = take(o.c0z.data());
-    for (int j = 0; j < 9; ++j) r.K.col(j) = take(o.K.col(j).data());
+    for (int c = 0; c < kColumns; ++c)
+      r.a.col(c) = Eigen::Map<const Eigen::ArrayXd, 0, Eigen::InnerStride<>>(
+          o.column(c), n, Eigen::InnerStride<>(step));
     return r;
   }
-  Vec3 w(Eigen::Index i) const { return Vec3(wx[i], wy[i], wz[i]); }
+  const double* column(int c) const { return a.col(c).data(); }
+  double* column(int c) { return a.col(c).data(); }
+  double operator()(Eigen::Index i, int c) const { return a(i, c); }
+  Vec3 w(Eigen::Index i) const { return Vec3(a(i, WX), a(i, WY), a(i, WZ)); }
 
-  Eigen::ArrayXd t, e;                        ///< [s] time, [m/s] the equation's left-hand side
-  Eigen::ArrayXd wx, wy, wz;                  ///< direction in b0
-  Eigen::ArrayXd twx, twy, twz;               ///< t w
-  Eigen::ArrayXd c0x, c0y, c0z;               ///< the gyro-bias column at s = 0
-  Eigen::Array<double, Eigen::Dynamic, 9> K;  ///< K row-major per return
+  Eigen::Array<double, Eigen::Dynamic, kColumns> a;  ///< one column after the other
 };
 
 /// Field-of-view cells of the returns: a grid over the observed azimuth/elevation extent.
@@ -181,15 +166,13 @@ FREEINIT_START_INLINE V4 load4(const double* p) {
   return v;
 }
 
-/// The returns' equations as the sweeps read them: Rows' arrays, or a copy of their last few.
+/// The returns' equations as the sweeps read them: Rows' columns, or a copy of their last few.
 struct RowArrays {
-  static constexpr int kArrays = 20;
-  enum Array : int { T, E, WX, WY, WZ, TWX, TWY, TWZ, C0X, C0Y, C0Z, K0 };  // K0..K0 + 8: K
+  static constexpr int kArrays = Rows::kColumns;
+  using Array = Rows::Column;
   std::array<const double*, kArrays> a;
-  explicit RowArrays(const Rows& r)
-      : a{r.t.data(),   r.e.data(),   r.wx.data(),  r.wy.data(),  r.wz.data(),  r.twx.data(),
-          r.twy.data(), r.twz.data(), r.c0x.data(), r.c0y.data(), r.c0z.data(), r.K.data()} {
-    for (int j = 1; j < 9; ++j) a[static_cast<std::size_t>(K0 + j)] = r.K.col(j).data();
+  explicit RowArrays(const Rows& r) {
+    for (int c = 0; c < kArrays; ++c) a[static_cast<std::size_t>(c)] = r.column(c);
   }
   /// Rows [i, i + count) (count < 4) of `o`, zero-padded to four, in `room`.
   RowArrays(const RowArrays& o, std::size_t i, std::size_t count,
@@ -329,6 +312,10 @@ void gramBlocks(const double* blocks, std::size_t nb, double* N) {
 /// gravity term t w^T g, which RANSAC holds.
 struct PoolArrays {
   const double *e, *wx, *wy, *wz, *tg;
+  /// Return i's residual at the motion (vx, vy, vz): e + w^T v + t w^T g.
+  double residual(std::size_t i, double vx, double vy, double vz) const {
+    return (e[i] + (wx[i] * vx + wy[i] * vy + wz[i] * vz)) + tg[i];
+  }
 };
 
 /// How many of the pool's first m returns the motion v explains (|e + w^T v + t w^T g| < gate),
@@ -355,11 +342,8 @@ std::size_t countWithin(const PoolArrays& pool, std::size_t m, const double* v, 
     if (count + (m - i) <= best) return count;
   }
   std::size_t count = static_cast<std::size_t>((in[0] + in[1]) + (in[2] + in[3]));
-  for (; i < m; ++i) {
-    const double r =
-        (pool.e[i] + (pool.wx[i] * vx + pool.wy[i] * vy + pool.wz[i] * vz)) + pool.tg[i];
-    if (std::abs(r) < gate) ++count;
-  }
+  for (; i < m; ++i)
+    if (std::abs(pool.residual(i, vx, vy, vz)) < gate) ++count;
   return count;
 }
 
@@ -449,12 +433,8 @@ struct ReturnArrays {
 struct RowOutputs {
   std::array<double*, RowArrays::kArrays> a;  // in RowArrays::Array's order
   RowOutputs(Rows& r, Eigen::Index from) {
-    double* const first[] = {r.t.data(),   r.e.data(),   r.wx.data(),  r.wy.data(),
-                             r.wz.data(),  r.twx.data(), r.twy.data(), r.twz.data(),
-                             r.c0x.data(), r.c0y.data(), r.c0z.data()};
-    for (std::size_t k = 0; k < std::size(first); ++k) a[k] = first[k] + from;
-    for (int j = 0; j < 9; ++j)
-      a[static_cast<std::size_t>(RowArrays::K0 + j)] = r.K.col(j).data() + from;
+    for (int c = 0; c < RowArrays::kArrays; ++c)
+      a[static_cast<std::size_t>(c)] = r.column(c) + from;
   }
 };
 
@@ -713,9 +693,16 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   std::size_t m = 0;
   for (Eigen::Index i = 0; i < n; ++i) {
     if (!inl(i)) continue;
-    const std::array<double, 10> x = {
-        -s * rows.wx[i],  -s * rows.wy[i], -s * rows.wz[i], -s * rows.twx[i], -s * rows.twy[i],
-        -s * rows.twz[i], s * wk.cx[i],    s * wk.cy[i],    s * wk.cz[i],     s * rows.e[i]};
+    const std::array<double, 10> x = {-s * rows(i, Rows::WX),
+                                      -s * rows(i, Rows::WY),
+                                      -s * rows(i, Rows::WZ),
+                                      -s * rows(i, Rows::TWX),
+                                      -s * rows(i, Rows::TWY),
+                                      -s * rows(i, Rows::TWZ),
+                                      s * wk.cx[i],
+                                      s * wk.cy[i],
+                                      s * wk.cz[i],
+                                      s * rows(i, Rows::E)};
     double* block = wk.blocks.data() + kBlock * (m / 2) + m % 2;
     for (std::size_t c = 0; c < 10; ++c) block[2 * c] = x[c];
     ++m;
@@ -916,30 +903,24 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
   std::vector<Eigen::Index> pool, unexplained;
   pool.reserve(static_cast<std::size_t>(n));
   unexplained.reserve(static_cast<std::size_t>(n));
-  Eigen::ArrayXd pe(n), pwx(n), pwy(n), pwz(n), ptg(n), pres(n);
+  Eigen::ArrayXd pe(n), pwx(n), pwy(n), pwz(n), ptg(n);
   for (int slice = 0; slice < 4; ++slice) {
     const double t_s = T * slice / 4.0;
     pool.clear();
     for (Eigen::Index j = 0; j < n; ++j)
-      if (rows.t[j] >= t_s && (rows.t[j] <= t_s + kSlice || pool.size() < kSlicePoints))
+      if (rows(j, Rows::T) >= t_s &&
+          (rows(j, Rows::T) <= t_s + kSlice || pool.size() < kSlicePoints))
         pool.push_back(j);
     for (int h = 0; h < p.max_hypotheses && pool.size() >= 10; ++h) {
       const Eigen::Index m = static_cast<Eigen::Index>(pool.size());
       for (Eigen::Index k = 0; k < m; ++k) {
         const Eigen::Index j = pool[static_cast<std::size_t>(k)];
-        pe[k] = rows.e[j];
-        pwx[k] = rows.wx[j];
-        pwy[k] = rows.wy[j];
-        pwz[k] = rows.wz[j];
-        ptg[k] = rows.t[j] * rows.w(j).dot(g_mean);
+        pe[k] = rows(j, Rows::E);
+        pwx[k] = rows(j, Rows::WX);
+        pwy[k] = rows(j, Rows::WY);
+        pwz[k] = rows(j, Rows::WZ);
+        ptg[k] = rows(j, Rows::T) * rows.w(j).dot(g_mean);
       }
-      // |residual| < ransac_gate for each of the pool's returns, the gyro bias at its prior.
-      const auto within = [&](const Vec3& v) {
-        pres.head(m) = pe.head(m) +
-                       (pwx.head(m) * v.x() + pwy.head(m) * v.y() + pwz.head(m) * v.z()) +
-                       ptg.head(m);
-        return pres.head(m).abs() < ransac_gate;
-      };
       const PoolArrays candidates{pe.data(), pwx.data(), pwy.data(), pwz.data(), ptg.data()};
       std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
       std::size_t best = 0;
@@ -951,7 +932,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
           const Eigen::Index j = pool[pick(rng)];
           const Vec3 w = rows.w(j);
           W.row(k) = w.transpose();
-          e(k) = rows.e[j] + rows.t[j] * w.dot(g_mean);
+          e(k) = rows(j, Rows::E) + rows(j, Rows::T) * w.dot(g_mean);
         }
         if (std::abs(W.determinant()) < 1e-3) continue;
         const Vec3 v = -W.inverse() * e;
@@ -964,10 +945,11 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
       }
       if (best < std::max<std::size_t>(10, pool.size() / 20)) break;
       starts.push_back(best_v);
-      const Eigen::Array<bool, Eigen::Dynamic, 1> explained = within(best_v);
+      // The pool's returns best_v leaves outside the gate (the gyro bias at its prior).
       unexplained.clear();
-      for (Eigen::Index k = 0; k < m; ++k)
-        if (!explained[k]) unexplained.push_back(pool[static_cast<std::size_t>(k)]);
+      for (std::size_t k = 0; k < pool.size(); ++k)
+        if (!(std::abs(candidates.residual(k, best_v.x(), best_v.y(), best_v.z())) < ransac_gate))
+          unexplained.push_back(pool[k]);
       pool.swap(unexplained);
     }
   }
