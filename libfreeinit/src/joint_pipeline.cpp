@@ -590,7 +590,10 @@ class JointPipeline final : public Pipeline {
     const std::size_t nodes = rec.nodes();
     prepareMovingCellSums();
     std::uint32_t* touched = span_touched_.data();  // the span's slots, in the order first seen
-    std::vector<std::size_t> coherent;
+    struct Return {
+      std::size_t node, j;  ///< node's j-th return
+    };
+    std::vector<Return> coherent;
     auto moving = [this](std::size_t k) { return !(k < node_rest_.size() && node_rest_[k]); };
     std::size_t k = 0;
     while (k < nodes) {
@@ -643,7 +646,7 @@ class JointPipeline final : public Pipeline {
         if (!moving(f)) continue;
         const WindowRecorder::NodeReturns nr = rec.node(f);
         for (std::size_t j = 0; j < nr.end - nr.begin; ++j)
-          if (span_coherent_[nr.cell[j]] != 0) coherent.push_back(nr.begin + j);
+          if (span_coherent_[nr.cell[j]] != 0) coherent.push_back({f, j});
       }
       for (std::size_t t = 0; t < slots; ++t) {
         const std::uint32_t c = touched[t];
@@ -655,23 +658,18 @@ class JointPipeline final : public Pipeline {
     // Cells of the world pass the test by chance now and then (development seeds: none in most
     // windows, tens of returns in some): not worth another smoothing. An object's are thousands.
     if (coherent.size() < kMinReturns) return false;
-    std::size_t node = 0;
-    for (const std::size_t i : coherent) {
-      while (rec.node(node).end <= i) ++node;
-      removeReturn(node, i, r.diag);
-    }
+    for (const Return& c : coherent) removeReturn(c.node, c.j, r.diag);
     return true;
   }
 
-  /// Takes the i-th recorded return, one of node k's, out of the estimate (its node's sums) and
-  /// out of the map.
-  void removeReturn(std::size_t k, std::size_t i, Diagnostics& diag) {
+  /// Takes node k's j-th recorded return out of the estimate (its node's sums) and out of the
+  /// map.
+  void removeReturn(std::size_t k, std::size_t j, Diagnostics& diag) {
     const WindowRecorder::NodeReturns nr = recorder_.node(k);
-    const std::size_t j = i - nr.begin;
     filter_->removePoint(k, static_cast<double>(nr.tau[j]),
                          Eigen::Vector3f(nr.x[j], nr.y[j], nr.z[j]),
                          static_cast<double>(nr.doppler[j]));
-    recorder_.reject(i);
+    recorder_.reject(nr.begin + j);
     --diag.points_used;
     ++diag.points_rejected;
   }
@@ -695,7 +693,7 @@ class JointPipeline final : public Pipeline {
         const std::uint16_t c = nr.cell[j];
         if (c == WindowRecorder::kNoCell) continue;
         if (!rest_cells_.coherent(c, sigma, kSigmas, kMinCount)) continue;
-        removeReturn(k, nr.begin + j, r.diag);
+        removeReturn(k, j, r.diag);
       }
     }
   }
