@@ -791,6 +791,154 @@ StartDetectorParams startDetectorParams(const FreeInitConfig& cfg) {
   return sp;
 }
 
+namespace {
+
+/// Motions to start the refinement from (decideStart): RANSAC on short slices of the span
+/// (T [s]) with gravity at its mean g_mean there (a slice is short enough that the mean
+/// acceleration's share of the velocity change within it stays inside the gate), removing the
+/// inliers of each motion found. Slices start at the span's beginning and at three later times:
+/// a scan pattern sweeps the view, so that what the first instants see may be one large moving
+/// object, with the world in view only later.
+std::vector<Vec3> ransacStarts(const Rows& rows, double T, const Vec3& g_mean,
+                               const StartDetectorParams& p) {
+  const Eigen::Index n = rows.size();
+  std::mt19937_64 rng(0x5eed ^ static_cast<std::size_t>(n));
+  std::vector<Vec3> starts;
+  const double ransac_gate = 2.0 * p.gate;
+  constexpr double kSlice = 0.015;  // [s]
+  constexpr std::size_t kSlicePoints = 200;
+  // The pool's equations side by side (its candidates are counted 64 times each), with the
+  // gravity term t w^T g_mean, which RANSAC holds, computed once.
+  std::vector<Eigen::Index> pool, unexplained;
+  pool.reserve(static_cast<std::size_t>(n));
+  unexplained.reserve(static_cast<std::size_t>(n));
+  Eigen::ArrayXd pe(n), pwx(n), pwy(n), pwz(n), ptg(n);
+  for (int slice = 0; slice < 4; ++slice) {
+    const double t_s = T * slice / 4.0;
+    pool.clear();
+    for (Eigen::Index j = 0; j < n; ++j)
+      if (rows(j, Rows::T) >= t_s &&
+          (rows(j, Rows::T) <= t_s + kSlice || pool.size() < kSlicePoints))
+        pool.push_back(j);
+    for (int h = 0; h < p.max_hypotheses && pool.size() >= 10; ++h) {
+      const Eigen::Index m = static_cast<Eigen::Index>(pool.size());
+      for (Eigen::Index k = 0; k < m; ++k) {
+        const Eigen::Index j = pool[static_cast<std::size_t>(k)];
+        pe[k] = rows(j, Rows::E);
+        pwx[k] = rows(j, Rows::WX);
+        pwy[k] = rows(j, Rows::WY);
+        pwz[k] = rows(j, Rows::WZ);
+        ptg[k] = rows(j, Rows::T) * rows.w(j).dot(g_mean);
+      }
+      const PoolArrays candidates{pe.data(), pwx.data(), pwy.data(), pwz.data(), ptg.data()};
+      std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
+      std::size_t best = 0;
+      Vec3 best_v = Vec3::Zero();
+      for (int it = 0; it < p.ransac_iterations; ++it) {
+        Mat3 W;
+        Vec3 e;
+        for (int k = 0; k < 3; ++k) {
+          const Eigen::Index j = pool[pick(rng)];
+          const Vec3 w = rows.w(j);
+          W.row(k) = w.transpose();
+          e(k) = rows(j, Rows::E) + rows(j, Rows::T) * w.dot(g_mean);
+        }
+        if (std::abs(W.determinant()) < 1e-3) continue;
+        const Vec3 v = -W.inverse() * e;
+        // (Counted without the candidates that cannot beat the best: they change nothing.)
+        const std::size_t count = countWithin(candidates, pool.size(), v.data(), ransac_gate, best);
+        if (count > best) {
+          best = count;
+          best_v = v;
+        }
+      }
+      if (best < std::max<std::size_t>(10, pool.size() / 20)) break;
+      starts.push_back(best_v);
+      // The pool's returns best_v leaves outside the gate (the gyro bias at its prior).
+      unexplained.clear();
+      for (std::size_t k = 0; k < pool.size(); ++k)
+        if (!(std::abs(candidates.residual(k, best_v.x(), best_v.y(), best_v.z())) < ransac_gate))
+          unexplained.push_back(pool[k]);
+      pool.swap(unexplained);
+    }
+  }
+  return starts;
+}
+
+/// The refinement of each start (ransacStarts) on the whole span, those that converge to the
+/// same motion merged, by coverage of the view (then inliers), each with the rows it explains
+/// (masks, in the same order).
+std::vector<StartHypothesis> refineStarts(const std::vector<Vec3>& starts, const Rows& rows,
+                                          const Rows& sub, const CoverageGrid& grid,
+                                          RefineWork& work, const Vec3& g_mean, double T,
+                                          double lever, const StartDetectorParams& p,
+                                          std::vector<std::vector<std::uint8_t>>& masks) {
+  std::vector<StartHypothesis> hypotheses;
+  masks.clear();
+  EarlyStates early;
+  early.span = T;
+  early.lever = lever;
+  for (std::size_t i_start = 0; i_start < starts.size(); ++i_start) {
+    const Vec3& v0 = starts[i_start];
+    // The same motion found again in another slice converges to the same hypothesis: refine it
+    // once (slices see one motion within the mean acceleration times their spacing).
+    bool seen = false;
+    for (std::size_t j = 0; j < i_start && !seen; ++j) seen = (starts[j] - v0).norm() < p.gate;
+    for (const StartHypothesis& o : hypotheses) seen = seen || (o.v_b0 - v0).norm() < p.gate;
+    if (seen) continue;
+    std::vector<std::uint8_t> mask;
+    // A refinement that joins an earlier one's path ends as that one did: nothing new.
+    std::optional<StartHypothesis> first =
+        refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 4.0, &early);
+    if (!first) continue;
+    StartHypothesis h = *first;
+    // Gravity is what the refinement finds it to be. A fit that needs one far from 9.81 m/s^2
+    // is tried again with gravity held near the mean specific force (a motion of the platform
+    // cannot need more than its mean acceleration over the span); if that does not fit either,
+    // it is not a motion of the platform.
+    if (h.v_b0.allFinite() && std::abs(h.g_b0.norm() - kGravity) > p.max_gravity_error)
+      h = *refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 0.5);
+    if (h.inliers < 10 || !h.v_b0.allFinite()) continue;
+    // Kept either way: an implausible motion is never chosen, but its returns still show that
+    // something else moves coherently (a contender in decideStart).
+    h.plausible_gravity = std::abs(h.g_b0.norm() - kGravity) <= p.max_gravity_error;
+    bool merged = false;
+    for (std::size_t o = 0; o < hypotheses.size(); ++o) {
+      if ((hypotheses[o].v_b0 - h.v_b0).norm() < 2.0 * p.gate) {
+        if (h.coverage > hypotheses[o].coverage) {
+          hypotheses[o] = h;
+          masks[o] = mask;
+        }
+        merged = true;
+        break;
+      }
+    }
+    if (!merged) {
+      hypotheses.push_back(h);
+      masks.push_back(std::move(mask));
+    }
+  }
+  std::vector<std::size_t> order(hypotheses.size());
+  for (std::size_t j = 0; j < order.size(); ++j) order[j] = j;
+  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
+    const StartHypothesis &ha = hypotheses[a], &hb = hypotheses[b];
+    return ha.coverage != hb.coverage ? ha.coverage > hb.coverage : ha.inliers > hb.inliers;
+  });
+  {
+    std::vector<StartHypothesis> hs;
+    std::vector<std::vector<std::uint8_t>> ms;
+    for (std::size_t j : order) {
+      hs.push_back(hypotheses[j]);
+      ms.push_back(std::move(masks[j]));
+    }
+    hypotheses.swap(hs);
+    masks.swap(ms);
+  }
+  return hypotheses;
+}
+
+}  // namespace
+
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first,
                           std::size_t k_last, const std::vector<StartPoint>& points,
                           const Extrinsics& extrinsics, const Vec3& b_g_prior,
@@ -888,132 +1036,10 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
   const Rows sub = Rows::every(rows, 3);
   RefineWork work(n);
 
-  // Hypotheses: RANSAC on short slices of the span (gravity at its mean there; a slice is short
-  // enough that the mean acceleration's share of the velocity change within it stays inside the
-  // gate), removing the inliers of each hypothesis found. Slices start at the span's beginning
-  // and at three later times: a scan pattern sweeps the view, so that what the first instants
-  // see may be one large moving object, with the world in view only later.
-  std::mt19937_64 rng(0x5eed ^ static_cast<std::size_t>(n));
-  std::vector<Vec3> starts;
-  const double ransac_gate = 2.0 * p.gate;
-  constexpr double kSlice = 0.015;  // [s]
-  constexpr std::size_t kSlicePoints = 200;
-  // The pool's equations side by side (its candidates are counted 64 times each), with the
-  // gravity term t w^T g_mean, which RANSAC holds, computed once.
-  std::vector<Eigen::Index> pool, unexplained;
-  pool.reserve(static_cast<std::size_t>(n));
-  unexplained.reserve(static_cast<std::size_t>(n));
-  Eigen::ArrayXd pe(n), pwx(n), pwy(n), pwz(n), ptg(n);
-  for (int slice = 0; slice < 4; ++slice) {
-    const double t_s = T * slice / 4.0;
-    pool.clear();
-    for (Eigen::Index j = 0; j < n; ++j)
-      if (rows(j, Rows::T) >= t_s &&
-          (rows(j, Rows::T) <= t_s + kSlice || pool.size() < kSlicePoints))
-        pool.push_back(j);
-    for (int h = 0; h < p.max_hypotheses && pool.size() >= 10; ++h) {
-      const Eigen::Index m = static_cast<Eigen::Index>(pool.size());
-      for (Eigen::Index k = 0; k < m; ++k) {
-        const Eigen::Index j = pool[static_cast<std::size_t>(k)];
-        pe[k] = rows(j, Rows::E);
-        pwx[k] = rows(j, Rows::WX);
-        pwy[k] = rows(j, Rows::WY);
-        pwz[k] = rows(j, Rows::WZ);
-        ptg[k] = rows(j, Rows::T) * rows.w(j).dot(g_mean);
-      }
-      const PoolArrays candidates{pe.data(), pwx.data(), pwy.data(), pwz.data(), ptg.data()};
-      std::uniform_int_distribution<std::size_t> pick(0, pool.size() - 1);
-      std::size_t best = 0;
-      Vec3 best_v = Vec3::Zero();
-      for (int it = 0; it < p.ransac_iterations; ++it) {
-        Mat3 W;
-        Vec3 e;
-        for (int k = 0; k < 3; ++k) {
-          const Eigen::Index j = pool[pick(rng)];
-          const Vec3 w = rows.w(j);
-          W.row(k) = w.transpose();
-          e(k) = rows(j, Rows::E) + rows(j, Rows::T) * w.dot(g_mean);
-        }
-        if (std::abs(W.determinant()) < 1e-3) continue;
-        const Vec3 v = -W.inverse() * e;
-        // (Counted without the candidates that cannot beat the best: they change nothing.)
-        const std::size_t count = countWithin(candidates, pool.size(), v.data(), ransac_gate, best);
-        if (count > best) {
-          best = count;
-          best_v = v;
-        }
-      }
-      if (best < std::max<std::size_t>(10, pool.size() / 20)) break;
-      starts.push_back(best_v);
-      // The pool's returns best_v leaves outside the gate (the gyro bias at its prior).
-      unexplained.clear();
-      for (std::size_t k = 0; k < pool.size(); ++k)
-        if (!(std::abs(candidates.residual(k, best_v.x(), best_v.y(), best_v.z())) < ransac_gate))
-          unexplained.push_back(pool[k]);
-      pool.swap(unexplained);
-    }
-  }
-  // Refine each on the whole span; merge those that converge to the same motion.
+  // Hypotheses: motions found by RANSAC, refined on the whole span.
   std::vector<std::vector<std::uint8_t>> masks;  // the rows each hypothesis explains
-  EarlyStates early;
-  early.span = T;
-  early.lever = extrinsics.p_bl.norm();
-  for (std::size_t i_start = 0; i_start < starts.size(); ++i_start) {
-    const Vec3& v0 = starts[i_start];
-    // The same motion found again in another slice converges to the same hypothesis: refine it
-    // once (slices see one motion within the mean acceleration times their spacing).
-    bool seen = false;
-    for (std::size_t j = 0; j < i_start && !seen; ++j) seen = (starts[j] - v0).norm() < p.gate;
-    for (const StartHypothesis& o : out.hypotheses) seen = seen || (o.v_b0 - v0).norm() < p.gate;
-    if (seen) continue;
-    std::vector<std::uint8_t> mask;
-    // A refinement that joins an earlier one's path ends as that one did: nothing new.
-    std::optional<StartHypothesis> first =
-        refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 4.0, &early);
-    if (!first) continue;
-    StartHypothesis h = *first;
-    // Gravity is what the refinement finds it to be. A fit that needs one far from 9.81 m/s^2
-    // is tried again with gravity held near the mean specific force (a motion of the platform
-    // cannot need more than its mean acceleration over the span); if that does not fit either,
-    // it is not a motion of the platform.
-    if (h.v_b0.allFinite() && std::abs(h.g_b0.norm() - kGravity) > p.max_gravity_error)
-      h = *refine(rows, sub, grid, work, v0, g_mean, false, p, &mask, 0.5);
-    if (h.inliers < 10 || !h.v_b0.allFinite()) continue;
-    // Kept either way: an implausible motion is never chosen, but its returns still show that
-    // something else moves coherently (a contender, below).
-    h.plausible_gravity = std::abs(h.g_b0.norm() - kGravity) <= p.max_gravity_error;
-    bool merged = false;
-    for (std::size_t o = 0; o < out.hypotheses.size(); ++o) {
-      if ((out.hypotheses[o].v_b0 - h.v_b0).norm() < 2.0 * p.gate) {
-        if (h.coverage > out.hypotheses[o].coverage) {
-          out.hypotheses[o] = h;
-          masks[o] = mask;
-        }
-        merged = true;
-        break;
-      }
-    }
-    if (!merged) {
-      out.hypotheses.push_back(h);
-      masks.push_back(std::move(mask));
-    }
-  }
-  std::vector<std::size_t> order(out.hypotheses.size());
-  for (std::size_t j = 0; j < order.size(); ++j) order[j] = j;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) {
-    const StartHypothesis &ha = out.hypotheses[a], &hb = out.hypotheses[b];
-    return ha.coverage != hb.coverage ? ha.coverage > hb.coverage : ha.inliers > hb.inliers;
-  });
-  {
-    std::vector<StartHypothesis> hs;
-    std::vector<std::vector<std::uint8_t>> ms;
-    for (std::size_t j : order) {
-      hs.push_back(out.hypotheses[j]);
-      ms.push_back(std::move(masks[j]));
-    }
-    out.hypotheses.swap(hs);
-    masks.swap(ms);
-  }
+  out.hypotheses = refineStarts(ransacStarts(rows, T, g_mean, p), rows, sub, grid, work, g_mean, T,
+                                extrinsics.p_bl.norm(), p, masks);
   auto speed = [](const StartHypothesis& h) {
     char buf[32];
     std::snprintf(buf, sizeof buf, "%.2f", h.v_b0.norm());
