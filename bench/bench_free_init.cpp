@@ -445,6 +445,13 @@ BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride8, std::string("dyna_05"), 8)
 
 // Every preset at the default configuration: BM_FreeInitRun/<preset>_default.
 int main(int argc, char** argv) {
+  // Memory stays with the process between iterations, as in one that initializes again and again:
+  // fresh pages would cost each iteration page faults (~8 us each on the project's VM) that
+  // depend on where glibc happens to trim the heap, not on the estimator's work. Without this, a
+  // benchmark that frees all it took (BM_JointForwardPassArrays) met them or not depending on
+  // the size of one per-node array (3.0 against 5.5 ms, 320 faults an iteration).
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
   for (const std::string& name : freeinit::sim::presetNames())
     benchmark::RegisterBenchmark(("BM_FreeInitRun/" + name + "_default").c_str(), BM_FreeInitRun,
                                  name, 0)
