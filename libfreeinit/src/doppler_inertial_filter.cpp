@@ -95,8 +95,11 @@ double stepInTolerances(const DopplerInertialFilter::VecS& dx) {
 /// in double: one division (the inverse norm), then products. Every computation of a return's
 /// direction in the filter goes through here, so that a return taken out of a node's sums
 /// (removePoint) takes out exactly what it added.
+inline double inverseNorm(double x, double y, double z) {
+  return 1.0 / std::sqrt(x * x + y * y + z * z);
+}
 inline void unitDirection(double x, double y, double z, double& dx, double& dy, double& dz) {
-  const double inv_norm = 1.0 / std::sqrt(x * x + y * y + z * z);
+  const double inv_norm = inverseNorm(x, y, z);
   dx = x * inv_norm;
   dy = y * inv_norm;
   dz = z * inv_norm;
@@ -151,7 +154,7 @@ std::size_t gateAndSumReturns(std::size_t m, const GatePrediction& g, const floa
                               const float* __restrict px, const float* __restrict py,
                               const float* __restrict pz, const float* __restrict z,
                               double* __restrict res_out, std::int64_t* __restrict acc_out,
-                              double* __restrict total) {
+                              double* __restrict inv_norm_out, double* __restrict total) {
   const GatePrediction c = g;
   const double inv_h = c.inv_h, speed = c.speed, gate_min2 = c.gate_min2, gate_k2 = c.gate_k2;
   constexpr std::size_t kBlock = 128;
@@ -164,8 +167,8 @@ std::size_t gateAndSumReturns(std::size_t m, const GatePrediction& g, const floa
     for (std::size_t j = 0; j < n; ++j) {
       const std::size_t i = b + j;
       const double x = px[i], y = py[i], w = pz[i], zi = z[i];
-      double dx, dy, dz;
-      unitDirection(x, y, w, dx, dy, dz);
+      const double inv_norm = inverseNorm(x, y, w);
+      const double dx = x * inv_norm, dy = y * inv_norm, dz = w * inv_norm;
       const double s = static_cast<double>(tau[i]) * inv_h;
       double r, S;
       c.residual(s, dx, dy, dz, zi, r, S);
@@ -175,6 +178,7 @@ std::size_t gateAndSumReturns(std::size_t m, const GatePrediction& g, const floa
       const bool accept = (e <= 0) | (e * e <= bound);
       res_out[i] = r;
       acc_out[i] = accept;
+      inv_norm_out[i] = inv_norm;
       accepted += accept;
       bs[j] = s;
       bx[j] = dx;
@@ -245,20 +249,20 @@ void coherenceTest(std::size_t n, std::size_t half, std::size_t min_count, doubl
 
 /// The second gate of the m returns the first accepted (acc), against the update: residual, its
 /// variance, and whether r^2 <= k2 var (never for a return the first gate rejected, whose
-/// residual stays the first gate's). The direction as gateAndSumReturns computes it.
+/// residual stays the first gate's). The direction as gateAndSumReturns computes it, from the
+/// inverse norms it kept (a square root and a division per return, the most of such a loop).
 FREEINIT_VECTOR_CLONES
 void regateReturns(std::size_t m, const GatePrediction& g, double k2, const float* __restrict tau,
                    const float* __restrict px, const float* __restrict py,
                    const float* __restrict pz, const float* __restrict z,
-                   const std::int64_t* __restrict acc, double* __restrict res,
-                   double* __restrict res2_out, double* __restrict var_out,
+                   const double* __restrict inv_norm, const std::int64_t* __restrict acc,
+                   double* __restrict res, double* __restrict res2_out, double* __restrict var_out,
                    std::int64_t* __restrict pass_out) {
   const GatePrediction c = g;
   const double inv_h = c.inv_h;
   for (std::size_t i = 0; i < m; ++i) {
     const double x = px[i], y = py[i], w = pz[i], zi = z[i];
-    double dx, dy, dz;
-    unitDirection(x, y, w, dx, dy, dz);
+    const double dx = x * inv_norm[i], dy = y * inv_norm[i], dz = w * inv_norm[i];
     const double s = static_cast<double>(tau[i]) * inv_h;
     double r, var;
     c.residual(s, dx, dy, dz, zi, r, var);
@@ -829,7 +833,7 @@ std::size_t DopplerInertialFilter::OpenReturns::append(std::size_t count) {
 void DopplerInertialFilter::OpenReturns::reserve(std::size_t n) {
   if (n <= residual.size()) return;
   const std::size_t size = std::max(n, 2 * residual.size());
-  for (std::vector<double>* v : {&residual, &residual2, &variance2}) v->resize(size);
+  for (std::vector<double>* v : {&residual, &residual2, &variance2, &inv_norm}) v->resize(size);
   cum_r.resize(size + 1);
   cum_v.resize(size + 1);
   accepted.resize(size);
@@ -851,8 +855,9 @@ void DopplerInertialFilter::gateAndSum(Node& n) {
   g.gate_min2 = gate_min2_;
   g.gate_k2 = gate_k2_;
   double total[kSumCount];
-  const std::size_t used = gateAndSumReturns(m, g, o.in.tau, o.in.x, o.in.y, o.in.z, o.in.doppler,
-                                             o.residual.data(), o.accepted.data(), total);
+  const std::size_t used =
+      gateAndSumReturns(m, g, o.in.tau, o.in.x, o.in.y, o.in.z, o.in.doppler, o.residual.data(),
+                        o.accepted.data(), o.inv_norm.data(), total);
   o.used = used;
   DopplerSums& sums = n.sums;
   for (int c = 0; c < 5; ++c)
@@ -1095,8 +1100,9 @@ void DopplerInertialFilter::update() {
     g.setCovariance(M);
     g.inv_h = n.inv_h;
     g.r_doppler = r_doppler_;
-    regateReturns(m, g, k2, o.in.tau, o.in.x, o.in.y, o.in.z, o.in.doppler, o.accepted.data(),
-                  o.residual.data(), o.residual2.data(), o.variance2.data(), o.passed.data());
+    regateReturns(m, g, k2, o.in.tau, o.in.x, o.in.y, o.in.z, o.in.doppler, o.inv_norm.data(),
+                  o.accepted.data(), o.residual.data(), o.residual2.data(), o.variance2.data(),
+                  o.passed.data());
     std::int64_t* pass = o.passed.data();
     // Coherence: the returns of an object moving slowly along the line of sight each pass the
     // gate, but neighbours in the scan (consecutive returns) share its residual's sign and size.

@@ -391,6 +391,7 @@ class DopplerInertialFilter {
     // The per-return results, all 8 bytes wide: the loops over them vectorize without
     // conversions.
     std::vector<double> residual, residual2, variance2;
+    std::vector<double> inv_norm;  ///< 1 / |p_l|, the first gate's, for the second
     std::vector<std::int64_t> accepted, passed;
     // The coherence test's, over the returns the second gate passed, in order: their index
     // among the given ones, the prefix sums of their residuals and variances, the verdict.
