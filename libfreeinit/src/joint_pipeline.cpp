@@ -33,9 +33,6 @@ constexpr double kPi = 3.14159265358979323846;
 constexpr double kRestBackdating = 0.1;
 /// Share of the window after which what has been received is smoothed once.
 constexpr double kEarlySmoothing = 0.8;
-/// Share of the window from which it is smoothed at the end of a frame, when the next frame may
-/// close the window (JointPipeline::lastNodeBeforeTheClosingFrame).
-constexpr double kEarlySmoothingAtFrame = 0.5;
 /// That early smoothing is the final one's starting point, not a result: it stops once its next
 /// step would be below this many times the final one's threshold (DopplerInertialFilter::smooth).
 /// Held-out seeds 17000001-200 and 18000001-200: 13 % and 10 % fewer early iterations, 2 % fewer
@@ -423,45 +420,15 @@ class JointPipeline final : public Pipeline {
         return;
       }
       // Once, at kEarlySmoothing of the window: smooth what has been received, so that the final
-      // smoothing (what an online user waits for) starts from a good linearization. Earlier
-      // when the frame expected next may close the window: then in the call before it.
-      if (!early_smoothed_ && (t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration ||
-                               lastNodeBeforeTheClosingFrame(k))) {
+      // smoothing (what an online user waits for) starts from a good linearization.
+      if (!early_smoothed_ && t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration) {
         const double t0 = wallSeconds();
         filter_->smooth(kEarlyLooseness);
         r.diag.time_solver += wallSeconds() - t0;
-        r.diag.early_smoothing_at = t_k - t_ref_;
         early_smoothed_ = true;
       }
       filter_->predict();
     }
-  }
-
-  /// Whether node k, just closed, is the last node of its frame and the next frame may close the
-  /// window: the first return after node k's interval is in frame F, and F ends before the next
-  /// node's interval does (so node k + 1 waits for frame F + 1); the nodes cover
-  /// kEarlySmoothingAtFrame of the window or more; one frame period after F's end (F's stamp
-  /// from the previous one's) reaches the window's last node. The early smoothing then runs in the
-  /// call that brought frame F, not in the one that closes the window, where the node at
-  /// kEarlySmoothing would put it when its interval reaches into the last frame: a window that
-  /// starts with a frame at 10 Hz (that node at 0.4 s, its interval to 0.4025 s), or a sensor
-  /// at 5 Hz about half the time. Read from the data alone (the frames and the IMU samples
-  /// already needed), not from what has arrived: the result does not depend on the interleaving.
-  bool lastNodeBeforeTheClosingFrame(std::size_t k) const {
-    const auto& imu = seq_.imu();
-    const auto& frames = seq_.frames();
-    const std::size_t f = cursor_.f;
-    if (f == 0 || f >= frames.size() || k + 1 >= imu.size()) return false;
-    const MeasurementSequencer::FrameRef& frame = frames[f];
-    const double frame_end = frame.stamp + static_cast<double>(frame.points->back().time_offset);
-    // Node k + 1's interval ends half an IMU step after it (the step taken as node k's); the
-    // window's last node is within a step of its end.
-    const double step = imu[k + 1].t - imu[k].t;
-    const double next_end = imu[k + 1].t + 0.5 * step;
-    const double period = frame.stamp - frames[f - 1].stamp;
-    const double T = cfg_.window.duration;
-    return next_end > frame_end && imu[k].t - t_ref_ >= kEarlySmoothingAtFrame * T &&
-           frame_end + period + step >= t_ref_ + T;
   }
 
   void finalize(InitResult& r) {
