@@ -92,8 +92,9 @@ double stepInTolerances(const DopplerInertialFilter::VecS& dx) {
 }
 
 /// A return's unit direction from its position in the LiDAR frame (float, as the sensor gives it),
-/// in double: one division (the inverse norm), then products. Every computation of a return's
-/// direction in the filter goes through here, so that a return taken out of a node's sums
+/// in double: one division (inverseNorm), then the position times it. Every computation of a
+/// return's direction in the filter is this one (the gates' loops multiply by the inverse norm
+/// themselves, the second reusing the first's), so that a return taken out of a node's sums
 /// (removePoint) takes out exactly what it added.
 inline double inverseNorm(double x, double y, double z) {
   return 1.0 / std::sqrt(x * x + y * y + z * z);
