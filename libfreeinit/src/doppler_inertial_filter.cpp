@@ -440,7 +440,6 @@ const DopplerInertialFilter::ImuAlong& DopplerInertialFilter::imuAlong(
   return cache;
 }
 
-FREEINIT_VECTOR_CLONES
 FilterState DopplerInertialFilter::integrate(const FilterState& x,
                                              const std::vector<ImuSample>& imu, std::size_t k,
                                              double tau, IntegrationJacobian* J,
@@ -602,7 +601,6 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   return lidarVelocity(x, imu, k, tau, R_bl, &Jr_phi, J, nullptr);
 }
 
-FREEINIT_VECTOR_CLONES
 Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
                                           std::size_t k, double tau, const Mat3& R_bl,
                                           const Mat3* Jr_phi,
@@ -655,7 +653,6 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   return v_l;
 }
 
-FREEINIT_VECTOR_CLONES
 DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node& n,
                                                                       const FilterState& x,
                                                                       Mat9xS* G) const {
