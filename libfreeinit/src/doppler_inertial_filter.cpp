@@ -222,6 +222,24 @@ std::size_t gateAndSumReturns(std::size_t m, const GatePrediction& g, const floa
   return accepted;
 }
 
+/// act(i), in order, for each i < n whose flag(i) (an integer) is not zero, where those are
+/// few: the flags are first tested sixteen at a time, in a loop the compiler vectorizes, and a
+/// block without one is passed over. act(i) may change flag(i) but no other flag.
+template <class Flag, class Act>
+void forEachFlagged(std::size_t n, const Flag& flag, const Act& act) {
+  constexpr std::size_t kBlock = 16;
+  std::size_t i = 0;
+  for (; i + kBlock <= n; i += kBlock) {
+    std::int64_t any = 0;
+    for (std::size_t l = 0; l < kBlock; ++l) any |= flag(i + l);
+    if (any == 0) continue;
+    for (std::size_t l = 0; l < kBlock; ++l)
+      if (flag(i + l) != 0) act(i + l);
+  }
+  for (; i < n; ++i)
+    if (flag(i) != 0) act(i);
+}
+
 /// The coherence test of n returns from the prefix sums of their residuals (cum_r) and of the
 /// residuals' variances (cum_v), n + 1 values each: whether the neighbourhood [j - half,
 /// j + half] (cut at the ends, tested only if it holds at least min_count returns) has
@@ -1135,21 +1153,22 @@ void DopplerInertialFilter::update() {
       const double c2 = params_.coherence_sigma * params_.coherence_sigma;
       std::int64_t* coherent = o.coherent.data();
       coherenceTest(np, half, static_cast<std::size_t>(K) / 2, c2, cum_r, cum_v, coherent);
-      for (std::size_t j = 0; j < np; ++j)
-        if (coherent[j] != 0) pass[idx[j]] = 0;
+      forEachFlagged(np, [&](std::size_t j) { return coherent[j]; },
+                     [&](std::size_t j) { pass[idx[j]] = 0; });
     }
     // The dropped points leave the sums (a small share: taking them out is cheaper than summing
     // the kept ones again), in the order given, each as the first gate summed it.
     std::size_t dropped = 0;
-    for (std::size_t i = 0; i < m; ++i) {
-      if (o.accepted[i] == 0 || pass[i] != 0) continue;
+    const std::int64_t* accepted = o.accepted.data();
+    forEachFlagged(m, [&](std::size_t i) { return accepted[i] & ~pass[i]; },  // both 0 or 1
+                   [&](std::size_t i) {
       o.accepted[i] = 0;
       Vec3 direction;
       unitDirection(o.in.x[i], o.in.y[i], o.in.z[i], direction.x(), direction.y(), direction.z());
       accumulate(n.sums, static_cast<double>(o.in.tau[i]) * n.inv_h, direction,
                  static_cast<double>(o.in.doppler[i]), -1.0);
       ++dropped;
-    }
+    });
     o.used -= dropped;
     if (dropped > 0) {
       const FilterState x_first = x;
