@@ -1153,15 +1153,15 @@ void DopplerInertialFilter::update() {
       const double c2 = params_.coherence_sigma * params_.coherence_sigma;
       std::int64_t* coherent = o.coherent.data();
       coherenceTest(np, half, static_cast<std::size_t>(K) / 2, c2, cum_r, cum_v, coherent);
-      forEachFlagged(np, [&](std::size_t j) { return coherent[j]; },
-                     [&](std::size_t j) { pass[idx[j]] = 0; });
+      auto dropsIt = [&](std::size_t j) { return coherent[j]; };
+      forEachFlagged(np, dropsIt, [&](std::size_t j) { pass[idx[j]] = 0; });
     }
     // The dropped points leave the sums (a small share: taking them out is cheaper than summing
     // the kept ones again), in the order given, each as the first gate summed it.
     std::size_t dropped = 0;
     const std::int64_t* accepted = o.accepted.data();
-    forEachFlagged(m, [&](std::size_t i) { return accepted[i] & ~pass[i]; },  // both 0 or 1
-                   [&](std::size_t i) {
+    auto leaves = [&](std::size_t i) { return accepted[i] & ~pass[i]; };  // both 0 or 1
+    forEachFlagged(m, leaves, [&](std::size_t i) {
       o.accepted[i] = 0;
       Vec3 direction;
       unitDirection(o.in.x[i], o.in.y[i], o.in.z[i], direction.x(), direction.y(), direction.z());
