@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <limits>
 #include <stdexcept>
+#include <string>
 
 namespace freeinit {
 namespace {
@@ -126,6 +127,51 @@ TEST(FreeInitBehaviour, GatingRejectsOutliersAndMovingObjects) {
   EXPECT_LE(rejected, static_cast<double>(non_static) + 0.02 * static_cast<double>(in_window));
   EXPECT_EQ(r.diag.points_used + r.diag.points_rejected + r.diag.points_skipped,
             r.diag.points_seen);
+}
+
+// The early smoothing (the final one's starting point, ~1 ms on a 300,000-return window) runs in
+// a call before the one that closes the window, for a sensor at 10 Hz or faster, whatever the
+// window's phase against the frames: the frame that brings the end of its data is not the one
+// the window's last node waits for. At 80 % of the window it was, for a window that starts with
+// a frame at 10 Hz (phase 0 here).
+TEST(FreeInitBehaviour, TheEarlySmoothingComesBeforeTheClosingFrame) {
+  for (const double rate : {10.0, 20.0}) {
+    for (const double phase : {0.0, 0.1, 0.3, 0.5, 0.7, 0.9}) {
+      auto sc = sim::preset("dyna_05", 1);
+      sc.duration = 1.0;
+      sc.points_per_frame = 5000;
+      sc.frame_rate = rate;
+      sim::Recording rec = sim::simulate(sc);
+      // The recording starts `phase` periods into a frame: the points and IMU samples before
+      // that instant dropped.
+      const double t_start = rec.config.t0 + 2.0 / rate + phase / rate;
+      cropBefore(rec, t_start - 1.0 / rate);
+      LidarFrame& first = rec.frames.front();
+      first.points.erase(std::remove_if(first.points.begin(), first.points.end(),
+                                        [&](const DopplerPoint& p) {
+                                          return first.stamp + p.time_offset < t_start;
+                                        }),
+                         first.points.end());
+      rec.imu.erase(std::remove_if(rec.imu.begin(), rec.imu.end(),
+                                   [&](const ImuSample& s) { return s.t < t_start; }),
+                    rec.imu.end());
+      const std::string tag = std::to_string(rate) + " Hz, phase " + std::to_string(phase);
+      const InitResult r = FreeInit::run(configFor(rec), rec.imu, rec.frames);
+      ASSERT_TRUE(r.state.ok()) << tag << ": " << r.state.message;
+      ASSERT_GT(r.diag.early_smoothing_to, 0.0) << tag;
+      const double t_ref = r.state.timestamp - r.diag.window_duration;
+      // A node is taken once a frame reaching the end of its data has arrived: the early
+      // smoothing's last node with the first frame ending at or after t_ref + early_smoothing_to,
+      // the window's last node only with a frame ending after the state's time.
+      auto end = [](const LidarFrame& f) { return f.stamp + f.points.back().time_offset; };
+      std::size_t brought = 0;
+      while (brought < rec.frames.size() &&
+             end(rec.frames[brought]) < t_ref + r.diag.early_smoothing_to)
+        ++brought;
+      ASSERT_LT(brought, rec.frames.size()) << tag;
+      EXPECT_LT(end(rec.frames[brought]), r.state.timestamp) << tag;
+    }
+  }
 }
 
 // Data may arrive in any interleaving: IMU far ahead of the LiDAR, or the LiDAR ahead.

@@ -103,8 +103,12 @@ struct Diagnostics {
   std::size_t frames_in_window = 0;   ///< LiDAR frames with points in the window
   bool imu_at_rest_at_start = false;  ///< the IMU showed only noise over the start decision's span
   int iterations = 0;                 ///< smoother iterations (joint estimator)
-  double time_velocimeter = 0;        ///< [s] wall time
-  double time_solver = 0;             ///< [s] wall time
+  /// [s] from the window start to the end of the data the early smoothing took (joint
+  /// estimator: it runs once, at three quarters of the window, so that the final smoothing
+  /// starts near its solution; 0 if it did not run)
+  double early_smoothing_to = 0;
+  double time_velocimeter = 0;  ///< [s] wall time
+  double time_solver = 0;       ///< [s] wall time
   /// [s] wall time of the add*() / finish() call that made the state final: the latency from
   /// the last measurement the window needed to the state (what an online user waits for; the
   /// joint estimator's map comes after it, time_map).
