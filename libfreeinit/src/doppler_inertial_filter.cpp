@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstring>
 #include <stdexcept>
+#include <string>
 
 #include "filter_kernels.h"
 #include "vector_clones.h"
@@ -1391,11 +1392,27 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
   return out;
 }
 
-double DopplerInertialFilter::residualSumOfSquares() const {
+std::vector<DopplerInertialFilter::Vec9> DopplerInertialFilter::lidarVelocityPolynomials() const {
+  std::vector<Vec9> Q;
+  Q.reserve(nodes_.size());
+  for (const Node& n : nodes_) Q.push_back(velocityPolynomial(n, n.xs, nullptr));
+  return Q;
+}
+
+void DopplerInertialFilter::checkPolynomials(const std::vector<Vec9>& Q) const {
+  if (Q.size() != nodes_.size())
+    throw std::invalid_argument("DopplerInertialFilter: " + std::to_string(Q.size()) +
+                                " velocity polynomials for " + std::to_string(nodes_.size()) +
+                                " nodes");
+}
+
+double DopplerInertialFilter::residualSumOfSquares(const std::vector<Vec9>& Qs) const {
+  checkPolynomials(Qs);
   double rss = 0;
-  for (const Node& n : nodes_) {
+  for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    const Node& n = nodes_[k];
     if (n.sums.n == 0) continue;
-    const Vec9 Q = velocityPolynomial(n, n.xs, nullptr);
+    const Vec9& Q = Qs[k];
     double quad = 0, lin = 0;
     for (int m = 0; m < 3; ++m) {
       lin += n.sums.bz.col(m).dot(Q.segment<3>(3 * m));
@@ -1418,14 +1435,16 @@ Mat3 DopplerInertialFilter::dopplerInformation(std::size_t k) const {
 }
 
 DopplerInertialFilter::NodeResiduals DopplerInertialFilter::nodeResiduals(
-    std::size_t min_returns) const {
+    std::size_t min_returns, const std::vector<Vec9>& Qs) const {
+  checkPolynomials(Qs);
   NodeResiduals out;
   const double var_g = params_.gyro_sigma * params_.gyro_sigma;
-  for (const Node& n : nodes_) {
+  for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    const Node& n = nodes_[k];
     if (n.sums.n == 0 || n.sums.n < min_returns) continue;
     if (n.rest_velocity_sigma > 0 || n.rest_rate_sigma > 0) continue;
     // sum r d = sum z d + sum d d^T q(s), r = z + d^T q(s): from the sums.
-    const Vec9 Q = velocityPolynomial(n, n.xs, nullptr);
+    const Vec9& Q = Qs[k];
     Vec3 g = n.sums.bz.col(0);
     for (int m = 0; m < 3; ++m) g += n.sums.moment(m) * Q.segment<3>(3 * m);
     const Mat3 S = n.sums.moment(0);

@@ -466,15 +466,19 @@ class JointPipeline final : public Pipeline {
       diag.iterations += filter_->smooth();
       rest_withdrawn_ = true;
     }
-    for (int round = 0; round < 3 && rejectMovingCells(r); ++round)
+    // The nodes' smoothed LiDAR velocities, for the tests below: computed once per smoothing.
+    std::vector<DopplerInertialFilter::Vec9> Q = filter_->lidarVelocityPolynomials();
+    for (int round = 0; round < 3 && rejectMovingCells(r, Q); ++round) {
       diag.iterations += filter_->smooth();
+      Q = filter_->lidarVelocityPolynomials();
+    }
     diag.time_solver += wallSeconds() - t_solve;
     const std::size_t N = filter_->nodes();
     const FilterState& x = filter_->state(N - 1);
     const std::size_t used = filter_->acceptedPointsTotal();
     diag.doppler_residual_rms =
-        used > 0 ? std::sqrt(filter_->residualSumOfSquares() / static_cast<double>(used)) : 0.0;
-    const double inflation = testNodeResiduals(diag);
+        used > 0 ? std::sqrt(filter_->residualSumOfSquares(Q) / static_cast<double>(used)) : 0.0;
+    const double inflation = testNodeResiduals(diag, Q);
     node_residuals_inflated_ = inflation > 1.0;
     std::ostringstream rep;
     rep << "joint: " << N << " nodes, " << diag.iterations << " smoother iterations";
@@ -539,10 +543,11 @@ class JointPipeline final : public Pipeline {
   /// then optimistic by about that ratio, and the returned factor (else 1) scales it: the
   /// variance factor of least squares, which keeps the states (right to one or two bounds in
   /// such cases) with a covariance that covers them.
-  double testNodeResiduals(Diagnostics& diag) const {
+  double testNodeResiduals(Diagnostics& diag,
+                           const std::vector<DopplerInertialFilter::Vec9>& Q) const {
     constexpr std::size_t kMinReturns = 30;
     constexpr int kMinDof = 30;  // ten nodes: fewer leave the ratio itself too noisy
-    const DopplerInertialFilter::NodeResiduals t = filter_->nodeResiduals(kMinReturns);
+    const DopplerInertialFilter::NodeResiduals t = filter_->nodeResiduals(kMinReturns, Q);
     diag.node_residual_ratio = t.dof > 0 ? t.chi2 / t.dof : 0.0;
     if (t.dof < kMinDof) return 1.0;
     constexpr double kZ999 = 3.090;  // standard normal, 99.9 %
@@ -584,8 +589,9 @@ class JointPipeline final : public Pipeline {
   /// residual by direction and range. Those cells' returns leave the estimate when they are
   /// many; returns whether they did (the window is then smoothed again). A wrong calibration
   /// leaves direction-dependent residuals of the world itself: its cells may go too, and the
-  /// calibration test still tells.
-  bool rejectMovingCells(InitResult& r) {
+  /// calibration test still tells. Qs: the nodes' smoothed LiDAR velocities
+  /// (DopplerInertialFilter::lidarVelocityPolynomials).
+  bool rejectMovingCells(InitResult& r, const std::vector<DopplerInertialFilter::Vec9>& Qs) {
     constexpr double kSpan = 0.05;  // [s]
     constexpr double kSigmas = 4.0;
     constexpr std::uint32_t kMinCount = 8;
@@ -620,7 +626,7 @@ class JointPipeline final : public Pipeline {
         const WindowRecorder::NodeReturns nr = rec.node(k);
         const std::size_t n = nr.end - nr.begin;
         if (n == 0) continue;
-        const Eigen::Matrix<float, 9, 1> Q = filter_->lidarVelocityPolynomial(k).cast<float>();
+        const Eigen::Matrix<float, 9, 1> Q = Qs[k].cast<float>();
         float q[9];
         for (int j = 0; j < 9; ++j) q[j] = Q(j);
         const float inv_h = static_cast<float>(filter_->normalizedTime(k, 1.0));

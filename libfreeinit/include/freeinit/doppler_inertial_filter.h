@@ -246,13 +246,18 @@ class DopplerInertialFilter {
   Vec9 lidarVelocityPolynomial(std::size_t k) const {
     return velocityPolynomial(nodes_[k], nodes_[k].xs, nullptr);
   }
+  /// lidarVelocityPolynomial() of every node (node k's at k): what the readers of the smoothed
+  /// states below take, computed once when several read them.
+  std::vector<Vec9> lidarVelocityPolynomials() const;
   /// Smoothed state of node k after smooth(); before, the filtered one.
   const FilterState& state(std::size_t k) const { return nodes_[k].xs; }
   /// Covariance of the last node's state (the filter's of the last pass).
   const MatS& covariance() const { return nodes_.back().P; }
   std::size_t acceptedPoints(std::size_t k) const { return nodes_[k].sums.n; }
   /// Sum of squared residuals of the accepted points at the current estimate, and their count.
-  double residualSumOfSquares() const;
+  double residualSumOfSquares() const { return residualSumOfSquares(lidarVelocityPolynomials()); }
+  /// The same with the nodes' polynomials given (lidarVelocityPolynomials()).
+  double residualSumOfSquares(const std::vector<Vec9>& Q) const;
   std::size_t acceptedPointsTotal() const;
   /// Weighted information the Doppler gave about v_l at node k (sum d d^T / sigma^2).
   Mat3 dopplerInformation(std::size_t k) const;
@@ -270,7 +275,11 @@ class DopplerInertialFilter {
     double chi2 = 0;
     int dof = 0;  ///< 3 per node tested
   };
-  NodeResiduals nodeResiduals(std::size_t min_returns) const;
+  NodeResiduals nodeResiduals(std::size_t min_returns) const {
+    return nodeResiduals(min_returns, lidarVelocityPolynomials());
+  }
+  /// The same with the nodes' polynomials given (lidarVelocityPolynomials()).
+  NodeResiduals nodeResiduals(std::size_t min_returns, const std::vector<Vec9>& Q) const;
 
   // The models, exposed for tests. `imu` holds the samples, x is the state at sample k.
   /// Integrates x from sample k over a signed tau (within one interval of k): the gyro and the
@@ -416,6 +425,8 @@ class DopplerInertialFilter {
 
   /// Q = [q0; q1; q2] of node n at state x, optionally with its Jacobian dQ/ddx (9x19).
   Vec9 velocityPolynomial(const Node& n, const FilterState& x, Mat9xS* G) const;
+  /// Throws std::invalid_argument unless Q holds one polynomial per node.
+  void checkPolynomials(const std::vector<Vec9>& Q) const;
   /// The blocks of integrate()'s Jacobian that are not those of the identity: the rows of
   /// dtheta, dp and dv against dtheta, db_g and db_a (dp against dv is tau I; every other block
   /// is the identity's). Those who read a few rows (lidarVelocity) take them without the 19x19.
