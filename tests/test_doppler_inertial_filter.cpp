@@ -420,7 +420,7 @@ TEST(DopplerInertialFilter, WindowEstimateIsConsistentWithItsCovariance) {
 }
 
 TEST(DopplerInertialFilter, SmoothingEarlyLeavesTheFinalSmoothingTheSameAnswer) {
-  // The pipeline smooths once at 80 % of the window and goes on. The final smoothing then finds
+  // The pipeline smooths once at 75 % of the window and goes on. The final smoothing then finds
   // the answer of one smoothing over the whole window, and in at most two iterations: the nodes
   // added after the early smoothing start from the propagation of the smoothed ones, a
   // linearization one Gauss-Newton step from the solution. The answers agree within a tenth of
@@ -434,7 +434,7 @@ TEST(DopplerInertialFilter, SmoothingEarlyLeavesTheFinalSmoothingTheSameAnswer) 
     const auto imu = imuOf(m, 0.6, noise, rng);
     const Returns ret = returnsOf(m, 0.5, 20000, noise.doppler, 0.0, rng);
     const WindowRun once = runWindow(m, imu, ret, noise);
-    const WindowRun early = runWindow(m, imu, ret, noise, 80);
+    const WindowRun early = runWindow(m, imu, ret, noise, 75);
     EXPECT_LE(early.final_iterations, 2) << "seed " << seed;
     const Filter& f = once.filter;
     const Filter::VecS d =

@@ -184,8 +184,8 @@ TEST(FreeInitAccuracy, CovarianceIsConsistentOverPresetsAndSeeds) {
   check("accel bias", ba, n, 3);
 }
 
-// The smoothing at 80 % of the window leaves the final one (what an online user waits for) one
-// Gauss-Newton step and its check: two iterations on every preset and seed. The nodes received
+// The early smoothing (at 75 % of the window) leaves the final one (what an online user waits for)
+// one Gauss-Newton step and its check: two iterations on every preset and seed. The nodes received
 // after the early smoothing start from the propagation of the smoothed ones; started from the
 // filter's states instead, 14 of these 39 runs took three iterations and dyna_05 seed 2 six.
 TEST(FreeInitAccuracy, FinalSmoothingTakesTwoIterations) {

@@ -1258,10 +1258,11 @@ int DopplerInertialFilter::smooth(double looseness) {
   // After an earlier smoothing, the nodes the filter added since start from the propagation of
   // the last smoothed node, not from the filter's own states. The filter, going on from the
   // smoothed covariance, is free along the weakly observed direction (tilt with the accelerometer
-  // bias and the world velocity: at 80 % of dyna_05 the smoothing widens pitch from 1.2 to 10
-  // mrad, the bias from 0.01 to 0.1 m/s^2), and its one-step updates scatter the states along it;
-  // linearized there, the first Gauss-Newton step overshot along that direction and the second
-  // took it back (1761, 1678, 43 tolerances). From the propagation (no process defect): 248, 3.
+  // bias and the world velocity: smoothed at 80 % of dyna_05, where the early smoothing ran when
+  // this was measured, pitch widens from 1.2 to 10 mrad, the bias from 0.01 to 0.1 m/s^2), and
+  // its one-step updates scatter the states along it; linearized there, the first Gauss-Newton
+  // step overshot along that direction and the second took it back (1761, 1678, 43 tolerances).
+  // From the propagation (no process defect): 248, 3.
   if (smoothed_ > 0)
     for (std::size_t k = smoothed_; k < N; ++k)
       nodes_[k].xs = propagate(nodes_[k - 1], nodes_[k - 1].xs, nullptr);
