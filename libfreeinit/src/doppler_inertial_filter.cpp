@@ -1410,10 +1410,10 @@ void DopplerInertialFilter::checkPolynomials(const std::vector<Vec9>& Q) const {
 double DopplerInertialFilter::residualSumOfSquares(const std::vector<Vec9>& Qs) const {
   checkPolynomials(Qs);
   double rss = 0;
-  for (std::size_t k = 0; k < nodes_.size(); ++k) {
-    const Node& n = nodes_[k];
+  for (std::size_t i = 0; i < nodes_.size(); ++i) {
+    const Node& n = nodes_[i];
     if (n.sums.n == 0) continue;
-    const Vec9& Q = Qs[k];
+    const Vec9& Q = Qs[i];
     double quad = 0, lin = 0;
     for (int m = 0; m < 3; ++m) {
       lin += n.sums.bz.col(m).dot(Q.segment<3>(3 * m));
