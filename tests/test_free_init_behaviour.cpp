@@ -162,8 +162,12 @@ TEST(FreeInitBehaviour, TheEarlySmoothingComesBeforeTheClosingFrame) {
       const double t_ref = r.state.timestamp - r.diag.window_duration;
       // A node is taken once a frame reaching the end of its data has arrived: the early
       // smoothing's last node with the first frame ending at or after t_ref + early_smoothing_to,
-      // the window's last node only with a frame ending after the state's time.
-      auto end = [](const LidarFrame& f) { return f.stamp + f.points.back().time_offset; };
+      // the window's last node only with a frame ending after the state's time. (A frame without
+      // points, as the first one at phase 0, brings none.)
+      auto end = [](const LidarFrame& f) {
+        return f.points.empty() ? -std::numeric_limits<double>::infinity()
+                                : f.stamp + f.points.back().time_offset;
+      };
       std::size_t brought = 0;
       while (brought < rec.frames.size() &&
              end(rec.frames[brought]) < t_ref + r.diag.early_smoothing_to)
