@@ -94,9 +94,9 @@ double stepInTolerances(const DopplerInertialFilter::VecS& dx) {
 
 /// A return's unit direction from its position in the LiDAR frame (float, as the sensor gives it),
 /// in double: one division (inverseNorm), then the position times it. Every computation of a
-/// return's direction in the filter is this one (the gates' loops multiply by the inverse norm
-/// themselves, the second reusing the first's), so that a return taken out of a node's sums
-/// (removePoint) takes out exactly what it added.
+/// return's direction in the filter is this one (the first gate multiplies by the inverse norm
+/// itself and keeps it; the second gate and the returns it drops reuse it), so that a return
+/// taken out of a node's sums (removePoint) takes out exactly what it added.
 inline double inverseNorm(double x, double y, double z) {
   return 1.0 / std::sqrt(x * x + y * y + z * z);
 }
@@ -1164,8 +1164,8 @@ void DopplerInertialFilter::update() {
     auto leaves = [&](std::size_t i) { return accepted[i] & ~pass[i]; };  // both 0 or 1
     forEachFlagged(m, leaves, [&](std::size_t i) {
       o.accepted[i] = 0;
-      Vec3 direction;
-      unitDirection(o.in.x[i], o.in.y[i], o.in.z[i], direction.x(), direction.y(), direction.z());
+      const double inv_norm = o.inv_norm[i];  // the first gate's, as it summed the return
+      const Vec3 direction(o.in.x[i] * inv_norm, o.in.y[i] * inv_norm, o.in.z[i] * inv_norm);
       accumulate(n.sums, static_cast<double>(o.in.tau[i]) * n.inv_h, direction,
                  static_cast<double>(o.in.doppler[i]), -1.0);
       ++dropped;
@@ -1396,7 +1396,7 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
 std::vector<DopplerInertialFilter::Vec9> DopplerInertialFilter::lidarVelocityPolynomials() const {
   std::vector<Vec9> Q;
   Q.reserve(nodes_.size());
-  for (const Node& n : nodes_) Q.push_back(velocityPolynomial(n, n.xs, nullptr));
+  for (std::size_t k = 0; k < nodes_.size(); ++k) Q.push_back(lidarVelocityPolynomial(k));
   return Q;
 }
 

@@ -275,10 +275,7 @@ class DopplerInertialFilter {
     double chi2 = 0;
     int dof = 0;  ///< 3 per node tested
   };
-  NodeResiduals nodeResiduals(std::size_t min_returns) const {
-    return nodeResiduals(min_returns, lidarVelocityPolynomials());
-  }
-  /// The same with the nodes' polynomials given (lidarVelocityPolynomials()).
+  /// Q: the nodes' polynomials (lidarVelocityPolynomials()).
   NodeResiduals nodeResiduals(std::size_t min_returns, const std::vector<Vec9>& Q) const;
 
   // The models, exposed for tests. `imu` holds the samples, x is the state at sample k.
