@@ -69,10 +69,10 @@ class JointPipeline final : public Pipeline {
 
   bool processBuffered(InitResult& r) override {
     if (phase_ == Phase::Done) return true;
-    const double t0 = wallSeconds();
+    const double t0 = wallSeconds(), solver0 = r.diag.time_solver;
     if (phase_ == Phase::WaitStart) tryStart(r);
     if (phase_ == Phase::Running) run(r);
-    if (phase_ != Phase::Done) r.diag.time_velocimeter += wallSeconds() - t0;
+    r.diag.time_velocimeter += wallSeconds() - t0 - (r.diag.time_solver - solver0);
     if (phase_ == Phase::Running && seq_.finished()) {
       // The open node's returns were counted as seen; those not usable count as skipped.
       r.diag.points_skipped += recorder_.openUnusable(usable_);

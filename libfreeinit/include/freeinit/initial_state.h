@@ -107,8 +107,10 @@ struct Diagnostics {
   /// estimator: it runs once, at three quarters of the window, so that the final smoothing
   /// starts near its solution; 0 if it did not run)
   double early_smoothing_to = 0;
-  double time_velocimeter = 0;  ///< [s] wall time
-  double time_solver = 0;       ///< [s] wall time
+  /// [s] wall time of the estimator but its solver (time_solver), over every call, the one that
+  /// closes the window included
+  double time_velocimeter = 0;
+  double time_solver = 0;  ///< [s] wall time of the smoothings or solves
   /// [s] wall time of the add*() / finish() call that made the state final: the latency from
   /// the last measurement the window needed to the state (what an online user waits for; the
   /// joint estimator's map comes after it, time_map).
