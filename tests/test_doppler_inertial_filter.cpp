@@ -210,9 +210,10 @@ struct WindowRun {
 
 /// Runs the filter and smoother over [kT0, kT0 + 0.5 s] as the pipeline does, from a start that is
 /// 2 deg and 0.15 m/s off the truth; with `smooth_at` > 0, smoothing also once after that node
-/// (the pipeline's early smoothing) and going on from there.
+/// (the pipeline's early smoothing; `ahead` as the pipeline gives it) and going on from there.
 WindowRun runWindow(const test::AnalyticMotion& m, const std::vector<ImuSample>& imu,
-                    const Returns& ret, const Noise& noise, std::size_t smooth_at = 0) {
+                    const Returns& ret, const Noise& noise, std::size_t smooth_at = 0,
+                    bool ahead = true) {
   DopplerInertialFilterParams params;
   params.doppler_sigma = noise.doppler;
   params.gyro_sigma = noise.gyro;
@@ -247,7 +248,7 @@ WindowRun runWindow(const test::AnalyticMotion& m, const std::vector<ImuSample>&
     }
     f.update();
     if (last) break;
-    if (k == smooth_at && smooth_at > 0) f.smooth();
+    if (k == smooth_at && smooth_at > 0) f.smooth(1.0, ahead);
     f.predict();
   }
   run.final_iterations = f.smooth();
@@ -257,9 +258,11 @@ WindowRun runWindow(const test::AnalyticMotion& m, const std::vector<ImuSample>&
 
 /// Runs the filter over the window's returns with the gates wide open and without the second
 /// gate, giving only the returns with keep[i] (all when `remove_after`, and then taking the others
-/// back with removePoint() once the window is in), and smooths.
+/// back with removePoint() once the window is in; after a first smoothing that looks ahead if
+/// `smooth_first`), and smooths.
 Filter filterWithout(const test::AnalyticMotion& m, const std::vector<ImuSample>& imu,
-                     const Returns& ret, const std::vector<bool>& keep, bool remove_after) {
+                     const Returns& ret, const std::vector<bool>& keep, bool remove_after,
+                     bool smooth_first = false) {
   DopplerInertialFilterParams params;
   params.gate_sigma = 50;
   params.gate_min = 5;
@@ -290,6 +293,7 @@ Filter filterWithout(const test::AnalyticMotion& m, const std::vector<ImuSample>
     if (last) break;
     f.predict();
   }
+  if (smooth_first) f.smooth(1.0, true);
   for (const Given& g : taken_back) f.removePoint(g.node, g.tau, ret.p_l[g.index], ret.z[g.index]);
   f.smooth();
   return f;
@@ -311,6 +315,31 @@ TEST(DopplerInertialFilter, TakingPointsBackEqualsNeverGivingThem) {
   ASSERT_EQ(a.nodes(), b.nodes());
   EXPECT_EQ(a.acceptedPointsTotal(), b.acceptedPointsTotal());
   EXPECT_GT(a.acceptedPointsTotal(), 3900u);
+  const FilterState& xa = a.state(a.nodes() - 1);
+  const FilterState& xb = b.state(b.nodes() - 1);
+  EXPECT_LT((xa.v_w - xb.v_w).norm(), 3e-4);
+  EXPECT_LT((xa.b_g - xb.b_g).norm(), 3e-5);
+  EXPECT_LT((xa.b_a - xb.b_a).norm(), 3e-3);
+  EXPECT_NEAR(a.residualSumOfSquares(), b.residualSumOfSquares(), 1e-3 * b.residualSumOfSquares());
+}
+
+TEST(DopplerInertialFilter, TakingPointsBackAfterASmoothingEqualsNeverGivingThem) {
+  // Smoothed (looking ahead: the forward pass of the next smoothing made and kept), every third
+  // return taken back, smoothed again. The kept forward pass holds only before the first node
+  // that lost a return; taken for the others, the second smoothing would find its first step
+  // below the tolerances and keep the answer with the returns. Its answer is that of a filter
+  // that never saw them, to the same tolerances as above.
+  const test::AnalyticMotion m;
+  const Noise noise{0.002, 0.02, 0.03};
+  std::mt19937 rng(21);
+  const auto imu = imuOf(m, 0.6, noise, rng);
+  const Returns ret = returnsOf(m, 0.5, 6000, noise.doppler, 0.0, rng);
+  std::vector<bool> keep(ret.t.size());
+  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = i % 3 != 0;
+  const Filter a = filterWithout(m, imu, ret, keep, true, true);
+  const Filter b = filterWithout(m, imu, ret, keep, false);
+  ASSERT_EQ(a.nodes(), b.nodes());
+  EXPECT_EQ(a.acceptedPointsTotal(), b.acceptedPointsTotal());
   const FilterState& xa = a.state(a.nodes() - 1);
   const FilterState& xb = b.state(b.nodes() - 1);
   EXPECT_LT((xa.v_w - xb.v_w).norm(), 3e-4);
@@ -443,6 +472,30 @@ TEST(DopplerInertialFilter, SmoothingEarlyLeavesTheFinalSmoothingTheSameAnswer) 
     for (int i = 0; i < Filter::kCoreDim; ++i)
       EXPECT_LT(std::abs(d(i)), (same_returns ? 1e-3 : 0.1) * std::sqrt(f.covariance()(i, i)))
           << "seed " << seed << " component " << i;
+  }
+}
+
+TEST(DopplerInertialFilter, SmoothingAheadLeavesTheFinalSmoothingTheSame) {
+  // The early smoothing looking ahead makes, at the states it leaves, the forward pass the final
+  // smoothing's first iteration would make over its nodes: the final smoothing takes it instead
+  // of computing it, and its iterations and answer are the same to the bit.
+  const test::AnalyticMotion m;
+  const Noise noise{0.002, 0.02, 0.03};
+  for (unsigned seed = 31; seed <= 32; ++seed) {
+    std::mt19937 rng(seed);
+    const auto imu = imuOf(m, 0.6, noise, rng);
+    const Returns ret = returnsOf(m, 0.5, 20000, noise.doppler, 0.0, rng);
+    const WindowRun plain = runWindow(m, imu, ret, noise, 75, false);
+    const WindowRun ahead = runWindow(m, imu, ret, noise, 75, true);
+    EXPECT_EQ(plain.final_iterations, ahead.final_iterations) << "seed " << seed;
+    ASSERT_EQ(plain.filter.nodes(), ahead.filter.nodes());
+    for (std::size_t k = 0; k < plain.filter.nodes(); ++k) {
+      const FilterState &a = plain.filter.state(k), &b = ahead.filter.state(k);
+      EXPECT_TRUE(a.R_wb == b.R_wb && a.p_w == b.p_w && a.v_w == b.v_w && a.b_g == b.b_g &&
+                  a.b_a == b.b_a)
+          << "seed " << seed << " node " << k;
+    }
+    EXPECT_TRUE(plain.filter.covariance() == ahead.filter.covariance()) << "seed " << seed;
   }
 }
 

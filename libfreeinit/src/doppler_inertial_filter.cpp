@@ -753,6 +753,7 @@ void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior
   nodes_.clear();
   smoothed_ = 0;
   linearized_ = 0;
+  forward_kept_ = 0;
   x0_prior_ = x0;
   x0_prior_.t = imu_.front().t;
   Node n;
@@ -779,6 +780,7 @@ void DopplerInertialFilter::predict() {
 
 void DopplerInertialFilter::beginNode(bool last) {
   Node& n = nodes_.back();
+  nodeChanged(nodes_.size() - 1);
   n.last = last;
   node_open_ = true;
   if (!last && n.k + 1 >= imu_.size())
@@ -1076,6 +1078,7 @@ void DopplerInertialFilter::update() {
   // 15000001-300: no status changed, the same wrong results flagged; a few ill-posed ones that
   // are flagged either way moved), for 5 % fewer instructions.
   Node& n = nodes_.back();
+  nodeChanged(nodes_.size() - 1);
   gateAndSum(n);
   const MatS P_pred = n.P;
   // The update linearized at x_start: the prediction, where beginNode() linearized the node
@@ -1215,6 +1218,7 @@ DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, con
 
 void DopplerInertialFilter::updateRest(double velocity_sigma, double rate_sigma) {
   Node& n = nodes_.back();
+  nodeChanged(nodes_.size() - 1);
   n.rest_velocity_sigma = velocity_sigma;
   n.rest_rate_sigma = rate_sigma;
   MatS P = n.P;
@@ -1224,8 +1228,10 @@ void DopplerInertialFilter::updateRest(double velocity_sigma, double rate_sigma)
 }
 
 void DopplerInertialFilter::cancelRestFrom(double t) {
-  for (Node& n : nodes_) {
+  for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    Node& n = nodes_[k];
     if (imu_[n.k].t < t) continue;
+    if (n.rest_velocity_sigma > 0 || n.rest_rate_sigma > 0) nodeChanged(k);
     n.rest_velocity_sigma = 0;
     n.rest_rate_sigma = 0;
   }
@@ -1237,6 +1243,9 @@ void DopplerInertialFilter::prepareSmoothing(std::size_t n) {
     smoother_P_f_.assign(n, MatS::Zero());
     smoother_P_p_.assign(n, MatS::Zero());
     linearization_.assign(n, Linearization{});
+    smoother_dx_f_.assign(n, VecS::Zero());
+    smoother_dx_p_.assign(n, VecS::Zero());
+    forward_kept_ = 0;
   }
 }
 
@@ -1247,14 +1256,57 @@ void DopplerInertialFilter::linearize(std::size_t k, Linearization& L) const {
   if (k + 1 < nodes_.size()) L.x_next = propagate(n, n.xs, &L.F);
 }
 
-int DopplerInertialFilter::smooth(double looseness) {
+void DopplerInertialFilter::smootherForward(std::size_t first) {
+  // A Kalman filter on the errors around the nominal trajectory xs. From node k to the next: the
+  // predicted error and covariance.
+  const std::size_t N = nodes_.size();
+  std::vector<MatS>& P_f = smoother_P_f_;
+  std::vector<MatS>& P_p = smoother_P_p_;
+  std::vector<VecS>& dx_f = smoother_dx_f_;
+  std::vector<VecS>& dx_p = smoother_dx_p_;
+  std::vector<Linearization>& lin = linearization_;
+  auto predictNext = [&](std::size_t k) {
+    const Node &n = nodes_[k], &m = nodes_[k + 1];
+    dx_p[k + 1] = lin[k].F.times(dx_f[k]) + boxminus(lin[k].x_next, m.xs);
+    P_p[k + 1] = propagateCovariance(lin[k].F, P_f[k], imu_[m.k].t - imu_[n.k].t);
+  };
+  if (first == 0) {
+    // The prior of node 0, expressed where node 0 now is (its yaw gauge about the current
+    // vertical: held about the prior's, it would hold a part of the tilt too).
+    dx_p[0] = priorMean(nodes_[0].xs);
+    P_p[0] = priorCovariance(nodes_[0].xs);
+  } else if (first < N) {
+    // The transition after the nodes kept (their last one had none then).
+    Linearization& L = lin[first - 1];
+    L.x_next = propagate(nodes_[first - 1], nodes_[first - 1].xs, &L.F);
+    predictNext(first - 1);
+  }
+  for (std::size_t k = first; k < N; ++k) {
+    Node& n = nodes_[k];
+    Linearization& L = lin[k];
+    linearize(k, L);
+    MatS P = P_p[k];
+    dx_f[k] = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, L.Q, L.G, dx_p[k], P, false), P);
+    P_f[k] = P;
+    if (k + 1 < N) predictNext(k);
+  }
+}
+
+int DopplerInertialFilter::smooth(double looseness, bool ahead) {
   const std::size_t N = nodes_.size();
   if (N == 0) return 0;
-  for (Node& n : nodes_)
-    if (n.rows_stale) {
-      buildRows(n);
-      n.rows_stale = false;
-    }
+  for (std::size_t k = 0; k < N; ++k) {
+    Node& n = nodes_[k];
+    if (!n.rows_stale) continue;
+    buildRows(n);
+    n.rows_stale = false;
+    nodeChanged(k);
+  }
+  // The forward pass an earlier smoothing made ahead, around the states it left, holds for the
+  // first forward_kept_ nodes (their data unchanged since): this smoothing's first iteration
+  // takes it as it is for them (after the early smoothing, three quarters of the final one's).
+  const std::size_t kept = std::min(forward_kept_, smoothed_);
+  forward_kept_ = 0;
   // After an earlier smoothing, the nodes the filter added since start from the propagation of
   // the last smoothed node, not from the filter's own states. The filter, going on from the
   // smoothed covariance, is free along the weakly observed direction (tilt with the accelerometer
@@ -1267,38 +1319,27 @@ int DopplerInertialFilter::smooth(double looseness) {
     for (std::size_t k = smoothed_; k < N; ++k)
       nodes_[k].xs = propagate(nodes_[k - 1], nodes_[k - 1].xs, nullptr);
   smoothed_ = N;
-  std::vector<VecS> dx_f(N), dx_p(N), dxs(N);
+  std::vector<VecS> dxs(N);
   if (smoother_P_f_.size() < N) {
     smoother_P_f_.resize(N);
     smoother_P_p_.resize(N);
     linearization_.resize(N);
   }
+  if (smoother_dx_f_.size() < N) {
+    smoother_dx_f_.resize(N);
+    smoother_dx_p_.resize(N);
+  }
   std::vector<MatS>& P_f = smoother_P_f_;  // every element read below is written first
   std::vector<MatS>& P_p = smoother_P_p_;
+  std::vector<VecS>& dx_f = smoother_dx_f_;
+  std::vector<VecS>& dx_p = smoother_dx_p_;
   std::vector<Linearization>& lin = linearization_;
   linearized_ = 0;
   int iterations = 0;
   double previous_step = 0;  // none yet: no evidence of the convergence rate
   for (int it = 0; it < params_.max_iterations; ++it) {
     ++iterations;
-    // Forward: a Kalman filter on the errors around the nominal trajectory xs.
-    // The prior of node 0, expressed where node 0 now is (its yaw gauge about the current
-    // vertical: held about the prior's, it would hold a part of the tilt too).
-    dx_p[0] = priorMean(nodes_[0].xs);
-    P_p[0] = priorCovariance(nodes_[0].xs);
-    for (std::size_t k = 0; k < N; ++k) {
-      Node& n = nodes_[k];
-      Linearization& L = lin[k];
-      linearize(k, L);
-      MatS P = P_p[k];
-      dx_f[k] =
-          restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, L.Q, L.G, dx_p[k], P, false), P);
-      P_f[k] = P;
-      if (k + 1 == N) break;
-      const Node& m = nodes_[k + 1];
-      dx_p[k + 1] = L.F.times(dx_f[k]) + boxminus(L.x_next, m.xs);
-      P_p[k + 1] = propagateCovariance(L.F, P, imu_[m.k].t - imu_[n.k].t);
-    }
+    smootherForward(it == 0 ? kept : 0);
     // Backward: Rauch-Tung-Striebel, dxs_k = dx_f_k + P_f_k F_k^T P_p_k+1^-1 (dxs_k+1 - dx_p_k+1),
     // evaluated right to left (one solve with a vector; the smoothed covariances are not needed).
     nodes_[N - 1].P = P_f[N - 1];
@@ -1338,6 +1379,10 @@ int DopplerInertialFilter::smooth(double looseness) {
       break;
     }
     previous_step = step;
+  }
+  if (ahead) {
+    smootherForward(0);
+    forward_kept_ = N;
   }
   // The filter can go on from the last node (an early smoothing while the window is received).
   nodes_.back().x = nodes_.back().xs;

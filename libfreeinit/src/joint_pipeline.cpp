@@ -428,7 +428,7 @@ class JointPipeline final : public Pipeline {
       // smoothing (what an online user waits for) starts from a good linearization.
       if (!early_smoothed_ && t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration) {
         const double t0 = wallSeconds();
-        filter_->smooth(kEarlyLooseness);
+        filter_->smooth(kEarlyLooseness, true);
         r.diag.time_solver += wallSeconds() - t0;
         r.diag.early_smoothing_to = hi - t_ref_;
         early_smoothed_ = true;

@@ -224,7 +224,11 @@ class DopplerInertialFilter {
   /// smoothing once while the window is received leaves the final smoothing little to do.
   /// `looseness` (>= 1) multiplies the threshold DopplerInertialFilterParams::convergence: an
   /// early smoothing is the final one's starting point, and the final one converges on its own.
-  int smooth(double looseness = 1.0);
+  /// `ahead`: more nodes follow and will be smoothed again; the forward pass that the next
+  /// smoothing's first iteration makes over these nodes is made now, at the smoothed states, and
+  /// kept (that iteration then computes only the nodes added since, or changed: returns taken
+  /// back, rest cancelled).
+  int smooth(double looseness = 1.0, bool ahead = false);
 
   /// What the data say of the calibration: after smooth(), one more forward pass around the
   /// smoothed trajectory with the calibration's prior std set to these (rad, s). When that
@@ -503,6 +507,17 @@ class DopplerInertialFilter {
   /// holds (0: none; set when a smoothing converges, for testCalibration()).
   std::vector<Linearization> linearization_;
   std::size_t linearized_ = 0;
+  /// smooth()'s filtered and predicted means per node (its last forward pass, as the covariances
+  /// above), and for how many of the first nodes a forward pass made around their current states
+  /// (smooth(.., ahead)) still holds: their data have not changed since.
+  std::vector<VecS> smoother_dx_f_, smoother_dx_p_;
+  std::size_t forward_kept_ = 0;
+  /// Node k's data (its returns, rows or rest) change: the kept forward pass holds before it
+  /// only.
+  void nodeChanged(std::size_t k) { forward_kept_ = std::min(forward_kept_, k); }
+  /// smooth()'s forward pass around the states xs from node `first` on, the nodes before it as
+  /// the last pass left them (first > 0: that pass was made around the same states).
+  void smootherForward(std::size_t first);
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;
