@@ -10,6 +10,7 @@
 #include <cmath>
 #include <functional>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "analytic_motion.h"
@@ -303,10 +304,11 @@ Filter filterWithout(const test::AnalyticMotion& m, const std::vector<ImuSample>
   return f;
 }
 
-TEST(DopplerInertialFilter, TakingPointsBackEqualsNeverGivingThem) {
-  // Every third return taken back after the window, against a filter that never saw them: the
-  // sums are the same up to rounding, so the smoothed states agree to the smoother's tolerances
-  // (1e-4 m/s, 1e-5 rad/s; the two got there by different paths).
+/// Every third return of a window taken back (filterWithout; after a first smoothing if
+/// `smooth_first`), against a filter that never saw them: the sums are the same up to rounding,
+/// so the smoothed states agree to the smoother's tolerances (1e-4 m/s, 1e-5 rad/s; the two got
+/// there by different paths).
+void expectTakenBackAsNeverGiven(bool smooth_first) {
   const test::AnalyticMotion m;
   const Noise noise{0.002, 0.02, 0.03};
   std::mt19937 rng(21);
@@ -314,7 +316,7 @@ TEST(DopplerInertialFilter, TakingPointsBackEqualsNeverGivingThem) {
   const Returns ret = returnsOf(m, 0.5, 6000, noise.doppler, 0.0, rng);
   std::vector<bool> keep(ret.t.size());
   for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = i % 3 != 0;
-  const Filter a = filterWithout(m, imu, ret, keep, true);
+  const Filter a = filterWithout(m, imu, ret, keep, true, smooth_first);
   const Filter b = filterWithout(m, imu, ret, keep, false);
   ASSERT_EQ(a.nodes(), b.nodes());
   EXPECT_EQ(a.acceptedPointsTotal(), b.acceptedPointsTotal());
@@ -327,29 +329,17 @@ TEST(DopplerInertialFilter, TakingPointsBackEqualsNeverGivingThem) {
   EXPECT_NEAR(a.residualSumOfSquares(), b.residualSumOfSquares(), 1e-3 * b.residualSumOfSquares());
 }
 
+TEST(DopplerInertialFilter, TakingPointsBackEqualsNeverGivingThem) {
+  // Taken back after the window.
+  expectTakenBackAsNeverGiven(false);
+}
+
 TEST(DopplerInertialFilter, TakingPointsBackAfterASmoothingEqualsNeverGivingThem) {
-  // Smoothed (looking ahead: the forward pass of the next smoothing made and kept), every third
-  // return taken back, smoothed again. The kept forward pass holds only before the first node
-  // that lost a return; taken for the others, the second smoothing would find its first step
-  // below the tolerances and keep the answer with the returns. Its answer is that of a filter
-  // that never saw them, to the same tolerances as above.
-  const test::AnalyticMotion m;
-  const Noise noise{0.002, 0.02, 0.03};
-  std::mt19937 rng(21);
-  const auto imu = imuOf(m, 0.6, noise, rng);
-  const Returns ret = returnsOf(m, 0.5, 6000, noise.doppler, 0.0, rng);
-  std::vector<bool> keep(ret.t.size());
-  for (std::size_t i = 0; i < keep.size(); ++i) keep[i] = i % 3 != 0;
-  const Filter a = filterWithout(m, imu, ret, keep, true, true);
-  const Filter b = filterWithout(m, imu, ret, keep, false);
-  ASSERT_EQ(a.nodes(), b.nodes());
-  EXPECT_EQ(a.acceptedPointsTotal(), b.acceptedPointsTotal());
-  const FilterState& xa = a.state(a.nodes() - 1);
-  const FilterState& xb = b.state(b.nodes() - 1);
-  EXPECT_LT((xa.v_w - xb.v_w).norm(), 3e-4);
-  EXPECT_LT((xa.b_g - xb.b_g).norm(), 3e-5);
-  EXPECT_LT((xa.b_a - xb.b_a).norm(), 3e-3);
-  EXPECT_NEAR(a.residualSumOfSquares(), b.residualSumOfSquares(), 1e-3 * b.residualSumOfSquares());
+  // Smoothed (looking ahead: the forward pass of the next smoothing made and kept), the returns
+  // taken back, smoothed again. The kept forward pass holds only before the first node that lost
+  // a return; taken for the others, the second smoothing would find its first step below the
+  // tolerances and keep the answer with the returns.
+  expectTakenBackAsNeverGiven(true);
 }
 
 TEST(DopplerInertialFilter, ReturnsAsArraysEqualTheirCopies) {
@@ -452,6 +442,19 @@ TEST(DopplerInertialFilter, WindowEstimateIsConsistentWithItsCovariance) {
   }
 }
 
+/// The same iterations, states and covariance to the bit.
+void expectSameSmoothing(const WindowRun& plain, const WindowRun& ahead) {
+  EXPECT_EQ(plain.final_iterations, ahead.final_iterations);
+  ASSERT_EQ(plain.filter.nodes(), ahead.filter.nodes());
+  for (std::size_t k = 0; k < plain.filter.nodes(); ++k) {
+    const FilterState &a = plain.filter.state(k), &b = ahead.filter.state(k);
+    EXPECT_TRUE(a.R_wb == b.R_wb && a.p_w == b.p_w && a.v_w == b.v_w && a.b_g == b.b_g &&
+                a.b_a == b.b_a)
+        << "node " << k;
+  }
+  EXPECT_TRUE(plain.filter.covariance() == ahead.filter.covariance());
+}
+
 TEST(DopplerInertialFilter, SmoothingEarlyLeavesTheFinalSmoothingTheSameAnswer) {
   // The pipeline smooths once at 75 % of the window and goes on. The final smoothing then finds
   // the answer of one smoothing over the whole window, and in at most two iterations: the nodes
@@ -460,6 +463,9 @@ TEST(DopplerInertialFilter, SmoothingEarlyLeavesTheFinalSmoothingTheSameAnswer) 
   // the estimate's std in every component: the early smoothing moves the predictions after it,
   // so the first gate may take a few different returns of the 20,000 (each moves the estimate by
   // ~ 1/sqrt(20000) of a std per std of its residual); when it takes the same ones, to rounding.
+  // The early smoothing looks ahead, as the pipeline's does: it makes, at the states it leaves,
+  // the final smoothing's first forward pass over its nodes, which the final one then takes
+  // instead of computing it; one that does not look ahead gives the same, to the bit.
   const test::AnalyticMotion m;
   const Noise noise{0.002, 0.02, 0.03};
   for (unsigned seed = 31; seed <= 33; ++seed) {
@@ -476,30 +482,8 @@ TEST(DopplerInertialFilter, SmoothingEarlyLeavesTheFinalSmoothingTheSameAnswer) 
     for (int i = 0; i < Filter::kCoreDim; ++i)
       EXPECT_LT(std::abs(d(i)), (same_returns ? 1e-3 : 0.1) * std::sqrt(f.covariance()(i, i)))
           << "seed " << seed << " component " << i;
-  }
-}
-
-TEST(DopplerInertialFilter, SmoothingAheadLeavesTheFinalSmoothingTheSame) {
-  // The early smoothing looking ahead makes, at the states it leaves, the forward pass the final
-  // smoothing's first iteration would make over its nodes: the final smoothing takes it instead
-  // of computing it, and its iterations and answer are the same to the bit.
-  const test::AnalyticMotion m;
-  const Noise noise{0.002, 0.02, 0.03};
-  for (unsigned seed = 31; seed <= 32; ++seed) {
-    std::mt19937 rng(seed);
-    const auto imu = imuOf(m, 0.6, noise, rng);
-    const Returns ret = returnsOf(m, 0.5, 20000, noise.doppler, 0.0, rng);
-    const WindowRun plain = runWindow(m, imu, ret, noise, 75, false);
-    const WindowRun ahead = runWindow(m, imu, ret, noise, 75, true);
-    EXPECT_EQ(plain.final_iterations, ahead.final_iterations) << "seed " << seed;
-    ASSERT_EQ(plain.filter.nodes(), ahead.filter.nodes());
-    for (std::size_t k = 0; k < plain.filter.nodes(); ++k) {
-      const FilterState &a = plain.filter.state(k), &b = ahead.filter.state(k);
-      EXPECT_TRUE(a.R_wb == b.R_wb && a.p_w == b.p_w && a.v_w == b.v_w && a.b_g == b.b_g &&
-                  a.b_a == b.b_a)
-          << "seed " << seed << " node " << k;
-    }
-    EXPECT_TRUE(plain.filter.covariance() == ahead.filter.covariance()) << "seed " << seed;
+    SCOPED_TRACE("seed " + std::to_string(seed));
+    expectSameSmoothing(runWindow(m, imu, ret, noise, 75, false), early);
   }
 }
 
@@ -516,15 +500,8 @@ TEST(DopplerInertialFilter, SmoothingAheadHoldsOnlyWhereTheRestStays) {
     if (k < 80) f.updateRest(1.0, 0.0);  // loose: the sensor moves
     if (k == 80) f.cancelRestFrom(imu[72].t);
   };
-  const WindowRun plain = runWindow(m, imu, ret, noise, 75, false, rest);
-  const WindowRun ahead = runWindow(m, imu, ret, noise, 75, true, rest);
-  EXPECT_EQ(plain.final_iterations, ahead.final_iterations);
-  ASSERT_EQ(plain.filter.nodes(), ahead.filter.nodes());
-  for (std::size_t k = 0; k < plain.filter.nodes(); ++k) {
-    const FilterState &a = plain.filter.state(k), &b = ahead.filter.state(k);
-    EXPECT_TRUE(a.R_wb == b.R_wb && a.v_w == b.v_w && a.b_g == b.b_g && a.b_a == b.b_a)
-        << "node " << k;
-  }
+  expectSameSmoothing(runWindow(m, imu, ret, noise, 75, false, rest),
+                      runWindow(m, imu, ret, noise, 75, true, rest));
 }
 
 TEST(DopplerInertialFilter, CalibrationTestFlagsAnUndeclaredTimeOffset) {
