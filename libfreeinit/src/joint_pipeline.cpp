@@ -425,7 +425,8 @@ class JointPipeline final : public Pipeline {
         return;
       }
       // Once, at kEarlySmoothing of the window: smooth what has been received, so that the final
-      // smoothing (what an online user waits for) starts from a good linearization.
+      // smoothing (what an online user waits for) starts from a good linearization, and make its
+      // first forward pass over these nodes now (ahead): the final one computes the rest.
       if (!early_smoothed_ && t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration) {
         const double t0 = wallSeconds();
         filter_->smooth(kEarlyLooseness, true);
