@@ -503,8 +503,9 @@ class DopplerInertialFilter {
   /// smooth()'s filtered and predicted covariances per node, kept from one smoothing to the
   /// next (a few hundred kilobytes: allocated anew, every smoothing touched fresh pages).
   std::vector<MatS> smoother_P_f_, smoother_P_p_;
-  /// The linearization of smooth()'s last iteration, node by node, and for how many nodes it
-  /// holds (0: none; set when a smoothing converges, for testCalibration()).
+  /// The linearization of smooth()'s last iteration (after smooth(.., ahead): of its pass made
+  /// ahead, at the states it left), node by node, and for how many nodes it holds (0: none; set
+  /// when a smoothing converges, for testCalibration()).
   std::vector<Linearization> linearization_;
   std::size_t linearized_ = 0;
   /// smooth()'s filtered and predicted means per node (its last forward pass, as the covariances
