@@ -899,6 +899,7 @@ void DopplerInertialFilter::removePoint(std::size_t k, double tau, const Eigen::
   unitDirection(p.x(), p.y(), p.z(), d.x(), d.y(), d.z());
   accumulate(n.sums, normalizedTime(k, tau), d, doppler, -1.0);
   n.rows_stale = true;
+  nodeChanged(k);
 }
 
 void DopplerInertialFilter::accumulate(DopplerSums& sums, double s, const Vec3& d, double z,
@@ -1295,13 +1296,11 @@ void DopplerInertialFilter::smootherForward(std::size_t first) {
 int DopplerInertialFilter::smooth(double looseness, bool ahead) {
   const std::size_t N = nodes_.size();
   if (N == 0) return 0;
-  for (std::size_t k = 0; k < N; ++k) {
-    Node& n = nodes_[k];
-    if (!n.rows_stale) continue;
-    buildRows(n);
-    n.rows_stale = false;
-    nodeChanged(k);
-  }
+  for (Node& n : nodes_)
+    if (n.rows_stale) {
+      buildRows(n);
+      n.rows_stale = false;
+    }
   // The forward pass an earlier smoothing made ahead, around the states it left, holds for the
   // first forward_kept_ nodes (their data unchanged since): this smoothing's first iteration
   // takes it as it is for them (after the early smoothing, three quarters of the final one's).
@@ -1320,14 +1319,12 @@ int DopplerInertialFilter::smooth(double looseness, bool ahead) {
       nodes_[k].xs = propagate(nodes_[k - 1], nodes_[k - 1].xs, nullptr);
   smoothed_ = N;
   std::vector<VecS> dxs(N);
-  if (smoother_P_f_.size() < N) {
+  if (smoother_P_f_.size() < N) {  // the five grow together (prepareSmoothing)
     smoother_P_f_.resize(N);
     smoother_P_p_.resize(N);
-    linearization_.resize(N);
-  }
-  if (smoother_dx_f_.size() < N) {
     smoother_dx_f_.resize(N);
     smoother_dx_p_.resize(N);
+    linearization_.resize(N);
   }
   std::vector<MatS>& P_f = smoother_P_f_;  // every element read below is written first
   std::vector<MatS>& P_p = smoother_P_p_;

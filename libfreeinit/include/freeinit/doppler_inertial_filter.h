@@ -451,6 +451,9 @@ class DopplerInertialFilter {
     FilterState x_next;
   };
   void linearize(std::size_t k, Linearization& L) const;
+  /// smooth()'s forward pass around the states xs from node `first` on, the nodes before it as
+  /// the last pass left them (first > 0: that pass was made around the same states).
+  void smootherForward(std::size_t first);
   /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
   /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
@@ -514,11 +517,9 @@ class DopplerInertialFilter {
   std::vector<VecS> smoother_dx_f_, smoother_dx_p_;
   std::size_t forward_kept_ = 0;
   /// Node k's data (its returns, rows or rest) change: the kept forward pass holds before it
-  /// only.
+  /// only. Every change of a node's data calls it (beginNode, update, updateRest,
+  /// cancelRestFrom, removePoint).
   void nodeChanged(std::size_t k) { forward_kept_ = std::min(forward_kept_, k); }
-  /// smooth()'s forward pass around the states xs from node `first` on, the nodes before it as
-  /// the last pass left them (first > 0: that pass was made around the same states).
-  void smootherForward(std::size_t first);
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;
