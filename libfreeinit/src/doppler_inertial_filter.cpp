@@ -1036,16 +1036,6 @@ DopplerInertialFilter::VecS DopplerInertialFilter::kalmanUpdate(
   return dx;
 }
 
-DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n,
-                                                                 const FilterState& x_lin,
-                                                                 const VecS& dx_prior, MatS& P,
-                                                                 bool full) const {
-  if (n.rows.W.rows() == 0) return dx_prior;
-  Mat9xS G;
-  const Vec9 Q = velocityPolynomial(n, x_lin, &G);
-  return dopplerUpdate(n, Q, G, dx_prior, P, full);
-}
-
 DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n, const Vec9& Q,
                                                                  const Mat9xS& G,
                                                                  const VecS& dx_prior, MatS& P,
@@ -1082,11 +1072,12 @@ void DopplerInertialFilter::update() {
   nodeChanged(nodes_.size() - 1);
   gateAndSum(n);
   const MatS P_pred = n.P;
-  // The update linearized at x_start: the prediction, where beginNode() linearized the node
-  // for its gate (q_open_, G_open_), or the first solve's result when the second gate dropped a
-  // few points.
-  auto solve = [&](FilterState& x_out, MatS& P_out, const FilterState& x_start,
-                   bool at_prediction) {
+  // The update linearized at x_start (Q, G: the node's velocity polynomial there and its
+  // Jacobian): the prediction, where beginNode() linearized the node for its gate (q_open_,
+  // G_open_), or the first solve's result, where the second gate linearized it, when that gate
+  // dropped a few points.
+  auto solve = [&](FilterState& x_out, MatS& P_out, const FilterState& x_start, const Vec9& Q,
+                   const Mat9xS& G) {
     buildRows(n);
     P_out = P_pred;
     if (n.rows.W.rows() == 0) {
@@ -1094,13 +1085,11 @@ void DopplerInertialFilter::update() {
       return;
     }
     const VecS dx_prior = boxminus(n.x_pred, x_start);
-    const VecS dx = at_prediction ? dopplerUpdate(n, q_open_, G_open_, dx_prior, P_out, false)
-                                  : dopplerUpdate(n, x_start, dx_prior, P_out);
-    x_out = boxplus(x_start, dx);
+    x_out = boxplus(x_start, dopplerUpdate(n, Q, G, dx_prior, P_out, false));
   };
   FilterState x;
   MatS P;
-  solve(x, P, n.x_pred, true);
+  solve(x, P, n.x_pred, q_open_, G_open_);
   // Second gate, against the update: the first one, against the prediction, must be wide where
   // the prediction is uncertain (the first nodes) and lets slow moving objects through; the
   // points are gated again at regate_sigma of their residual's std after the update (no floor,
@@ -1177,7 +1166,7 @@ void DopplerInertialFilter::update() {
     o.used -= dropped;
     if (dropped > 0) {
       const FilterState x_first = x;
-      solve(x, P, x_first, false);
+      solve(x, P, x_first, q, G);
     }
   }
   n.x = n.xs = x;

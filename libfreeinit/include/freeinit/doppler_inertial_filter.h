@@ -480,11 +480,9 @@ class DopplerInertialFilter {
   /// in Q (see the definition).
   void marginalizeLeverNoise(const Node& n, Mat9& A, Vec9& b) const;
   /// Kalman update of the error dx (prior mean dx_prior relative to x_lin, covariance P) with
-  /// node n's rows linearized at x_lin. Returns the posterior error relative to x_lin. full: on
-  /// all 19 components even when the calibration is declared exact.
-  VecS dopplerUpdate(const Node& n, const FilterState& x_lin, const VecS& dx_prior, MatS& P,
-                     bool full = false) const;
-  /// The same with node n's velocity polynomial Q and its Jacobian G at x_lin given.
+  /// node n's rows linearized at x_lin: Q, G its velocity polynomial there and the polynomial's
+  /// Jacobian (velocityPolynomial). Returns the posterior error relative to x_lin. full: on all
+  /// 19 components even when the calibration is declared exact.
   VecS dopplerUpdate(const Node& n, const Vec9& Q, const Mat9xS& G, const VecS& dx_prior, MatS& P,
                      bool full) const;
   /// Rest update of the error dx (relative to x_lin, covariance P) at node n.
