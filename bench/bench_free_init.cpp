@@ -17,7 +17,10 @@
 //                          the returned result), result_bytes = heap the result still holds,
 //                          allocs = allocations per run, ms_to_result = the time the call that
 //                          closes the window takes (what an online user waits for: the state),
-//                          ms_map = the map built after it (FreeInit::result()).
+//                          ms_map = the map built after it (FreeInit::result()). Sweeps on
+//                          dyna_05: every 2nd, 4th, 8th point (_stride2..8: the cost of a return
+//                          against that of the window) and the IMU at 400 and 1000 Hz instead
+//                          of 200 (_imu400.., _imu1000..: one filter node per IMU sample).
 // The recordings are simulated once, outside the timed loops.
 // BM_FreeInitRun's updates_per_s_of_data is the velocimeter's output rate: its state updates per
 // second of recording (the paper reports > 10 kHz).
@@ -92,14 +95,15 @@ namespace {
 
 constexpr double kSimDuration = 0.8;  ///< [s] covers the 0.5 s window and the bootstrap
 
-/// One simulated recording per preset (seed 1), made on first use.
-const freeinit::sim::Recording& recording(const std::string& name) {
-  static std::map<std::string, freeinit::sim::Recording> cache;
-  auto it = cache.find(name);
+/// One simulated recording per preset (seed 1) and IMU rate (0: the preset's), made on first use.
+const freeinit::sim::Recording& recording(const std::string& name, double imu_rate = 0) {
+  static std::map<std::pair<std::string, double>, freeinit::sim::Recording> cache;
+  auto it = cache.find({name, imu_rate});
   if (it == cache.end()) {
     freeinit::sim::ScenarioConfig sc = freeinit::sim::preset(name, 1);
     sc.duration = kSimDuration;
-    it = cache.emplace(name, freeinit::sim::simulate(sc)).first;
+    if (imu_rate > 0) sc.imu_rate = imu_rate;  // the same noise per sample
+    it = cache.emplace(std::make_pair(name, imu_rate), freeinit::sim::simulate(sc)).first;
   }
   return it->second;
 }
@@ -176,9 +180,10 @@ void BM_VelocimeterDoppler(benchmark::State& state, const std::string& name) {
       static_cast<double>(accepted) / static_cast<double>(state.iterations() * stream.points);
 }
 
-/// stride 0: the default configuration as it is.
-void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride) {
-  const freeinit::sim::Recording& rec = recording(name);
+/// stride 0: the default configuration as it is; imu_rate 0: the preset's (one filter node per
+/// IMU sample: the rate sets the nodes of the window).
+void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride, double imu_rate) {
+  const freeinit::sim::Recording& rec = recording(name, imu_rate);
   freeinit::FreeInitConfig cfg;
   cfg.extrinsics = rec.extrinsics;
   if (stride > 0) cfg.velocimeter.point_stride = stride;
@@ -429,18 +434,23 @@ BENCHMARK_CAPTURE(BM_VelocimeterDoppler, dyna_05, std::string("dyna_05"))
 BENCHMARK_CAPTURE(BM_VelocimeterDoppler, dyna_04, std::string("dyna_04"))
     ->Unit(benchmark::kMillisecond);
 
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_every_point, std::string("dyna_05"), 1)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_every_point, std::string("dyna_05"), 1, 0.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_01_every_point, std::string("dyna_01"), 1)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_01_every_point, std::string("dyna_01"), 1, 0.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, stat_01_every_point, std::string("stat_01"), 1)
+BENCHMARK_CAPTURE(BM_FreeInitRun, stat_01_every_point, std::string("stat_01"), 1, 0.0)
     ->Unit(benchmark::kMillisecond);
 // Decimation sweep on dyna_05 (the default's candidates).
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride2, std::string("dyna_05"), 2)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride2, std::string("dyna_05"), 2, 0.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride4, std::string("dyna_05"), 4)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride4, std::string("dyna_05"), 4, 0.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride8, std::string("dyna_05"), 8)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride8, std::string("dyna_05"), 8, 0.0)
+    ->Unit(benchmark::kMillisecond);
+// IMU-rate sweep on dyna_05 (the preset's is 200 Hz): the window's nodes, 100 at 200 Hz.
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu400_every_point, std::string("dyna_05"), 1, 400.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu1000_every_point, std::string("dyna_05"), 1, 1000.0)
     ->Unit(benchmark::kMillisecond);
 
 // Every preset at the default configuration: BM_FreeInitRun/<preset>_default.
@@ -454,7 +464,7 @@ int main(int argc, char** argv) {
   mallopt(M_TRIM_THRESHOLD, 512 << 20);
   for (const std::string& name : freeinit::sim::presetNames())
     benchmark::RegisterBenchmark(("BM_FreeInitRun/" + name + "_default").c_str(), BM_FreeInitRun,
-                                 name, 0)
+                                 name, 0, 0.0)
         ->Unit(benchmark::kMillisecond);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
