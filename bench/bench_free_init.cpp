@@ -25,10 +25,10 @@
 // BM_FreeInitRun's updates_per_s_of_data is the velocimeter's output rate: its state updates per
 // second of recording (the paper reports > 10 kHz).
 #include <benchmark/benchmark.h>
-#include <freeinit/doppler_inertial_filter.h>
+#include "joint/doppler_inertial_filter.h"
 #include <freeinit/free_init.h>
 #include <freeinit/sim/simulator.h>
-#include <freeinit/velocimeter.h>
+#include "paper/velocimeter.h"
 #include <malloc.h>
 
 #include <algorithm>

@@ -11,7 +11,7 @@
 #include <benchmark/benchmark.h>
 #include <freeinit/config.h>
 #include <freeinit/sim/simulator.h>
-#include <freeinit/start_detector.h>
+#include "joint/start_detector.h"
 
 #include <algorithm>
 #include <cmath>

@@ -7,8 +7,8 @@
 // Every loader takes a path: the input is written to a file first. Invariants: an error is one
 // line naming the file; a configuration that loads echoes (dumpAppConfig) to text that loads
 // again to the same echo.
-#include <freeinit/config_section.h>
-#include <freeinit/ini_file.h>
+#include <freeinit/io/config_section.h>
+#include <freeinit/io/ini_file.h>
 #include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/icp_slam_bridge.h>
 #include <freeinit/ros1/bag_import_app.h>

@@ -2,7 +2,7 @@
 // and integration against the exact motion, the Jacobians against finite differences, and the
 // whole filter and smoother against the truth and its own covariance, with a calibration that is
 // right and one that is not.
-#include <freeinit/doppler_inertial_filter.h>
+#include "joint/doppler_inertial_filter.h"
 #include <freeinit/rotation.h>
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
 // GravityEstimator against an exact analytic rotational motion: noiseless recovery, accuracy of
 // both formulations under velocimeter + accelerometer noise, covariance consistency (NEES),
 // failures.
-#include <freeinit/gravity_estimator.h>
+#include "paper/gravity_estimator.h"
 #include <freeinit/rotation.h>
 #include <gtest/gtest.h>
 

@@ -1,6 +1,6 @@
 // The plot layout shared by the snapshot and the evaluation figures: ticks, axis limits over the
 // data (truth and bands included), degenerate data, the legend and the velocity panels.
-#include <freeinit/plot_layout.h>
+#include <freeinit/report/plot_layout.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,7 +1,7 @@
 // The scenario INI: a written file read back gives the same recording bit for bit (presets and
 // random scenarios), the short form (a preset plus overrides) reads, and every bad section, key
 // or value is named with its file and line.
-#include <freeinit/ini_file.h>
+#include <freeinit/io/ini_file.h>
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/scenario_ini.h>
 #include <freeinit/sim/simulator.h>

@@ -8,7 +8,7 @@
 #include <random>
 #include <vector>
 
-#include "velocimeter_inputs.h"
+#include "usable_points.h"
 
 namespace freeinit::detail {
 namespace {

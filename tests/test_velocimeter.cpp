@@ -3,7 +3,7 @@
 // convergence and covariance consistency, the gyro and zero-velocity updates, gating, numerical
 // health of the covariance, and continuous-time process noise.
 #include <freeinit/rotation.h>
-#include <freeinit/velocimeter.h>
+#include "paper/velocimeter.h"
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>

@@ -1,6 +1,6 @@
 // Robust LiDAR velocity from Doppler returns (IRLS, Cauchy): accuracy with gross outliers, high
 // speed, degenerate geometries, too few points, covariance consistency.
-#include <freeinit/velocity_bootstrap.h>
+#include "paper/velocity_bootstrap.h"
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>

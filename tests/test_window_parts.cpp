@@ -12,7 +12,7 @@
 #include <random>
 #include <vector>
 
-#include "window_parts.h"
+#include "joint/window_parts.h"
 
 namespace freeinit::detail {
 namespace {

@@ -1,7 +1,7 @@
 // Baseline initializers (FAST-LIO2, DLIO, per-frame Doppler least squares), see baselines.h.
 #include <freeinit/baselines.h>
 #include <freeinit/rotation.h>
-#include <freeinit/velocity_bootstrap.h>
+#include "paper/velocity_bootstrap.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

@@ -2,7 +2,7 @@
 // units, accepted ranges and docs are written. The ranges reject values off by orders of
 // magnitude (a sigma given in the wrong unit, a typo's exponent), not merely unusual ones.
 #include <freeinit/config.h>
-#include <freeinit/config_section.h>
+#include <freeinit/io/config_section.h>
 #include <freeinit/initial_state.h>
 
 #include <cmath>

@@ -1,7 +1,7 @@
 // INI declarations, loading and echo of AppConfig. Each section is declared once (keys, units,
 // accepted values, docs); that declaration drives loading, validation and the dump, so that the
 // documented INI and the loader cannot drift apart.
-#include <freeinit/config_section.h>
+#include <freeinit/io/config_section.h>
 #include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/result_files.h>
 

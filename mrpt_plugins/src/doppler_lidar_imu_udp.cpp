@@ -1,6 +1,6 @@
 // The only translation unit that includes mrpt/hwdrivers.
-#include <freeinit/atomic_file.h>
-#include <freeinit/config_section.h>
+#include <freeinit/io/atomic_file.h>
+#include <freeinit/io/config_section.h>
 #include <freeinit/mrpt_plugins/doppler_lidar_imu_udp.h>
 #include <freeinit/mrpt_plugins/register.h>
 #include <mrpt/config/CConfigFile.h>

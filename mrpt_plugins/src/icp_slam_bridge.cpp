@@ -1,4 +1,4 @@
-#include <freeinit/config_section.h>
+#include <freeinit/io/config_section.h>
 #include <freeinit/mrpt_plugins/conversions.h>
 #include <freeinit/mrpt_plugins/icp_slam_bridge.h>
 #include <mrpt/maps/CSimplePointsMap.h>

@@ -1,4 +1,4 @@
-#include <freeinit/atomic_file.h>
+#include <freeinit/io/atomic_file.h>
 #include <freeinit/mrpt_plugins/rawlog_index.h>
 #include <sys/stat.h>
 #include <zlib.h>

@@ -1,5 +1,5 @@
 #include <freeinit/mrpt_plugins/snapshots.h>
-#include <freeinit/plot_layout.h>
+#include <freeinit/report/plot_layout.h>
 #include <freeinit/report/plot.h>
 #include <mrpt/img/CImage.h>
 #include <mrpt/opengl/CArrow.h>

@@ -1,4 +1,4 @@
-#include <freeinit/atomic_file.h>
+#include <freeinit/io/atomic_file.h>
 #include <freeinit/eval/state_errors.h>
 #include <freeinit/initial_state.h>
 #include <freeinit/report/eval_table.h>

@@ -1,5 +1,5 @@
-#include <freeinit/atomic_file.h>
-#include <freeinit/config_section.h>
+#include <freeinit/io/atomic_file.h>
+#include <freeinit/io/config_section.h>
 #include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/output_set.h>

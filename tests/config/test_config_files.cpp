@@ -2,8 +2,8 @@
 // the bag importer's, icp-slam's [freeinit_scan], the rawlog-grabber driver's; and the shipped
 // ini/*.ini files: each documents every key of the sections it has, its values load, and where
 // it shows a default (a line ";key = value") that default is the code's.
-#include <freeinit/config_section.h>
-#include <freeinit/ini_file.h>
+#include <freeinit/io/config_section.h>
+#include <freeinit/io/ini_file.h>
 #include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/doppler_lidar_imu_udp.h>
 #include <freeinit/mrpt_plugins/icp_slam_bridge.h>

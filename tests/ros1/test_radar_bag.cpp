@@ -6,7 +6,7 @@
 // stamps zero), 413 trigger messages on the IMU clock whose seq matches the scans' (the last
 // trigger, seq 521, has no scan: the recording stopped within that frame). At rest for ~13 s, then
 // carried by hand, near rest again from ~34 s.
-#include <freeinit/doppler_inertial_filter.h>
+#include "joint/doppler_inertial_filter.h"
 #include <freeinit/free_init.h>
 #include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/conversions.h>

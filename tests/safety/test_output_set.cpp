@@ -1,7 +1,7 @@
 // The output set (output_set.h): a run's outputs appear whole or not at all, replace the earlier
 // run's as a whole, never touch what is not ours, never delete a recording, and two sets on one
 // folder exclude each other.
-#include <freeinit/config_section.h>
+#include <freeinit/io/config_section.h>
 #include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/output_set.h>
 #include <freeinit/mrpt_plugins/result_files.h>

@@ -9,7 +9,6 @@
 // configuration echo and the checks that the shipped ini/*.ini files document every key.
 #pragma once
 
-#include <freeinit/gravity_estimator.h>
 #include <freeinit/types.h>
 
 #include <cstddef>
@@ -61,6 +60,38 @@ struct VelocimeterParams {
   double gate_min = 0.15;                ///< [m/s] ... but never below this
   double gate_rel = 0.01;                ///< [-] ... plus this fraction of the LiDAR speed
   bool doppler_ego_compensated = false;  ///< input Doppler already has the ego motion removed
+};
+
+/// How the accelerometer bias and gravity are solved for.
+enum class GravityFormulation {
+  Integrated,      ///< velocity differences vs integrated specific force (default)
+  Differentiated,  ///< the paper's form: numerically differentiated, low-pass filtered velocities
+};
+
+/// Parameters of GravityEstimator. INI section [gravity] (keys declared in config.cpp).
+struct GravityParams {
+  GravityFormulation formulation = GravityFormulation::Integrated;
+  bool use_body_equation = true;        ///< residuals of the body kinematics
+  bool use_lidar_equation = true;       ///< residuals of the LiDAR kinematics (lever arm terms)
+  double accel_sigma = 0.02;            ///< [m/s^2] accelerometer white noise per sample
+  double accel_bias_bound = 0.5;        ///< [m/s^2] |b_a| per axis is kept below this
+  double accel_bias_prior_sigma = 0.1;  ///< [m/s^2] zero-mean prior (typical MEMS, ~10 mg)
+  double lowpass_cutoff_hz = 10.0;      ///< [Hz] for the differentiated formulation (<= 0: off)
+  /// [s] correlation time of the velocimeter's velocity error, modelled as first-order
+  /// Gauss-Markov (AR(1)) with the samples' covariance as its stationary covariance; the
+  /// integrated residuals are then whitened in time (quasi-differenced). 0: white errors.
+  double velocity_error_correlation_time = 0.0;
+  /// The body and LiDAR velocities come from the same points (as in the velocimeter): when both
+  /// equations are used each gets half the information, so that together they count it once
+  /// (integrated formulation; the differentiated one weighs both fully, as the paper).
+  bool equations_share_errors = true;
+  double loss_scale = 3.0;  ///< Cauchy loss scale on whitened residuals [sigma]
+  int max_iterations = 50;
+  /// Estimate a correction of the gyro bias with the integrated formulation (needs the gyro
+  /// bias covariance, see estimate()).
+  bool estimate_gyro_bias = true;
+  /// Compute the covariance (`cov`, `cov_full`); off, they are left at their defaults.
+  bool compute_covariance = true;
 };
 
 /// Robust start of the LiDAR velocity from the first points. INI section [bootstrap].

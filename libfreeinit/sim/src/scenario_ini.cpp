@@ -1,4 +1,4 @@
-#include <freeinit/atomic_file.h>
+#include <freeinit/io/atomic_file.h>
 #include <freeinit/sim/presets.h>
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/scenario_ini.h>

@@ -16,7 +16,7 @@
 //   }
 #pragma once
 
-#include <freeinit/config_section.h>
+#include <freeinit/io/config_section.h>
 
 #include <deque>
 #include <functional>

@@ -2,7 +2,7 @@
 // so every output is either complete or absent.
 #pragma once
 
-#include <freeinit/atomic_file.h>
+#include <freeinit/io/atomic_file.h>
 #include <freeinit/initial_state.h>
 
 #include <ostream>

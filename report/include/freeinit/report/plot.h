@@ -4,7 +4,7 @@
 // not a general plotting library.
 #pragma once
 
-#include <freeinit/plot_layout.h>
+#include <freeinit/report/plot_layout.h>
 
 #include <opencv2/core.hpp>
 #include <string>

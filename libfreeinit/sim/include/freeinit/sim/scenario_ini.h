@@ -16,8 +16,8 @@
 // MRPT-free.
 #pragma once
 
-#include <freeinit/config_section.h>
-#include <freeinit/ini_file.h>
+#include <freeinit/io/config_section.h>
+#include <freeinit/io/ini_file.h>
 #include <freeinit/sim/scenario.h>
 
 #include <cstdint>

@@ -3,7 +3,7 @@
 // direction and range. Used by joint_pipeline.cpp only.
 #pragma once
 
-#include <freeinit/doppler_inertial_filter.h>
+#include "joint/doppler_inertial_filter.h"
 #include <freeinit/initial_state.h>
 #include <freeinit/rotation.h>
 #include <freeinit/types.h>
@@ -16,7 +16,7 @@
 #include <limits>
 #include <vector>
 
-#include "velocimeter_inputs.h"
+#include "usable_points.h"
 
 namespace freeinit::detail {
 

@@ -1,4 +1,4 @@
-#include <freeinit/pose_integrator.h>
+#include "paper/pose_integrator.h"
 
 #include <cmath>
 

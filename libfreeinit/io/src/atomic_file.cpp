@@ -1,4 +1,4 @@
-#include <freeinit/atomic_file.h>
+#include <freeinit/io/atomic_file.h>
 
 #include <cerrno>
 #include <cstdio>

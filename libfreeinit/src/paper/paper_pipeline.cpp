@@ -7,11 +7,11 @@
 // of the window; its gravity solve starts the accelerometer-aided last pass, which catches up on
 // the buffered data and then follows the stream. When the last IMU sample of the window has been
 // processed the last solve makes the result final.
-#include <freeinit/gravity_estimator.h>
-#include <freeinit/pose_integrator.h>
+#include "paper/gravity_estimator.h"
+#include "paper/pose_integrator.h"
 #include <freeinit/rotation.h>
-#include <freeinit/velocimeter.h>
-#include <freeinit/velocity_bootstrap.h>
+#include "paper/velocimeter.h"
+#include "paper/velocity_bootstrap.h"
 
 #include <chrono>
 #include <cmath>
@@ -21,7 +21,7 @@
 #include <string>
 
 #include "pipeline.h"
-#include "velocimeter_inputs.h"
+#include "paper/velocimeter_inputs.h"
 
 namespace freeinit::detail {
 namespace {

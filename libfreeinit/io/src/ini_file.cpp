@@ -1,4 +1,4 @@
-#include <freeinit/ini_file.h>
+#include <freeinit/io/ini_file.h>
 
 #include <algorithm>
 #include <cctype>

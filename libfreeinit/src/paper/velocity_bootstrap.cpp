@@ -1,4 +1,4 @@
-#include <freeinit/velocity_bootstrap.h>
+#include "paper/velocity_bootstrap.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>

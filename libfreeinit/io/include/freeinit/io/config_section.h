@@ -22,8 +22,9 @@
 // (when()). Errors are ConfigError, one line naming the file, the line, the section and the key.
 #pragma once
 
-#include <freeinit/ini_file.h>
-#include <freeinit/types.h>
+#include <freeinit/io/ini_file.h>
+
+#include <Eigen/Core>
 
 #include <functional>
 #include <iosfwd>
@@ -233,7 +234,7 @@ class Section : public SectionBase {
     return *this;
   }
 
-  /// Three numbers "x y z" (Vec3), each within `range`.
+  /// Three numbers "x y z" (an Eigen::Vector3d), each within `range`.
   template <class M>
   Section& vector3(std::string key, M member, std::string unit, Range range, std::string doc) {
     auto acc = detail::accessor<S>(member);
@@ -246,15 +247,15 @@ class Section : public SectionBase {
       std::string err = parseNumbers(text, 3, v);
       for (std::size_t i = 0; err.empty() && i < 3; ++i)
         if (!range.contains(v[i])) err = detail::outOfRange(formatNumber(v[i]), range, unit);
-      if (err.empty()) acc(s) = Vec3(v[0], v[1], v[2]);
+      if (err.empty()) acc(s) = Eigen::Vector3d(v[0], v[1], v[2]);
       return err;
     };
     k.get = [acc](const S& s) {
-      const Vec3& v = acc(s);
+      const Eigen::Vector3d& v = acc(s);
       return formatNumber(v.x()) + " " + formatNumber(v.y()) + " " + formatNumber(v.z());
     };
     k.check = [acc, range, unit = k.info.unit](const S& s) -> std::string {
-      const Vec3& v = acc(s);
+      const Eigen::Vector3d& v = acc(s);
       for (int i = 0; i < 3; ++i)
         if (!range.contains(v[i])) return detail::outOfRange(formatNumber(v[i]), range, unit);
       return "";

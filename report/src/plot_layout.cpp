@@ -1,4 +1,4 @@
-#include <freeinit/plot_layout.h>
+#include <freeinit/report/plot_layout.h>
 
 #include <algorithm>
 #include <cmath>

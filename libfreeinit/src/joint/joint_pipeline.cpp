@@ -7,9 +7,9 @@
 //   DopplerInertialFilter              the estimator proper
 //   WindowRecorder (window_parts.h)    the window's returns as received, mapped at the end
 //   RestCells (window_parts.h)         a standing sensor's returns by direction and range
-#include <freeinit/doppler_inertial_filter.h>
+#include "joint/doppler_inertial_filter.h"
 #include <freeinit/rotation.h>
-#include <freeinit/start_detector.h>
+#include "joint/start_detector.h"
 
 #include <algorithm>
 #include <chrono>
@@ -19,10 +19,10 @@
 #include <optional>
 #include <sstream>
 
-#include "chi_square.h"
+#include "joint/chi_square.h"
 #include "pipeline.h"
-#include "velocimeter_inputs.h"
-#include "window_parts.h"
+#include "usable_points.h"
+#include "joint/window_parts.h"
 
 namespace freeinit::detail {
 namespace {

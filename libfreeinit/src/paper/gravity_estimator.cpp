@@ -2,8 +2,8 @@
 // the paper's differentiated form, Eq. (acc_bias_gravity_opt), and its integrated form.
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
-#include <freeinit/affine_residual.h>
-#include <freeinit/gravity_estimator.h>
+#include "paper/affine_residual.h"
+#include "paper/gravity_estimator.h"
 #include <freeinit/rotation.h>
 
 #include <algorithm>

@@ -1,5 +1,5 @@
 #include <freeinit/rotation.h>
-#include <freeinit/velocimeter.h>
+#include "paper/velocimeter.h"
 
 #include <algorithm>
 #include <cmath>

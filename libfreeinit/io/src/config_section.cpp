@@ -1,4 +1,4 @@
-#include <freeinit/config_section.h>
+#include <freeinit/io/config_section.h>
 
 #include <algorithm>
 #include <cctype>

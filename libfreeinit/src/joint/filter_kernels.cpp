@@ -1,11 +1,11 @@
-#include "filter_kernels.h"
+#include "joint/filter_kernels.h"
 
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 
-#include "vector_clones.h"
+#include "joint/vector_clones.h"
 
 namespace freeinit::detail {
 namespace {

@@ -1,6 +1,6 @@
-#include <freeinit/doppler_inertial_filter.h>
+#include "joint/doppler_inertial_filter.h"
 #include <freeinit/rotation.h>
-#include <freeinit/start_detector.h>
+#include "joint/start_detector.h"
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -17,7 +17,7 @@
 #include <string>
 #include <utility>
 
-#include "vector_clones.h"
+#include "joint/vector_clones.h"
 
 namespace freeinit {
 namespace {

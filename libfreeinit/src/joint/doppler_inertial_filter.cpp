@@ -1,4 +1,4 @@
-#include <freeinit/doppler_inertial_filter.h>
+#include "joint/doppler_inertial_filter.h"
 #include <freeinit/rotation.h>
 
 #include <Eigen/Cholesky>
@@ -10,8 +10,8 @@
 #include <stdexcept>
 #include <string>
 
-#include "filter_kernels.h"
-#include "vector_clones.h"
+#include "joint/filter_kernels.h"
+#include "joint/vector_clones.h"
 
 namespace freeinit {
 namespace {

@@ -2,6 +2,7 @@
 // (paper Sec. III-C, Eq. (acc_bias_gravity_opt)), solved with Ceres on the sphere S^2(9.81).
 #pragma once
 
+#include <freeinit/config.h>
 #include <freeinit/types.h>
 
 #include <string>
@@ -38,38 +39,6 @@ struct GravityEstimate {
   Eigen::Matrix<double, 9, 9> cov_full = Eigen::Matrix<double, 9, 9>::Identity();
   double final_cost = 0;
   int iterations = 0;
-};
-
-/// How the accelerometer bias and gravity are solved for.
-enum class GravityFormulation {
-  Integrated,      ///< velocity differences vs integrated specific force (default)
-  Differentiated,  ///< the paper's form: numerically differentiated, low-pass filtered velocities
-};
-
-/// Parameters of GravityEstimator. INI section [gravity] (keys declared in config.cpp).
-struct GravityParams {
-  GravityFormulation formulation = GravityFormulation::Integrated;
-  bool use_body_equation = true;        ///< residuals of the body kinematics
-  bool use_lidar_equation = true;       ///< residuals of the LiDAR kinematics (lever arm terms)
-  double accel_sigma = 0.02;            ///< [m/s^2] accelerometer white noise per sample
-  double accel_bias_bound = 0.5;        ///< [m/s^2] |b_a| per axis is kept below this
-  double accel_bias_prior_sigma = 0.1;  ///< [m/s^2] zero-mean prior (typical MEMS, ~10 mg)
-  double lowpass_cutoff_hz = 10.0;      ///< [Hz] for the differentiated formulation (<= 0: off)
-  /// [s] correlation time of the velocimeter's velocity error, modelled as first-order
-  /// Gauss-Markov (AR(1)) with the samples' covariance as its stationary covariance; the
-  /// integrated residuals are then whitened in time (quasi-differenced). 0: white errors.
-  double velocity_error_correlation_time = 0.0;
-  /// The body and LiDAR velocities come from the same points (as in the velocimeter): when both
-  /// equations are used each gets half the information, so that together they count it once
-  /// (integrated formulation; the differentiated one weighs both fully, as the paper).
-  bool equations_share_errors = true;
-  double loss_scale = 3.0;  ///< Cauchy loss scale on whitened residuals [sigma]
-  int max_iterations = 50;
-  /// Estimate a correction of the gyro bias with the integrated formulation (needs the gyro
-  /// bias covariance, see estimate()).
-  bool estimate_gyro_bias = true;
-  /// Compute the covariance (`cov`, `cov_full`); off, they are left at their defaults.
-  bool compute_covariance = true;
 };
 
 /// Solves for b_a and g_w given the window's kinematic samples.

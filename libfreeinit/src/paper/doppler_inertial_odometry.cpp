@@ -1,12 +1,12 @@
 #include <freeinit/doppler_inertial_odometry.h>
-#include <freeinit/pose_integrator.h>
-#include <freeinit/velocimeter.h>
+#include "paper/pose_integrator.h"
+#include "paper/velocimeter.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
-#include "velocimeter_inputs.h"
+#include "paper/velocimeter_inputs.h"
 
 namespace freeinit {
 

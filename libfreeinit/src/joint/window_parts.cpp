@@ -3,14 +3,14 @@
 // well as the baseline, chosen at load time (vector_clones.h). The same float operations in the
 // same order as the scalar forms (RestCells::cellOf, the map and residual formulas) and no FMA
 // contraction: the same results on every build.
-#include "window_parts.h"
+#include "joint/window_parts.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <cstring>
 
-#include "vector_clones.h"
+#include "joint/vector_clones.h"
 
 namespace freeinit::detail::recorder_kernels {
 
