@@ -9,7 +9,6 @@
 // librosbag opens the bag (bag_guard.h), alone; bytes/s of the bag.
 #include <benchmark/benchmark.h>
 #include <freeinit/ros1/bag_guard.h>
-#include <freeinit/ros1/bag_import_app.h>
 #include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/bag_writer.h>
 #include <freeinit/sim/simulator.h>
@@ -22,6 +21,8 @@
 #include <fstream>
 #include <sstream>
 #include <string>
+
+#include "bag_import_app.h"
 
 namespace {
 
@@ -97,7 +98,7 @@ void BM_ImportBag(benchmark::State& state) {
     const pid_t pid = fork();
     if (pid == 0) {
       close(fd[0]);
-      freeinit::mrpt_plugins::BagImportApp app;
+      freeinit::apps::BagImportApp app;
       app.params.bag = bag;
       app.params.config_file = ini;
       app.params.output = (dir / "out.rawlog").string();

@@ -25,10 +25,8 @@
 // BM_FreeInitRun's updates_per_s_of_data is the velocimeter's output rate: its state updates per
 // second of recording (the paper reports > 10 kHz).
 #include <benchmark/benchmark.h>
-#include "joint/doppler_inertial_filter.h"
 #include <freeinit/free_init.h>
 #include <freeinit/sim/simulator.h>
-#include "paper/velocimeter.h"
 #include <malloc.h>
 
 #include <algorithm>
@@ -38,6 +36,9 @@
 #include <new>
 #include <string>
 #include <vector>
+
+#include "joint/doppler_inertial_filter.h"
+#include "paper/velocimeter.h"
 
 // ---------------------------------------------------------------------------------------------
 // Heap accounting: the global allocation functions of this executable count live and peak bytes

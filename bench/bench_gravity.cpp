@@ -2,13 +2,13 @@
 // of 100 kinematic samples (0.5 s at 200 Hz) of an exact rotational motion with velocimeter and
 // accelerometer noise: body + LiDAR equations, covariance included, in both formulations.
 #include <benchmark/benchmark.h>
-#include "paper/gravity_estimator.h"
 
 #include <random>
 #include <stdexcept>
 #include <vector>
 
 #include "analytic_motion.h"
+#include "paper/gravity_estimator.h"
 
 namespace {
 

@@ -11,13 +11,14 @@
 #include <benchmark/benchmark.h>
 #include <freeinit/config.h>
 #include <freeinit/sim/simulator.h>
-#include "joint/start_detector.h"
 
 #include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <string>
 #include <vector>
+
+#include "joint/start_detector.h"
 
 namespace {
 

@@ -7,11 +7,10 @@
 // Every loader takes a path: the input is written to a file first. Invariants: an error is one
 // line naming the file; a configuration that loads echoes (dumpAppConfig) to text that loads
 // again to the same echo.
+#include <freeinit/app_support/app_config.h>
+#include <freeinit/app_support/icp_slam_bridge.h>
 #include <freeinit/io/config_section.h>
 #include <freeinit/io/ini_file.h>
-#include <freeinit/mrpt_plugins/app_config.h>
-#include <freeinit/mrpt_plugins/icp_slam_bridge.h>
-#include <freeinit/ros1/bag_import_app.h>
 #include <freeinit/sim/scenario_ini.h>
 #include <unistd.h>
 
@@ -20,6 +19,7 @@
 #include <sstream>
 #include <string>
 
+#include "bag_import_app.h"
 #include "harness.h"
 
 namespace freeinit::fuzz {
@@ -33,31 +33,31 @@ bool save(const std::string& path, const std::uint8_t* data, std::size_t size) {
   return ok;
 }
 
-std::string echo(const mrpt_plugins::AppConfig& c) {
+std::string echo(const app_support::AppConfig& c) {
   std::ostringstream os;
-  mrpt_plugins::dumpAppConfig(c, os);
+  app_support::dumpAppConfig(c, os);
   return os.str();
 }
 
 std::string load(int loader, const std::string& path, const std::uint8_t* data, std::size_t size) {
   switch (loader) {
     case 0: {
-      const std::string first = echo(mrpt_plugins::loadAppConfig(path));
+      const std::string first = echo(app_support::loadAppConfig(path));
       const std::string again_path = path + ".echo.ini";
       save(again_path, reinterpret_cast<const std::uint8_t*>(first.data()), first.size());
-      if (echo(mrpt_plugins::loadAppConfig(again_path)) != first)
+      if (echo(app_support::loadAppConfig(again_path)) != first)
         broken("the echoed configuration does not load back to itself");
       return "ok: freeinit configuration";
     }
     case 1:
-      mrpt_plugins::loadBagImportSettings(path);
+      apps::loadBagImportSettings(path);
       return "ok: bag import settings";
     case 2: {
       const sim::ScenarioConfig sc = sim::loadScenarioIni(path);
       return "ok: scenario " + sc.name;
     }
     case 3:
-      mrpt_plugins::loadScanSliceParams(path);
+      app_support::loadScanSliceParams(path);
       return "ok: scan slice";
     default: {
       const config::IniFile ini =

@@ -6,9 +6,9 @@
 // what passes the checks is finite, IMU stamps increase, a frame's points are sorted by time;
 // salvage reads exactly the records the strict reader read before its error, and reports where it
 // stopped.
-#include <freeinit/mrpt_plugins/app_config.h>
-#include <freeinit/mrpt_plugins/ingest.h>
-#include <freeinit/mrpt_plugins/ingest_sources.h>
+#include <freeinit/app_support/app_config.h>
+#include <freeinit/app_support/ingest.h>
+#include <freeinit/app_support/ingest_sources.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <unistd.h>
 
@@ -36,23 +36,23 @@ Pass read(const std::string& path, bool salvage) {
   mrpt_plugins::RawlogIndexPolicy no_index;
   no_index.use = false;
   Pass p;
-  mrpt_plugins::AppConfig config;
-  mrpt_plugins::ObservationDecoder decoder(config.input);
-  mrpt_plugins::RecordChecker checker(config);
+  app_support::AppConfig config;
+  app_support::ObservationDecoder decoder(config.input);
+  app_support::RecordChecker checker(config);
   double last_imu = -INFINITY;
-  auto inspect = [&](const mrpt_plugins::CheckedItem& c) {
+  auto inspect = [&](const app_support::CheckedItem& c) {
     if (!c.ok()) {
       ++p.rejected;
       return;
     }
     const auto& it = c.item;
-    if (it.kind == mrpt_plugins::IngestItem::Kind::Imu) {
+    if (it.kind == app_support::IngestItem::Kind::Imu) {
       if (!std::isfinite(it.imu.t) || !it.imu.gyro.allFinite() || !it.imu.accel.allFinite())
         broken("non-finite IMU sample passed the checks");
       if (!(it.imu.t > last_imu)) broken("IMU stamps passed the checks without increasing");
       last_imu = it.imu.t;
       ++p.imu;
-    } else if (it.kind == mrpt_plugins::IngestItem::Kind::Frame) {
+    } else if (it.kind == app_support::IngestItem::Kind::Frame) {
       if (!it.frame || it.frame->points.empty()) broken("empty frame passed the checks");
       for (std::size_t i = 0; i < it.frame->points.size(); ++i) {
         const DopplerPoint& q = it.frame->points[i];
@@ -70,12 +70,12 @@ Pass read(const std::string& path, bool salvage) {
     reader.setSalvage(salvage);
     // The apps' own loop (what a user's recording goes through), with the record numbering
     // checked on the way.
-    mrpt_plugins::forEachCheckedItem(reader, decoder, checker, inspect,
-                                     [&](const mrpt_plugins::RawlogObject& rec) {
-                                       if (rec.index != p.records)
-                                         broken("records not numbered in order");
-                                       ++p.records;
-                                     });
+    app_support::forEachCheckedItem(reader, decoder, checker, inspect,
+                                    [&](const mrpt_plugins::RawlogObject& rec) {
+                                      if (rec.index != p.records)
+                                        broken("records not numbered in order");
+                                      ++p.records;
+                                    });
     p.stop = reader.salvageStop();
   } catch (const std::exception& e) {
     p.error = e.what();

@@ -13,13 +13,13 @@ RUNS=${2:-3}
 DIR=${TMPDIR:-/tmp}/freeinit_bench_window
 mkdir -p "$DIR"
 [ "${KEEP:-0}" = 1 ] || trap 'rm -rf "$DIR"' EXIT
-APP=$BUILD/apps/mrpt/freeinit
+APP=$BUILD/bin/freeinit
 INI=ini/freeinit.ini
 
 for d in 30 300; do
   if [ ! -f "$DIR/d$d.rawlog" ]; then
     echo "simulating $d s of dyna_05 at 60,000 points per frame..."
-    "$BUILD/apps/mrpt/freeinit-sim" -p dyna_05 -d "$d" -n 60000 -o "$DIR/d$d.rawlog" > /dev/null
+    "$BUILD/bin/freeinit-sim" -p dyna_05 -d "$d" -n 60000 -o "$DIR/d$d.rawlog" > /dev/null
   fi
 done
 ls -l "$DIR"/d30.rawlog "$DIR"/d300.rawlog

@@ -10,7 +10,7 @@
 #   OUT_DIR  where the rawlog goes (default out/grab); its name is dataset_doppler_<date>.rawlog
 #   PORT     UDP port (default: the INI's, 47800)
 # Environment: BUILD_DIR (default build), INI (default ini/rawlog_grabber_doppler_udp.ini).
-# Play something to it meanwhile, e.g. build/apps/mrpt/freeinit-stream -i rawlogs/dyna_01.rawlog
+# Play something to it meanwhile, e.g. build/bin/freeinit-stream -i rawlogs/dyna_01.rawlog
 # Prints the rawlog path on the last line; the driver's final statistics go to OUT_DIR/stream_stats.ini.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -26,7 +26,7 @@ port=${3:-}
 [ -z "$port" ] || [[ "$port" =~ ^[0-9]+$ ]] || die "PORT must be a number, not '$port'"
 
 BUILD_DIR=${BUILD_DIR:-build}
-plugin=$BUILD_DIR/mrpt_plugins/libfreeinit_mrpt_plugins.so
+plugin=$BUILD_DIR/lib/libfreeinit_mrpt_plugins.so
 ini=${INI:-ini/rawlog_grabber_doppler_udp.ini}
 [ -f "$plugin" ] || die "$plugin not found: build first (./scripts/setup.sh)"
 [ -f "$ini" ] || die "$ini not found"

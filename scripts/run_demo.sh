@@ -41,7 +41,7 @@ if [ "${SKIP_SETUP:-0}" != 1 ]; then
   echo "[demo] setup: installing missing packages and building into $BUILD_DIR (./scripts/setup.sh)"
   ./scripts/setup.sh || die "./scripts/setup.sh failed (see above)"
 fi
-app="$BUILD_DIR/apps/mrpt/freeinit"
+app="$BUILD_DIR/bin/freeinit"
 [ -x "$app" ] || die "$app was not built: is MRPT installed (libmrpt-dev) and FREEINIT_WITH_MRPT on?"
 
 echo

@@ -22,7 +22,7 @@ source=${1:-rawlogs/dyna_01.rawlog}
 out=${2:-out/live}
 port=${3:-47800}
 BUILD_DIR=${BUILD_DIR:-build}
-bin=$BUILD_DIR/apps/mrpt
+bin=$BUILD_DIR/bin
 for b in freeinit freeinit-online freeinit-stream; do
   [ -x "$bin/$b" ] || die "$bin/$b not built: run ./scripts/setup.sh first"
 done

@@ -1,8 +1,8 @@
 // The configuration mechanism of the core (no MRPT): the INI parser, the key declarations
 // (loading, validation, echo) of the estimator's sections, and the window in seconds.
 #include <freeinit/config.h>
-#include <freeinit/io/config_section.h>
 #include <freeinit/free_init.h>
+#include <freeinit/io/config_section.h>
 #include <freeinit/io/ini_file.h>
 #include <freeinit/sim/simulator.h>
 #include <gtest/gtest.h>

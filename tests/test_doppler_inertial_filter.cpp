@@ -2,7 +2,6 @@
 // and integration against the exact motion, the Jacobians against finite differences, and the
 // whole filter and smoother against the truth and its own covariance, with a calibration that is
 // right and one that is not.
-#include "joint/doppler_inertial_filter.h"
 #include <freeinit/rotation.h>
 #include <gtest/gtest.h>
 
@@ -14,6 +13,7 @@
 #include <vector>
 
 #include "analytic_motion.h"
+#include "joint/doppler_inertial_filter.h"
 
 namespace freeinit {
 namespace {

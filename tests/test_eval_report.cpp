@@ -2,7 +2,6 @@
 // the displacement error, the job pool, the PNG writer, the methods run on equal terms and
 // freeinit-eval's app class (its command line, a tiny run).
 #include <freeinit/eval/state_errors.h>
-#include <freeinit/report/eval_app.h>
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
@@ -24,6 +23,8 @@
 #include <string>
 #include <system_error>
 #include <vector>
+
+#include "eval_app.h"
 
 namespace freeinit::report {
 namespace {
@@ -502,6 +503,9 @@ TEST(RunMethods, EveryMethodInTableOrderWithItsTrack) {
   ASSERT_EQ(alone.size(), 1u);
   EXPECT_EQ(alone[0].method, "free-init");
 }
+
+using apps::EvalApp;
+using apps::EvalAppParams;
 
 EvalApp::Action parseLine(EvalApp& app, std::vector<const char*> args) {
   args.insert(args.begin(), "freeinit-eval");

@@ -1,7 +1,6 @@
 // GravityEstimator against an exact analytic rotational motion: noiseless recovery, accuracy of
 // both formulations under velocimeter + accelerometer noise, covariance consistency (NEES),
 // failures.
-#include "paper/gravity_estimator.h"
 #include <freeinit/rotation.h>
 #include <gtest/gtest.h>
 
@@ -13,6 +12,7 @@
 #include <vector>
 
 #include "analytic_motion.h"
+#include "paper/gravity_estimator.h"
 
 namespace freeinit {
 namespace {

@@ -1,11 +1,12 @@
 // Pose integration (paper Eq. (pose_integ_continuous)): closed forms for constant rates, and the
 // order of accuracy of the coning-corrected rotation increment for a linearly varying rate.
-#include "paper/pose_integrator.h"
 #include <freeinit/rotation.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+
+#include "paper/pose_integrator.h"
 
 namespace freeinit {
 namespace {

@@ -1,7 +1,6 @@
 // The start decision on a platform moving at constant velocity (the IMU then sees gravity only)
 // among returns from the world and from one object moving at its own constant velocity: the
 // IMU cannot tell the two apart, only how much of the view each covers can.
-#include "joint/start_detector.h"
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -10,6 +9,8 @@
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "joint/start_detector.h"
 
 namespace freeinit {
 namespace {

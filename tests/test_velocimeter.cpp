@@ -3,7 +3,6 @@
 // convergence and covariance consistency, the gyro and zero-velocity updates, gating, numerical
 // health of the covariance, and continuous-time process noise.
 #include <freeinit/rotation.h>
-#include "paper/velocimeter.h"
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
@@ -13,6 +12,7 @@
 #include <random>
 #include <utility>
 
+#include "paper/velocimeter.h"
 #include "test_stats.h"
 
 namespace freeinit {

@@ -1,6 +1,5 @@
 // Robust LiDAR velocity from Doppler returns (IRLS, Cauchy): accuracy with gross outliers, high
 // speed, degenerate geometries, too few points, covariance consistency.
-#include "paper/velocity_bootstrap.h"
 #include <gtest/gtest.h>
 
 #include <Eigen/Cholesky>
@@ -8,6 +7,7 @@
 #include <random>
 #include <vector>
 
+#include "paper/velocity_bootstrap.h"
 #include "test_stats.h"
 
 namespace freeinit {

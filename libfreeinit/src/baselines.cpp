@@ -1,13 +1,14 @@
 // Baseline initializers (FAST-LIO2, DLIO, per-frame Doppler least squares), see baselines.h.
 #include <freeinit/baselines.h>
 #include <freeinit/rotation.h>
-#include "paper/velocity_bootstrap.h"
 
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
+
+#include "paper/velocity_bootstrap.h"
 
 namespace freeinit::baselines {
 namespace {

@@ -2,8 +2,8 @@
 // units, accepted ranges and docs are written. The ranges reject values off by orders of
 // magnitude (a sigma given in the wrong unit, a typo's exponent), not merely unusual ones.
 #include <freeinit/config.h>
-#include <freeinit/io/config_section.h>
 #include <freeinit/initial_state.h>
+#include <freeinit/io/config_section.h>
 
 #include <cmath>
 #include <ostream>

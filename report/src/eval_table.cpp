@@ -1,6 +1,6 @@
-#include <freeinit/io/atomic_file.h>
 #include <freeinit/eval/state_errors.h>
 #include <freeinit/initial_state.h>
+#include <freeinit/io/atomic_file.h>
 #include <freeinit/report/eval_table.h>
 
 #include <algorithm>

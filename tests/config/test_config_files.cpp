@@ -2,16 +2,16 @@
 // the bag importer's, icp-slam's [freeinit_scan], the rawlog-grabber driver's; and the shipped
 // ini/*.ini files: each documents every key of the sections it has, its values load, and where
 // it shows a default (a line ";key = value") that default is the code's.
+#include <freeinit/app_support/app_config.h>
+#include <freeinit/app_support/icp_slam_bridge.h>
 #include <freeinit/io/config_section.h>
 #include <freeinit/io/ini_file.h>
-#include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/doppler_lidar_imu_udp.h>
-#include <freeinit/mrpt_plugins/icp_slam_bridge.h>
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/config/CConfigFileMemory.h>
 #ifdef FREEINIT_WITH_BAG_IMPORT
-#include <freeinit/ros1/bag_import_app.h>
+#include "bag_import_app.h"
 #endif
 
 #include <cmath>
@@ -25,6 +25,8 @@
 
 using namespace freeinit;
 using namespace freeinit::mrpt_plugins;
+using namespace freeinit::app_support;
+using namespace freeinit::apps;
 using config::ConfigError;
 namespace fs = std::filesystem;
 

@@ -8,11 +8,11 @@ out=$(mktemp -d /tmp/freeinit_grabber_test.XXXXXX)
 trap 'rm -rf "$out"' EXIT
 cd "$src"
 # The stop key goes to rawlog-grabber 1.5 s after the stream ended (time to write its queue).
-( "$build/apps/mrpt/freeinit-stream" -i rawlogs/dyna_01.rawlog -p "$port" -w 20 -x 2 >&2
+( "$build/bin/freeinit-stream" -i rawlogs/dyna_01.rawlog -p "$port" -w 20 -x 2 >&2
   sleep 1.5; echo ) | BUILD_DIR=$build ./scripts/grab_live.sh - "$out" "$port" > "$out/grab.log" 2>&1 ||
   { cat "$out/grab.log"; exit 1; }
 rawlog=$(tail -1 "$out/grab.log")
-info=$(rawlog-edit -p "$build/mrpt_plugins/libfreeinit_mrpt_plugins.so" --info -i "$rawlog" 2>&1)
+info=$(rawlog-edit -p "$build/lib/libfreeinit_mrpt_plugins.so" --info -i "$rawlog" 2>&1)
 echo "$info" | grep -E "IMU|LIDAR"
 echo "$info" | grep -qE "LIDAR */ *15 " || { echo "expected the 15 clouds"; exit 1; }
 imu=$(echo "$info" | sed -nE 's/.* IMU *\/ *([0-9]+) .*/\1/p')
@@ -23,4 +23,4 @@ echo "driver received $sent IMU samples, the rawlog holds $imu; anomalies: $anom
 # rawlog-grabber 2.5.8 writes half of its pending list per period and, at exit, half of what is
 # left: the newest object or so may be missing from the file (not a loss of the driver's).
 [ "$imu" -ge 300 ] || { echo "too few IMU samples in the rawlog"; exit 1; }
-"$build/apps/mrpt/freeinit" ini/freeinit.ini "$rawlog" -o "$out/freeinit" -q | grep "Initialization: ok"
+"$build/bin/freeinit" ini/freeinit.ini "$rawlog" -o "$out/freeinit" -q | grep "Initialization: ok"

@@ -2,9 +2,7 @@
 // moving starts of the wheeled and vehicular presets (street and tunnel), against the simulator's
 // ground truth; and the export that the stock icp-slam app runs on.
 #include <freeinit/mrpt_plugins/conversions.h>
-#include <freeinit/mrpt_plugins/icp_slam_app.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
-#include <freeinit/mrpt_plugins/sim_app.h>
 #include <gtest/gtest.h>
 #include <mrpt/maps/CSimpleMap.h>
 #include <mrpt/obs/CSensoryFrame.h>
@@ -17,8 +15,13 @@
 #include <map>
 #include <sstream>
 
+#include "icp_slam_app.h"
+#include "sim_app.h"
+
 using namespace freeinit;
 using namespace freeinit::mrpt_plugins;
+using namespace freeinit::app_support;
+using namespace freeinit::apps;
 namespace fs = std::filesystem;
 
 namespace {

@@ -2,18 +2,15 @@
 // runs on the committed samples with ini/freeinit.ini and meets the ground-truth tolerances; it
 // reads only what the window needs, initializes anywhere (--start, --every, --starts) with the
 // seek index, and tells bad records inside the window (errors) from those outside (warnings).
+#include <freeinit/app_support/checked_recording.h>
+#include <freeinit/app_support/command_line.h>
+#include <freeinit/app_support/file_kind.h>
+#include <freeinit/app_support/output_writers.h>
 #include <freeinit/free_init.h>
-#include <freeinit/mrpt_plugins/checked_recording.h>
-#include <freeinit/mrpt_plugins/command_line.h>
 #include <freeinit/mrpt_plugins/conversions.h>
-#include <freeinit/mrpt_plugins/eval_rawlog_app.h>
-#include <freeinit/mrpt_plugins/file_kind.h>
-#include <freeinit/mrpt_plugins/free_init_app.h>
-#include <freeinit/mrpt_plugins/output_writers.h>
 #include <freeinit/mrpt_plugins/plugin_path.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
-#include <freeinit/mrpt_plugins/sim_app.h>
 #include <gtest/gtest.h>
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
@@ -31,8 +28,14 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "eval_rawlog_app.h"
+#include "free_init_app.h"
+#include "sim_app.h"
+
 using namespace freeinit;
 using namespace freeinit::mrpt_plugins;
+using namespace freeinit::app_support;
+using namespace freeinit::apps;
 namespace fs = std::filesystem;
 
 namespace {

@@ -2,9 +2,8 @@
 // (read_budget.h, with the program's allocation guard linked in as in the apps), the point count
 // of a Doppler cloud, the IMU presence flags, and the INI MRPT parses for freeinit-icp-slam.
 // Each error is one line naming the file and the record (or key).
-#include <freeinit/mrpt_plugins/app_config.h>
+#include <freeinit/app_support/app_config.h>
 #include <freeinit/mrpt_plugins/conversions.h>
-#include <freeinit/mrpt_plugins/icp_slam_app.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
 #include <freeinit/mrpt_plugins/read_budget.h>
@@ -23,8 +22,12 @@
 #include <sstream>
 #include <vector>
 
+#include "icp_slam_app.h"
+
 using namespace freeinit;
 using namespace freeinit::mrpt_plugins;
+using namespace freeinit::app_support;
+using namespace freeinit::apps;
 namespace fs = std::filesystem;
 
 namespace {

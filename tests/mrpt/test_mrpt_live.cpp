@@ -4,12 +4,8 @@
 // and survived.
 #include <freeinit/mrpt_plugins/conversions.h>
 #include <freeinit/mrpt_plugins/doppler_lidar_imu_udp.h>
-#include <freeinit/mrpt_plugins/free_init_app.h>
-#include <freeinit/mrpt_plugins/free_init_online_app.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
-#include <freeinit/mrpt_plugins/sim_app.h>
-#include <freeinit/mrpt_plugins/stream_app.h>
 #include <freeinit/mrpt_plugins/stream_conversions.h>
 #include <freeinit/net/stream_source.h>
 #include <freeinit/net/udp_socket.h>
@@ -24,8 +20,15 @@
 #include <sstream>
 #include <thread>
 
+#include "free_init_app.h"
+#include "free_init_online_app.h"
+#include "sim_app.h"
+#include "stream_app.h"
+
 using namespace freeinit;
 using namespace freeinit::mrpt_plugins;
+using namespace freeinit::app_support;
+using namespace freeinit::apps;
 namespace fs = std::filesystem;
 
 namespace {

@@ -1,10 +1,10 @@
 // Unit tests of the MRPT glue: the Doppler map's serialization, conversions, the streaming rawlog
 // reader (truncation, unregistered classes) and its seek index, and the record checks of the
 // ingest path on whole recordings (INI loading: tests/config).
-#include <freeinit/mrpt_plugins/app_config.h>
-#include <freeinit/mrpt_plugins/checked_recording.h>
+#include <freeinit/app_support/app_config.h>
+#include <freeinit/app_support/checked_recording.h>
+#include <freeinit/app_support/output_writers.h>
 #include <freeinit/mrpt_plugins/conversions.h>
-#include <freeinit/mrpt_plugins/output_writers.h>
 #include <freeinit/mrpt_plugins/points_map_doppler.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
@@ -27,6 +27,7 @@
 
 using namespace freeinit;
 using namespace freeinit::mrpt_plugins;
+using namespace freeinit::app_support;
 namespace fs = std::filesystem;
 
 namespace {

@@ -4,11 +4,8 @@
 // accuracy. Then every kind of bad bag: each must fail with a clear error or be counted, never
 // import silently wrong.
 #include <freeinit/mrpt_plugins/conversions.h>
-#include <freeinit/mrpt_plugins/free_init_app.h>
 #include <freeinit/mrpt_plugins/points_map_doppler.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
-#include <freeinit/mrpt_plugins/sim_app.h>
-#include <freeinit/ros1/bag_import_app.h>
 #include <freeinit/ros1/bag_writer.h>
 #include <freeinit/ros1/cloud_codec.h>
 #include <freeinit/sim/simulator.h>
@@ -24,8 +21,14 @@
 #include <limits>
 #include <sstream>
 
+#include "bag_import_app.h"
+#include "free_init_app.h"
+#include "sim_app.h"
+
 using namespace freeinit;
 using namespace freeinit::mrpt_plugins;
+using namespace freeinit::app_support;
+using namespace freeinit::apps;
 namespace fs = std::filesystem;
 
 namespace {

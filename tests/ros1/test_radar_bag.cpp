@@ -6,12 +6,10 @@
 // stamps zero), 413 trigger messages on the IMU clock whose seq matches the scans' (the last
 // trigger, seq 521, has no scan: the recording stopped within that frame). At rest for ~13 s, then
 // carried by hand, near rest again from ~34 s.
-#include "joint/doppler_inertial_filter.h"
+#include <freeinit/app_support/app_config.h>
 #include <freeinit/free_init.h>
-#include <freeinit/mrpt_plugins/app_config.h>
 #include <freeinit/mrpt_plugins/conversions.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
-#include <freeinit/ros1/bag_import_app.h>
 #include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/doppler_fit.h>
 #include <freeinit/rotation.h>
@@ -26,6 +24,9 @@
 #include <filesystem>
 #include <fstream>
 #include <sstream>
+
+#include "bag_import_app.h"
+#include "joint/doppler_inertial_filter.h"
 
 using namespace freeinit;
 namespace fs = std::filesystem;
@@ -55,7 +56,7 @@ std::string dir(const std::string& name) {
 
 // The recording as read with the shipped INI (MRPT-free reader), once.
 struct Recording {
-  mrpt_plugins::BagImportSettings settings;
+  apps::BagImportSettings settings;
   ros1::BagSummary summary;
   std::vector<ImuSample> imu;
   std::vector<LidarFrame> scans;
@@ -65,7 +66,7 @@ struct Recording {
 const Recording& recording() {
   static const Recording r = [] {
     Recording x;
-    x.settings = mrpt_plugins::loadBagImportSettings(kIni);
+    x.settings = apps::loadBagImportSettings(kIni);
     ros1::BagReadCallbacks cb;
     cb.imu = [&](const ImuSample& s) { x.imu.push_back(s); };
     cb.frame = [&](LidarFrame&& f) { x.scans.push_back(std::move(f)); };
@@ -90,7 +91,7 @@ bool moving(double t) {
 // The shipped INI: trigger stamps, no per-point time (spread over the 18.5 ms frame), the
 // README's extrinsics.
 TEST(RadarBag, ShippedIni) {
-  const auto s = mrpt_plugins::loadBagImportSettings(kIni);
+  const auto s = apps::loadBagImportSettings(kIni);
   EXPECT_EQ(s.bag.stamp_source, ros1::StampSource::kTrigger);
   EXPECT_EQ(s.bag.trigger_topic, "/sensor_platform/radar_right/trigger");
   EXPECT_EQ(s.bag.cloud.time.field.name, "");
@@ -181,7 +182,7 @@ TEST(RadarBag, RestMeansMatchTheReadme) {
 TEST(RadarBag, DopplerIsWholeBinsAsTheIniDeclares) {
   SKIP_WITHOUT_THE_BAG();
   const double bin =
-      mrpt_plugins::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").input.doppler_resolution;
+      app_support::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").input.doppler_resolution;
   ASSERT_GT(bin, 0);
   std::size_t nonzero = 0, zero_scans_moving = 0;
   for (const auto& f : recording().scans) {
@@ -270,7 +271,7 @@ TEST(RadarBag, DopplerFitWhileMovingAgreesWithTheImu) {
   // The shipped estimator INI's doppler_sigma is this test's measurement: with the fits'
   // covariances scaled by its ratio to their residuals' 0.044 m/s, the chi-square has its mean.
   const double scale =
-      mrpt_plugins::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core.velocimeter.doppler_sigma /
+      app_support::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core.velocimeter.doppler_sigma /
       0.044;
   double chi2_scaled = 0;
   std::size_t pairs = 0, agree = 0;
@@ -327,7 +328,7 @@ TEST(RadarBag, DopplerFitWhileMovingAgreesWithTheImu) {
 TEST(RadarBag, ImporterAppWritesARawlogAndTheFits) {
   SKIP_WITHOUT_THE_BAG();
   const std::string d = dir("import");
-  mrpt_plugins::BagImportApp app;
+  apps::BagImportApp app;
   app.params.bag = kBag;
   app.params.config_file = kIni;
   app.params.output = d + "/ti.rawlog";
@@ -353,7 +354,7 @@ TEST(RadarBag, ImporterAppWritesARawlogAndTheFits) {
   std::ifstream csv(d + "/fits.csv");
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(line, mrpt_plugins::kDopplerFitCsvHeader);
+  EXPECT_EQ(line, apps::kDopplerFitCsvHeader);
   std::size_t rows = 0;
   while (std::getline(csv, line)) {
     std::stringstream ss(line);
@@ -400,7 +401,7 @@ TEST(RadarBag, BagTimeStampsWithADeclaredClockOffset) {
 // The radar configuration of the estimator loads with today's keys: a window of 2 s (410 IMU
 // samples of the recording, 20 scans) whose seed passes span all of it.
 TEST(RadarBag, EstimatorIniLoads) {
-  const auto c = mrpt_plugins::loadAppConfig(kSrc + "/ini/freeinit_radar.ini");
+  const auto c = app_support::loadAppConfig(kSrc + "/ini/freeinit_radar.ini");
   EXPECT_DOUBLE_EQ(c.core.velocimeter.doppler_sigma, 0.11);
   EXPECT_EQ(c.core.bootstrap.points, 40);
   EXPECT_DOUBLE_EQ(c.core.window.duration, 2.0);
@@ -415,7 +416,7 @@ namespace {
 InitResult initializeAt(double seconds_after_start) {
   const Recording& r = recording();
   const double t = r.imu.front().t + seconds_after_start;
-  FreeInitConfig cfg = mrpt_plugins::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core;
+  FreeInitConfig cfg = app_support::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core;
   cfg.extrinsics = r.settings.extrinsics;
   std::vector<ImuSample> imu;
   for (const auto& s : r.imu)
@@ -522,7 +523,7 @@ TEST(RadarBag, EstimatorAlongTheRecordingIsSelfConsistent) {
   SKIP_WITHOUT_THE_BAG();
   using F = DopplerInertialFilter;
   const Recording& r = recording();
-  const FreeInitConfig cfg = mrpt_plugins::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core;
+  const FreeInitConfig cfg = app_support::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core;
   const double duration = r.imu.back().t - r.imu.front().t;
   std::vector<InitResult> starts;
   for (double T = 0; T + 3.0 < duration; T += 1.0) starts.push_back(initializeAt(T));

@@ -1,11 +1,11 @@
 // The output set (output_set.h): a run's outputs appear whole or not at all, replace the earlier
 // run's as a whole, never touch what is not ours, never delete a recording, and two sets on one
 // folder exclude each other.
+#include <freeinit/app_support/app_config.h>
+#include <freeinit/app_support/output_set.h>
+#include <freeinit/app_support/result_files.h>
+#include <freeinit/app_support/stop_signal.h>
 #include <freeinit/io/config_section.h>
-#include <freeinit/mrpt_plugins/app_config.h>
-#include <freeinit/mrpt_plugins/output_set.h>
-#include <freeinit/mrpt_plugins/result_files.h>
-#include <freeinit/mrpt_plugins/stop_signal.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -19,11 +19,11 @@
 namespace {
 
 namespace fs = std::filesystem;
-using freeinit::mrpt_plugins::folderSetOptions;
-using freeinit::mrpt_plugins::OutputBusy;
-using freeinit::mrpt_plugins::OutputError;
-using freeinit::mrpt_plugins::OutputSet;
-using freeinit::mrpt_plugins::OutputSetOptions;
+using freeinit::app_support::folderSetOptions;
+using freeinit::app_support::OutputBusy;
+using freeinit::app_support::OutputError;
+using freeinit::app_support::OutputSet;
+using freeinit::app_support::OutputSetOptions;
 
 fs::path freshDir(const std::string& name) {
   const fs::path d = fs::current_path() / "output_set" / name;
@@ -266,9 +266,9 @@ TEST(OutputSet, AStopRequestStopsTheNextWrite) {
   const fs::path d = freshDir("stop");
   std::ostringstream log;
   OutputSet set(d.string(), "", folderSetOptions(), log);
-  freeinit::mrpt_plugins::requestStop(SIGTERM);
-  EXPECT_THROW(writeText(set, "initial_state.ini", "x"), freeinit::mrpt_plugins::Interrupted);
-  freeinit::mrpt_plugins::clearStopRequest();
+  freeinit::app_support::requestStop(SIGTERM);
+  EXPECT_THROW(writeText(set, "initial_state.ini", "x"), freeinit::app_support::Interrupted);
+  freeinit::app_support::clearStopRequest();
 }
 
 TEST(OutputSet, RefusesAFileAsTheFolder) {
@@ -286,7 +286,7 @@ TEST(OutputSet, RefusesAFileAsTheFolder) {
 // The result files' table (result_files.h) is the one list: each file is ours in an output folder
 // (replaced with the set, never left behind) and enabled by an [output] flag the INI declares.
 TEST(ResultFiles, EveryFileIsOwnedByAFolderSetAndHasADeclaredFlag) {
-  using namespace freeinit::mrpt_plugins;
+  using namespace freeinit::app_support;
   const std::vector<std::string> owned = folderOutputNames();
   std::set<std::string> flags;
   for (const auto& k : outputSection().keys())
@@ -301,7 +301,7 @@ TEST(ResultFiles, EveryFileIsOwnedByAFolderSetAndHasADeclaredFlag) {
 }
 
 TEST(ResultFiles, WritesWhatOutputEnablesAndWhatHasContent) {
-  using namespace freeinit::mrpt_plugins;
+  using namespace freeinit::app_support;
   freeinit::InitResult r;  // no map and no velocities: no snapshot has anything to draw
   r.trajectory.resize(2);
   OutputParams output;  // snapshots enabled, as by default

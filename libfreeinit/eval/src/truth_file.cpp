@@ -1,5 +1,5 @@
-#include <freeinit/io/atomic_file.h>
 #include <freeinit/eval/truth_file.h>
+#include <freeinit/io/atomic_file.h>
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,5 @@
 #include "joint/doppler_inertial_filter.h"
+
 #include <freeinit/rotation.h>
 
 #include <Eigen/Cholesky>

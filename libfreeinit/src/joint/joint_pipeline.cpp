@@ -7,9 +7,7 @@
 //   DopplerInertialFilter              the estimator proper
 //   WindowRecorder (window_parts.h)    the window's returns as received, mapped at the end
 //   RestCells (window_parts.h)         a standing sensor's returns by direction and range
-#include "joint/doppler_inertial_filter.h"
 #include <freeinit/rotation.h>
-#include "joint/start_detector.h"
 
 #include <algorithm>
 #include <chrono>
@@ -20,9 +18,11 @@
 #include <sstream>
 
 #include "joint/chi_square.h"
+#include "joint/doppler_inertial_filter.h"
+#include "joint/start_detector.h"
+#include "joint/window_parts.h"
 #include "pipeline.h"
 #include "usable_points.h"
-#include "joint/window_parts.h"
 
 namespace freeinit::detail {
 namespace {

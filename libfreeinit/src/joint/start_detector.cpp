@@ -1,6 +1,6 @@
-#include "joint/doppler_inertial_filter.h"
-#include <freeinit/rotation.h>
 #include "joint/start_detector.h"
+
+#include <freeinit/rotation.h>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -17,6 +17,7 @@
 #include <string>
 #include <utility>
 
+#include "joint/doppler_inertial_filter.h"
 #include "joint/vector_clones.h"
 
 namespace freeinit {

@@ -3,7 +3,6 @@
 // direction and range. Used by joint_pipeline.cpp only.
 #pragma once
 
-#include "joint/doppler_inertial_filter.h"
 #include <freeinit/initial_state.h>
 #include <freeinit/rotation.h>
 #include <freeinit/types.h>
@@ -16,6 +15,7 @@
 #include <limits>
 #include <vector>
 
+#include "joint/doppler_inertial_filter.h"
 #include "usable_points.h"
 
 namespace freeinit::detail {

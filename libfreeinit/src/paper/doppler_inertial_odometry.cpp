@@ -1,11 +1,11 @@
 #include <freeinit/doppler_inertial_odometry.h>
-#include "paper/pose_integrator.h"
-#include "paper/velocimeter.h"
 
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
+#include "paper/pose_integrator.h"
+#include "paper/velocimeter.h"
 #include "paper/velocimeter_inputs.h"
 
 namespace freeinit {

@@ -1,9 +1,9 @@
 // Accelerometer bias and gravity (paper Sec. III-C), two formulations of the same kinematics:
 // the paper's differentiated form, Eq. (acc_bias_gravity_opt), and its integrated form.
+#include "paper/gravity_estimator.h"
+
 #include <ceres/ceres.h>
 #include <ceres/sphere_manifold.h>
-#include "paper/affine_residual.h"
-#include "paper/gravity_estimator.h"
 #include <freeinit/rotation.h>
 
 #include <algorithm>
@@ -12,6 +12,8 @@
 #include <stdexcept>
 #include <string>
 #include <vector>
+
+#include "paper/affine_residual.h"
 
 namespace freeinit {
 namespace {

@@ -7,11 +7,7 @@
 // of the window; its gravity solve starts the accelerometer-aided last pass, which catches up on
 // the buffered data and then follows the stream. When the last IMU sample of the window has been
 // processed the last solve makes the result final.
-#include "paper/gravity_estimator.h"
-#include "paper/pose_integrator.h"
 #include <freeinit/rotation.h>
-#include "paper/velocimeter.h"
-#include "paper/velocity_bootstrap.h"
 
 #include <chrono>
 #include <cmath>
@@ -20,8 +16,12 @@
 #include <sstream>
 #include <string>
 
-#include "pipeline.h"
+#include "paper/gravity_estimator.h"
+#include "paper/pose_integrator.h"
+#include "paper/velocimeter.h"
 #include "paper/velocimeter_inputs.h"
+#include "paper/velocity_bootstrap.h"
+#include "pipeline.h"
 
 namespace freeinit::detail {
 namespace {

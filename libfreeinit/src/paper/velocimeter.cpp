@@ -1,5 +1,6 @@
-#include <freeinit/rotation.h>
 #include "paper/velocimeter.h"
+
+#include <freeinit/rotation.h>
 
 #include <algorithm>
 #include <cmath>

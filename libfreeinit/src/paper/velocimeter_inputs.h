@@ -4,11 +4,12 @@
 #pragma once
 
 #include <freeinit/types.h>
-#include "paper/velocimeter.h"
-#include "usable_points.h"
 
 #include <cstddef>
 #include <vector>
+
+#include "paper/velocimeter.h"
+#include "usable_points.h"
 
 namespace freeinit::detail {
 

@@ -1,5 +1,5 @@
 // A small line plot rendered with OpenCV: what to draw and where comes from the core's
-// plot layout (freeinit/plot_layout.h: nice ticks, linear or log y, legend, margins), shared with
+// plot layout (plot_layout.h: nice ticks, linear or log y, legend, margins), shared with
 // the MRPT app's snapshot; this file holds the OpenCV drawing only. For the evaluation figures;
 // not a general plotting library.
 #pragma once

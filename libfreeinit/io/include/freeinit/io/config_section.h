@@ -25,7 +25,6 @@
 #include <freeinit/io/ini_file.h>
 
 #include <Eigen/Core>
-
 #include <functional>
 #include <iosfwd>
 #include <limits>

@@ -1,5 +1,0 @@
-// freeinit-eval-rawlog <config.ini> <a.rawlog> [b.rawlog ...]: Free-Init and the baselines on
-// recorded rawlogs with ground truth (EvalRawlogApp, eval_rawlog_app.h).
-#include <freeinit/mrpt_plugins/eval_rawlog_app.h>
-
-int main(int argc, char** argv) { return freeinit::mrpt_plugins::EvalRawlogApp::main(argc, argv); }

@@ -1,7 +1,0 @@
-// freeinit-online <config.ini> [--port N] [--out DIR]: Free-Init on a live Doppler LiDAR + IMU
-// stream (docs/wire_format.md); writes initial_state.ini the moment the window closes.
-#include <freeinit/mrpt_plugins/free_init_online_app.h>
-
-int main(int argc, char** argv) {
-  return freeinit::mrpt_plugins::FreeInitOnlineApp::main(argc, argv);
-}

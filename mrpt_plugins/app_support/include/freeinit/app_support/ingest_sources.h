@@ -1,0 +1,51 @@
+// Where IngestItems (ingest.h) come from: a rawlog record (an MRPT object, converted once, straight
+// to core types) or a live stream event (already in core types: no MRPT on the way).
+#pragma once
+
+#include <freeinit/app_support/app_config.h>
+#include <freeinit/app_support/ingest.h>
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+#include <freeinit/net/stream_receiver.h>
+#include <mrpt/poses/CPose3D.h>
+#include <mrpt/serialization/CSerializable.h>
+
+#include <functional>
+#include <optional>
+#include <vector>
+
+namespace freeinit::app_support {
+
+/// Turns the top-level records of a rawlog into items: sensory frames are flattened, actions
+/// skipped, IMU samples and clouds with the configured labels converted (accelerations scaled by
+/// [input] imu_accel_in_g), any other observation an Other item. A cloud's declared extrinsics
+/// are its sensorPose relative to the first IMU sample's sensorPose the decoder saw.
+class ObservationDecoder {
+ public:
+  explicit ObservationDecoder(const InputParams& input);
+  void decode(std::size_t record, const mrpt::serialization::CSerializable::Ptr& object,
+              std::vector<IngestItem>& out);
+  /// The sensorPose of the first cloud relative to the first IMU's, once a cloud was decoded.
+  const std::optional<Extrinsics>& firstCloudExtrinsics() const { return first_extrinsics_; }
+
+ private:
+  InputParams input_;
+  std::optional<mrpt::poses::CPose3D> imu_pose_;
+  std::optional<Extrinsics> first_extrinsics_;
+};
+
+/// The whole offline path over a rawlog: every record `reader` gives, decoded and checked, in
+/// order; `take` gets each checked item, the clouds held for the IMU around them at the end
+/// included; `on_record` (if given) sees each record before it is decoded. Errors of the reader
+/// propagate.
+void forEachCheckedItem(
+    mrpt_plugins::RawlogReader& reader, ObservationDecoder& decoder, RecordChecker& checker,
+    const std::function<void(CheckedItem&)>& take,
+    const std::function<void(const mrpt_plugins::RawlogObject&)>& on_record = {});
+
+/// An Imu or Frame event of the live stream as an item (`record`: the observation number); its
+/// points are moved out of the event and sorted by time if they are not; the accelerations are
+/// multiplied by `accel_scale` as the rawlog decoder does. Other kinds: nullopt.
+std::optional<IngestItem> itemFromStream(net::StreamEvent&& e, std::size_t record,
+                                         double accel_scale = 1.0);
+
+}  // namespace freeinit::app_support

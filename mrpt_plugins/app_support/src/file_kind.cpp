@@ -1,0 +1,78 @@
+#include <freeinit/app_support/file_kind.h>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <string_view>
+
+namespace freeinit::app_support {
+namespace {
+
+bool isClassNameChar(unsigned char c) { return std::isalnum(c) != 0 || c == '_' || c == ':'; }
+
+// An MRPT archive starts with its first object's class name, written as one byte 0x80 | length
+// and the name ("\x9amrpt::obs::CObservationIMU").
+bool isMrptArchive(std::string_view head) {
+  if (head.empty()) return false;
+  const auto first = static_cast<unsigned char>(head[0]);
+  const std::size_t length = first & 0x7Fu;
+  if ((first & 0x80u) == 0 || length == 0 || head.size() < 1 + length) return false;
+  return std::all_of(head.begin() + 1, head.begin() + 1 + static_cast<std::ptrdiff_t>(length),
+                     [](char c) { return isClassNameChar(static_cast<unsigned char>(c)); });
+}
+
+bool isIni(std::string_view text) {
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string_view::npos) end = text.size();
+    std::string_view line = text.substr(pos, end - pos);
+    pos = end + 1;
+    const auto b = line.find_first_not_of(" \t\r");
+    if (b == std::string_view::npos) continue;
+    line.remove_prefix(b);
+    if (line[0] == ';' || line[0] == '#') continue;
+    return line[0] == '[' || line.find('=') != std::string_view::npos;
+  }
+  return true;  // blank lines and comments only: every key at its default
+}
+
+}  // namespace
+
+FileKind fileKind(const std::string& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) return FileKind::Unreadable;
+  std::string head(4096, '\0');
+  f.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(f.gcount()));
+  if (head.empty()) return FileKind::Empty;
+  if (head.size() >= 2 && static_cast<unsigned char>(head[0]) == 0x1f &&
+      static_cast<unsigned char>(head[1]) == 0x8b)
+    return FileKind::Rawlog;
+  if (isMrptArchive(head)) return FileKind::Rawlog;
+  if (head.rfind("#ROSBAG", 0) == 0) return FileKind::RosBag;
+  if (head.find('\0') != std::string::npos) return FileKind::Binary;
+  return isIni(head) ? FileKind::Ini : FileKind::Text;
+}
+
+std::string describe(FileKind kind) {
+  switch (kind) {
+    case FileKind::Unreadable:
+      return "not readable";
+    case FileKind::Empty:
+      return "empty";
+    case FileKind::Rawlog:
+      return "an MRPT rawlog";
+    case FileKind::RosBag:
+      return "a ROS1 bag (freeinit-import-bag makes a rawlog of it)";
+    case FileKind::Ini:
+      return "an INI configuration file";
+    case FileKind::Text:
+      return "a text file";
+    case FileKind::Binary:
+      return "binary data, neither gzip nor an MRPT archive";
+  }
+  return "?";
+}
+
+}  // namespace freeinit::app_support
