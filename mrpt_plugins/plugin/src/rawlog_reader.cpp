@@ -267,7 +267,7 @@ struct RawlogReader::Impl {
         if (cause.innermost.find("not registered") != std::string::npos)
           fail(start,
                "cannot be read: " + cause.line() +
-                   " (rawlogs with Doppler clouds need the freeinit_mrpt_plugins_apps plugin)");
+                   " (rawlogs with Doppler clouds need the plugin libfreeinit_mrpt_plugins.so)");
         if (cause.innermost.find("Cannot read requested number of bytes") != std::string::npos)
           fail(start,
                "cannot be read: corrupted data (a length or count beyond the record's "
