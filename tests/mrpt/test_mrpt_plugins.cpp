@@ -15,6 +15,7 @@
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/serialization/CArchive.h>
+#include <sys/stat.h>
 
 #include <chrono>
 #include <cmath>
@@ -657,4 +658,63 @@ TEST(RawlogIndex, PlainFilesAndTheSizeThreshold) {
   }
   EXPECT_EQ(small.saveIndex(), "");
   EXPECT_FALSE(fs::exists(indexPathBeside(fx.path)));
+}
+
+// Whatever lies at the index's path is checked before it is used: a FIFO does not block the
+// reader, a link to a device or a huge file costs no memory, an index that does not fit the
+// recording is ignored and rebuilt; a name that is not a regular file is not replaced.
+TEST(RawlogIndex, WhatLiesAtItsPathIsCheckedBeforeUse) {
+  IndexedFixture fx("index_path_kinds.rawlog");
+  fx.policy.cache_dir = tmpPath("index_path_kinds_cache");
+  const std::string idx = indexPathBeside(fx.path);
+  const double t0 = fx.records.front().second;
+  auto seekAndRead = [&](bool expect_loaded) {
+    RawlogReader reader(fx.path, fx.policy);
+    EXPECT_EQ(reader.indexLoaded(), expect_loaded);
+    EXPECT_TRUE(reader.seekToTime(t0 + 1.0));
+    RawlogObject rec;
+    EXPECT_TRUE(reader.next(rec));
+    EXPECT_EQ(rec.index, fx.firstAtOrAfter(t0 + 1.0));
+    return reader.saveIndex();
+  };
+
+  // A FIFO: would block an open() for reading until a writer comes.
+  ASSERT_EQ(::mkfifo(idx.c_str(), 0600), 0);
+  EXPECT_NE(seekAndRead(false), idx);  // saved in the cache folder, the FIFO left alone
+  EXPECT_TRUE(fs::is_fifo(idx));
+  fs::remove(idx);
+  fs::remove(indexPathInCache(fx.path, fx.policy.cache_dir));
+
+  // A link to /dev/zero: endless zeros.
+  fs::create_symlink("/dev/zero", idx);
+  EXPECT_NE(seekAndRead(false), idx);
+  EXPECT_TRUE(fs::is_symlink(idx));
+  fs::remove(idx);
+  fs::remove(indexPathInCache(fx.path, fx.policy.cache_dir));
+
+  // A sparse file far larger than the rawlog: refused by its size, before any read.
+  {
+    std::ofstream f(idx, std::ios::binary);
+    f << "FIIDX001";
+  }
+  fs::resize_file(idx, std::uintmax_t{3} << 30);
+  EXPECT_EQ(seekAndRead(false), idx);  // replaced by a real index
+  EXPECT_LT(fs::file_size(idx), fs::file_size(fx.path));
+  seekAndRead(true);  // loaded, used
+
+  // A valid index whose records no longer fit (edited): ignored, rebuilt.
+  RawlogIndex index;
+  ASSERT_TRUE(loadRawlogIndex(idx, rawlogIdentity(fx.path), index));
+  ASSERT_GT(index.records.size(), 2u);
+  std::swap(index.records[0].offset, index.records[1].offset);
+  saveRawlogIndex(idx, index);
+  RawlogIndex reloaded;
+  EXPECT_FALSE(loadRawlogIndex(idx, rawlogIdentity(fx.path), reloaded));
+  index.records[1].offset = index.records[0].offset;
+  index.records[0].offset = 0;
+  index.points.back().in = fs::file_size(fx.path) + 1;  // beyond the file
+  saveRawlogIndex(idx, index);
+  EXPECT_FALSE(loadRawlogIndex(idx, rawlogIdentity(fx.path), reloaded));
+  EXPECT_EQ(seekAndRead(false), idx);
+  EXPECT_TRUE(loadRawlogIndex(idx, rawlogIdentity(fx.path), reloaded));
 }

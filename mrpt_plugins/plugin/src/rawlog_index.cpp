@@ -1,6 +1,8 @@
+#include <fcntl.h>
 #include <freeinit/io/atomic_file.h>
 #include <freeinit/mrpt_plugins/rawlog_index.h>
 #include <sys/stat.h>
+#include <unistd.h>
 #include <zlib.h>
 
 #include <algorithm>
@@ -121,16 +123,36 @@ std::string indexPathInCache(const std::string& rawlog, const std::string& cache
   return (dir / name.str()).string();
 }
 
+std::uint64_t maxIndexBytes(const RawlogIdentity& identity) {
+  // An index holds 17 bytes per record and one compressed 32 KiB window per `spacing` bytes of
+  // decompressed data: on any rawlog it is far smaller than the rawlog itself (a record with a
+  // timestamp compresses to more than 17 bytes).
+  return identity.size + (1u << 20);
+}
+
 bool loadRawlogIndex(const std::string& path, const RawlogIdentity& identity, RawlogIndex& out) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) return false;
-  // The whole file through its buffer (an istreambuf_iterator range here makes GCC 12 warn of a
-  // null dereference inside <streambuf> once inlined, -Wnull-dereference).
-  std::ostringstream whole;
-  whole << f.rdbuf();
-  const std::string bytes = whole.str();
-  if (bytes.size() < sizeof(kMagic) + 4 || bytes.compare(0, sizeof(kMagic), kMagic, 8) != 0)
-    return false;
+  // Only a regular file of a plausible size is read: a FIFO there would block the reader, a link
+  // to a device or a huge file would cost its whole size in memory. O_NONBLOCK: a FIFO put there
+  // after the check does not block either (the descriptor's own kind is checked below).
+  const int fd = ::open(path.c_str(), O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) return false;
+  struct Closer {
+    int fd;
+    ~Closer() { ::close(fd); }
+  } closer{fd};
+  struct stat st {};
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) return false;
+  const auto file_bytes = static_cast<std::uint64_t>(st.st_size);
+  if (file_bytes < sizeof(kMagic) + 4 || file_bytes > maxIndexBytes(identity)) return false;
+  std::string bytes(static_cast<std::size_t>(file_bytes), '\0');
+  std::size_t got = 0;
+  while (got < bytes.size()) {
+    const ssize_t n = ::read(fd, bytes.data() + got, bytes.size() - got);
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;  // shorter than it said (being rewritten) or unreadable
+    got += static_cast<std::size_t>(n);
+  }
+  if (bytes.compare(0, sizeof(kMagic), kMagic, 8) != 0) return false;
   const std::size_t body = bytes.size() - 4;
   {
     std::uint32_t crc = 0;
@@ -151,12 +173,16 @@ bool loadRawlogIndex(const std::string& path, const RawlogIdentity& identity, Ra
   idx.complete = complete != 0;
   if (n_points > in.left()) return false;
   idx.points.resize(static_cast<std::size_t>(n_points));
-  for (auto& p : idx.points) {
+  for (std::size_t i = 0; i < idx.points.size(); ++i) {
+    AccessPoint& p = idx.points[i];
     std::uint8_t bits = 0;
     std::uint32_t raw_len = 0, comp_len = 0;
     std::vector<unsigned char> comp;
     if (!in.get(p.in) || !in.get(bits) || !in.get(p.out) || !in.get(raw_len) || !in.get(comp_len) ||
         raw_len > 32768 || !in.getBytes(comp_len, comp))
+      return false;
+    // Validated against the recording: inside the file, in stream order.
+    if (bits > 7 || p.in > identity.size || (i > 0 && !(p.out > idx.points[i - 1].out)))
       return false;
     p.bits = bits;
     p.window.resize(raw_len);
@@ -167,13 +193,24 @@ bool loadRawlogIndex(const std::string& path, const RawlogIdentity& identity, Ra
   }
   if (!in.get(n_records) || n_records > in.left()) return false;
   idx.records.resize(static_cast<std::size_t>(n_records));
-  for (auto& rec : idx.records)
+  for (std::size_t i = 0; i < idx.records.size(); ++i) {
+    IndexedRecord& rec = idx.records[i];
     if (!in.get(rec.offset) || !in.get(rec.ticks) || !in.get(rec.kind)) return false;
+    if (rec.kind > IndexedRecord::kAction || rec.offset >= idx.covered ||
+        (i > 0 && !(rec.offset > idx.records[i - 1].offset)))
+      return false;
+  }
+  if (in.left() != 0) return false;
   out = std::move(idx);
   return true;
 }
 
 void saveRawlogIndex(const std::string& path, const RawlogIndex& index) {
+  // Something else under the index's name (a link, a FIFO, a device, a folder) was not written
+  // here (an index is a regular file): it is not ours to replace.
+  struct stat st {};
+  if (::lstat(path.c_str(), &st) == 0 && !S_ISREG(st.st_mode))
+    throw std::runtime_error(path + ": exists and is not a regular file; not replaced");
   Writer w;
   w.bytes.assign(kMagic, sizeof(kMagic));
   w.put(index.identity.size);

@@ -78,9 +78,14 @@ struct RawlogIndex {
 std::string indexPathBeside(const std::string& rawlog);
 std::string indexPathInCache(const std::string& rawlog, const std::string& cache_dir);
 
-/// Loads an index; false if it is missing, unreadable, of another format or not of `identity`.
+/// Loads an index; false if it is missing, not a regular file (a FIFO or a device is never
+/// opened for reading in a way that blocks), larger than the rawlog it claims to index, unreadable,
+/// of another format, not of `identity`, or inconsistent with the recording (access points
+/// beyond the file or out of order, records out of order or beyond what it covers).
 bool loadRawlogIndex(const std::string& path, const RawlogIdentity& identity, RawlogIndex& out);
-/// Writes atomically (temporary file + rename). Throws std::runtime_error.
+/// Writes atomically (temporary file + rename). Throws std::runtime_error, also when something
+/// that is not a regular file (a link, a FIFO, a device, a folder) has the index's name: it is not
+/// ours.
 void saveRawlogIndex(const std::string& path, const RawlogIndex& index);
 
 }  // namespace freeinit::mrpt_plugins
