@@ -158,6 +158,26 @@ TEST(RawlogReader, ARecordOverTheConfiguredMaximumIsRefusedNamingTheKey) {
   EXPECT_NE(m.find("1.0 MB"), std::string::npos) << m;
 }
 
+TEST(RawlogReader, AValidCloudIsChargedItsSizeNotTheGrowthOfItsFields) {
+  // 400,000 points: 10 MB of fields in memory. Read as its data arrive, each field vector grew
+  // by doubling and every earlier block was charged too (24 MB): a valid cloud then looked like
+  // a corrupt count. Where the budget vouches for the count, the fields are allocated once.
+  const std::string p = tmpPath("cloud_of_its_size.rawlog");
+  {
+    RawlogWriter w(p);
+    w.write(*imuToObservation(imu(1700000000.0), "IMU"));
+    w.write(*frameToObservation(frame(1700000000.01, 400000), Extrinsics(), "LIDAR"));
+    w.commit();
+  }
+  EXPECT_EQ(readError(p, 16000000), "");
+  // Below its size it is refused, and the message adds up: what it asked for on top of what it
+  // had allocated.
+  const std::string m = readError(p, 6000000);
+  expectOneLineNaming(m, p, "record 1", "max_record_mb");
+  EXPECT_NE(m.find(" on top of the "), std::string::npos) << m;
+  EXPECT_NE(m.find("more than the 6.0 MB a record may take"), std::string::npos) << m;
+}
+
 TEST(RawlogReader, ACountBeyondWhatTheFileHoldsIsRefusedBeforeAllocating) {
   // A stock points map declaring 50 million points (600 MB of coordinates) in a file of a few KB:
   // MRPT would allocate them before reading; the budget of the record (what the rest of the file

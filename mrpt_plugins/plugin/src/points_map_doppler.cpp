@@ -1,4 +1,5 @@
 #include <freeinit/mrpt_plugins/points_map_doppler.h>
+#include <freeinit/mrpt_plugins/read_budget.h>
 #include <mrpt/core/bits_mem.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/serialization/CArchive.h>
@@ -164,6 +165,10 @@ template <class Vec>
 void readChunked(mrpt::serialization::CArchive& in, Vec& v, std::size_t n) {
   constexpr std::size_t kChunk = std::size_t{1} << 16;
   v.clear();
+  // Where the reader's budget vouches for the count (a count the rest of the file may hold),
+  // the whole vector at once: growing it charges its earlier blocks too, and a valid cloud of
+  // millions of points would look twice its size.
+  if (ReadBudget::fits(n * sizeof(typename Vec::value_type))) v.reserve(n);
   for (std::size_t done = 0; done < n;) {
     const std::size_t k = std::min(kChunk, n - done);
     v.resize(done + k);

@@ -231,7 +231,7 @@ struct RawlogReader::Impl {
     const std::size_t budget = by_file ? static_cast<std::size_t>(file_budget) : max_record_bytes;
     mrpt::serialization::CSerializable::Ptr obj;
     std::exception_ptr error;
-    std::size_t refused = 0;
+    std::size_t refused = 0, charged = 0;
     {
       StderrHold hold;
       {
@@ -242,15 +242,23 @@ struct RawlogReader::Impl {
           error = std::current_exception();
         }
         refused = guard.refused();
+        charged = guard.chargedBeforeRefusal();
       }
       hold.release(!error && refused == 0);
     }
-    if (refused > 0)
-      fail(start, "cannot be read: it would allocate " + megabytes(refused) +
-                      (by_file ? ", more than the rest of the file can hold"
-                               : ", more than the " + megabytes(max_record_bytes) +
-                                     " a record may take ([input] max_record_mb)") +
-                      ": a corrupt length or count");
+    if (refused > 0) {
+      const std::string asked =
+          megabytes(refused) + (charged > 0
+                                    ? " on top of the " + megabytes(charged) + " it had allocated"
+                                    : std::string());
+      if (by_file)
+        fail(start, "cannot be read: it would allocate " + asked +
+                        ", more than the rest of the file can hold: a corrupt length or count");
+      fail(start, "cannot be read: it would allocate " + asked + ", more than the " +
+                      megabytes(max_record_bytes) +
+                      " a record may take ([input] max_record_mb): a corrupt length or count, "
+                      "or a record larger than that key allows");
+    }
     if (error) {
       try {
         std::rethrow_exception(error);

@@ -28,19 +28,26 @@ class ReadBudget {
 
   /// An allocation was refused: the request [bytes] that did not fit, else 0.
   std::size_t refused() const noexcept;
+  /// [bytes] allocated within the budget before the refused request.
+  std::size_t chargedBeforeRefusal() const noexcept;
   /// [bytes] allocated within the budget so far.
   std::size_t charged() const noexcept;
 
   /// For the allocation functions: charges `bytes` to this thread's open budget; false (and the
   /// request is recorded) when a large request does not fit. True when no budget is open.
   static bool charge(std::size_t bytes) noexcept;
+  /// Whether a budget is open on this thread, charged by this program's allocation functions, and
+  /// `bytes` more fit in it. A reader that trusts a count only this far allocates what the count
+  /// asks for at once (charged once) instead of growing by parts as the data arrive (charged
+  /// about twice: a growing vector's earlier blocks are charged too).
+  static bool fits(std::size_t bytes) noexcept;
   /// Whether this program's allocation functions charge budgets (alloc_guard.cpp is linked in).
   static bool enforced() noexcept;
   /// Called once by the guard at start-up.
   static void markEnforced() noexcept;
 
  private:
-  std::size_t saved_limit_, saved_used_, saved_refused_;
+  std::size_t saved_limit_, saved_used_, saved_refused_, saved_used_at_refusal_;
   bool saved_open_;
 };
 
