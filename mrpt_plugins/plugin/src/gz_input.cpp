@@ -180,9 +180,19 @@ bool GzInput::fill() {
       maybeAddPoint();
       continue;
     }
-    error_ = std::string("corrupt gzip data near byte ") + std::to_string(file_pos_ - z_.avail_in) +
-             " of the file" +
-             (z_.msg != nullptr ? std::string(" (zlib: ") + z_.msg + ")" : std::string());
+    const std::string zmsg = z_.msg != nullptr ? z_.msg : "";
+    if (zmsg == "incorrect data check" || zmsg == "incorrect length check")
+      // The member's trailer is read after its last byte: the damage is anywhere before it.
+      error_ = std::string("the gzip stream's ") +
+               (zmsg == "incorrect data check" ? "CRC-32" : "length") +
+               " does not match its data (checked at byte " +
+               std::to_string(file_pos_ - z_.avail_in) +
+               " of the file, its end): a byte is wrong somewhere in the stream, not "
+               "necessarily here, so every record read from it is suspect";
+    else
+      error_ = std::string("corrupt gzip data near byte ") +
+               std::to_string(file_pos_ - z_.avail_in) + " of the file" +
+               (zmsg.empty() ? std::string() : " (zlib: " + zmsg + ")");
     eof_ = true;
     break;
   }
