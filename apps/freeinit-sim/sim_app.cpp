@@ -4,12 +4,14 @@
 #include <freeinit/app_support/ground_truth.h>
 #include <freeinit/app_support/output_set.h>
 #include <freeinit/app_support/output_writers.h>
+#include <freeinit/app_support/progress_bar.h>
 #include <freeinit/app_support/stop_signal.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
 #include <freeinit/mrpt_plugins/register.h>
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/scenario_ini.h>
 #include <freeinit/sim/simulator.h>
+#include <unistd.h>
 
 #include <cstdint>
 #include <filesystem>
@@ -18,6 +20,7 @@
 #include <ostream>
 #include <sstream>
 #include <stdexcept>
+#include <system_error>
 
 namespace freeinit::apps {
 namespace {
@@ -31,6 +34,37 @@ sim::ScenarioConfig loadScenario(const std::string& file, const SimAppParams& p)
 bool sameExtrinsics(const Extrinsics& a, const Extrinsics& b) {
   return a.R_bl == b.R_bl && a.p_bl == b.p_bl;
 }
+
+/// What a scenario costs before it is simulated: the rawlog's bytes before compression (a
+/// return's seven fields take 25 bytes, and Doppler data hardly compress) and the memory that
+/// holds the recording while it is written (the simulator keeps every frame).
+struct SimulationSize {
+  std::size_t frames = 0, imu_samples = 0;
+  double rawlog_bytes = 0, memory_bytes = 0;
+};
+
+SimulationSize sizeOf(const sim::ScenarioConfig& sc) {
+  SimulationSize z;
+  z.frames = sim::frameCount(sc);
+  z.imu_samples = static_cast<std::size_t>(sc.duration * sc.imu_rate) + 1;
+  const double points = static_cast<double>(z.frames) * static_cast<double>(sc.points_per_frame);
+  z.rawlog_bytes = points * 25.0 + static_cast<double>(z.frames) * 400.0 +
+                   static_cast<double>(z.imu_samples) * 300.0;
+  z.memory_bytes = points * static_cast<double>(sizeof(DopplerPoint) + 1);
+  return z;
+}
+
+std::string gigabytes(double bytes) {
+  std::ostringstream os;
+  if (bytes >= 1e9)
+    os << std::fixed << std::setprecision(1) << bytes / 1e9 << " GB";
+  else
+    os << std::fixed << std::setprecision(bytes >= 1e7 ? 0 : 1) << bytes / 1e6 << " MB";
+  return os.str();
+}
+
+/// Progress of the long runs only (a short one prints what it always printed).
+constexpr double kProgressFromBytes = 200e6;
 
 }  // namespace
 
@@ -70,11 +104,43 @@ void SimApp::run(std::ostream& log) {
   }
   if (params.duration > 0) sc.duration = params.duration;
   if (params.points_per_frame > 0) sc.points_per_frame = params.points_per_frame;
+  // What it will take, checked before any work: the disk the rawlog goes to and the memory that
+  // holds the recording.
+  const SimulationSize size = sizeOf(sc);
+  std::ostringstream what;
+  what << "-d " << sc.duration << " -n " << sc.points_per_frame << ": " << size.frames
+       << " point clouds of " << sc.points_per_frame << " points, about "
+       << gigabytes(size.rawlog_bytes) << " of rawlog";
+  std::error_code ec;
+  const std::filesystem::path folder =
+      std::filesystem::absolute(stem_path.parent_path().empty() ? "." : stem_path.parent_path());
+  std::filesystem::path probe = folder;  // the nearest folder that exists (the set creates it)
+  while (!probe.empty() && !std::filesystem::exists(probe, ec) && probe != probe.root_path())
+    probe = probe.parent_path();
+  const std::filesystem::space_info disk = std::filesystem::space(probe, ec);
+  if (!ec && size.rawlog_bytes > static_cast<double>(disk.available))
+    throw std::invalid_argument(what.str() + ", more than the " +
+                                gigabytes(static_cast<double>(disk.available)) + " free on " +
+                                probe.string() + " (-d is in seconds)");
+  const double physical =
+      static_cast<double>(sysconf(_SC_PHYS_PAGES)) * static_cast<double>(sysconf(_SC_PAGE_SIZE));
+  if (physical > 0 && size.memory_bytes > 0.8 * physical)
+    throw std::invalid_argument(what.str() + "; simulating it holds about " +
+                                gigabytes(size.memory_bytes) + " in memory, more than this " +
+                                gigabytes(physical) + " machine has (-d is in seconds)");
+  const bool large = size.rawlog_bytes >= kProgressFromBytes;
   log << "Simulating " << (sc.name == "random" ? "random scenario " : "preset ")
       << (sc.name == "random" ? std::to_string(sc.seed) : sc.name) << " (seed " << sc.seed << ", "
       << sc.duration << " s, " << sc.points_per_frame << " points/frame, IMU " << sc.imu_rate
-      << " Hz)...\n";
-  const sim::Recording rec = sim::simulate(sc);
+      << " Hz" << (large ? "; about " + gigabytes(size.rawlog_bytes) + " to write" : "")
+      << ")...\n";
+  const bool terminal = isatty(STDOUT_FILENO) != 0;
+  app_support::ProgressBar simulating(log, "  simulating", "frames", terminal);
+  const sim::Recording rec = sim::simulate(sc, [&](std::size_t done, std::size_t total) {
+    app_support::throwIfStopRequested();
+    if (large) simulating.update(done, total);
+  });
+  if (large) simulating.finish();
   app_support::throwIfStopRequested();
   std::vector<std::string> drawn;
   if (params.random) {
@@ -91,9 +157,12 @@ void SimApp::run(std::ostream& log) {
   set.write(rawlog_name, [&](const std::string& path) {
     mrpt_plugins::RawlogWriter rawlog(path, rec.declared_extrinsics, params.imu_label,
                                       params.lidar_label);
+    app_support::ProgressBar writing(log, "  writing", "records", terminal);
+    const std::size_t total = rec.imu.size() + rec.frames.size();
     std::size_t i = 0, k = 0;
     while (i < rec.imu.size() || k < rec.frames.size()) {
       if ((i + k) % 512 == 0) app_support::throwIfStopRequested();
+      if (large) writing.update(i + k, total);
       const bool take_imu =
           k >= rec.frames.size() || (i < rec.imu.size() && rec.imu[i].t <= rec.frames[k].stamp);
       if (take_imu) {
@@ -105,6 +174,7 @@ void SimApp::run(std::ostream& log) {
       }
     }
     rawlog.commit();
+    if (large) writing.finish();
     records_written = rawlog.records();
   });
 

@@ -32,4 +32,26 @@ TEST(SeekIndex, AFifoBesideTheRecordingIsNeitherReadNorReplaced) {
   EXPECT_TRUE(fs::exists(d / "out" / "initial_state.ini"));
 }
 
+// A user thinking in ms (`-d 500`): freeinit-sim says how much it will write before it starts,
+// and refuses what does not fit on the disk, naming the flags, before simulating anything.
+TEST(Simulator, ARecordingTooLargeForTheDiskIsRefusedBeforeAnyWork) {
+  const fs::path d = freshDir("sim_too_large");
+  const fs::path mnt = d / "mnt";
+  const std::string script = std::string(FREEINIT_SIM_APP) + " -p dyna_01 -d 500 -n 60000 -o " +
+                             mnt.string() + "/x.rawlog > " + (d / "sim.out").string() + " 2> " +
+                             (d / "sim.err").string() + "; echo $? > " + (d / "sim.rc").string() +
+                             "; ls -A " + mnt.string() + " > " + (d / "sim.left").string();
+  if (!withSmallDisk(mnt, "2m", script, d / "unshare.log"))
+    GTEST_SKIP() << "cannot mount a tmpfs here (not root?)";
+  EXPECT_EQ(readText(d / "sim.rc"), "1\n") << readText(d / "unshare.log");
+  const std::string err = readText(d / "sim.err");
+  EXPECT_EQ(lineCount(err), 1u) << err;
+  EXPECT_CONTAINS(err,
+                  "freeinit-sim: error: -d 500 -n 60000: 5000 point clouds of 60000 points, "
+                  "about 7.5 GB of rawlog, more than the ");
+  EXPECT_CONTAINS(err, "(-d is in seconds)");
+  EXPECT_EQ(readText(d / "sim.out"), "");
+  EXPECT_EQ(readText(d / "sim.left"), "");
+}
+
 }  // namespace

@@ -136,7 +136,7 @@ int lineOfSlot(LineOrder order, int s, int L) {
   return s;
 }
 
-void simulateLidar(const ScenarioConfig& c, Recording& rec) {
+void simulateLidar(const ScenarioConfig& c, Recording& rec, const SimulationProgress& progress) {
   std::mt19937_64 rng = detail::randomStream(c.seed, detail::Stream::Lidar);
   std::normal_distribution<double> n01(0.0, 1.0);
   std::uniform_real_distribution<double> u01(0.0, 1.0);
@@ -144,7 +144,7 @@ void simulateLidar(const ScenarioConfig& c, Recording& rec) {
   const Trajectory& traj = *rec.trajectory;
   const Extrinsics& ext = rec.extrinsics;
   const double T = 1.0 / c.frame_rate;
-  const long n_frames = static_cast<long>(std::floor(c.duration * c.frame_rate + 1e-9));
+  const long n_frames = static_cast<long>(frameCount(c));
   const long N = c.points_per_frame;
   const int L = c.lines;
   const double dt = T / static_cast<double>(std::max<long>(N, 1));
@@ -225,12 +225,17 @@ void simulateLidar(const ScenarioConfig& c, Recording& rec) {
     frame.stamp += c.lidar_time_offset;
     rec.frames.push_back(std::move(frame));
     rec.labels.push_back(std::move(labels));
+    if (progress) progress(rec.frames.size(), static_cast<std::size_t>(n_frames));
   }
 }
 
 }  // namespace
 
-Recording simulate(const ScenarioConfig& config) {
+std::size_t frameCount(const ScenarioConfig& config) {
+  return static_cast<std::size_t>(std::floor(config.duration * config.frame_rate + 1e-9));
+}
+
+Recording simulate(const ScenarioConfig& config, const SimulationProgress& progress) {
   try {
     validateScenario(config);
   } catch (const std::invalid_argument& e) {
@@ -247,7 +252,7 @@ Recording simulate(const ScenarioConfig& config) {
   rec.lidar_time_offset = config.lidar_time_offset;
   drawBiases(config, rec);
   simulateImu(config, rec);
-  simulateLidar(config, rec);
+  simulateLidar(config, rec, progress);
   return rec;
 }
 

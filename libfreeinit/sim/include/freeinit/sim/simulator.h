@@ -6,7 +6,9 @@
 #include <freeinit/sim/trajectory.h>
 #include <freeinit/types.h>
 
+#include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <string>
 #include <vector>
@@ -48,8 +50,15 @@ std::vector<std::string> presetNames();
 /// unknown name.
 ScenarioConfig preset(const std::string& name, std::uint64_t seed = 1);
 
+/// Called after each simulated frame with (frames done, frames in all).
+using SimulationProgress = std::function<void(std::size_t, std::size_t)>;
+
 /// Generates a recording from the config alone. Deterministic for a given config (including seed).
-/// Throws std::invalid_argument (validateScenario) on a config it cannot run.
-Recording simulate(const ScenarioConfig& config);
+/// Throws std::invalid_argument (validateScenario) on a config it cannot run. `progress`, if
+/// given, is called after each frame.
+Recording simulate(const ScenarioConfig& config, const SimulationProgress& progress = {});
+
+/// The number of LiDAR frames simulate() makes for `config`.
+std::size_t frameCount(const ScenarioConfig& config);
 
 }  // namespace freeinit::sim
