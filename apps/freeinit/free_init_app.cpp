@@ -503,8 +503,8 @@ int FreeInitApp::run(std::ostream& log) {
     app_support::printVerdict(
         log, app_support::verdictOf(result, config.core.velocimeter.doppler_sigma));
   for (const auto& w : s.warnings) log << "  warning: " << w << "\n";
-  if (config.extrinsics.from_sensor_pose && decoder.firstCloudExtrinsics())
-    log << "Extrinsics from sensorPose: p_bl = " << v3(decoder.firstCloudExtrinsics()->p_bl)
+  if (config.extrinsics.from_sensor_pose && checker.declaredExtrinsics())
+    log << "Extrinsics from sensorPose: p_bl = " << v3(checker.declaredExtrinsics()->p_bl)
         << " m\n";
 
   // 4. Ground truth, when it sits beside the rawlog.

@@ -39,7 +39,7 @@ void ObservationDecoder::decode(std::size_t record,
       it.kind = IngestItem::Kind::Imu;
       try {
         it.imu = mrpt_plugins::imuFromObservation(*imu, input_.imu_accel_in_g ? kGravity : 1.0);
-        if (!imu_pose_) imu_pose_ = imu->sensorPose;
+        it.sensor_pose = mrpt_plugins::extrinsicsFromPose(imu->sensorPose);
       } catch (const std::exception& e) {
         it.problem = e.what();
       }
@@ -52,10 +52,7 @@ void ObservationDecoder::decode(std::size_t record,
       } catch (const std::exception& e) {
         it.problem = e.what();
       }
-      const mrpt::poses::CPose3D imu_p = imu_pose_ ? *imu_pose_ : mrpt::poses::CPose3D();
-      it.frame_extrinsics =
-          mrpt_plugins::extrinsicsFromPose(pc->sensorPose - imu_p);  // imu^-1 (+) lidar
-      if (!first_extrinsics_ && it.problem.empty()) first_extrinsics_ = it.frame_extrinsics;
+      it.sensor_pose = mrpt_plugins::extrinsicsFromPose(pc->sensorPose);
     } else {
       it.kind = IngestItem::Kind::Other;
       it.what = std::string(obs->GetRuntimeClass()->className) + " '" + obs->sensorLabel + "'";
