@@ -1463,10 +1463,6 @@ std::size_t DopplerInertialFilter::acceptedPointsTotal() const {
   return total;
 }
 
-Mat3 DopplerInertialFilter::dopplerInformation(std::size_t k) const {
-  return nodes_[k].sums.moment(0) / r_doppler_;
-}
-
 DopplerInertialFilter::NodeResiduals DopplerInertialFilter::nodeResiduals(
     std::size_t min_returns, const std::vector<Vec9>& Qs) const {
   checkPolynomials(Qs);

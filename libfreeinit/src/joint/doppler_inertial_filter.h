@@ -123,7 +123,6 @@ class DopplerInertialFilter {
   /// through the samples around them, so the filter wants sample k + 2 before it predicts node
   /// k + 1 or takes the points of node k (with fewer it falls back to lower orders).
   void addImu(const ImuSample& s);
-  std::size_t imuSamples() const { return imu_.size(); }
 
   /// The prior of the window's first node, in terms the filter re-expresses wherever node 0's
   /// estimate moves in the smoother's iterations: roll and pitch in the world (the yaw and the
@@ -257,14 +256,11 @@ class DopplerInertialFilter {
   const FilterState& state(std::size_t k) const { return nodes_[k].xs; }
   /// Covariance of the last node's state (the filter's of the last pass).
   const MatS& covariance() const { return nodes_.back().P; }
-  std::size_t acceptedPoints(std::size_t k) const { return nodes_[k].sums.n; }
   /// Sum of squared residuals of the accepted points at the current estimate, and their count.
   double residualSumOfSquares() const { return residualSumOfSquares(lidarVelocityPolynomials()); }
   /// The same with the nodes' polynomials given (lidarVelocityPolynomials()).
   double residualSumOfSquares(const std::vector<Vec9>& Q) const;
   std::size_t acceptedPointsTotal() const;
-  /// Weighted information the Doppler gave about v_l at node k (sum d d^T / sigma^2).
-  Mat3 dopplerInformation(std::size_t k) const;
   /// Whether each node's returns agree with its smoothed LiDAR velocity as the noise model says
   /// (after smooth()): for every node with at least min_returns accepted returns and no rest
   /// knowledge (rest is a model of its own, approximate for a hand-held rig's tremor), g = sum r d
