@@ -10,7 +10,6 @@
 #include <freeinit/rotation.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -44,11 +43,6 @@ constexpr double kEarlySmoothing = 0.75;
 /// final ones, no status change; 90 % of the states the same to 1e-4 of their bound, all within
 /// 0.04 of it but in the runs confidently wrong either way (their answers depend on the path).
 constexpr double kEarlyLooseness = 100.0;
-
-double wallSeconds() {
-  using Clock = std::chrono::steady_clock;
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
 
 using BodyVelocityJacobian = Eigen::Matrix<double, 3, DopplerInertialFilter::kStateDim>;
 
@@ -211,8 +205,7 @@ class JointPipeline final : public Pipeline {
     }
     k_first_ = k;
     t_ref_ = t_ref;
-    stride_ = vp.point_stride > 0 ? vp.point_stride
-                                  : automaticPointStride(frameList(), vp.max_point_rate);
+    stride_ = vp.point_stride > 0 ? vp.point_stride : automaticPointStride(seq_, vp.max_point_rate);
     reserveRecorder();
     startFilter(d);
     Vec3 gm = Vec3::Zero(), am = Vec3::Zero();
@@ -248,16 +241,6 @@ class JointPipeline final : public Pipeline {
     // map to be written behind the node it is read from, without copying the node aside.
     recorder_.reserve(static_cast<std::size_t>(reserved) + 1024,
                       static_cast<std::size_t>(0.02 * reserved));
-  }
-
-  /// Frames as the automatic stride wants them (anything with a `points` vector).
-  struct FramePoints {
-    const std::vector<DopplerPoint>& points;
-  };
-  std::vector<FramePoints> frameList() const {
-    std::vector<FramePoints> out;
-    for (const auto& f : seq_.frames()) out.push_back({*f.points});
-    return out;
   }
 
   /// The filter's first node: attitude from the decision's gravity (yaw zero: the world's

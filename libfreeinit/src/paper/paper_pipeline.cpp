@@ -9,9 +9,7 @@
 // processed the last solve makes the result final.
 #include <freeinit/rotation.h>
 
-#include <chrono>
 #include <cmath>
-#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -25,11 +23,6 @@
 
 namespace freeinit::detail {
 namespace {
-
-double wallSeconds() {
-  using Clock = std::chrono::steady_clock;
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
 
 class PaperPipeline final : public Pipeline {
  public:
@@ -49,9 +42,9 @@ class PaperPipeline final : public Pipeline {
   double pass_duration = 0;       ///< [s] length of the current pass (window rule, config.h)
   bool pass_closed = false;       ///< the last IMU sample of the current pass is processed
   std::size_t k_next = 0;         ///< next IMU sample to process
-  std::size_t next_frame = 0, next_point = 0;  ///< next point to process
-  int point_stride = 1;                        ///< the configured stride, or the automatic one
-  std::size_t stride_counter = 0;  ///< usable points since the last used one (mod the stride)
+  MeasurementSequencer::Cursor next;  ///< next point to process
+  int point_stride = 1;               ///< the configured stride, or the automatic one
+  std::size_t stride_counter = 0;     ///< usable points since the last used one (mod the stride)
 
   std::optional<Velocimeter> velocimeter;
   PoseIntegrator integrator;
@@ -75,40 +68,13 @@ class PaperPipeline final : public Pipeline {
   PaperPipeline(const FreeInitConfig& c, const MeasurementSequencer& s)
       : cfg(c), seq(s), imu(s.imu()) {}
 
-  const std::vector<DopplerPoint>& pts(std::size_t f) const { return *seq.frames()[f].points; }
-  double stampOf(std::size_t f) const { return seq.frames()[f].stamp; }
-
-  /// Frames as the automatic stride wants them (anything with a `points` vector).
-  struct FramePoints {
-    const std::vector<DopplerPoint>& points;
-  };
-  std::vector<FramePoints> frameList() const {
-    std::vector<FramePoints> out;
-    for (const auto& f : seq.frames()) out.push_back({*f.points});
-    return out;
-  }
-
-  double pointTime(std::size_t f, std::size_t p) const {
-    return (stampOf(f) - t_ref) + pts(f)[p].time_offset;
-  }
-  /// Moves (f, p) to the next existing point; false when the buffered frames are exhausted.
-  bool normalizeCursor(std::size_t& f, std::size_t& p) const {
-    while (f < seq.frames().size() && p >= pts(f).size()) {
-      ++f;
-      p = 0;
-    }
-    return f < seq.frames().size();
-  }
-  /// Time of the last buffered point (relative), or -inf.
-  double lidarCoveredUntil() const {
-    for (std::size_t f = seq.frames().size(); f-- > 0;)
-      if (!pts(f).empty()) return (stampOf(f) - t_ref) + pts(f).back().time_offset;
-    return -std::numeric_limits<double>::infinity();
+  /// Time of the point at a normalized cursor, from the window start (t_ref) [s].
+  double pointTime(const MeasurementSequencer::Cursor& c) const {
+    return (seq.frames()[c.f].stamp - t_ref) + seq.point(c).time_offset;
   }
 
   void fail(InitStatus s, const std::string& msg) {
-    res->state.status = s;
-    res->state.message = msg;
+    failResult(*res, s, msg);
     phase = Phase::Done;
   }
 
@@ -138,9 +104,9 @@ class PaperPipeline final : public Pipeline {
       return;
     }
     // Window start: the first IMU sample at or after the first LiDAR point.
-    std::size_t f = 0, p = 0;
-    if (!normalizeCursor(f, p) || imu.empty()) return;
-    const double tp0 = stampOf(f) + pts(f)[p].time_offset;
+    MeasurementSequencer::Cursor c;
+    if (!seq.normalize(c) || imu.empty()) return;
+    const double tp0 = seq.time(c);
     std::size_t k = 0;
     while (k < imu.size() && imu[k].t < tp0) ++k;
     if (k + 1 >= imu.size()) return;  // need the sample and the next one (gyro slope)
@@ -151,9 +117,9 @@ class PaperPipeline final : public Pipeline {
     const auto& vp = cfg.velocimeter;
     dirs.reserve(cfg.bootstrap.points);
     dopplers.reserve(cfg.bootstrap.points);
-    for (; normalizeCursor(f, p) && static_cast<int>(dirs.size()) < cfg.bootstrap.points; ++p) {
-      const DopplerPoint& pt = pts(f)[p];
-      if (pointTime(f, p) < 0 || !usablePoint(pt, vp)) continue;
+    for (; seq.normalize(c) && static_cast<int>(dirs.size()) < cfg.bootstrap.points; ++c.p) {
+      const DopplerPoint& pt = seq.point(c);
+      if (pointTime(c) < 0 || !usablePoint(pt, vp)) continue;
       const double r = pt.p_l.norm();
       dirs.push_back(pt.p_l.cast<double>() / r);
       dopplers.push_back(pt.doppler);
@@ -169,8 +135,8 @@ class PaperPipeline final : public Pipeline {
       return;
     }
     k_first = k;
-    point_stride = vp.point_stride > 0 ? vp.point_stride
-                                       : automaticPointStride(frameList(), vp.max_point_rate);
+    point_stride =
+        vp.point_stride > 0 ? vp.point_stride : automaticPointStride(seq, vp.max_point_rate);
     boot_fit = fit;
     b_g_start = vp.gyro_bias_prior;
     const auto& sp = cfg.static_detector;
@@ -188,8 +154,7 @@ class PaperPipeline final : public Pipeline {
     pass_duration =
         finalPass() || seed <= 0 ? cfg.window.duration : std::min(seed, cfg.window.duration);
     pass_closed = false;
-    next_frame = 0;
-    next_point = 0;
+    next = {};
     stride_counter = 0;
     kinematics.clear();
     res->static_map.clear();
@@ -227,8 +192,8 @@ class PaperPipeline final : public Pipeline {
 
   void run() {
     while (true) {
-      const bool have_point = normalizeCursor(next_frame, next_point);
-      const double tp = have_point ? pointTime(next_frame, next_point) : 0.0;
+      const bool have_point = seq.normalize(next);
+      const double tp = have_point ? pointTime(next) : 0.0;
       if (!pass_closed) {
         if (k_next >= imu.size()) return;  // wait for IMU
         const WindowSample w =
@@ -243,7 +208,7 @@ class PaperPipeline final : public Pipeline {
           continue;
         }
         // All points before tg are processed if the LiDAR stream has passed tg.
-        if (!have_point && !seq.finished() && lidarCoveredUntil() < tg) return;
+        if (!have_point && !seq.lidarPassed(imu[k_next].t)) return;
         const bool last = w == WindowSample::Last;
         if (!last && k_next + 1 >= imu.size() && !seq.finished()) return;  // need the slope
         processGyro(k_next);
@@ -292,8 +257,8 @@ class PaperPipeline final : public Pipeline {
   }
 
   void processPoint(double t) {
-    const DopplerPoint& pt = pts(next_frame)[next_point];
-    ++next_point;
+    const DopplerPoint& pt = seq.point(next);
+    ++next.p;
     auto& diag = res->diag;
     if (t < 0) return;  // before the window
     ++diag.points_seen;
