@@ -119,7 +119,7 @@ struct Stream {
   std::int64_t points = 0;
 };
 
-Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::VelocimeterParams& vp) {
+Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::DopplerParams& dp) {
   Stream s;
   const double t0 = rec.imu.front().t;
   std::vector<Stream::Event> pts;
@@ -127,7 +127,7 @@ Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::Velocimet
     for (const auto& p : f.points) {
       const double r = p.p_l.norm();
       const double t = f.stamp + p.time_offset - t0;
-      if (t < 0 || r < vp.min_range || r > vp.max_range) continue;
+      if (t < 0 || r < dp.min_range || r > dp.max_range) continue;
       pts.push_back({t, -1, p.p_l, p.doppler});
     }
   // Keep the points within the IMU span, merge in the gyro samples.
@@ -149,11 +149,11 @@ Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::Velocimet
 void BM_VelocimeterDoppler(benchmark::State& state, const std::string& name) {
   const freeinit::sim::Recording& rec = recording(name);
   const freeinit::FreeInitConfig cfg;
-  const Stream stream = makeStream(rec, cfg.velocimeter);
+  const Stream stream = makeStream(rec, cfg.doppler);
   const auto& imu = rec.imu;
   std::int64_t accepted = 0;
   for (auto _ : state) {
-    freeinit::Velocimeter div(cfg.velocimeter, rec.extrinsics);
+    freeinit::Velocimeter div(freeinit::velocimeterParams(cfg), rec.extrinsics);
     // Started from the true LiDAR velocity with a loose covariance (the bootstrap's job).
     const freeinit::sim::TruthState x0 = rec.truth(imu.front().t);
     const freeinit::Vec3 v_b0 = x0.R_wb.transpose() * x0.v_w;
@@ -185,7 +185,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   const freeinit::sim::Recording& rec = recording(name, imu_rate);
   freeinit::FreeInitConfig cfg;
   cfg.extrinsics = rec.extrinsics;
-  if (stride > 0) cfg.velocimeter.point_stride = stride;
+  if (stride > 0) cfg.doppler.point_stride = stride;
   HeapStats before{}, after{};
   std::size_t used = 0;
   double t_div = 0, t_solve = 0, t_result = 0, t_map = 0;
@@ -209,7 +209,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   }
   if (!ok) state.SkipWithError("initialization did not succeed");
   const double n = static_cast<double>(state.iterations());
-  state.counters["stride"] = cfg.velocimeter.point_stride;  // 0: automatic (every point up to 3M/s)
+  state.counters["stride"] = cfg.doppler.point_stride;  // 0: automatic (every point up to 3M/s)
   // Diagnostics: time_velocimeter is the estimator's time but the solves.
   state.counters["ms_filter"] = 1e3 * t_div / n;
   state.counters["ms_solver"] = 1e3 * t_solve / n;
@@ -229,7 +229,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
 /// Doppler noise, as the joint pipeline sets them.
 freeinit::DopplerInertialFilterParams forwardPassParams(const freeinit::FreeInitConfig& cfg) {
   freeinit::DopplerInertialFilterParams fp;
-  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  fp.doppler_sigma = cfg.doppler.doppler_sigma;
   return fp;
 }
 
@@ -271,7 +271,7 @@ std::vector<NodeArrays> nodeArrays(const freeinit::sim::Recording& rec,
   for (const auto& f : rec.frames)
     for (const auto& p : f.points) {
       const double r = p.p_l.norm();
-      if (r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range) continue;
+      if (r < cfg.doppler.min_range || r > cfg.doppler.max_range) continue;
       const double t = f.stamp + p.time_offset;
       if (t < t0 || t > rec.imu[k_end].t) continue;
       std::size_t k = 0;

@@ -86,7 +86,7 @@ void writeStateSet(app_support::OutputSet& set, const std::string& prefix,
       writeFileAtomically(p, [&](std::ostream& o) { o << *effective; });
     });
   const app_support::StateVerdict verdict =
-      app_support::verdictOf(result, config.core.velocimeter.doppler_sigma);
+      app_support::verdictOf(result, config.core.doppler.doppler_sigma);
   set.write(prefix + kStateFile, [&](const std::string& p) {
     app_support::writeInitialStateIni(p, result.state, &verdict);
   });
@@ -219,8 +219,10 @@ int FreeInitApp::run(std::ostream& log) {
   app_support::OutputSet set(out_dir, "", app_support::folderSetOptions(), log);
 
   // 1. Configuration (the defaults without a file), echoed.
+  std::vector<std::string> notices;  // keys given under their former names
   config = params.config_file.empty() ? app_support::loadAppConfigFromText("", "the defaults")
-                                      : app_support::loadAppConfig(params.config_file);
+                                      : app_support::loadAppConfig(params.config_file, &notices);
+  for (const std::string& n : notices) log << n << "\n";
   std::ostringstream effective;
   app_support::dumpAppConfig(config, effective);
   if (params.echo_config)
@@ -500,8 +502,8 @@ int FreeInitApp::run(std::ostream& log) {
       << result.diag.points_rejected << " rejected, " << result.diag.points_skipped
       << " skipped; static start: " << (result.diag.static_start ? "yes" : "no") << "\n";
   if (s.ok())
-    app_support::printVerdict(
-        log, app_support::verdictOf(result, config.core.velocimeter.doppler_sigma));
+    app_support::printVerdict(log,
+                              app_support::verdictOf(result, config.core.doppler.doppler_sigma));
   for (const auto& w : s.warnings) log << "  warning: " << w << "\n";
   if (config.extrinsics.from_sensor_pose && checker.declaredExtrinsics())
     log << "Extrinsics from sensorPose: p_bl = " << v3(checker.declaredExtrinsics()->p_bl)
