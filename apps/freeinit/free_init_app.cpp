@@ -18,7 +18,6 @@
 #include <ctime>
 #include <deque>
 #include <filesystem>
-#include <fstream>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -40,34 +39,6 @@ std::string v3(const Vec3& v) {
 constexpr const char* kStateFile = "initial_state.ini";
 constexpr const char* kErrorsFile = "errors_wrt_gt.ini";
 constexpr const char* kConfigFile = "effective_config.ini";
-
-/// The starts of a run, in increasing order: one (possibly -inf: from the first record), a
-/// list, or `first + k * every` without end.
-class StartPlan {
- public:
-  static StartPlan single(double t) { return StartPlan({t}, 0); }
-  static StartPlan list(std::vector<double> t) { return StartPlan(std::move(t), 0); }
-  static StartPlan every(double t0, double step) { return StartPlan({t0}, step); }
-
-  std::optional<double> peek() const {
-    if (step_ > 0) return list_.front() + static_cast<double>(next_) * step_;
-    if (next_ < list_.size()) return list_[next_];
-    return std::nullopt;
-  }
-  std::size_t index() const { return next_; }
-  void pop() { ++next_; }
-  /// The explicit starts not reached (none for `every`).
-  std::vector<double> rest() const {
-    if (step_ > 0) return {};
-    return {list_.begin() + static_cast<std::ptrdiff_t>(next_), list_.end()};
-  }
-
- private:
-  StartPlan(std::vector<double> t, double step) : list_(std::move(t)), step_(step) {}
-  std::vector<double> list_;
-  double step_;
-  std::size_t next_ = 0;
-};
 
 struct Slot {
   std::size_t index = 0;
@@ -154,41 +125,6 @@ std::string FreeInitAppParams::argumentsProblem() const {
     return "<input.rawlog> '" + rawlog + "': not an MRPT rawlog (it is " +
            app_support::describe(input) + ")";
   return "";
-}
-
-double startTime(double value, double first) {
-  return value > kUnixStampThreshold ? value : first + value;
-}
-
-std::vector<double> readStartsFile(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw mrpt_plugins::InputError(path + ": cannot open the starts file");
-  std::vector<double> out;
-  std::string line;
-  for (int n = 1; std::getline(f, line); ++n) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.erase(hash);
-    std::istringstream is(line);
-    double v = 0;
-    if (!(is >> v)) {
-      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      throw mrpt_plugins::InputError(path + ": line " + std::to_string(n) + ": '" + line +
-                                     "' is not a number");
-    }
-    std::string rest;
-    if (is >> rest)
-      throw mrpt_plugins::InputError(path + ": line " + std::to_string(n) + ": one start per line");
-    if (!std::isfinite(v) || v < 0)
-      throw mrpt_plugins::InputError(path + ": line " + std::to_string(n) +
-                                     ": a start must be >= 0");
-    if (!out.empty() && !(v > out.back()))
-      throw mrpt_plugins::InputError(path + ": line " + std::to_string(n) +
-                                     ": starts must increase (after " +
-                                     input::formatStamp(out.back()) + ")");
-    out.push_back(v);
-  }
-  if (out.empty()) throw mrpt_plugins::InputError(path + ": no start in the file");
-  return out;
 }
 
 int FreeInitApp::run(std::ostream& log) {

@@ -26,18 +26,10 @@
 #include <string>
 #include <vector>
 
+#include "start_plan.h"
 #include "start_table.h"
 
 namespace freeinit::apps {
-
-/// Start values above this are UNIX stamps [s], others seconds after the first record (1e8 s is
-/// in 1973: no recording is that long, no real stamp is that early).
-inline constexpr double kUnixStampThreshold = 1e8;
-/// [UNIX s] of a start value given `first` [UNIX s], the first record's stamp.
-double startTime(double value, double first);
-/// Start values from a file, one per line ('#' comments and blank lines ignored), in increasing
-/// order. Throws InputError naming the file and line.
-std::vector<double> readStartsFile(const std::string& path);
 
 /// The output folder of `freeinit <config.ini> <input.rawlog>` without --out.
 inline constexpr const char* kDefaultOutDir = "freeinit_out";
