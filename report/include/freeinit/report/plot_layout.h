@@ -82,6 +82,7 @@ struct AxisSpec {
   double min_pad = 0;       ///< auto linear limits: at least this much on each side [axis unit]
   int ticks = 5;            ///< about this many ticks (linear)
   std::string unit;         ///< appended to each tick label (" s")
+  bool tick_labels = true;  ///< false: ticks and grid only (a stacked panel over a shared axis)
 };
 
 /// What a panel shows.
@@ -126,7 +127,7 @@ struct Axis {
   Range range;
   bool log = false;
   std::vector<double> ticks;
-  std::vector<std::string> labels;  ///< one per tick
+  std::vector<std::string> labels;  ///< one per tick, or none (AxisSpec::tick_labels false)
   std::vector<double> minor;        ///< log axis: 2..9 times each decade, inside the range
   std::string label;
   /// The value's position along the axis, 0 at range.lo, 1 at range.hi (not clamped).
