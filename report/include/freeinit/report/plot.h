@@ -1,8 +1,16 @@
-// A panel renderer with OpenCV: what to draw and where comes from the plot layout
-// (plot_layout.h: nice ticks, linear or log y, legend, margins), shared with the MRPT app's
-// snapshot; this file holds the OpenCV drawing only, of a panel in any cell of an image, with any
-// layout style and with a font of the caller's (PanelFont). For the evaluation figures; not a
-// general plotting library.
+// The one panel renderer: draws a plot layout (plot_layout.h: what is drawn and where) on an
+// OpenCV image, for the evaluation figures and the MRPT app's velocity snapshot alike.
+//
+// One shared drawing rather than one renderer per output kind, because the kinds differ in two
+// things only and both are parameters: the layout's style (the figures' single panel, title and
+// legend above; the snapshot's stacked panels, title inside) and the font (OpenCV's Hershey font
+// in the figures; in the snapshot MRPT's bitmap font of the rest of the app's PNGs, through
+// PanelFont). An mrpt::img::CImage keeps its pixels in a cv::Mat (BGR, asCvMatRef()), so MRPT
+// holds the snapshot's image and draws its text, and OpenCV draws the rest of both kinds: lines
+// anti-aliased, 1 px frames, sigma bands as filled polygons, data clipped to the plot area, none
+// of which CImage's own drawing calls offer.
+//
+// For the evaluation figures and the app's snapshot; not a general plotting library.
 #pragma once
 
 #include <freeinit/report/plot_layout.h>

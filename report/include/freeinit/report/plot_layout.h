@@ -1,9 +1,9 @@
-// The layout of a 2-D plot over time, shared by the two renderers that draw it: the snapshot of
-// the MRPT app (mrpt::img::CImage) and the evaluation figures (OpenCV). What is drawn and where is
-// decided here, free of any drawing library: the axis limits and their "nice" ticks, the series
-// (their colours, labels and the legend) and the placement of the plot area, title, legend and
-// tick labels in normalized figure coordinates (x right, y down, both 0..1 across the figure). A
-// renderer scales these by its image size and keeps only its drawing primitives.
+// The layout of a 2-D plot over time, drawn by the one panel renderer (plot.h's drawPanel) for the
+// MRPT app's velocity snapshot and for the evaluation figures. What is drawn and where is decided
+// here, free of any drawing library: the axis limits and their "nice" ticks, the series (their
+// colours, labels and the legend) and the placement of the plot area, title, legend and tick
+// labels in normalized figure coordinates (x right, y down, both 0..1 across the figure). The
+// renderer scales these by its image size.
 #pragma once
 
 #include <freeinit/types.h>
@@ -168,7 +168,7 @@ PanelLayout layoutPanel(const PanelSpec& spec, const Box& cell, const PanelStyle
 /// `n` cells stacked vertically in `box`, `gap` apart (normalized).
 std::vector<Box> stackCells(const Box& box, int n, double gap);
 
-// The velocity-over-time panels of both renderers.
+// The velocity-over-time panels of the app's snapshot and the evaluation figures.
 
 /// A vector quantity over time: components per instant, optionally their standard deviations.
 struct VectorTrack {
