@@ -7,6 +7,7 @@
 #include <map>
 #include <optional>
 #include <queue>
+#include <set>
 #include <stdexcept>
 #include <tuple>
 #include <vector>
@@ -100,7 +101,8 @@ struct McapReader::Impl {
   std::size_t next_chunk = 0;
   std::priority_queue<Pending, std::vector<Pending>, std::greater<Pending>> queue;
   std::map<std::size_t, LoadedChunk> loaded;
-  std::uint64_t position = 0;  ///< file order: the next top-level record
+  std::uint64_t loaded_bytes = 0;  ///< in `loaded`
+  std::uint64_t position = 0;      ///< file order: the next top-level record
   std::vector<std::uint8_t> scratch;
   std::vector<std::uint8_t> file_order_chunk;
   std::optional<mcap::RecordWalker> file_order_walker;
@@ -124,6 +126,13 @@ struct McapReader::Impl {
                               std::vector<std::uint8_t>& records);
   std::size_t topicOf(std::uint16_t channel) const;
   bool inWindow(std::int64_t t) const { return t >= options.start && t <= options.end; }
+
+  void unload(std::size_t ordinal) {
+    const auto it = loaded.find(ordinal);
+    if (it == loaded.end()) return;
+    loaded_bytes -= std::min<std::uint64_t>(loaded_bytes, it->second.records.size());
+    loaded.erase(it);
+  }
 
   void start(const ReadOptions& o);
   bool nextInLogOrder(Message& m);
@@ -303,6 +312,7 @@ void McapReader::Impl::scan() {
                      0,
                      {},
                      ordinal};
+        std::set<std::uint16_t> in_chunk;
         mcap::RecordWalker walker(records.data(), records.size());
         mcap::Record r;
         while (nextRecord(walker, r, what)) {
@@ -314,15 +324,14 @@ void McapReader::Impl::scan() {
               count(m);
               ref.start = std::min(ref.start, m.log_time);
               ref.end = std::max(ref.end, m.log_time);
-              if (std::find(ref.channels.begin(), ref.channels.end(), m.channel) ==
-                  ref.channels.end())
-                ref.channels.push_back(m.channel);
+              in_chunk.insert(m.channel);
             }
           } catch (const FormatError& e) {
             throw FormatError(what + ", record " + std::to_string(walker.count()) + ": " +
                               e.what());
           }
         }
+        ref.channels.assign(in_chunk.begin(), in_chunk.end());
         if (!ref.channels.empty()) chunks.push_back(ref);
         break;
       }
@@ -359,16 +368,14 @@ void McapReader::Impl::count(const mcap::MessageHeader& m) {
 }
 
 void McapReader::Impl::makeTopics() {
+  std::map<std::tuple<std::string, std::string, std::string>, std::size_t> index;
   for (const auto& [id, c] : channels) {
     const auto schema = schemas.find(c.schema_id);
-    TopicInfo t{c.topic, schema == schemas.end() ? std::string() : schema->second.name,
-                c.message_encoding, std::nullopt};
-    std::size_t index = topics.size();
-    for (std::size_t k = 0; k < topics.size(); ++k)
-      if (topics[k].name == t.name && topics[k].type == t.type && topics[k].encoding == t.encoding)
-        index = k;
-    if (index == topics.size()) topics.push_back(t);
-    channel_topic[id] = index;
+    const std::string type = schema == schemas.end() ? std::string() : schema->second.name;
+    const auto [it, added] =
+        index.emplace(std::tuple(c.topic, type, c.message_encoding), topics.size());
+    if (added) topics.push_back({c.topic, type, c.message_encoding, std::nullopt});
+    channel_topic[id] = it->second;
   }
   // Counts where the file gives them: the statistics of an indexed file, the scan's otherwise.
   if (!indexed || !counts.empty()) {
@@ -442,6 +449,7 @@ void McapReader::Impl::start(const ReadOptions& o) {
   next_chunk = 0;
   queue = {};
   loaded.clear();
+  loaded_bytes = 0;
   position = mcap::kMagicBytes;
   file_order_walker.reset();
 }
@@ -468,6 +476,12 @@ bool McapReader::Impl::nextInLogOrder(Message& m) {
     LoadedChunk& chunk = loaded[c.ordinal];
     try {
       loadChunk(c.offset, c.length, what, chunk.records);
+      loaded_bytes += chunk.records.size();
+      if (loaded_bytes > limits.max_loaded_bytes)
+        throw FormatError(what + ": with the chunks overlapping it in time, more than " +
+                          std::to_string(limits.max_loaded_bytes) +
+                          " bytes at once (ReaderLimits::max_loaded_bytes): the file's chunks are "
+                          "far from log-time order");
       mcap::RecordWalker walker(chunk.records.data(), chunk.records.size());
       mcap::Record r;
       while (nextRecord(walker, r, what)) {
@@ -492,10 +506,10 @@ bool McapReader::Impl::nextInLogOrder(Message& m) {
         ++chunk.pending;
       }
     } catch (const FormatError&) {
-      loaded.erase(c.ordinal);
+      unload(c.ordinal);
       throw;
     }
-    if (chunk.pending == 0) loaded.erase(c.ordinal);
+    if (chunk.pending == 0) unload(c.ordinal);
   }
   if (queue.empty()) return false;
   const Pending p = queue.top();
@@ -505,7 +519,7 @@ bool McapReader::Impl::nextInLogOrder(Message& m) {
   m.log_time = p.log_time;
   m.data.assign(chunk.records.begin() + static_cast<std::ptrdiff_t>(p.offset),
                 chunk.records.begin() + static_cast<std::ptrdiff_t>(p.offset + p.length));
-  if (--chunk.pending == 0) loaded.erase(p.chunk);
+  if (--chunk.pending == 0) unload(p.chunk);
   return true;
 }
 

@@ -5,6 +5,7 @@
 #include <cctype>
 #include <map>
 #include <stdexcept>
+#include <tuple>
 #include <vector>
 
 namespace freeinit::ros2 {
@@ -103,18 +104,17 @@ SqliteBagReader::SqliteBagReader(const std::string& path)
 
     Statement topics =
         impl_->prepare("SELECT id, name, type, serialization_format FROM topics ORDER BY id");
+    std::map<std::tuple<std::string, std::string, std::string>, std::size_t> by_name;
     while ((rc_step = sqlite3_step(topics.get())) == SQLITE_ROW) {
       const auto text = [&](int col) {
         const unsigned char* v = sqlite3_column_text(topics.get(), col);
         return v ? std::string(reinterpret_cast<const char*>(v)) : std::string();
       };
       const TopicInfo t{text(1), text(2), text(3), std::nullopt};
-      std::size_t index = topics_.size();
-      for (std::size_t k = 0; k < topics_.size(); ++k)
-        if (topics_[k].name == t.name && topics_[k].type == t.type &&
-            topics_[k].encoding == t.encoding)
-          index = k;
-      if (index == topics_.size()) {
+      const auto [it, added] =
+          by_name.emplace(std::tuple(t.name, t.type, t.encoding), topics_.size());
+      const std::size_t index = it->second;
+      if (added) {
         topics_.push_back(t);
         impl_->ids_of_topic.emplace_back();
       }

@@ -238,6 +238,20 @@ TEST(McapReader, BoundsChunksByTheLimit) {
               ::testing::ThrowsMessage<RecordingError>(HasSubstr("decompresses to")));
 }
 
+// Chunks overlapping in time are held together while their messages are merged: bounded too.
+TEST(McapReader, BoundsTheChunksHeldAtOnce) {
+  ReaderLimits limits;
+  limits.max_loaded_bytes = 8000;  // one chunk of these files, not two
+  McapReader in_order(fixture("imu_cloud.mcap"), limits);
+  EXPECT_EQ(test::stamps(in_order).size(), 84u);
+  McapReader overlapping(fixture("imu_cloud_zstd.mcap"), limits);  // clouds written late
+  EXPECT_THAT(
+      [&] { test::stamps(overlapping); },
+      ::testing::ThrowsMessage<RecordingError>(HasSubstr(
+          "with the chunks overlapping it in time, more than 8000 bytes at once "
+          "(ReaderLimits::max_loaded_bytes): the file's chunks are far from log-time order")));
+}
+
 // A window of the last 30 ms of an indexed file reads a fraction of it: the chunks that overlap.
 TEST(McapReader, AWindowCostsTheWindow) {
   McapReader r(fixture("imu_cloud.mcap"));

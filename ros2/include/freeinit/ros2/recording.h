@@ -51,6 +51,10 @@ struct ReaderLimits {
   /// [bytes] largest MCAP chunk accepted, compressed or decompressed. Recorders write chunks of
   /// 1-4 MB and one message per chunk above that: 256 MB is 5 million 48-byte points.
   std::uint64_t max_chunk_bytes = std::uint64_t{256} << 20;
+  /// [bytes] most decompressed MCAP chunk data held at once. Reading in log-time order holds the
+  /// chunks whose time spans overlap; recorders write chunks one after the other in time, so one
+  /// or two at once. A file whose chunks all span the whole recording would need all of it.
+  std::uint64_t max_loaded_bytes = std::uint64_t{1} << 30;
   bool verify_crc = true;  ///< check MCAP chunk CRCs (where the writer computed them)
 };
 
