@@ -181,7 +181,8 @@ bool GzInput::fill() {
       continue;
     }
     const std::string zmsg = z_.msg != nullptr ? z_.msg : "";
-    if (zmsg == "incorrect data check" || zmsg == "incorrect length check")
+    integrity_failed_ = zmsg == "incorrect data check" || zmsg == "incorrect length check";
+    if (integrity_failed_)
       // The member's trailer is read after its last byte: the damage is anywhere before it.
       error_ = std::string("the gzip stream's ") +
                (zmsg == "incorrect data check" ? "CRC-32" : "length") +

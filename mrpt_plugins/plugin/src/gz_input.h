@@ -52,6 +52,9 @@ class GzInput : public mrpt::io::CStream {
   bool truncated() const { return truncated_; }
   /// At the end: what was wrong with the compressed data ("" if nothing).
   const std::string& error() const { return error_; }
+  /// At the end: error() is a failed check of a member's trailer (its CRC-32 or length): a
+  /// byte is wrong somewhere in the data decompressed before it.
+  bool integrityFailed() const { return integrity_failed_; }
   /// [bytes] of the file consumed so far (progress).
   std::uint64_t compressedPosition() const;
   /// [bytes] at least as much as the decompressed data left: what is buffered, and what the rest
@@ -84,6 +87,7 @@ class GzInput : public mrpt::io::CStream {
   bool eof_ = false;
   bool truncated_ = false;
   std::string error_;
+  bool integrity_failed_ = false;
   std::vector<unsigned char> in_, out_;
   std::size_t out_begin_ = 0, out_end_ = 0;  ///< unread bytes are out_[out_begin_, out_end_)
   std::uint64_t out_total_ = 0;              ///< decompressed bytes produced up to out_end_

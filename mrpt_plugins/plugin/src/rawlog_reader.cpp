@@ -176,6 +176,8 @@ struct RawlogReader::Impl {
     if (!salvage) return readOneStrict(out);
     try {
       return readOneStrict(out);
+    } catch (const StreamIntegrityError&) {
+      throw;  // not a file cut short: what was read is suspect
     } catch (const InputError&) {
       if (next == 0) throw;  // nothing whole to salvage
       salvage_stop = path + ": read up to record " + std::to_string(next - 1) +
@@ -206,6 +208,12 @@ struct RawlogReader::Impl {
   bool readOneStrict(RawlogObject& out) {
     const std::uint64_t start = in.getPosition();
     if (in.atEnd()) {
+      if (in.integrityFailed())
+        throw StreamIntegrityError(path + ": " + in.error() + " (" +
+                                   (next == 0
+                                        ? std::string("no record read")
+                                        : "records 0.." + std::to_string(next - 1) + " read") +
+                                   ")");
       if (!in.error().empty()) fail(start, "cannot be read: " + in.error());
       if (in.truncated())
         fail(start,

@@ -30,6 +30,14 @@ class InputError : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// The gzip stream's checksum (CRC-32 or length, at the end of the stream) does not match the
+/// data: a byte is wrong somewhere in it, so every record read from it is suspect, not only the
+/// one where it was found.
+class StreamIntegrityError : public InputError {
+ public:
+  using InputError::InputError;
+};
+
 /// Where a reader keeps a rawlog's seek index and when it writes one.
 struct RawlogIndexPolicy {
   bool use = true;                           ///< read an index, write a new or longer one
