@@ -84,15 +84,20 @@ StateNees stateNees(const InitialState& s, const std::vector<app_support::TruthS
   return n;
 }
 
-std::string startFolderName(double offset) {
+std::string startFolderName(double offset, int decimals) {
+  // Rounded as folderDecimals() tells names apart: the offset in units of 10^-decimals s.
+  long long scale = 1;
+  for (int i = 0; i < decimals; ++i) scale *= 10;
+  const long long units = std::llround(offset * static_cast<double>(scale));
+  const long long magnitude = units < 0 ? -units : units;
   std::ostringstream os;
-  os << "start_" << std::fixed << std::setprecision(3) << std::setw(8) << std::setfill('0')
-     << offset;
+  os << "start_" << (units < 0 ? "-" : "") << std::setw(4) << std::setfill('0') << magnitude / scale
+     << "." << std::setw(decimals) << magnitude % scale;
   return os.str();
 }
 
 StartRow startRow(std::size_t index, double start, double first, const app_support::InitSession& s,
-                  bool at_end, const std::vector<app_support::TruthSample>& truth) {
+                  bool at_end, const std::vector<app_support::TruthSample>& truth, int decimals) {
   StartRow row;
   row.index = index;
   row.start = start;
@@ -117,7 +122,7 @@ StartRow startRow(std::size_t index, double start, double first, const app_suppo
       if (!truth.empty() && app_support::truthAt(truth, r.state.timestamp))
         row.truth = stateNees(r.state, truth);
     }
-    row.folder = startFolderName(row.start_offset);
+    row.folder = startFolderName(row.start_offset, decimals);
   }
   return row;
 }

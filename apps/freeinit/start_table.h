@@ -36,16 +36,18 @@ struct StartRow {
   std::optional<StateNees> truth;     ///< when ok and ground truth is beside the rawlog
 };
 
-/// "start_0012.300" for 12.3 s after the first record (sortable by name).
-std::string startFolderName(double offset);
+/// "start_0012.300" for 12.3 s after the first record (sortable by name); with more
+/// `decimals` (folderDecimals(): starts less than a millisecond apart) "start_0012.3000005".
+std::string startFolderName(double offset, int decimals = 3);
 
 /// The row of start `index` at `start` [UNIX s] (`first` [UNIX s]: the first record's stamp)
 /// whose session `s` closed: input_error if it failed; not_enough_data without outputs when the
 /// recording ends before its window closes (`at_end`: the file ended with the session open); else
 /// its state (with `truth` beside the rawlog, errors and NEES), and `folder` names where its
-/// outputs go (startFolderName).
+/// outputs go (startFolderName with `decimals`).
 StartRow startRow(std::size_t index, double start, double first, const app_support::InitSession& s,
-                  bool at_end, const std::vector<app_support::TruthSample>& truth);
+                  bool at_end, const std::vector<app_support::TruthSample>& truth,
+                  int decimals = 3);
 /// The row of a start the reading did not reach: not_enough_data (no record at or after it), or
 /// "unreadable" with `read_error`, the reader's error that ended the reading.
 StartRow unreachedStartRow(std::size_t index, double start, double first,
