@@ -117,8 +117,12 @@ TEST(CommandLine, Freeinit) {
   expectUsageError(
       "fi_one", exe, {ini},
       "freeinit: error: missing <input.rawlog>: '" + ini + "' is an INI configuration file");
-  expectUsageError("fi_neither", exe, {kSrc + "/rawlogs/stat_01.truth.csv"},
-                   "stat_01.truth.csv': not an MRPT rawlog (it is a text file)");
+  expectUsageError("fi_neither", exe, {kSrc + "/README.md"},
+                   "README.md': not an MRPT rawlog (it is a text file)");
+  // A file the apps wrote is told as such, with what to give instead.
+  expectUsageError("fi_truth", exe, {kSrc + "/rawlogs/stat_01.truth.csv"},
+                   "stat_01.truth.csv' is the ground truth of a simulated recording "
+                   "(<input>.truth.csv of freeinit-sim), not a recording: give the recording");
   expectUsageError("fi_three", exe, {ini, kRawlog, "extra"}, "'extra': unexpected argument");
   expectUsageError("fi_no_value", exe, {ini, kRawlog, "-o"}, "-o (--out): missing value");
   expectUsageError("fi_twice", exe, {ini, kRawlog, "-o", "a", "--out", "b"},
