@@ -4,6 +4,7 @@
 #include <freeinit/app_support/file_kind.h>
 #include <freeinit/app_support/ingest.h>
 #include <freeinit/app_support/ingest_sources.h>
+#include <freeinit/app_support/output_file_kind.h>
 #include <freeinit/app_support/output_set.h>
 #include <freeinit/app_support/output_writers.h>
 #include <freeinit/app_support/progress_bar.h>
@@ -121,26 +122,50 @@ std::string newOutputFolder(const FreeInitAppParams& p, EmptyFolderSweep& sweep)
 
 /// The run's starts: --every or --starts, else the one at `from` [UNIX s] (-inf: the first
 /// record). `first` [UNIX s]: the first record's stamp, known with --start and several starts.
-StartPlan startPlan(const FreeInitAppParams& p, double from, const std::optional<double>& first) {
-  if (p.every > 0) return StartPlan::every(p.start ? from : *first, p.every);
+/// Refuses (std::invalid_argument, InputError for the file) starts so close that more than
+/// kMaxOpenStarts windows of `window` [s] overlap, or more than kMaxStarts in a file; sets
+/// `decimals` to those of the start folders' names (folderDecimals).
+StartPlan startPlan(const FreeInitAppParams& p, double from, const std::optional<double>& first,
+                    double window, int& decimals) {
+  decimals = 3;
+  if (p.every > 0) {
+    if (const std::string problem = everyProblem(p.every, window); !problem.empty())
+      throw std::invalid_argument(problem);
+    while (decimals < 9 && p.every < std::pow(10.0, -decimals)) ++decimals;
+    return StartPlan::every(p.start ? from : *first, p.every);
+  }
   if (!p.starts_file.empty()) {
     std::vector<double> t = readStartsFile(p.starts_file);
     for (double& x : t) x = startTime(x, *first);
+    if (const std::string problem = startsProblem(t, window, p.starts_file); !problem.empty())
+      throw mrpt_plugins::InputError(problem);
+    std::vector<double> offsets = t;
+    for (double& x : offsets) x -= *first;
+    decimals = folderDecimals(offsets);
     return StartPlan::list(std::move(t));
   }
   return StartPlan::single(from);
 }
 
-/// The result of the only start's session, with a line on what went in. Throws InputError with
-/// its errors (each on the log) when it failed, or why there is no window when the file ended
-/// before the window closed.
+/// At most this many errors of a failed start are named in its message (the others counted).
+constexpr std::size_t kErrorsNamed = 4;
+
+/// The result of the only start's session, with a line on what went in. Throws InputError when
+/// it failed (its errors in one message, printed once, on the error stream: the first, and the
+/// next ones after it up to kErrorsNamed), or why there is no window when the file ended before
+/// the window closed.
 const InitResult& resultOf(const app_support::InitSession& s, std::ostream& log) {
   if (s.failed()) {
-    for (const auto& e : s.errors()) log << "Error: " << e << "\n";
-    const auto n = s.errors().size();
-    throw mrpt_plugins::InputError(
-        s.errors().front() +
-        (n > 1 ? " (and " + std::to_string(n - 1) + " more, listed above)" : ""));
+    const std::vector<std::string>& errors = s.errors();
+    std::string message = errors.front();
+    if (errors.size() > 1) {
+      message += " (and " + std::to_string(errors.size() - 1) + " more:";
+      for (std::size_t i = 1; i < std::min(errors.size(), kErrorsNamed); ++i)
+        message += (i == 1 ? " " : "; ") + errors[i];
+      if (errors.size() > kErrorsNamed) message += "; ...";
+      message += ")";
+    }
+    throw mrpt_plugins::InputError(message);
   }
   // The file ended before the window closed.
   if (!s.ready() || s.result().state.status == InitStatus::NotEnoughData)
@@ -211,6 +236,18 @@ std::string createNewOutputFolder(const std::string& root, const std::string& ra
 }
 
 std::string FreeInitAppParams::argumentsProblem() const {
+  // An output of an earlier run where the configuration or the recording goes.
+  if (!config_file.empty())
+    if (std::string p = app_support::outputGivenAsInput(
+            config_file, "<config.ini>", "a configuration",
+            "an INI configuration such as ini/freeinit.ini (or a run's effective_config.ini)");
+        !p.empty())
+      return p;
+  if (std::string p = app_support::outputGivenAsInput(
+          rawlog, "<input.rawlog>", "a recording",
+          "the recording the run read (an MRPT .rawlog, e.g. rawlogs/dyna_01.rawlog)");
+      !p.empty())
+    return p;
   if (!config_file.empty()) return "";  // the configuration's and the rawlog's readers check
   const app_support::FileKind input = app_support::fileKind(rawlog);
   if (input == app_support::FileKind::Ini)
@@ -234,6 +271,7 @@ struct FreeInitApp::Job {
   std::unique_ptr<mrpt_plugins::RawlogReader> reader;
   std::optional<double> first;  ///< [UNIX s] the first record's stamp (with --start, many starts)
   StartPlan plan = StartPlan::single(-std::numeric_limits<double>::infinity());
+  int folder_decimals = 3;                      ///< of the start folders' names (folderDecimals)
   std::vector<app_support::TruthSample> truth;  ///< from truth_file, when it is beside the rawlog
   std::string truth_file;
 };
@@ -310,6 +348,12 @@ class FreeInitApp::StartPass {
 
   /// The reader's error that ended the reading, if one did.
   const std::optional<std::string>& readError() const { return read_error_; }
+  /// Throws the reader's error when it says the whole stream is suspect (its gzip checksum
+  /// failed, e.g. at the end of the file with --check-all): no start's state can be trusted,
+  /// whether its window was read before or not.
+  void throwIfStreamSuspect() const {
+    if (integrity_failed_) throw mrpt_plugins::StreamIntegrityError(*read_error_);
+  }
   const app_support::RecordChecker& checker() const { return checker_; }
 
  private:
@@ -328,6 +372,10 @@ class FreeInitApp::StartPass {
       // Idle: straight to the next start (no record at or after it: the end).
       if (idle() && !reader_.seekToTime(*job_.plan.peek())) return false;
       return reader_.next(rec);
+    } catch (const mrpt_plugins::StreamIntegrityError& e) {
+      read_error_ = e.what();
+      integrity_failed_ = true;
+      return false;
     } catch (const mrpt_plugins::InputError& e) {
       read_error_ = e.what();
       return false;
@@ -387,7 +435,8 @@ class FreeInitApp::StartPass {
   std::deque<Slot> active_;
   std::vector<std::string> outside_;  ///< bad records no session took
   std::optional<std::string> read_error_;
-  bool stopped_early_ = false;  ///< the starts needed no more (the file goes on)
+  bool integrity_failed_ = false;  ///< read_error_ is a StreamIntegrityError
+  bool stopped_early_ = false;     ///< the starts needed no more (the file goes on)
   std::size_t last_record_ = 0;
 };
 
@@ -440,7 +489,7 @@ void FreeInitApp::openRecording(Job& job, std::ostream& log) {
   }
   const double from = params.start ? startTime(*params.start, *job.first)
                                    : -std::numeric_limits<double>::infinity();
-  job.plan = startPlan(params, from, job.first);
+  job.plan = startPlan(params, from, job.first, config.core.window.duration, job.folder_decimals);
   if (params.start)
     log << "  start at " << input::formatStamp(from) << " (" << from - *job.first
         << " s after the first record)\n";
@@ -453,6 +502,7 @@ int FreeInitApp::initializeOnce(Job& job, std::ostream& log) {
   StartPass pass(*this, job, log,
                  [&](const Slot& slot, bool) { result = resultOf(*slot.session, log); });
   pass.read();
+  pass.throwIfStreamSuspect();
   if (const auto start = job.plan.peek()) {
     if (pass.readError()) throw mrpt_plugins::InputError(*pass.readError());
     throw mrpt_plugins::InputError(
@@ -482,7 +532,8 @@ int FreeInitApp::initializeAtStarts(Job& job, std::ostream& log) {
   int exit_code = 0;
   StartPass pass(*this, job, log, [&](const Slot& slot, bool at_end) {
     const app_support::InitSession& s = *slot.session;
-    StartRow row = startRow(slot.index, slot.start, *job.first, s, at_end, job.truth);
+    StartRow row =
+        startRow(slot.index, slot.start, *job.first, s, at_end, job.truth, job.folder_decimals);
     if (!row.folder.empty())
       writeStateSet(job.set, row.folder + "/", config, s.result(),
                     row.truth ? std::optional(row.truth->errors) : std::nullopt, job.truth,
@@ -492,6 +543,7 @@ int FreeInitApp::initializeAtStarts(Job& job, std::ostream& log) {
     rows.push_back(std::move(row));
   });
   pass.read();
+  pass.throwIfStreamSuspect();
   // Starts the file does not reach.
   const std::optional<std::string>& read_error = pass.readError();
   std::size_t k = job.plan.index();
@@ -499,9 +551,16 @@ int FreeInitApp::initializeAtStarts(Job& job, std::ostream& log) {
     rows.push_back(unreachedStartRow(k++, t, *job.first, read_error));
     if (read_error) exit_code = 3;
   }
-  if (read_error && params.every > 0)
+  if (read_error && params.every > 0 && job.plan.peek())
     log << "Warning: no start from " << std::fixed << std::setprecision(3)
         << *job.plan.peek() - *job.first << std::defaultfloat << " s on: " << *read_error << "\n";
+  if (const auto beyond = job.plan.beyondLimit(); beyond && !read_to_end) {
+    std::ostringstream os;
+    os << "--every " << params.every << ": " << kMaxStarts
+       << " starts, the most one run makes; the recording goes on: run again with --start "
+       << std::fixed << std::setprecision(3) << *beyond - *job.first << " for the next ones";
+    warn(log, os.str());
+  }
   pass.end();
 
   writeStartTable(job, log);
@@ -553,17 +612,24 @@ int FreeInitApp::main(int argc, char** argv) {
                std::string(kDefaultOutDir) +
                    "; without <config.ini> a new folder for each run, "
                    "freeinit_out/<input>.<time>");
-  const auto& quiet = cli.flag("q", "quiet",
-                               "no progress bar and no listing of the effective configuration "
-                               "(still written to effective_config.ini)");
+  const auto& quiet = cli.flag("q", "quiet", "no progress bar");
+  const auto& print_config =
+      cli.flag("", "print-config",
+               "list the effective configuration (every key with the value used) before the "
+               "result; it is written to effective_config.ini in any case");
   const auto& start = cli.number("", "start",
                                  "initialize with the records from T on: seconds after the first "
                                  "record, or a UNIX stamp if T > 1e8",
                                  0, range::atLeast(0), "T", "the first record");
-  const auto& every = cli.number("", "every",
-                                 "initialize every S seconds along the recording (from --start), "
-                                 "each start in its own folder, with starts.csv/.md/.png",
-                                 0, range::atLeast(0), "S", "off");
+  const auto& every =
+      cli.number("", "every",
+                 "initialize every S seconds along the recording (from --start), "
+                 "each start in its own folder, with starts.csv/.md/.png; at "
+                 "most " +
+                     std::to_string(kMaxStarts) + " starts a run, and S at least the window / " +
+                     std::to_string(kMaxOpenStarts) + " (at most " +
+                     std::to_string(kMaxOpenStarts) + " initializations open at once)",
+                 0, range::above(0), "S", "off");
   const auto& starts = cli.text("", "starts",
                                 "initialize at each start in FILE (one per line, as --start), "
                                 "as --every does",
@@ -586,7 +652,7 @@ int FreeInitApp::main(int argc, char** argv) {
   return app_support::runMain(cli.program(), [&] {
     app.params.out_dir = out.given ? out.value : ini.given ? kDefaultOutDir : "";
     app.params.progress = !quiet.value;
-    app.params.echo_config = !quiet.value;
+    app.params.echo_config = print_config.value;
     app.params.progress_terminal = isatty(STDOUT_FILENO) != 0;
     if (start.given) app.params.start = start.value;
     app.params.every = every.value;

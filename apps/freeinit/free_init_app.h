@@ -46,9 +46,9 @@ struct FreeInitAppParams {
   std::string out_dir = kDefaultOutDir;
   std::string new_out_root = kDefaultOutDir;  ///< where out_dir = "" makes its folder
   bool progress = true;                       ///< progress bars on the log stream
-  /// The effective configuration on the log stream too (it is always written to
-  /// effective_config.ini in the outputs).
-  bool echo_config = true;
+  /// The effective configuration on the log stream too, before the result (--print-config; it
+  /// is always written to effective_config.ini in the outputs).
+  bool echo_config = false;
   bool progress_terminal = false;  ///< the log is a terminal: redraw the bars in place
   std::optional<double> start;     ///< --start (see kUnixStampThreshold)
   double every = 0;                ///< --every [s] (> 0: repeated starts from `start` or 0)
@@ -58,11 +58,13 @@ struct FreeInitAppParams {
   mrpt_plugins::RawlogIndexPolicy index;  ///< --no-index: use = false
   std::string command;                    ///< the command line, for the table's header
 
-  /// `freeinit <input.rawlog>` (config_file ""): one line naming the file when, by its content
-  /// (file_kind.h), it is no rawlog (a configuration given alone, a ROS1 bag, a file that is
-  /// neither), else "". With a configuration file "": its reader and the rawlog's check both,
-  /// as they always have (a swapped pair: the INI reader names the binary file). A file that
-  /// cannot be read passes: its reader says why.
+  /// One line naming the file when either argument is, by its content, an output of an earlier
+  /// run (output_file_kind.h: a static map, a snapshot, initial_state.ini, ...), saying what it
+  /// is and what to give instead. Else for `freeinit <input.rawlog>` (config_file ""): one line
+  /// naming the file when, by its content (file_kind.h), it is no rawlog (a configuration given
+  /// alone, a ROS1 bag, a file that is neither), else "". With a configuration file "": its
+  /// reader and the rawlog's check both, as they always have (a swapped pair: the INI reader
+  /// names the binary file). A file that cannot be read passes: its reader says why.
   std::string argumentsProblem() const;
 };
 

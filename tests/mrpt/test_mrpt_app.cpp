@@ -272,8 +272,8 @@ TEST(FreeInitAppEndToEnd, StaticSampleStat01) {
   EXPECT_LE(app.errors_wrt_gt->gravity_deg, bound) << log.str();
 }
 
-// -q leaves the effective configuration to its file: the log keeps the verdict, not the ~80
-// configuration lines.
+// The effective configuration goes to its file; the log lists it only on request
+// (--print-config): by default the log keeps the verdict, not the ~80 configuration lines.
 TEST(FreeInitAppEndToEnd, QuietLeavesTheConfigurationToItsFile) {
   for (const bool echo : {true, false}) {
     const std::string out = outDir(echo ? "config_echoed" : "config_quiet");
@@ -681,6 +681,40 @@ TEST(FreeInitAppStart, OverlappingStartsFromAFile) {
               std::string::npos)
         << e.what();
   }
+}
+
+// The bounds of a run at many starts: --every stops at kMaxStarts; starts may not keep more
+// than kMaxOpenStarts windows open; folder names keep starts apart to the decimal they need.
+TEST(FreeInitAppStart, StartPlansAreBoundedAndTheirFoldersDistinct) {
+  StartPlan every = StartPlan::every(100.0, 0.5, 3);
+  for (int k = 0; k < 3; ++k) {
+    ASSERT_TRUE(every.peek());
+    EXPECT_DOUBLE_EQ(*every.peek(), 100.0 + 0.5 * k);
+    every.pop();
+  }
+  EXPECT_FALSE(every.peek());
+  ASSERT_TRUE(every.beyondLimit());
+  EXPECT_DOUBLE_EQ(*every.beyondLimit(), 101.5);
+
+  EXPECT_EQ(everyProblem(0.5 / kMaxOpenStarts, 0.5), "");
+  EXPECT_NE(everyProblem(0.5 / kMaxOpenStarts * 0.99, 0.5).find("--every "), std::string::npos);
+  std::vector<double> close(kMaxOpenStarts + 1);
+  for (std::size_t i = 0; i < close.size(); ++i) close[i] = 1.0 + 1e-3 * static_cast<double>(i);
+  EXPECT_NE(startsProblem(close, 0.5, "s.txt").find("s.txt: 33 starts within one window"),
+            std::string::npos);
+  close.pop_back();
+  EXPECT_EQ(startsProblem(close, 0.5, "s.txt"), "");
+  EXPECT_NE(startsProblem(std::vector<double>(kMaxStarts + 1, 0.0), 1e-9, "s.txt")
+                .find("more than the 10000 one run makes"),
+            std::string::npos);
+
+  EXPECT_EQ(folderDecimals({0.0, 0.001, 12.3}), 3);
+  EXPECT_EQ(folderDecimals({0.1, 0.1001, 0.1002}), 4);
+  EXPECT_EQ(folderDecimals({5.0, 5.0000003}), 7);
+  EXPECT_EQ(startFolderName(12.3), "start_0012.300");
+  EXPECT_EQ(startFolderName(0.1001, 4), "start_0000.1001");
+  EXPECT_EQ(startFolderName(5.0000003, 7), "start_0005.0000003");
+  EXPECT_EQ(startFolderName(12345.5), "start_12345.500");
 }
 
 // The seek index: written by the first --start run, used by the next (which deserializes only
