@@ -168,6 +168,10 @@ const config::Section<BagImportSettings>& bagImportSection() {
             between(1, 1e6), "first IMU samples whose mean specific force checks imu_accel_unit")
         .text("imu_label", &S::imu_label, "sensorLabel written on the IMU observations", true)
         .text("lidar_label", &S::lidar_label, "sensorLabel written on the point clouds", true)
+        .text("freeinit_config", &S::freeinit_config,
+              "the freeinit configuration made for this sensor, relative to this INI's folder, "
+              "suggested after the import (empty: the defaults suit it)",
+              false)
         .check([](const S& x, const config::Checker& c) {
           if (x.imu_label == x.lidar_label) c.fail("lidar_label", "must differ from imu_label");
           try {
@@ -325,8 +329,17 @@ int BagImportApp::run(std::ostream& log) {
   summary.print(log);
   log << "Wrote " << out << " (" << rawlog.records() << " records: " << rawlog.imuRecords()
       << " IMU, " << rawlog.frameRecords() << " point clouds, " << summary.points << " points) and "
-      << ext << "\nRun: freeinit " << out << "   (the default configuration; freeinit <config.ini> "
-      << out << " for another)\n";
+      << ext << "\n";
+  if (settings.freeinit_config.empty())
+    log << "Run: freeinit " << out << "   (the default configuration; freeinit <config.ini> " << out
+        << " for another)\n";
+  else
+    log << "Run: freeinit "
+        << (std::filesystem::path(params.config_file).parent_path() / settings.freeinit_config)
+               .lexically_normal()
+               .string()
+        << " " << out << "   (the configuration for this sensor: [bag_import] freeinit_config of "
+        << params.config_file << ")\n";
   if (summary.imu.skipped() + summary.lidar.skipped() > 0 || summary.invalid_points > 0)
     log << "Warning: " << summary.imu.skipped() + summary.lidar.skipped()
         << " message(s) skipped and " << summary.invalid_points

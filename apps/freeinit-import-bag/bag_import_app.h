@@ -40,8 +40,11 @@ struct BagImportAppParams {
 struct BagImportSettings {
   ros1::BagImportConfig bag;
   Extrinsics extrinsics;
-  std::string imu_label = "IMU";       ///< sensorLabel written on the IMU observations
-  std::string lidar_label = "LIDAR";   ///< sensorLabel written on the point clouds
+  std::string imu_label = "IMU";      ///< sensorLabel written on the IMU observations
+  std::string lidar_label = "LIDAR";  ///< sensorLabel written on the point clouds
+  /// The freeinit configuration made for this sensor, relative to the import INI's folder,
+  /// suggested after the import ("": the defaults suit it).
+  std::string freeinit_config;
   ros1::DopplerFitParams doppler_fit;  ///< [doppler_fit]: the per-scan fits of --doppler-fit-csv
 };
 

@@ -175,6 +175,30 @@ TEST(BagImport, ReleaseLayoutEqualsTheSimulatorsRawlog) {
   expectSameRawlog(simRawlog(), d + "/rec.rawlog", 1e-8);
   EXPECT_NE(log.find("/imu/data (sensor_msgs/Imu): 201 messages, 201 imported"), std::string::npos)
       << log;
+  // Without [bag_import] freeinit_config the defaults are suggested.
+  EXPECT_NE(log.find("Run: freeinit " + d + "/rec.rawlog   (the default configuration"),
+            std::string::npos)
+      << log;
+}
+
+// An import INI that names the estimator's configuration for its sensor (as the radar's does):
+// the importer suggests it, found beside that INI, not the defaults.
+TEST(BagImport, SuggestsTheConfigurationTheImportIniNames) {
+  const std::string d = dir("suggested_config");
+  const auto [app, log] = writeAndImport(d, {}, "freeinit_config = ../ini/freeinit_radar.ini\n");
+  EXPECT_NE(log.find("Run: freeinit " + fs::path(d).parent_path().string() +
+                     "/ini/freeinit_radar.ini " + d +
+                     "/rec.rawlog   (the configuration for "
+                     "this sensor: [bag_import] freeinit_config of " +
+                     d + "/rec.ini)"),
+            std::string::npos)
+      << log;
+  EXPECT_EQ(log.find("the default configuration"), std::string::npos) << log;
+  // The shipped radar INI names ini/freeinit_radar.ini, where docs/dataset_bags.md prescribes it.
+  const auto radar = loadBagImportSettings(kSrc + "/ini/import_bag_ti_mmwave.ini");
+  EXPECT_EQ(radar.freeinit_config, "freeinit_radar.ini");
+  EXPECT_TRUE(fs::is_regular_file(kSrc + "/ini/" + radar.freeinit_config));
+  EXPECT_EQ(loadBagImportSettings(kSrc + "/ini/import_bag.ini").freeinit_config, "");
 }
 
 // Compressed bags (rosbag record --lz4 / --bz2) read the same.
