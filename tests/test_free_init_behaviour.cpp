@@ -3,6 +3,7 @@
 // baselines' failure on dynamic starts (the paper's point).
 #include <freeinit/baselines.h>
 #include <freeinit/free_init.h>
+#include <freeinit/rotation.h>
 #include <freeinit/sim/evaluation.h>
 #include <freeinit/sim/simulator.h>
 #include <gtest/gtest.h>
@@ -385,4 +386,37 @@ TEST(FreeInitBehaviour, ASensorDenserThanItsStartIsMappedWhole) {
 }
 
 }  // namespace
+// The joint estimator's velocities carry a sigma at every node (velocimeter.csv, the band of
+// velocity.png): the filter's covariance given the data up to the node, so wider than the
+// smoothed estimate's error needs. Every sigma is positive; the last node's is the state's
+// (its covariance's body velocity block); the true body velocity is within 4 sigma on each axis
+// at nearly every node (a bound the filter's covariance must meet for the smoothed estimate).
+TEST(FreeInitBehaviour, VelocitiesCarryASigmaAtEveryNode) {
+  const sim::Recording rec = simulatePreset("dyna_01", 0.7, 20000);
+  const InitResult r = FreeInit::run(configFor(rec), rec.imu, rec.frames);
+  ASSERT_TRUE(r.state.ok()) << r.state.message;
+  ASSERT_GT(r.velocities.size(), 90u);
+  std::size_t outside = 0;
+  for (const VelocitySample& v : r.velocities) {
+    ASSERT_TRUE(v.sigma_v_b.allFinite());
+    ASSERT_GT(v.sigma_v_b.minCoeff(), 0.0) << "t " << v.t;
+    EXPECT_LT(v.sigma_v_b.maxCoeff(), 2.0) << "t " << v.t;
+    const sim::TruthState truth = rec.truth(v.t);
+    const Vec3 v_b_true = truth.R_wb.transpose() * truth.v_w;
+    const Vec3 z = (v.v_b - v_b_true).cwiseQuotient(v.sigma_v_b);
+    outside += z.cwiseAbs().maxCoeff() > 4.0 ? 1 : 0;
+  }
+  EXPECT_LE(outside, r.velocities.size() / 20) << outside << " of " << r.velocities.size();
+  // The last node: the state's own velocity sigma (as initial_state.ini's sigma_v_b).
+  const VelocitySample& last = r.velocities.back();
+  const Mat3 R_bw = r.state.q_wb.toRotationMatrix().transpose();
+  Eigen::Matrix<double, 3, 18> A = Eigen::Matrix<double, 3, 18>::Zero();
+  A.block<3, 3>(0, 0) = skew(R_bw * r.state.v_w);
+  A.block<3, 3>(0, 6) = R_bw;
+  const Vec3 own = (A * r.state.cov * A.transpose()).diagonal().cwiseSqrt();
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(last.sigma_v_b(i), own(i), 1e-3 * own(i));
+  // Wider at the start, where fewer data are behind the filter, than at the end.
+  EXPECT_GT(r.velocities[1].sigma_v_b.norm(), last.sigma_v_b.norm());
+}
+
 }  // namespace freeinit

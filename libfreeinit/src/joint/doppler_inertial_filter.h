@@ -239,6 +239,10 @@ class DopplerInertialFilter {
   const FilterState& state(std::size_t k) const { return nodes_[k].xs; }
   /// Covariance of the last node's state (the filter's of the last pass).
   const MatS& covariance() const { return nodes_.back().P; }
+  /// Covariance of node k's state as the filter of the last pass left it (after smooth(): its
+  /// last iteration's forward pass), i.e. given the data up to node k: at the last node,
+  /// covariance(); before it, an upper bound of the smoothed covariance.
+  const MatS& nodeCovariance(std::size_t k) const { return nodes_[k].P; }
   /// Sum of squared residuals of the accepted points at the current estimate, and their count.
   double residualSumOfSquares() const { return residualSumOfSquares(lidarVelocityPolynomials()); }
   /// The same with the nodes' polynomials given (lidarVelocityPolynomials()).

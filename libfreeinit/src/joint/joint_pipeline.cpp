@@ -501,13 +501,13 @@ class JointPipeline final : public Pipeline {
       v.v_l = cfg_.extrinsics.R_bl.transpose() * (v.v_b + v.omega_b.cross(cfg_.extrinsics.p_bl));
       v.b_g = xk.b_g;
       v.stationary = k < node_rest_.size() && node_rest_[k];
+      // The body velocity's sigma from the node's covariance (the filter's, given the data up
+      // to the node: at the last node the state's, before it wider than the smoothed one),
+      // scaled as the state's is.
+      const BodyVelocityJacobian A = bodyVelocityJacobian(xk);
+      v.sigma_v_b =
+          (inflation * A * filter_->nodeCovariance(k) * A.transpose()).diagonal().cwiseSqrt();
       r.velocities.push_back(v);
-    }
-    // The last node's velocity sigma from the state covariance.
-    {
-      const BodyVelocityJacobian A = bodyVelocityJacobian(x);
-      r.velocities.back().sigma_v_b =
-          (inflation * A * filter_->covariance() * A.transpose()).diagonal().cwiseSqrt();
     }
     addWarnings(r);
     map_pending_ = true;  // completeMap(): the state does not wait for the map
