@@ -83,10 +83,20 @@ TEST(FreeInitBehaviour, SeedLongerThanTheWindowIsTheWholeWindow) {
   EXPECT_EQ(a.state.q_wb.coeffs(), b.state.q_wb.coeffs());
 }
 
+// No frame, or no IMU: not enough data, and the message says which is missing (not that the
+// IMU does not overlap LiDAR data there are none of), for both estimators.
 TEST(FreeInitBehaviour, NoLidarIsNotEnoughData) {
   const sim::Recording rec = simulatePreset("dyna_01", 0.7, 5000);
-  const InitResult r = FreeInit::run(configFor(rec), rec.imu, {});
-  EXPECT_EQ(r.state.status, InitStatus::NotEnoughData);
+  for (const auto method : {EstimatorParams::Method::Joint, EstimatorParams::Method::Paper}) {
+    FreeInitConfig cfg = configFor(rec);
+    cfg.estimator.method = method;
+    const InitResult r = FreeInit::run(cfg, rec.imu, {});
+    EXPECT_EQ(r.state.status, InitStatus::NotEnoughData);
+    EXPECT_EQ(r.state.message.rfind("no LiDAR frame was given", 0), 0u) << r.state.message;
+    const InitResult no_imu = FreeInit::run(cfg, {}, rec.frames);
+    EXPECT_EQ(no_imu.state.status, InitStatus::NotEnoughData);
+    EXPECT_EQ(no_imu.state.message, "no IMU sample was given");
+  }
 }
 
 TEST(FreeInitBehaviour, EgoCompensatedDopplerIsRefused) {

@@ -39,6 +39,17 @@ inline void failResult(InitResult& result, InitStatus status, const std::string&
   result.state.message = message;
 }
 
+/// Why no window could start when the input ended before one did: no LiDAR frame, no IMU
+/// sample, or IMU samples that do not reach the LiDAR data (the status message of both
+/// estimators).
+inline std::string noWindowReason(const MeasurementSequencer& sequencer) {
+  if (sequencer.frames().empty())
+    return "no LiDAR frame was given (none arrived, or every one was refused before the "
+           "estimator)";
+  if (sequencer.imu().empty()) return "no IMU sample was given";
+  return "no IMU sample overlaps the LiDAR data";
+}
+
 /// [s] a monotonic clock, for the durations the diagnostics report.
 inline double wallSeconds() {
   using Clock = std::chrono::steady_clock;

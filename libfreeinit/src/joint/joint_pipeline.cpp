@@ -77,7 +77,7 @@ class JointPipeline final : public Pipeline {
                " s) is covered");
     }
     if (phase_ == Phase::WaitStart && seq_.finished())
-      fail(r, InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
+      fail(r, InitStatus::NotEnoughData, noWindowReason(seq_));
     return phase_ == Phase::Done;
   }
 

@@ -92,7 +92,7 @@ class PaperPipeline final : public Pipeline {
                                           window.str() + " s) is covered");
     }
     if (phase == Phase::WaitStart && seq.finished())
-      fail(InitStatus::NotEnoughData, "no IMU sample overlaps the LiDAR data");
+      fail(InitStatus::NotEnoughData, noWindowReason(seq));
     return phase == Phase::Done;
   }
 
