@@ -2,10 +2,12 @@
 // output, a full disk, live recordings across runs, a recording cut short, and the messages of
 // bad inputs. Each case asserts the exit status, the message and what is left on disk.
 #include <fcntl.h>
+#include <freeinit/mrpt_plugins/points_map_doppler.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
 #include <gtest/gtest.h>
 #include <mrpt/obs/CObservationIMU.h>
+#include <mrpt/obs/CObservationPointCloud.h>
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -13,6 +15,7 @@
 #include <chrono>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <optional>
 #include <regex>
 #include <set>
@@ -400,6 +403,67 @@ TEST(Messages, StampsHaveTheDigitsToDiffer) {
   ASSERT_TRUE(
       std::regex_search(r.err, m, std::regex("goes backwards \\(([0-9.]+) after ([0-9.]+)\\)")));
   EXPECT_NE(m[1].str(), m[2].str());
+}
+
+/// The sample rewritten record by record through `edit` (which may change the observation).
+void rewriteSample(const fs::path& out,
+                   const std::function<void(std::size_t, mrpt::obs::CObservation&)>& edit) {
+  auto records = freeinit::mrpt_plugins::readRawlog(kSample);
+  freeinit::mrpt_plugins::RawlogWriter w(out.string());
+  for (std::size_t i = 0; i < records.size(); ++i) {
+    edit(i, *records[i].obs);
+    w.write(*records[i].obs);
+  }
+  w.commit();
+}
+
+// Point times 2 s after their cloud's stamp (offsets in another unit, or from another
+// instant): the message names the first cloud's record and that cause, not "a recording
+// shorter than the window".
+TEST(Messages, PointTimesFarFromTheirStampNameTheCloud) {
+  const fs::path d = freshDir("msg_point_times");
+  const fs::path f = d / "late_points.rawlog";
+  rewriteSample(f, [](std::size_t, mrpt::obs::CObservation& obs) {
+    auto* pc = dynamic_cast<mrpt::obs::CObservationPointCloud*>(&obs);
+    if (pc == nullptr) return;
+    auto* m = dynamic_cast<freeinit::mrpt_plugins::CPointsMapDoppler*>(pc->pointcloud.get());
+    ASSERT_NE(m, nullptr);
+    std::vector<float> fields(freeinit::mrpt_plugins::CPointsMapDoppler::kFieldCount);
+    for (std::size_t i = 0; i < m->size(); ++i) {
+      m->getPointAllFieldsFast(i, fields);
+      fields[4] += 2.0F;
+      m->setPointAllFieldsFast(i, fields);
+    }
+  });
+  const auto r = runFreeinit(d, kIni, f.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  EXPECT_EQ(r.err.find("shorter than the window"), std::string::npos) << r.err;
+  EXPECT_CONTAINS(r.err, f.string() + ": record 1: its points are timed 2");
+  EXPECT_CONTAINS(r.err, "s after the cloud's stamp");
+}
+
+// A sensorPose that is not a rotation on a later cloud: the message names that cloud's record
+// (not an IMU record, not a configuration key), whatever the order of the records.
+TEST(Messages, ASensorPoseThatIsNoRotationNamesTheCloud) {
+  const fs::path d = freshDir("msg_sensor_pose");
+  const fs::path f = d / "bad_pose.rawlog";
+  std::size_t clouds = 0, bad_record = 0;
+  rewriteSample(f, [&](std::size_t i, mrpt::obs::CObservation& obs) {
+    if (!IS_CLASS(obs, mrpt::obs::CObservationPointCloud) || ++clouds != 3) return;
+    auto* pc = dynamic_cast<mrpt::obs::CObservationPointCloud*>(&obs);
+    mrpt::math::CMatrixDouble44 h;
+    pc->sensorPose.getHomogeneousMatrix(h);
+    h(0, 0) *= 2.0;  // a scaled axis: not a rotation
+    pc->sensorPose = mrpt::poses::CPose3D(h);
+    bad_record = i;
+  });
+  const auto r = runFreeinit(d, kIni, f.string());
+  EXPECT_EQ(r.code, 1);
+  EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  EXPECT_CONTAINS(r.err, f.string() + ": record " + std::to_string(bad_record) + ": ");
+  EXPECT_CONTAINS(r.err, "sensorPose");
+  EXPECT_EQ(r.err.find("extrinsics.R_bl"), std::string::npos) << r.err;
 }
 
 // freeinit-eval-rawlog's command line follows every app's rule.

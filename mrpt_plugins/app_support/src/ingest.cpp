@@ -269,6 +269,7 @@ void InitSession::push(const CheckedItem& c) {
   try {
     if (it.kind == IngestItem::Kind::Imu) {
       ++imu_count_;
+      last_imu_t_ = it.imu.t;
       if (first_frame_t_ && it.imu.t >= *first_frame_t_) ++imu_after_first_frame_;
       if (estimator_) {
         estimator_->addImu(it.imu);
@@ -284,6 +285,8 @@ void InitSession::push(const CheckedItem& c) {
       if (!first_frame_t_) {
         first_frame_t_ = it.frame->stamp;
         first_frame_record_ = it.record;
+        first_frame_begin_ = c.begin;
+        first_frame_end_ = c.end;
       }
       if (!extrinsics_known_) {
         if (it.frame_extrinsics) config_.core.extrinsics = *it.frame_extrinsics;
@@ -390,10 +393,29 @@ std::string InitSession::endOfDataReason() const {
            (others.empty() ? "" : " and " + others) + plugin_hint;
   if (imu_count_ < 2)
     return source_ + ": record " + std::to_string(first_imu_record_) + ": a single IMU sample";
-  std::ostringstream covered;
-  covered << std::setprecision(3) << (last_t_ && first_frame_t_ ? *last_t_ - *first_frame_t_ : 0.0);
+  const double window_s = config_.core.window.duration;
   std::ostringstream window;
-  window << config_.core.window.duration;
+  window << window_s;
+  // The IMU goes on for a window after the first cloud's stamp, yet its points start later
+  // than a sweep after it (kLatePoints), beyond the IMU data or too late in it for a window:
+  // their times, not the recording's length.
+  constexpr double kLatePoints = 0.1;  // [s] a LiDAR sweep
+  if (first_frame_t_ && last_imu_t_ && *last_imu_t_ - *first_frame_t_ >= window_s &&
+      first_frame_begin_ - *first_frame_t_ > kLatePoints &&
+      first_frame_begin_ + window_s > *last_imu_t_) {
+    std::ostringstream os;
+    os << std::setprecision(4) << source_ << ": record " << first_frame_record_
+       << ": its points are timed " << first_frame_begin_ - *first_frame_t_ << " to "
+       << first_frame_end_ - *first_frame_t_
+       << " s after the cloud's stamp, and the IMU samples end " << *last_imu_t_ - *first_frame_t_
+       << " s after it: no " << window.str()
+       << " s window ([window] duration) fits after the first point (point time offsets in "
+          "another unit, or counted from another instant than the stamp?)";
+    return os.str();
+  }
+  std::ostringstream covered;
+  covered << std::setprecision(3)
+          << (last_imu_t_ && first_frame_t_ ? *last_imu_t_ - *first_frame_t_ : 0.0);
   return source_ + ": " + (from_file_ ? "recording" : "stream") +
          " shorter than the window: " + covered.str() + " s (" +
          std::to_string(imu_after_first_frame_) +

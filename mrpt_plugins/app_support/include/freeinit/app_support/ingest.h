@@ -177,6 +177,8 @@ class InitSession {
   std::optional<double> first_t_, last_t_;
   std::optional<double> first_frame_t_;
   std::size_t first_frame_record_ = 0, imu_after_first_frame_ = 0;
+  double first_frame_begin_ = 0, first_frame_end_ = 0;  ///< [UNIX s] its points' span
+  std::optional<double> last_imu_t_;
   std::size_t imu_count_ = 0, frame_count_ = 0;
   InitResult empty_;
 };
