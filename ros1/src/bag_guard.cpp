@@ -467,6 +467,14 @@ class Checker {
   }
 
   void finish(const std::vector<std::pair<std::uint64_t, std::uint8_t>>& top) {
+    // A bag librosbag closed without a message: no connection, no chunk, its (empty) index at
+    // the end of the file. Valid; the reader says it holds no messages.
+    if (conn_count_ == 0 && chunk_count_ == 0 && index_pos_ == file_.size()) {
+      for (const auto& [at, op] : top)
+        if (op != kOpFileHeader)
+          throw Bad(at, "a " + opName(op) + " in a bag whose file header announces no record");
+      return;
+    }
     // librosbag reads conn_count connection records from index_pos, then chunk_count chunk infos.
     auto it =
         std::find_if(top.begin(), top.end(), [&](const auto& t) { return t.first == index_pos_; });

@@ -209,6 +209,10 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
       for (const auto& l : listing) s += "\n  " + l;
       return s.empty() ? std::string(" none") : s;
     };
+    if (listing.empty())
+      throw BagError(path +
+                     ": the bag holds no messages (a valid bag, but nothing was recorded in "
+                     "it: was the recorder started before the sensors published?)");
     for (const auto* t : {&imu_state.summary, &lidar_state.summary})
       if (t->in_bag == 0)
         throw BagError(path + ": no message on topic " + t->topic + " (set " +

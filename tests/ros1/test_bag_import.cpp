@@ -356,6 +356,13 @@ std::string importError(const HandBag& h, const std::string& name, const std::st
 
 }  // namespace
 
+// A valid bag librosbag wrote without a message: not corrupt, it holds no messages.
+TEST(BagImportBadBags, AnEmptyBagSaysItHoldsNoMessages) {
+  const std::string e = importError(HandBag{}, "empty");
+  EXPECT_CONTAINS(e, "bad.bag: the bag holds no messages (a valid bag");
+  EXPECT_EQ(e.find("corrupt"), std::string::npos) << e;
+}
+
 TEST(BagImportBadBags, MissingTopicListsWhatTheBagHas) {
   HandBag h = firstSeconds();
   h.lidar_topic = "/aeva/other";
