@@ -5,6 +5,9 @@
 #include <freeinit/app_support/checked_recording.h>
 #include <freeinit/app_support/command_line.h>
 #include <freeinit/app_support/file_kind.h>
+#include <freeinit/app_support/ground_truth.h>
+#include <freeinit/app_support/map_export.h>
+#include <freeinit/app_support/output_file_kind.h>
 #include <freeinit/app_support/output_writers.h>
 #include <freeinit/free_init.h>
 #include <freeinit/mrpt_plugins/conversions.h>
@@ -392,6 +395,49 @@ TEST(FreeInitAppWithoutConfig, DefaultsIntoANewFolderPerRun) {
 // `freeinit <input.rawlog>` by the file's content: a configuration given alone, or a file that is
 // neither, is one line naming the file, and the app refuses to run; with a configuration file both
 // are left to their readers, as before.
+// Every kind of output the apps write is told by its content (a gzip simple map decompressed),
+// with a message naming it and what to give instead; recordings and configurations are not.
+TEST(FreeInitAppParams, OutputsOfARunAreNamed) {
+  InitResult r;
+  r.state.status = InitStatus::Ok;
+  r.trajectory.push_back({1.0, Quat::Identity(), Vec3::Zero()});
+  r.velocities.push_back({});
+  r.static_map.push_back({});
+  const std::vector<std::pair<std::string, OutputFileKind>> files = {
+      {"static_map.simplemap", OutputFileKind::SimpleMap},
+      {"static_map.ply", OutputFileKind::Ply},
+      {"initial_state.ini", OutputFileKind::InitialState},
+      {"errors_wrt_gt.ini", OutputFileKind::TruthErrors},
+      {"velocimeter.csv", OutputFileKind::Velocities},
+      {"trajectory_tum.txt", OutputFileKind::Trajectory},
+      {"starts.csv", OutputFileKind::StartTable},
+      {"truth.csv", OutputFileKind::GroundTruth}};
+  writeStaticSimplemap(tmpFile("static_map.simplemap"), r);
+  writePly(tmpFile("static_map.ply"), r.static_map);
+  writeInitialStateIni(tmpFile("initial_state.ini"), r.state);
+  writeTruthErrors(tmpFile("errors_wrt_gt.ini"), TruthErrors{});
+  writeVelocityCsv(tmpFile("velocimeter.csv"), r.velocities);
+  writeTum(tmpFile("trajectory_tum.txt"), r.trajectory);
+  writeStartTableCsv(tmpFile("starts.csv"), {});
+  fs::copy_file(kSrc + "/rawlogs/dyna_01.truth.csv", tmpFile("truth.csv"),
+                fs::copy_options::overwrite_existing);
+  for (const auto& [name, kind] : files) {
+    const auto found = outputFileKind(tmpFile(name));
+    ASSERT_TRUE(found) << name;
+    EXPECT_EQ(*found, kind) << name;
+    FreeInitAppParams params;
+    params.rawlog = tmpFile(name);
+    EXPECT_NE(params.argumentsProblem().find("<input.rawlog> '" + tmpFile(name) + "' is " +
+                                             describe(kind) + ", not a recording: give"),
+              std::string::npos)
+        << name;
+  }
+  EXPECT_EQ(outputFileKind(kSrc + "/gui_snapshots/dyna_01_velocity.png"), OutputFileKind::Png);
+  for (const std::string& ours_not :
+       {kDyna, kSrc + "/ini/freeinit.ini", kSrc + "/README.md", kSrc + "/nope"})
+    EXPECT_FALSE(outputFileKind(ours_not)) << ours_not;
+}
+
 TEST(FreeInitAppWithoutConfig, ArgumentsAreToldApartByContent) {
   const std::string ini = kSrc + "/ini/freeinit.ini";
   const std::string csv = kSrc + "/rawlogs/dyna_01.truth.csv";
