@@ -350,6 +350,7 @@ TEST(FreeInitAppWithoutConfig, DefaultsIntoANewFolderPerRun) {
   for (int run = 0; run < 2; ++run) {
     auto app = makeApp(kDyna, "", "");
     app.params.new_out_root = root;
+    app.params.echo_config = true;  // --print-config: the listing names where it comes from
     std::ostringstream log;
     ASSERT_EQ(app.run(log), 0) << log.str();
     EXPECT_EQ(fs::path(app.out_dir).parent_path(), fs::path(root));
@@ -474,14 +475,20 @@ TEST(FreeInitAppWithoutConfig, ArgumentsAreToldApartByContent) {
   EXPECT_EQ(problem("", ini), "missing <input.rawlog>: '" + ini +
                                   "' is an INI configuration file (freeinit "
                                   "[<config.ini>] <input.rawlog>)");
-  EXPECT_EQ(problem("", csv),
-            "<input.rawlog> '" + csv + "': not an MRPT rawlog (it is a text file)");
-  EXPECT_EQ(problem("", png), "<input.rawlog> '" + png +
-                                  "': not an MRPT rawlog (it is binary data, neither gzip nor an "
-                                  "MRPT archive)");
+  const std::string text = kSrc + "/README.md";
+  EXPECT_EQ(problem("", text),
+            "<input.rawlog> '" + text + "': not an MRPT rawlog (it is a text file)");
+  const std::string bytes = tmpFile("bytes.bin");
+  std::ofstream(bytes, std::ios::binary).write("\x01\x00\x02", 3);
+  EXPECT_EQ(problem("", bytes), "<input.rawlog> '" + bytes +
+                                    "': not an MRPT rawlog (it is binary data, neither gzip nor "
+                                    "an MRPT archive)");
+  // Outputs of a run (a simulator's truth, a snapshot), with or without a configuration.
+  EXPECT_EQ(problem("", csv).rfind("<input.rawlog> '" + csv + "' is the ground truth", 0), 0u);
+  EXPECT_EQ(problem("", png).rfind("<input.rawlog> '" + png + "' is a PNG image", 0), 0u);
+  EXPECT_EQ(problem(ini, png).rfind("<input.rawlog> '" + png + "' is a PNG image", 0), 0u);
   EXPECT_NE(problem("", bag).find("freeinit-import-bag"), std::string::npos);
   EXPECT_EQ(problem(kDyna, ini), "");  // swapped: the INI reader names the binary file
-  EXPECT_EQ(problem(ini, png), "");
 
   auto app = makeApp(ini, outDir("refused"), "");
   std::ostringstream log;
