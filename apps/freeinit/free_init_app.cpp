@@ -215,7 +215,7 @@ int FreeInitApp::run(std::ostream& log) {
     sweep.add(out_dir);
   }
   // The outputs' set: locked now, installed as a whole at the end; on any failure (an exception
-  // through here) the earlier run's outputs are removed with the staging folder.
+  // through here) the staging folder goes and the earlier run's outputs stay as they were.
   app_support::OutputSet set(out_dir, "", app_support::folderSetOptions(), log);
 
   // 1. Configuration (the defaults without a file), echoed.
