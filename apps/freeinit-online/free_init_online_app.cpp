@@ -287,8 +287,9 @@ class OnlineRun {
       }
     }
     if (!data_seen_) {
-      std::ostringstream within;
-      if (p_.wait_first > 0) within << " within " << p_.wait_first << " s";
+      std::ostringstream within;  // a signal before --wait ran out: "before SIGINT" only
+      if (p_.wait_first > 0 && stopped_by_signal_ == 0)
+        within << " within " << p_.wait_first << " s";
       throw mrpt_plugins::InputError(
           std::string(kSourceName) + ": no data received" + within.str() +
           (stopped_by_signal_ != 0 ? " before " + app_support::signalName(stopped_by_signal_)

@@ -184,7 +184,8 @@ TEST(LiveRecordings, StoppedWhileStreamingTheRecordingIsReadableAndTheEarlierOne
     ASSERT_GT(port, 0) << online.err();
     Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port), "-x", "0.5"}, d,
                    "stream");
-    // Data arrived: the earlier run's outputs are gone, its recording renamed.
+    // The window closed: this run's state and configuration replaced the earlier run's outputs,
+    // its recording renamed.
     ASSERT_TRUE(waitUntil([&] { return fs::exists(out / "effective_config.ini"); }));
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     online.signal(sig);
