@@ -375,6 +375,22 @@ TEST(StreamReceiver, GarbageIsCountedByReason) {
   EXPECT_TRUE(ev.empty());
 }
 
+namespace {
+
+/// The samples and 500-point frames of imu(k) / frame(k, 500) that came out are exactly as sent.
+void expectAsSent(const Output& o) {
+  for (const auto& s : o.imu) {
+    const int k = static_cast<int>((s.stamp_ns - kT0) / 5'000'000LL);
+    ASSERT_EQ(s.gyro, imu(k).gyro);
+  }
+  for (const auto& f : o.frames) {
+    const int k = static_cast<int>((f.stamp_ns - kT0) / 100'000'000LL);
+    expectSamePoints(f.points, frame(k, 500).points);
+  }
+}
+
+}  // namespace
+
 TEST(UdpLoopback, FaultyStreamIsSurvivedAndCounted) {
   UdpSourceParams sp;
   sp.port = 0;  // ephemeral
@@ -416,14 +432,7 @@ TEST(UdpLoopback, FaultyStreamIsSurvivedAndCounted) {
   // Stamps strictly increase; samples come out exactly as sent.
   for (std::size_t i = 1; i < o.imu.size(); ++i)
     ASSERT_GT(o.imu[i].stamp_ns, o.imu[i - 1].stamp_ns);
-  for (const auto& s : o.imu) {
-    const int k = static_cast<int>((s.stamp_ns - kT0) / 5'000'000LL);
-    ASSERT_EQ(s.gyro, imu(k).gyro);
-  }
-  for (const auto& f : o.frames) {
-    const int k = static_cast<int>((f.stamp_ns - kT0) / 100'000'000LL);
-    expectSamePoints(f.points, frame(k, 500).points);
-  }
+  expectAsSent(o);
   // Nothing vanished silently: IMU samples not delivered are covered by counted losses.
   EXPECT_GT(st.receiver.lost, 0u);
   EXPECT_LT(o.imu.size(), static_cast<std::size_t>(n_imu));
@@ -455,14 +464,7 @@ TEST(UdpLoopback, TruncatedDatagramsAreRefusedEachOne) {
   ASSERT_GT(ss.truncated, 10u);
   EXPECT_EQ(source.stats().receiver.malformed, ss.truncated);
   EXPECT_LT(o.imu.size(), static_cast<std::size_t>(n_imu));
-  for (const auto& s : o.imu) {
-    const int k = static_cast<int>((s.stamp_ns - kT0) / 5'000'000LL);
-    ASSERT_EQ(s.gyro, imu(k).gyro);
-  }
-  for (const auto& f : o.frames) {
-    const int k = static_cast<int>((f.stamp_ns - kT0) / 100'000'000LL);
-    expectSamePoints(f.points, frame(k, 500).points);
-  }
+  expectAsSent(o);
 }
 
 TEST(UdpLoopback, AnEmptyDatagramIsCountedAsMalformed) {
