@@ -13,8 +13,10 @@
 #include <freeinit/mrpt_plugins/register.h>
 #include <freeinit/mrpt_plugins/stream_conversions.h>
 
+#include <array>
 #include <chrono>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
@@ -515,6 +517,37 @@ class OnlineRun {
   int sessions_ = 0;  ///< sender sessions seen
 };
 
+// From the end of the stream on, a stop signal asks for what is already under way (the end of
+// the stream, then the outputs, a few seconds): SIGINT, SIGTERM and SIGHUP are ignored until the
+// run returns, and one that came since the stream ended is acknowledged, so that a late Ctrl-C
+// does not cost the outputs (nor say that none was written while the state is there). SIGKILL
+// still stops the process.
+class StopSignalsIgnored {
+ public:
+  explicit StopSignalsIgnored(std::ostream& log) {
+    struct sigaction ignore = {};
+    ignore.sa_handler = SIG_IGN;
+    sigemptyset(&ignore.sa_mask);
+    for (std::size_t i = 0; i < kSignals.size(); ++i)
+      sigaction(kSignals[i], &ignore, &previous_[i]);
+    if (const int sig = app_support::stopSignal()) {
+      log << app_support::signalName(sig) << " after the end of the stream: the outputs are "
+          << "written first\n";
+      app_support::clearStopRequest();
+    }
+  }
+  ~StopSignalsIgnored() {
+    for (std::size_t i = 0; i < kSignals.size(); ++i)
+      sigaction(kSignals[i], &previous_[i], nullptr);
+  }
+  StopSignalsIgnored(const StopSignalsIgnored&) = delete;
+  StopSignalsIgnored& operator=(const StopSignalsIgnored&) = delete;
+
+ private:
+  static constexpr std::array<int, 3> kSignals = {SIGINT, SIGTERM, SIGHUP};
+  std::array<struct sigaction, 3> previous_{};
+};
+
 }  // namespace
 
 int FreeInitOnlineApp::run(std::ostream& log) {
@@ -523,6 +556,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   r.prepare();
   r.startSource();
   r.receive();
+  const StopSignalsIgnored finishing(log);
   r.closeRecording();
   r.writeStreamStats();
   r.finishSession();

@@ -214,6 +214,39 @@ TEST(LiveRecordings, StoppedWhileStreamingTheRecordingIsReadableAndTheEarlierOne
   }
 }
 
+// A stop signal that comes after the stream ended, while the outputs are written: it asks for
+// what is under way, so the run finishes its outputs, exit code the run's.
+TEST(LiveRecordings, ASignalWhileTheOutputsAreWrittenCostsNothing) {
+  const fs::path d = freshDir("live_late_signal");
+  const fs::path out = d / "live";
+  for (int attempt = 0;; ++attempt) {
+    ASSERT_LT(attempt, 5) << "the outputs were always written before the signal";
+    Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-i", "30"}, d,
+                   "online");
+    const int port = listeningPort(online);
+    ASSERT_GT(port, 0) << online.err();
+    Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port), "-x", "2"}, d,
+                   "stream");
+    // The statistics are staged once the stream has ended, before the other outputs.
+    const fs::path stats = out / ".freeinit.staging" / "stream_stats.ini";
+    ASSERT_TRUE(waitUntil([&] { return fs::exists(stats) || !online.running(); }));
+    online.signal(SIGSTOP);
+    const bool in_time = fs::exists(stats);
+    if (in_time) online.signal(SIGTERM);
+    online.signal(SIGCONT);
+    const int st = online.wait();
+    stream.wait();
+    if (!in_time) continue;
+    EXPECT_EQ(exitCode(st), 0) << st << online.err();
+    EXPECT_EQ(online.err(), "");
+    for (const char* f :
+         {"initial_state.ini", "static_map.ply", "velocity.png", "live.rawlog", "stream_stats.ini"})
+      EXPECT_TRUE(fs::exists(out / f)) << f;
+    EXPECT_EQ(readText(out / "stream_stats.ini").find("stopped_by"), std::string::npos);
+    break;
+  }
+}
+
 // Re-running freeinit-online when no data ever arrives leaves the earlier recording as it was;
 // into a new folder, it leaves no folder.
 TEST(LiveRecordings, NoDataTheEarlierRecordingIsLeftAsItWas) {
