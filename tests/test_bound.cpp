@@ -302,9 +302,9 @@ TEST(SimulatorBound, UsesEveryStaticPointOfTheWindowAndNothingElse) {
   EXPECT_EQ(b.nodes, 81u);
   EXPECT_DOUBLE_EQ(b.t_end, t1);
   // The estimator's priors bound the biases from above; at rest the yaw-rate bias keeps its prior.
-  EXPECT_LE(b.gyro_bias, std::sqrt(3.0) * cfg.velocimeter.gyro_bias_sigma0);
-  EXPECT_GE(b.gyro_bias, cfg.velocimeter.gyro_bias_sigma0);
-  EXPECT_LE(b.accel_bias, std::sqrt(3.0) * cfg.gravity.accel_bias_prior_sigma);
+  EXPECT_LE(b.gyro_bias, std::sqrt(3.0) * cfg.imu.gyro_bias_sigma0);
+  EXPECT_GE(b.gyro_bias, cfg.imu.gyro_bias_sigma0);
+  EXPECT_LE(b.accel_bias, std::sqrt(3.0) * cfg.imu.accel_bias_prior_sigma);
   // A result without a state has no window and no bound.
   InitResult none;
   EXPECT_FALSE(sim::cramerRaoBound(rec, cfg, none).ok);

@@ -28,7 +28,15 @@ class ObservationDecoder {
   InputParams input_;
 };
 
-/// The whole offline path over a rawlog: every record `reader` gives, decoded and checked, in
+/// One record of a rawlog through the offline path: decoded, its items checked in order, each
+/// checked item to `take` (a cloud the checker holds for the IMU around it comes out with a later
+/// record, or at checker.finish()). `admit` (if given) sees each item before its checks and
+/// refuses the items not needed: they pass by unchecked. The record's object is released.
+void checkRecord(ObservationDecoder& decoder, RecordChecker& checker,
+                 mrpt_plugins::RawlogObject& rec, const std::function<void(CheckedItem&)>& take,
+                 const std::function<bool(const IngestItem&)>& admit = {});
+
+/// The whole offline path over a rawlog: every record `reader` gives through checkRecord, in
 /// order; `take` gets each checked item, the clouds held for the IMU around them at the end
 /// included; `on_record` (if given) sees each record before it is decoded. Errors of the reader
 /// propagate.
