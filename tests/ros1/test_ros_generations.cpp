@@ -2,6 +2,7 @@
 // @foxglove/cdr, SQLite) and on the same data recorded as a ROS 1 bag: every container gives the
 // same rawlog, byte for byte; the extrinsics come from /tf_static of either generation unless the
 // INI gives them (a disagreement is one warning line); app-level messages name the file.
+#include <freeinit/app_support/file_kind.h>
 #include <freeinit/bags/ros2_import.h>
 #include <freeinit/bags/static_transforms.h>
 #include <freeinit/ros1/bag_reader.h>
@@ -13,9 +14,12 @@
 #include <Eigen/Geometry>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <optional>
 #include <sstream>
 
 #include "bag_import_app.h"
+#include "free_init_app.h"
 
 using namespace freeinit;
 using namespace freeinit::apps;
@@ -212,10 +216,11 @@ TEST(StaticTransforms, AChainThroughACommonParentComposes) {
 TEST(Ros2Import, MessagesNameTheFileAndWhatItIs) {
   const std::string mcap = fixture("imu_cloud.mcap");
   EXPECT_CONTAINS(errorOf(mcap, "[bag_import]\nimu_topic = /imu\n", dir("topic")),
-                  mcap + ": an MCAP file (ROS 2): no topic /imu (set imu_topic); the recording "
-                         "has: /tf_static (tf2_msgs/msg/TFMessage), /imu/data "
-                         "(sensor_msgs/msg/Imu), /aeva/AeriesII/point_cloud_frame "
-                         "(sensor_msgs/msg/PointCloud2)");
+                  mcap +
+                      ": an MCAP file (ROS 2): no topic /imu (set imu_topic); the recording "
+                      "has: /tf_static (tf2_msgs/msg/TFMessage), /imu/data "
+                      "(sensor_msgs/msg/Imu), /aeva/AeriesII/point_cloud_frame "
+                      "(sensor_msgs/msg/PointCloud2)");
   EXPECT_CONTAINS(errorOf(mcap, "[bag_import]\nlidar_topic = /tf_static\n", dir("type")),
                   mcap +
                       ": topic /tf_static has type tf2_msgs/msg/TFMessage, expected "
@@ -242,4 +247,66 @@ TEST(Ros2Import, DefaultOutputNames) {
   EXPECT_EQ(defaultRawlogName("a/rec.db3"), "a/rec.rawlog");
   EXPECT_EQ(defaultRawlogName("a/rec.bag"), "a/rec.rawlog");
   EXPECT_EQ(defaultRawlogName(fixture("imu_cloud_db3") + "/"), fixture("imu_cloud_db3.rawlog"));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Straight in: freeinit on the recording is freeinit on its import, to the last digit.
+namespace {
+
+std::map<std::string, std::string> runFreeInit(const std::string& input, const std::string& out,
+                                               std::optional<double> start = std::nullopt) {
+  FreeInitApp app;
+  app.params.rawlog = input;
+  app.params.out_dir = out;
+  app.params.progress = false;
+  app.params.echo_config = false;
+  app.params.start = start;
+  std::ostringstream log;
+  app.run(log);
+  std::map<std::string, std::string> files;
+  for (const auto& f : fs::directory_iterator(out))
+    if (f.path().extension() != ".simplemap")  // holds the observations' source names
+      files[f.path().filename().string()] = bytes(f.path().string());
+  return files;
+}
+
+}  // namespace
+
+TEST(StraightIn, FreeInitOnARecordingIsFreeInitOnItsImport) {
+  const std::string d = dir("run");
+  const Imported imported = import(fixture("imu_cloud.mcap"), "[bag_import]\n", d);
+  for (const auto& start : {std::optional<double>(), std::optional<double>(0.1)}) {
+    const auto from_rawlog = runFreeInit(d + "/out.rawlog", d + "/rawlog_out", start);
+    for (const char* f : {"imu_cloud.mcap", "imu_cloud_db3", "imu_cloud.db3"}) {
+      const auto straight = runFreeInit(fixture(f), d + "/" + f + "_out", start);
+      EXPECT_EQ(straight, from_rawlog) << f;
+    }
+    EXPECT_EQ(from_rawlog.count("initial_state.ini"), 1u);
+  }
+}
+
+TEST(StraightIn, InputKindsAreRecognisedAndNamed) {
+  using app_support::FileKind;
+  EXPECT_EQ(app_support::fileKind(fixture("imu_cloud.mcap")), FileKind::Mcap);
+  EXPECT_EQ(app_support::fileKind(fixture("imu_cloud.db3")), FileKind::Sqlite);
+  EXPECT_EQ(app_support::fileKind(fixture("imu_cloud_db3")), FileKind::Rosbag2Folder);
+  EXPECT_EQ(app_support::fileKind(kRecordings), FileKind::Folder);
+  for (auto k : {FileKind::Mcap, FileKind::Sqlite, FileKind::Rosbag2Folder})
+    EXPECT_TRUE(app_support::isReadableInput(k));
+  EXPECT_EQ(app_support::describe(FileKind::Mcap), "an MCAP file (ROS 2)");
+  FreeInitAppParams p;
+  p.rawlog = fixture("imu_cloud.mcap");
+  EXPECT_EQ(p.argumentsProblem(), "");
+  // A folder of recordings without metadata.yaml: the reader names it and lists what it holds.
+  FreeInitApp app;
+  app.params.rawlog = kRecordings;
+  app.params.out_dir = dir("folder");
+  app.params.progress = false;
+  std::ostringstream log;
+  try {
+    app.run(log);
+    ADD_FAILURE() << "ran on a folder";
+  } catch (const std::exception& e) {
+    EXPECT_CONTAINS(e.what(), kRecordings + ": a rosbag2 folder without metadata.yaml");
+  }
 }

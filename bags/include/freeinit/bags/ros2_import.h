@@ -20,6 +20,10 @@
 
 namespace freeinit::bags {
 
+/// [s] a time in ns as ROS computes seconds (sec + 1e-9 nsec): the same double for both ROS
+/// generations.
+double rosSeconds(std::int64_t ns);
+
 /// A ROS 2 recording opened for import, read message by message into an ImportStream.
 class Ros2Reader {
  public:
@@ -56,6 +60,8 @@ class Ros2Reader {
   /// Messages read per topic so far.
   std::size_t imuRead() const { return imu_read_; }
   std::size_t cloudsRead() const { return clouds_read_; }
+  /// [s] UNIX log time of the last message read (rosSeconds).
+  double lastLogTime() const { return rosSeconds(last_log_time_); }
 
  private:
   /// The frame_id of the first message of `topic` (its header).
@@ -75,9 +81,5 @@ class Ros2Reader {
 /// (see Ros2Reader) or std::invalid_argument.
 BagSummary readRos2Recording(const std::string& path, const BagImportConfig& config,
                              const BagReadCallbacks& callbacks);
-
-/// [s] a time in ns as ROS computes seconds (sec + 1e-9 nsec): the same double for both ROS
-/// generations.
-double rosSeconds(std::int64_t ns);
 
 }  // namespace freeinit::bags
