@@ -5,9 +5,11 @@
 #include <freeinit/app_support/output_set.h>
 #include <freeinit/app_support/progress_bar.h>
 #include <freeinit/app_support/stop_signal.h>
+#include <freeinit/bags/ros2_import.h>
 #include <freeinit/io/atomic_file.h>
 #include <freeinit/io/config_section.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
+#include <freeinit/ros2/open_recording.h>
 #include <unistd.h>
 
 #include <cerrno>
@@ -27,34 +29,6 @@ namespace freeinit::apps {
 namespace {
 
 constexpr const char* kSection = "bag_import";
-/// [s] the largest clock offset: ROS1 times are uint32 seconds, so two of them differ by less
-/// than 2^32 s (a scan stamp from a clock since boot against bag times since 1970 is ~1.7e9 s).
-constexpr double kMaxClockOffset = 4294967296.0;
-
-std::string parseFieldType(std::string_view text, ros1::FieldType& t) {
-  try {
-    t = ros1::fieldTypeFromName(std::string(text));
-  } catch (const std::exception& e) {
-    return e.what();
-  }
-  return "";
-}
-
-// "<key>" names a PointCloud2 field ("" = not read, optional fields only), "<key>_type" its
-// datatype.
-template <class Field>
-void addField(config::Section<BagImportSettings>& s, const std::string& key, Field field,
-              const std::string& doc) {
-  s.text(
-       key, [field](auto& x) -> auto& { return field(x).name; }, doc)
-      .custom(
-          key + "_type", [field](auto& x) -> auto& { return field(x).type; }, "-",
-          "int8 | uint8 | int16 | uint16 | int32 | uint32 | float32 | float64",
-          std::function<std::string(std::string_view, ros1::FieldType&)>(parseFieldType),
-          std::function<std::string(const ros1::FieldType&)>(
-              [](const ros1::FieldType& t) { return ros1::fieldTypeName(t); }),
-          "datatype of " + key + " in the bag (another type is an error, not a conversion)");
-}
 
 std::string fixed(double x, int precision) {
   std::ostringstream os;
@@ -83,111 +57,6 @@ const char* const kDopplerFitCsvHeader =
     "stamp,t,points,inliers,ok,v_x,v_y,v_z,sigma_x,sigma_y,sigma_z,cov_xy,cov_xz,cov_yz,"
     "residual_sigma";
 
-const config::Section<BagImportSettings>& bagImportSection() {
-  using config::between;
-  using S = BagImportSettings;
-  static const auto s = [] {
-    config::Section<S> sec(kSection,
-                           "how to read a ROS1 bag (defaults: the Free-Init / FMCW-LIO release)");
-    sec.text(
-           "imu_topic", [](auto& x) -> auto& { return x.bag.imu_topic; }, "sensor_msgs/Imu topic",
-           true)
-        .text(
-            "lidar_topic", [](auto& x) -> auto& { return x.bag.lidar_topic; },
-            "sensor_msgs/PointCloud2 topic", true);
-    addField(
-        sec, "x_field", [](auto& x) -> auto& { return x.bag.cloud.x; }, "[m] LiDAR frame x");
-    addField(
-        sec, "y_field", [](auto& x) -> auto& { return x.bag.cloud.y; }, "[m] LiDAR frame y");
-    addField(
-        sec, "z_field", [](auto& x) -> auto& { return x.bag.cloud.z; }, "[m] LiDAR frame z");
-    addField(
-        sec, "doppler_field", [](auto& x) -> auto& { return x.bag.cloud.doppler; },
-        "[m/s] per-point Doppler velocity");
-    sec.choice(
-           "doppler_sign", [](auto& x) -> auto& { return x.bag.cloud.doppler_sign; },
-           {{"1", 1.0}, {"-1", -1.0}},
-           "1: the field is the range rate (negative approaching); -1: approach is positive")
-        .choice(
-            "doppler_mode", [](auto& x) -> auto& { return x.bag.doppler_mode; },
-            {{"relative", ros1::DopplerMode::kRelative},
-             {"ego_compensated", ros1::DopplerMode::kEgoCompensated}},
-            "relative (raw range rate) or ego_compensated (refused: Free-Init needs raw "
-            "Doppler)");
-    addField(
-        sec, "time_field", [](auto& x) -> auto& { return x.bag.cloud.time.field; },
-        "per-point time (empty: none, see frame_duration)");
-    sec.number(
-           "time_scale", [](auto& x) -> auto& { return x.bag.cloud.time.scale; }, "s per unit",
-           config::aboveUpTo(0, 1e3), "1e-9: ns, 1e-6: us, 1: s")
-        .flag(
-            "time_relative", [](auto& x) -> auto& { return x.bag.cloud.time.relative; },
-            "true: offset after the scan stamp; false: absolute UNIX time (float64)")
-        .number(
-            "frame_duration", [](auto& x) -> auto& { return x.bag.cloud.time.frame_duration; }, "s",
-            between(0, 10),
-            "without a time field: the span after the scan stamp the points are spread over, in "
-            "point order (0: all at the scan stamp)")
-        .choice(
-            "stamp_source", [](auto& x) -> auto& { return x.bag.stamp_source; },
-            {{"header", ros1::StampSource::kHeader},
-             {"trigger", ros1::StampSource::kTrigger},
-             {"bag_time", ros1::StampSource::kBagTime}},
-            "scan stamp: the cloud's header stamp, the stamp of the trigger_topic message with "
-            "the cloud's seq, or the time the bag recorded the cloud")
-        .text(
-            "trigger_topic", [](auto& x) -> auto& { return x.bag.trigger_topic; },
-            "std_msgs/Header topic of the scan starts (only with stamp_source = trigger)");
-    addField(
-        sec, "intensity_field", [](auto& x) -> auto& { return x.bag.cloud.intensity; },
-        "optional intensity");
-    addField(
-        sec, "line_field", [](auto& x) -> auto& { return x.bag.cloud.line; },
-        "optional scan line index");
-    sec.choice(
-           "imu_accel_unit", [](auto& x) -> auto& { return x.bag.imu_accel_in_g; },
-           {{"m/s^2", false}, {"g", true}},
-           "unit of linear_acceleration (checked against the data: mean |a| ~ 9.81 or ~ 1)")
-        .number(
-            "lidar_time_offset", [](auto& x) -> auto& { return x.bag.lidar_time_offset; }, "s",
-            between(-kMaxClockOffset, kMaxClockOffset),
-            "added to every scan stamp to put it on the IMU clock (bag times are often days "
-            "off)")
-        .number(
-            "reorder_window", [](auto& x) -> auto& { return x.bag.reorder_window; }, "s",
-            between(0, 3600),
-            "how late (in stamp time) a message may be recorded and still be put in order")
-        .flag(
-            "drop_invalid_points", [](auto& x) -> auto& { return x.bag.drop_invalid_points; },
-            "drop NaN/inf points (counted); false: error")
-        .number(
-            "gap_factor", [](auto& x) -> auto& { return x.bag.gap_factor; }, "-",
-            config::aboveUpTo(1, 1e6), "report intervals > gap_factor x the median as gaps")
-        .number(
-            "unit_check_samples", [](auto& x) -> auto& { return x.bag.unit_check_samples; }, "-",
-            between(1, 1e6), "first IMU samples whose mean specific force checks imu_accel_unit")
-        .text("imu_label", &S::imu_label, "sensorLabel written on the IMU observations", true)
-        .text("lidar_label", &S::lidar_label, "sensorLabel written on the point clouds", true)
-        .text("freeinit_config", &S::freeinit_config,
-              "the freeinit configuration made for this sensor, relative to this INI's folder, "
-              "suggested after the import (empty: the defaults suit it)",
-              false)
-        .check([](const S& x, const config::Checker& c) {
-          if (x.imu_label == x.lidar_label) c.fail("lidar_label", "must differ from imu_label");
-          try {
-            ros1::validate(x.bag);
-          } catch (const std::invalid_argument& e) {  // "key: why"
-            const std::string what = e.what();
-            const auto colon = what.find(": ");
-            c.fail(what.substr(0, colon),
-                   colon == std::string::npos ? what : what.substr(colon + 2));
-          }
-        });
-    return sec;
-  }();
-  return s;
-}
-
 const config::Section<ros1::DopplerFitParams>& dopplerFitSection() {
   using config::between;
   using P = ros1::DopplerFitParams;
@@ -208,20 +77,41 @@ BagImportSettings loadBagImportSettings(const std::string& ini_file) {
   const config::IniFile ini = config::IniFile::load(ini_file);
   ini.requireKnownSections({kSection, dopplerFitSection().name(), "extrinsics"});
   BagImportSettings s;
-  bagImportSection().load(ini, s);
+  bags::importSection().load(ini, s);
   dopplerFitSection().load(ini, s.doppler_fit);
   // [extrinsics]: the pose keys of the main app's section, required (a bag has no sensor poses;
   // the importer writes them as each cloud's sensorPose).
   app_support::LidarPoseParams pose;
   app_support::extrinsicsPoseSection().load(ini, pose);
+  // Optional: the recording's /tf_static may give them (checked in run()).
   const config::Checker keys(&ini, "extrinsics");
-  if (app_support::firstPoseKey(keys).empty())
-    keys.fail("R_bl",
-              "extrinsics missing: give R_bl (or roll_deg, pitch_deg, yaw_deg) and p_bl; the "
-              "importer writes them as each point cloud's sensorPose");
-  s.extrinsics = app_support::extrinsicsOf(pose, keys);
+  s.extrinsics_given = !app_support::firstPoseKey(keys).empty();
+  if (s.extrinsics_given) s.extrinsics = app_support::extrinsicsOf(pose, keys);
   return s;
 }
+
+std::string defaultRawlogName(const std::string& input) {
+  std::string out = input;
+  while (out.size() > 1 && out.back() == '/') out.pop_back();
+  if (!std::filesystem::is_directory(out))
+    for (const char* ext : {".bag", ".mcap", ".db3"}) {
+      const std::string e(ext);
+      if (out.size() > e.size() && out.compare(out.size() - e.size(), e.size(), e) == 0) {
+        out.resize(out.size() - e.size());
+        break;
+      }
+    }
+  return out + ".rawlog";
+}
+
+namespace {
+
+bool isRos2(ros2::RecordingKind k) {
+  return k == ros2::RecordingKind::kMcap || k == ros2::RecordingKind::kSqlite ||
+         k == ros2::RecordingKind::kRosbag2Folder;
+}
+
+}  // namespace
 
 int BagImportApp::run(std::ostream& log) {
   settings = loadBagImportSettings(params.config_file);
@@ -231,14 +121,18 @@ int BagImportApp::run(std::ostream& log) {
         ": [bag_import] doppler_mode = ego_compensated: Free-Init needs the raw (relative) "
         "Doppler of the sensor; ego-compensated Doppler carries no ego velocity, so nothing is "
         "imported");
-  std::string out = params.output;
-  if (out.empty()) {
-    out = params.bag;
-    if (const auto dot = out.rfind(".bag"); dot != std::string::npos && dot + 4 == out.size())
-      out.resize(dot);
-    out += ".rawlog";
-  }
+  std::string out = params.output.empty() ? defaultRawlogName(params.bag) : params.output;
   const auto& b = settings.bag;
+  const ros2::RecordingKind kind = ros2::identifyRecording(params.bag);
+  const bool ros2_input = isRos2(kind) || kind == ros2::RecordingKind::kPlainFolder;
+  if (ros2_input) {
+    // Opened once here for its topics and extrinsics (the read opens it again: cheap with an
+    // index).
+    recorded_extrinsics = bags::Ros2Reader(params.bag, b).staticExtrinsics();
+  } else if (kind == ros2::RecordingKind::kRos1Bag) {
+    recorded_extrinsics = ros1::readStaticExtrinsics(params.bag, b);
+  }
+  chooseExtrinsics();
   const std::string time = b.cloud.time.field.name.empty()
                                ? "no per-point time (points spread over " +
                                      fixed(b.cloud.time.frame_duration, 4) + " s in point order)"
@@ -247,7 +141,8 @@ int BagImportApp::run(std::ostream& log) {
                                      fixed(b.cloud.time.scale, 12) + " s " +
                                      (b.cloud.time.relative ? "after" : "absolute, not after") +
                                      " the scan stamp";
-  log << "Importing " << params.bag << " -> " << out << "\n  IMU " << b.imu_topic
+  log << "Importing " << params.bag << " -> " << out << "\n  extrinsics from "
+      << settings.extrinsics_source << "\n  IMU " << b.imu_topic
       << (b.imu_accel_in_g ? " (accelerations in g)" : " (m/s^2)") << ", LiDAR " << b.lidar_topic
       << ": Doppler '" << b.cloud.doppler.name << "' x" << b.cloud.doppler_sign << ", " << time
       << "\n  scan stamps: " << ros1::stampSourceName(b.stamp_source)
@@ -294,7 +189,8 @@ int BagImportApp::run(std::ostream& log) {
   };
   if (params.progress) cb.progress = [&](std::size_t d, std::size_t t) { bar.update(d, t); };
   try {
-    summary = ros1::readBag(params.bag, b, cb);
+    summary =
+        ros2_input ? bags::readRos2Recording(params.bag, b, cb) : ros1::readBag(params.bag, b, cb);
   } catch (const std::exception& e) {
     // The reader reports what a callback threw as a bag error: a stop is a stop, a full disk a
     // full disk.
@@ -312,7 +208,8 @@ int BagImportApp::run(std::ostream& log) {
   rawlog_written = out;
   set.write(base + ".extrinsics.ini", [&](const std::string& p) {
     mrpt_plugins::writeExtrinsicsIni(p, settings.extrinsics,
-                                     "extrinsics of " + out + " (from " + params.config_file +
+                                     "extrinsics of " + out + " (from " +
+                                         settings.extrinsics_source +
                                          "; also in each point cloud's sensorPose)");
   });
   if (fit_set) {
@@ -327,6 +224,7 @@ int BagImportApp::run(std::ostream& log) {
     log << "Wrote " << params.doppler_fit_csv << " (per-scan Doppler-only velocity fits)\n";
   }
   summary.print(log);
+  if (!extrinsics_warning.empty()) log << "Warning: " << extrinsics_warning << "\n";
   log << "Wrote " << out << " (" << rawlog.records() << " records: " << rawlog.imuRecords()
       << " IMU, " << rawlog.frameRecords() << " point clouds, " << summary.points << " points) and "
       << ext << "\n";
@@ -351,17 +249,44 @@ int BagImportApp::run(std::ostream& log) {
   return 0;
 }
 
+void BagImportApp::chooseExtrinsics() {
+  const std::string tf = settings.bag.tf_static_topic;
+  extrinsics_warning.clear();
+  if (settings.extrinsics_given) {
+    settings.extrinsics_source = params.config_file + " [extrinsics]";
+    if (recorded_extrinsics) {
+      const std::string diff =
+          bags::extrinsicsDifference(settings.extrinsics, recorded_extrinsics->extrinsics);
+      if (!diff.empty())
+        extrinsics_warning = params.config_file + " [extrinsics] and " + tf + " of " + params.bag +
+                             " (" + recorded_extrinsics->chain + ") " + diff +
+                             ": the INI's are used";
+    }
+    return;
+  }
+  if (!recorded_extrinsics)
+    throw std::invalid_argument(
+        params.config_file + ": [extrinsics] R_bl: extrinsics missing, and " + params.bag +
+        " has " + (tf.empty() ? std::string("tf_static_topic off") : "no " + tf) +
+        " linking the IMU's frame to the LiDAR's: give R_bl (or roll_deg, pitch_deg, yaw_deg) "
+        "and p_bl; the importer writes them as each point cloud's sensorPose");
+  settings.extrinsics = recorded_extrinsics->extrinsics;
+  settings.extrinsics_source = tf + " of " + params.bag + " (" + recorded_extrinsics->chain + ")";
+}
+
 int BagImportApp::main(int argc, char** argv) {
   app_support::CommandLine cli(
       "freeinit-import-bag",
-      "a ROS1 bag (sensor_msgs/Imu + sensor_msgs/PointCloud2 with per-point "
-      "Doppler and time) to a rawlog for freeinit");
-  const auto& bag = cli.positional("input.bag", "input ROS1 bag");
+      "a ROS recording (sensor_msgs/Imu + sensor_msgs/PointCloud2 with per-point "
+      "Doppler and time) to a rawlog for freeinit: a ROS 1 bag, an MCAP file, a rosbag2 folder "
+      "or a .db3");
+  const auto& bag =
+      cli.positional("input", "input recording: ROS 1 .bag, ROS 2 .mcap, rosbag2 folder or .db3");
   const auto& config = cli.requiredText(
       "c", "config",
       "INI with [bag_import], [extrinsics] and optionally [doppler_fit] (see ini/import_bag.ini)",
       "FILE");
-  const auto& out = cli.text("o", "out", "output rawlog", "", "FILE", "<bag>.rawlog");
+  const auto& out = cli.text("o", "out", "output rawlog", "", "FILE", "<input>.rawlog");
   const auto& fit_csv = cli.text("", "doppler-fit-csv",
                                  "also write each imported scan's sensor velocity fitted from its "
                                  "Doppler alone (no IMU; [doppler_fit] of the INI) to FILE",

@@ -1,5 +1,7 @@
-// freeinit-import-bag: a ROS1 bag (the Free-Init / FMCW-LIO release layout by default) to a typed
-// rawlog that the freeinit app reads, written with the simulator's writer (RawlogWriter):
+// freeinit-import-bag: a ROS recording (the Free-Init / FMCW-LIO release layout by default) to a
+// typed rawlog that the freeinit app reads, written with the simulator's writer (RawlogWriter). The
+// input is recognised by its content: a ROS 1 bag (ros1/bag_reader.h), an MCAP file, a rosbag2
+// folder or a single rosbag2 .db3 (bags/ros2_import.h); the same settings read both generations.
 //   <out>.rawlog            CObservationIMU + CObservationPointCloud (CPointsMapDoppler), in stamp
 //                           order, each cloud's sensorPose = the extrinsics
 //   <out>.extrinsics.ini    [extrinsics] R_bl, p_bl, as freeinit-sim writes it
@@ -7,15 +9,21 @@
 //                           (ros1/doppler_fit.h), a no-IMU reference
 // The configuration is an INI file: [bag_import] (topics, PointCloud2 fields and types, units,
 // scan stamp source, clock offset, Doppler mode; see ini/import_bag.ini), [extrinsics] (R_bl or
-// roll/pitch/yaw_deg, and p_bl, read by the main app's loader) and optionally [doppler_fit]. Each
-// output is written atomically; a bad bag or configuration fails before any exists.
+// roll/pitch/yaw_deg, and p_bl, read by the main app's loader) and optionally [doppler_fit].
+// Extrinsics: the INI's when it gives them, else those of the recording's /tf_static (from the
+// IMU's frame_id to the LiDAR's); when both exist and differ by more than 0.1 deg or 1 mm, a
+// warning says so (the INI's are used). Each output is written atomically; a bad recording or
+// configuration fails before any exists.
 #pragma once
 
+#include <freeinit/bags/import_section.h>
+#include <freeinit/bags/static_transforms.h>
 #include <freeinit/ros1/bag_import_config.h>
 #include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/doppler_fit.h>
 
 #include <iosfwd>
+#include <optional>
 #include <string>
 
 namespace freeinit::config {
@@ -26,7 +34,7 @@ class Section;
 namespace freeinit::apps {
 
 struct BagImportAppParams {
-  std::string bag;
+  std::string bag;          ///< a ROS 1 bag, an MCAP file, a rosbag2 folder or .db3
   std::string config_file;  ///< INI with [bag_import] and [extrinsics]
   std::string output;       ///< rawlog path ("" = the bag's path with .rawlog)
   /// CSV of the per-scan Doppler-only velocity fits ("" = none): stamp, t, points, inliers, ok,
@@ -37,14 +45,11 @@ struct BagImportAppParams {
 };
 
 /// The importer's whole configuration, from its INI file.
-struct BagImportSettings {
-  ros1::BagImportConfig bag;
-  Extrinsics extrinsics;
-  std::string imu_label = "IMU";      ///< sensorLabel written on the IMU observations
-  std::string lidar_label = "LIDAR";  ///< sensorLabel written on the point clouds
-  /// The freeinit configuration made for this sensor, relative to the import INI's folder,
-  /// suggested after the import ("": the defaults suit it).
-  std::string freeinit_config;
+/// [bag_import] (bags::ImportSettings: the topics, layout and labels) and the rest.
+struct BagImportSettings : bags::ImportSettings {
+  Extrinsics extrinsics;               ///< after run(): the extrinsics used
+  bool extrinsics_given = false;       ///< [extrinsics] gives them
+  std::string extrinsics_source;       ///< after run(): where the extrinsics used come from
   ros1::DopplerFitParams doppler_fit;  ///< [doppler_fit]: the per-scan fits of --doppler-fit-csv
 };
 
@@ -55,8 +60,6 @@ extern const char* const kDopplerFitCsvHeader;
 /// values and missing extrinsics throw config::ConfigError (a std::invalid_argument) naming the
 /// file, the line, the section and the key.
 BagImportSettings loadBagImportSettings(const std::string& ini_file);
-/// The declaration of [bag_import] (its [extrinsics] is extrinsicsPoseSection(), app_config.h).
-const config::Section<BagImportSettings>& bagImportSection();
 /// The declaration of [doppler_fit] (optional; read for --doppler-fit-csv).
 const config::Section<ros1::DopplerFitParams>& dopplerFitSection();
 
@@ -68,9 +71,23 @@ class BagImportApp {
   /// The command line (`main` of freeinit-import-bag): parses it, runs, returns the exit code.
   static int main(int argc, char** argv);
 
+ private:
+  /// settings.extrinsics and extrinsics_source from the INI or the recording (see above); throws
+  /// std::invalid_argument when neither gives them.
+  void chooseExtrinsics();
+
+ public:
   BagImportSettings settings;  ///< filled by run()
   ros1::BagSummary summary;    ///< filled by run()
   std::string rawlog_written;  ///< filled by run()
+  /// Filled by run(): the extrinsics of the recording's /tf_static, when it links the frames.
+  std::optional<bags::RecordedExtrinsics> recorded_extrinsics;
+  /// Filled by run(): "" or the warning that the INI's and the recording's extrinsics differ.
+  std::string extrinsics_warning;
 };
+
+/// The rawlog freeinit-import-bag writes for `input` by default: the input's path without its
+/// extension (.bag, .mcap, .db3; a folder: its name) + ".rawlog".
+std::string defaultRawlogName(const std::string& input);
 
 }  // namespace freeinit::apps

@@ -8,6 +8,7 @@
 #include <freeinit/app_support/output_set.h>
 #include <freeinit/app_support/output_writers.h>
 #include <freeinit/app_support/progress_bar.h>
+#include <freeinit/app_support/recording_source.h>
 #include <freeinit/app_support/result_files.h>
 #include <freeinit/app_support/snapshots.h>
 #include <freeinit/app_support/stop_signal.h>
@@ -253,9 +254,8 @@ std::string FreeInitAppParams::argumentsProblem() const {
   if (input == app_support::FileKind::Ini)
     return "missing <input.rawlog>: '" + rawlog + "' is " + app_support::describe(input) +
            " (freeinit [<config.ini>] <input.rawlog>)";
-  if (input == app_support::FileKind::Text || input == app_support::FileKind::RosBag ||
-      input == app_support::FileKind::Binary)
-    return "<input.rawlog> '" + rawlog + "': not an MRPT rawlog (it is " +
+  if (input == app_support::FileKind::Text || input == app_support::FileKind::Binary)
+    return "<input.rawlog> '" + rawlog + "': neither an MRPT rawlog nor a ROS recording (it is " +
            app_support::describe(input) + ")";
   return "";
 }
@@ -477,7 +477,9 @@ std::string FreeInitApp::loadConfiguration(std::ostream& log) {
 
 void FreeInitApp::openRecording(Job& job, std::ostream& log) {
   log << "Reading " << params.rawlog << "\n";
-  job.reader = std::make_unique<mrpt_plugins::RawlogReader>(params.rawlog, params.index);
+  std::vector<std::string> input_warnings;
+  job.reader = app_support::openInput(params.rawlog, config, params.index, &input_warnings);
+  for (const auto& w : input_warnings) warn(log, w);
   mrpt_plugins::RawlogReader& reader = *job.reader;
   reader.setSalvage(params.salvage);
   reader.setMaxRecordBytes(static_cast<std::size_t>(config.input.max_record_mb * 1e6));
@@ -606,7 +608,10 @@ int FreeInitApp::main(int argc, char** argv) {
                                    "INI configuration file (ini/freeinit.ini documents every key); "
                                    "without it the defaults, the extrinsics from the rawlog",
                                    false);
-  const auto& rawlog = cli.positional("input.rawlog", "input rawlog");
+  const auto& rawlog = cli.positional(
+      "input.rawlog",
+      "input rawlog, or a ROS 2 recording read straight in (an MCAP file, a rosbag2 folder, a "
+      ".db3; [bag_import] of the INI says how)");
   const auto& out =
       cli.text("o", "out", "output folder (its earlier outputs are replaced)", "", "DIR",
                std::string(kDefaultOutDir) +

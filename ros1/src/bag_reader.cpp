@@ -1,4 +1,3 @@
-#include <freeinit/accel_unit.h>
 #include <freeinit/ros1/bag_guard.h>
 #include <freeinit/ros1/bag_reader.h>
 #include <freeinit/ros1/cloud_codec.h>
@@ -11,70 +10,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
+#include <cstring>
 #include <map>
-#include <ostream>
-#include <sstream>
-#include <tuple>
 
 namespace freeinit::ros1 {
 namespace {
-
-std::string fmt(double t, int precision = 9) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(precision) << t;
-  return os.str();
-}
-
-// One message waiting in the reorder buffer, ordered by (stamp, IMU before LiDAR, arrival).
-struct Pending {
-  ImuSample imu;
-  LidarFrame frame;
-};
-using PendingKey = std::tuple<double, int, std::size_t>;
-
-// Per-topic bookkeeping while reading.
-struct TopicState {
-  TopicSummary summary;
-  std::vector<double> stamps;  // imported stamps, for rates and gaps
-  double last = -1;            // last accepted stamp
-
-  // False (and counted) when `t` does not increase within the topic.
-  bool accept(double t) {
-    if (t <= 0) {
-      ++summary.unusable;
-      return false;
-    }
-    if (last >= 0 && t <= last) {
-      ++(t == last ? summary.duplicated : summary.out_of_order);
-      return false;
-    }
-    last = t;
-    return true;
-  }
-
-  void finish(double gap_factor) {
-    TopicSummary& s = summary;
-    s.imported = stamps.size();
-    if (stamps.empty()) return;
-    s.first = stamps.front();
-    s.last = stamps.back();
-    if (stamps.size() < 2) return;
-    std::vector<double> dt(stamps.size() - 1);
-    for (std::size_t i = 1; i < stamps.size(); ++i) dt[i - 1] = stamps[i] - stamps[i - 1];
-    std::vector<double> sorted = dt;
-    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(dt.size() / 2),
-                     sorted.end());
-    s.median_interval = sorted[dt.size() / 2];
-    for (std::size_t i = 0; i < dt.size(); ++i) {
-      if (dt[i] > gap_factor * s.median_interval) ++s.gaps;
-      if (dt[i] > s.largest_gap) {
-        s.largest_gap = dt[i];
-        s.largest_gap_at = stamps[i + 1];
-      }
-    }
-  }
-};
 
 void checkConnection(const std::string& file, const rosbag::ConnectionInfo& c,
                      const std::string& type, const std::string& md5) {
@@ -99,6 +39,57 @@ void readMessage(const rosbag::MessageInstance& m, RosMessage type, std::vector<
   ros::serialization::deserialize(in, msg);
 }
 
+// A serialized tf2_msgs/TFMessage (ROS 1), every length checked against the bytes left.
+class Ros1Bytes {
+ public:
+  Ros1Bytes(const std::uint8_t* p, std::size_t n) : p_(p), n_(n) {}
+  template <class T>
+  T get() {
+    need(sizeof(T));
+    T v;
+    std::memcpy(&v, p_ + pos_, sizeof(T));
+    pos_ += sizeof(T);
+    return v;
+  }
+  std::string text() {
+    const auto len = get<std::uint32_t>();
+    need(len);
+    std::string s(reinterpret_cast<const char*>(p_ + pos_), len);
+    pos_ += len;
+    return s;
+  }
+  void need(std::size_t k) const {
+    if (k > n_ - pos_)
+      throw std::runtime_error("a length of " + std::to_string(k) + " bytes at byte " +
+                               std::to_string(pos_) + " of a " + std::to_string(n_) +
+                               "-byte message");
+  }
+
+ private:
+  const std::uint8_t* p_;
+  std::size_t n_, pos_ = 0;
+};
+
+std::vector<ros2::TransformStamped> parseTfMessage(const std::uint8_t* data, std::size_t n) {
+  Ros1Bytes in(data, n);
+  const auto count = in.get<std::uint32_t>();
+  in.need(std::size_t{count} * 92);  // the smallest TransformStamped: empty strings
+  std::vector<ros2::TransformStamped> out(count);
+  for (auto& t : out) {
+    in.get<std::uint32_t>();  // seq
+    t.header.stamp.sec = static_cast<std::int32_t>(in.get<std::uint32_t>());
+    t.header.stamp.nanosec = in.get<std::uint32_t>();
+    t.header.frame_id = in.text();
+    t.child_frame_id = in.text();
+    t.translation = {in.get<double>(), in.get<double>(), in.get<double>()};
+    t.rotation.x = in.get<double>();
+    t.rotation.y = in.get<double>();
+    t.rotation.z = in.get<double>();
+    t.rotation.w = in.get<double>();
+  }
+  return out;
+}
+
 double median(std::vector<double> v) {
   if (v.empty()) return 0;
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
@@ -106,45 +97,6 @@ double median(std::vector<double> v) {
 }
 
 }  // namespace
-
-double TopicSummary::meanRate() const {
-  return imported > 1 && last > first ? static_cast<double>(imported - 1) / (last - first) : 0;
-}
-
-void BagSummary::print(std::ostream& out) const {
-  out << "Bag " << file << ":\n";
-  for (const TopicSummary* t : {&imu, &lidar}) {
-    out << "  " << t->topic << " (" << t->type << "): " << t->in_bag << " messages, " << t->imported
-        << " imported";
-    if (t->skipped() > 0) {
-      out << ", skipped " << t->out_of_order << " out of order, " << t->duplicated
-          << " duplicated stamps, " << t->unusable << " unusable";
-      if (t->untriggered > 0) out << ", " << t->untriggered << " without a trigger";
-    }
-    out << "\n";
-    if (t->imported == 0) continue;
-    out << "    " << fmt(t->first, 6) << " .. " << fmt(t->last, 6) << " ("
-        << fmt(t->last - t->first, 3) << " s), " << fmt(t->meanRate(), 2) << " Hz mean, "
-        << fmt(t->median_interval > 0 ? 1.0 / t->median_interval : 0.0, 2) << " Hz nominal; "
-        << t->gaps << " gap(s) > " << gap_factor << "x the nominal interval";
-    if (t->gaps > 0)
-      out << ", largest " << fmt(t->largest_gap, 4) << " s ending at " << fmt(t->largest_gap_at, 6);
-    out << "\n";
-  }
-  if (!trigger.topic.empty()) {
-    out << "  scan stamps from " << trigger.topic
-        << " (std_msgs/Header, matched by seq): " << trigger.in_bag << " triggers, " << trigger.used
-        << " used, " << trigger.in_bag - trigger.used << " without a cloud";
-    if (trigger.repeated_seq > 0) out << ", " << trigger.repeated_seq << " with a repeated seq";
-    out << "; clouds recorded " << fmt(trigger.median_bag_delay, 6)
-        << " s (median, bag time - trigger stamp) after their trigger\n";
-  }
-  out << "  points: " << points << " imported";
-  if (invalid_points > 0) out << ", " << invalid_points << " NaN/inf points dropped";
-  out << "\n  mean specific force over the first IMU samples: " << fmt(accel_mean_norm, 3)
-      << " m/s^2\n";
-  for (const auto& o : other_topics) out << "  not imported: " << o << "\n";
-}
 
 BagSummary readBag(const std::string& path, const BagImportConfig& config,
                    const BagReadCallbacks& cb) {
@@ -163,9 +115,9 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
   const std::string pc_md5 = ros::message_traits::MD5Sum<sensor_msgs::PointCloud2>::value();
   const std::string header_md5 = ros::message_traits::MD5Sum<std_msgs::Header>::value();
   const bool by_trigger = config.stamp_source == StampSource::kTrigger;
-  TopicState imu_state, lidar_state;
-  imu_state.summary.topic = config.imu_topic;
-  lidar_state.summary.topic = config.lidar_topic;
+  TopicSummary imu_summary, lidar_summary;  // topic, type and messages in the bag
+  imu_summary.topic = config.imu_topic;
+  lidar_summary.topic = config.lidar_topic;
   BagSummary summary;
   summary.file = path;
   summary.gap_factor = config.gap_factor;
@@ -187,11 +139,11 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
       const std::string line = topic + " (" + type + ", " + std::to_string(n) + " messages)";
       listing.push_back(line);
       if (topic == config.imu_topic) {
-        imu_state.summary.type = type;
-        imu_state.summary.in_bag = n;
+        imu_summary.type = type;
+        imu_summary.in_bag = n;
       } else if (topic == config.lidar_topic) {
-        lidar_state.summary.type = type;
-        lidar_state.summary.in_bag = n;
+        lidar_summary.type = type;
+        lidar_summary.in_bag = n;
       } else if (by_trigger && topic == config.trigger_topic) {
         summary.trigger.in_bag = n;
       } else {
@@ -213,10 +165,10 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
       throw BagError(path +
                      ": the bag holds no messages (a valid bag, but nothing was recorded in "
                      "it: was the recorder started before the sensors published?)");
-    for (const auto* t : {&imu_state.summary, &lidar_state.summary})
+    for (const auto* t : {&imu_summary, &lidar_summary})
       if (t->in_bag == 0)
         throw BagError(path + ": no message on topic " + t->topic + " (set " +
-                       (t == &imu_state.summary ? "imu_topic" : "lidar_topic") +
+                       (t == &imu_summary ? "imu_topic" : "lidar_topic") +
                        "); the bag has:" + all_topics());
     if (by_trigger && summary.trigger.in_bag == 0)
       throw BagError(path + ": no message on topic " + config.trigger_topic +
@@ -257,48 +209,7 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
   }
   std::vector<double> bag_delays;
 
-  // The reorder buffer and the stream-wide order check.
-  std::map<PendingKey, Pending> buffer;
-  std::size_t arrival = 0;
-  double written_up_to = -1, newest = -1;
-  auto emit = [&](std::map<PendingKey, Pending>::iterator it) {
-    const auto& [t, kind, seq] = it->first;
-    written_up_to = t;
-    if (kind == 0) {
-      cb.imu(it->second.imu);
-    } else {
-      cb.frame(std::move(it->second.frame));
-    }
-    buffer.erase(it);
-  };
-  auto push = [&](double t, int kind, Pending&& p, const std::string& where) {
-    if (t < written_up_to)
-      throw BagError(where + ": stamped " + fmt(t) + ", but messages up to " + fmt(written_up_to) +
-                     " were already written: it arrived more than reorder_window = " +
-                     fmt(config.reorder_window, 3) + " s late; increase reorder_window");
-    buffer.emplace(PendingKey{t, kind, arrival++}, std::move(p));
-    newest = std::max(newest, t);
-    while (!buffer.empty() && std::get<0>(buffer.begin()->first) < newest - config.reorder_window)
-      emit(buffer.begin());
-  };
-
-  const double accel_scale = config.imu_accel_in_g ? kGravity : 1.0;
-  Vec3 accel_sum = Vec3::Zero();
-  int accel_n = 0;
-  auto checkUnit = [&](const std::string& where) {
-    summary.accel_mean_norm = (accel_sum / accel_n).norm();
-    const double g = summary.accel_mean_norm;
-    const AccelUnitMismatch unit = accelUnitMismatch(g, config.imu_accel_in_g);
-    if (unit == AccelUnitMismatch::kDataInG)
-      throw BagError(where + ": the mean specific force of the first " + std::to_string(accel_n) +
-                     " IMU samples is " + fmt(g, 3) +
-                     ": the IMU reports g, not m/s^2 (set imu_accel_unit = g)");
-    if (unit == AccelUnitMismatch::kDataInMs2)
-      throw BagError(where + ": imu_accel_unit = g, but the first " + std::to_string(accel_n) +
-                     " IMU samples average " + fmt(g, 2) +
-                     " m/s^2 after conversion: the IMU reports m/s^2");
-  };
-
+  bags::ImportStream stream(config, cb);
   auto imuMessage = [&](const rosbag::MessageInstance& m, const std::string& where) {
     sensor_msgs::Imu msg;
     readMessage(m, RosMessage::kImu, buf, msg);
@@ -307,30 +218,22 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
           where + ": the IMU declares no " +
           (msg.angular_velocity_covariance[0] == -1 ? "angular velocity" : "linear acceleration") +
           " (covariance[0] = -1)");
-    Pending p;
-    p.imu.t = msg.header.stamp.toSec();
-    p.imu.gyro = Vec3(msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z);
-    p.imu.accel = accel_scale * Vec3(msg.linear_acceleration.x, msg.linear_acceleration.y,
-                                     msg.linear_acceleration.z);
-    if (!p.imu.gyro.allFinite() || !p.imu.accel.allFinite()) {
-      ++imu_state.summary.unusable;
-    } else if (imu_state.accept(p.imu.t)) {
-      if (accel_n < config.unit_check_samples) {
-        accel_sum += p.imu.accel;
-        if (++accel_n == config.unit_check_samples) checkUnit(where);
-      }
-      imu_state.stamps.push_back(p.imu.t);
-      push(p.imu.t, 0, std::move(p), where);
-    }
+    ImuSample s;
+    s.t = msg.header.stamp.toSec();
+    s.gyro = Vec3(msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z);
+    s.accel = Vec3(msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z);
+    stream.imu(s, where);
   };
 
   DecodeStats decode_stats;
+  std::vector<ros2::PointField> fields;
   auto cloudMessage = [&](const rosbag::MessageInstance& m, const std::string& where) {
     sensor_msgs::PointCloud2 msg;
     readMessage(m, RosMessage::kPointCloud2, buf, msg);
-    Pending p;
+    LidarFrame frame;
     try {
-      p.frame = decodeCloud(msg, config.cloud, config.drop_invalid_points, &decode_stats);
+      frame = bags::decodeCloud(view(msg, fields), config.cloud, config.drop_invalid_points,
+                                &decode_stats);
     } catch (const LayoutError& e) {
       throw BagError(where + ": " + e.what());
     }
@@ -346,7 +249,7 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
       case StampSource::kTrigger: {
         const auto [first, last] = triggers.equal_range(msg.header.seq);
         if (first == last) {
-          ++lidar_state.summary.untriggered;
+          stream.untriggered();
           return;
         }
         const double bag_time = m.getTime().toSec();
@@ -361,15 +264,7 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
         break;
       }
     }
-    p.frame.stamp = stamp + config.lidar_time_offset;
-    if (p.frame.points.empty() || stamp == 0) {
-      ++lidar_state.summary.unusable;
-    } else if (lidar_state.accept(p.frame.stamp)) {
-      summary.points += p.frame.points.size();
-      lidar_state.stamps.push_back(p.frame.stamp);
-      const double t = p.frame.stamp;
-      push(t, 1, std::move(p), where);
-    }
+    stream.frame(std::move(frame), stamp, where);
   };
 
   std::size_t done = 0, imu_index = 0, lidar_index = 0, total = 0;
@@ -399,20 +294,70 @@ BagSummary readBag(const std::string& path, const BagImportConfig& config,
     throw BagError(path + ": after " + std::to_string(done) + " of " + std::to_string(total) +
                    " messages: " + e.what() + " (truncated or corrupted bag?)");
   }
-  if (accel_n > 0 && accel_n < config.unit_check_samples) checkUnit(path + ": " + config.imu_topic);
-  while (!buffer.empty()) emit(buffer.begin());
-
-  summary.invalid_points = decode_stats.invalid_points;
+  stream.finish(path + ": " + config.imu_topic);
   summary.trigger.median_bag_delay = median(bag_delays);
-  imu_state.finish(config.gap_factor);
-  lidar_state.finish(config.gap_factor);
-  summary.imu = imu_state.summary;
-  summary.lidar = lidar_state.summary;
-  for (const auto* t : {&summary.imu, &summary.lidar})
-    if (t->imported == 0)
-      throw BagError(path + ": no usable message on " + t->topic + " (" +
-                     std::to_string(t->skipped()) + " skipped)");
+  summary.imu = imu_summary;
+  summary.lidar = lidar_summary;
+  stream.summarize(summary, decode_stats.invalid_points);
   return summary;
+}
+
+}  // namespace freeinit::ros1
+
+namespace freeinit::ros1 {
+
+std::optional<bags::RecordedExtrinsics> readStaticExtrinsics(const std::string& path,
+                                                             const BagImportConfig& config) {
+  if (config.tf_static_topic.empty()) return std::nullopt;
+  checkBagFile(path);
+  rosbag::Bag bag;
+  std::vector<std::uint8_t> buf;
+  std::vector<ros2::TransformStamped> transforms;
+  std::string imu_frame, lidar_frame;
+  try {
+    bag.open(path, rosbag::bagmode::Read);
+    rosbag::View tf(bag, rosbag::TopicQuery(config.tf_static_topic));
+    if (tf.size() == 0) return std::nullopt;
+    for (const rosbag::ConnectionInfo* c : tf.getConnections())
+      if (c->datatype != "tf2_msgs/TFMessage" && c->datatype != "tf/tfMessage")
+        throw BagError(path + ": topic " + c->topic + " has type " + c->datatype +
+                       ", expected tf2_msgs/TFMessage (tf_static_topic)");
+    std::size_t k = 0;
+    for (const rosbag::MessageInstance& m : tf) {
+      buf.resize(m.size());
+      ros::serialization::OStream out(buf.data(), static_cast<std::uint32_t>(buf.size()));
+      m.write(out);
+      try {
+        for (auto& t : parseTfMessage(buf.data(), buf.size())) transforms.push_back(std::move(t));
+      } catch (const std::exception& e) {
+        throw BagError(path + ": " + config.tf_static_topic + " message " + std::to_string(k) +
+                       ": " + e.what());
+      }
+      ++k;
+    }
+    // The frame_id of the first message of a topic: both types start with a std_msgs/Header.
+    auto frameOf = [&](const std::string& topic) -> std::string {
+      rosbag::View v(bag, rosbag::TopicQuery(topic));
+      for (const rosbag::MessageInstance& m : v) {
+        buf.resize(m.size());
+        ros::serialization::OStream out(buf.data(), static_cast<std::uint32_t>(buf.size()));
+        m.write(out);
+        checkSerialized(RosMessage::kHeader, buf.data(), buf.size(), false);
+        std_msgs::Header h;
+        ros::serialization::IStream in(buf.data(), static_cast<std::uint32_t>(buf.size()));
+        ros::serialization::deserialize(in, h);
+        return h.frame_id;
+      }
+      return "";
+    };
+    imu_frame = frameOf(config.imu_topic);
+    lidar_frame = frameOf(config.lidar_topic);
+  } catch (const BagError&) {
+    throw;
+  } catch (const std::exception& e) {
+    throw BagError(path + ": " + config.tf_static_topic + ": " + e.what());
+  }
+  return bags::extrinsicsFromTransforms(transforms, imu_frame, lidar_frame);
 }
 
 }  // namespace freeinit::ros1

@@ -3,6 +3,7 @@
 #include <rosbag/bag.h>
 #include <sensor_msgs/Imu.h>
 #include <sensor_msgs/PointCloud2.h>
+#include <tf2_msgs/TFMessage.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -21,12 +22,31 @@ void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
                        : o.compression == C::kLz4 ? rosbag::compression::LZ4
                                                   : rosbag::compression::Uncompressed);
     const double accel_scale = o.config.imu_accel_in_g ? 1.0 / kGravity : 1.0;
+    if (!o.tf_static.empty() && !imu.empty()) {
+      tf2_msgs::TFMessage tf;
+      for (const ros2::TransformStamped& t : o.tf_static) {
+        geometry_msgs::TransformStamped g;
+        g.header.stamp =
+            ros::Time(static_cast<std::uint32_t>(t.header.stamp.sec), t.header.stamp.nanosec);
+        g.header.frame_id = t.header.frame_id;
+        g.child_frame_id = t.child_frame_id;
+        g.transform.translation.x = t.translation.x;
+        g.transform.translation.y = t.translation.y;
+        g.transform.translation.z = t.translation.z;
+        g.transform.rotation.x = t.rotation.x;
+        g.transform.rotation.y = t.rotation.y;
+        g.transform.rotation.z = t.rotation.z;
+        g.transform.rotation.w = t.rotation.w;
+        tf.transforms.push_back(g);
+      }
+      bag.write(o.config.tf_static_topic, ros::Time(imu.front().t), tf);
+    }
     std::size_t seq = 0;
     for (const ImuSample& s : imu) {
       sensor_msgs::Imu m;
       m.header.stamp = ros::Time(s.t);
       m.header.seq = static_cast<std::uint32_t>(seq++);
-      m.header.frame_id = "imu";
+      m.header.frame_id = o.imu_frame_id;
       m.orientation_covariance[0] = -1;  // no orientation estimate
       m.angular_velocity.x = s.gyro.x();
       m.angular_velocity.y = s.gyro.y();
@@ -42,6 +62,7 @@ void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
       shifted.points = f.points;
       sensor_msgs::PointCloud2 m;
       encodeCloud(shifted, o.config.cloud, o.reflectivity, o.big_endian, m);
+      m.header.frame_id = o.lidar_frame_id;
       bag.write(o.config.lidar_topic, ros::Time(shifted.stamp + o.lidar_publish_delay), m);
     }
     bag.close();

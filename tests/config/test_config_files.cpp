@@ -229,10 +229,11 @@ TEST(GrabberDriverIni, MillisecondKeysAreConvertedOnceAndRangesHold) {
 }
 
 #ifdef FREEINIT_WITH_BAG_IMPORT
-TEST(BagImportIni, ExtrinsicsAreRequiredAndOtherSectionsRefused) {
+TEST(BagImportIni, ExtrinsicsAreOptionalAndOtherSectionsRefused) {
   const std::string ext = "[extrinsics]\nR_bl = 1 0 0 0 1 0 0 0 1\np_bl = 0 0 0\n";
-  EXPECT_CONTAINS(errorOf([&] { loadBagImportSettings(tmpFile("b1.ini", "[bag_import]\n")); }),
-                  "[extrinsics] R_bl: extrinsics missing");
+  // Without them, the recording's /tf_static must give them (checked when importing).
+  EXPECT_FALSE(loadBagImportSettings(tmpFile("b1.ini", "[bag_import]\n")).extrinsics_given);
+  EXPECT_TRUE(loadBagImportSettings(tmpFile("b1e.ini", ext)).extrinsics_given);
   EXPECT_CONTAINS(errorOf([&] {
                     loadBagImportSettings(
                         tmpFile("b2.ini", "[bag_import]\n[extrinsics]\nfrom_sensor_pose = true\n"));
@@ -340,7 +341,7 @@ std::map<std::string, ShippedIni> shippedIniFiles() {
       }};
 #ifdef FREEINIT_WITH_BAG_IMPORT
   for (const char* f : {"import_bag.ini", "import_bag_vehicular.ini", "import_bag_ti_mmwave.ini"})
-    m[f] = {{&bagImportSection(), &dopplerFitSection(), &extrinsicsPoseSection()},
+    m[f] = {{&bags::importSection(), &dopplerFitSection(), &extrinsicsPoseSection()},
             {},
             false,
             [](const std::string& p) { loadBagImportSettings(p); }};

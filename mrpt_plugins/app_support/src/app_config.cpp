@@ -142,7 +142,8 @@ const config::Section<LidarPoseParams>& extrinsicsPoseSection() {
 
 std::vector<const config::SectionBase*> appSections() {
   std::vector<const config::SectionBase*> sections = FreeInitConfig::sections();
-  sections.insert(sections.end(), {&inputSection(), &outputSection(), &extrinsicsSection()});
+  sections.insert(sections.end(), {&inputSection(), &outputSection(), &extrinsicsSection(),
+                                   &bags::importSection()});
   return sections;
 }
 
@@ -178,6 +179,7 @@ AppConfig loadAppConfig(const config::IniFile& ini, std::vector<std::string>* no
   inputSection().load(ini, c.input);
   outputSection().load(ini, c.output);
   loadExtrinsics(ini, c);
+  bags::importSection().load(ini, c.bag_import);
   return c;
 }
 
@@ -208,6 +210,8 @@ void dumpAppConfig(const AppConfig& c, std::ostream& out) {
   sec.dumpKey(x, "from_sensor_pose", out);
   sec.dumpKey(x, "R_bl", out, x.from_sensor_pose);
   sec.dumpKey(x, "p_bl", out, x.from_sensor_pose);
+  out << "\n";
+  bags::importSection().dump(c.bag_import, out);
 }
 
 }  // namespace freeinit::app_support

@@ -1,6 +1,7 @@
 #include <freeinit/app_support/checked_recording.h>
 #include <freeinit/app_support/ingest.h>
 #include <freeinit/app_support/ingest_sources.h>
+#include <freeinit/app_support/recording_source.h>
 #include <freeinit/input_checks.h>
 
 #include <algorithm>
@@ -10,11 +11,14 @@ namespace freeinit::app_support {
 
 CheckedRecording readRecording(const std::string& path, const AppConfig& config,
                                const mrpt_plugins::RawlogIndexPolicy& index) {
-  mrpt_plugins::RawlogReader reader(path, index);
+  std::vector<std::string> input_warnings;
+  const auto input = openInput(path, config, index, &input_warnings);
+  mrpt_plugins::RawlogReader& reader = *input;
   reader.setMaxRecordBytes(static_cast<std::size_t>(config.input.max_record_mb * 1e6));
   ObservationDecoder decoder(config.input);
   RecordChecker checker(config);
   CheckedRecording in;
+  in.warnings = input_warnings;
   bool all_ns = true;
   std::map<std::string, int> ignored;  // "class 'label'" -> count
   std::size_t first_imu_record = 0, first_cloud_record = 0;

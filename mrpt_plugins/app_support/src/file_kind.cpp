@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <filesystem>
 #include <fstream>
 #include <string_view>
 
@@ -40,6 +41,11 @@ bool isIni(std::string_view text) {
 }  // namespace
 
 FileKind fileKind(const std::string& path) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    return std::filesystem::is_regular_file(std::filesystem::path(path) / "metadata.yaml", ec)
+               ? FileKind::Rosbag2Folder
+               : FileKind::Folder;
   std::ifstream f(path, std::ios::binary);
   if (!f) return FileKind::Unreadable;
   std::string head(4096, '\0');
@@ -51,6 +57,8 @@ FileKind fileKind(const std::string& path) {
     return FileKind::Rawlog;
   if (isMrptArchive(head)) return FileKind::Rawlog;
   if (head.rfind("#ROSBAG", 0) == 0) return FileKind::RosBag;
+  if (head.rfind("\x89MCAP0\r\n", 0) == 0) return FileKind::Mcap;
+  if (head.compare(0, 16, std::string("SQLite format 3\0", 16)) == 0) return FileKind::Sqlite;
   if (head.find('\0') != std::string::npos) return FileKind::Binary;
   return isIni(head) ? FileKind::Ini : FileKind::Text;
 }
@@ -64,7 +72,15 @@ std::string describe(FileKind kind) {
     case FileKind::Rawlog:
       return "an MRPT rawlog";
     case FileKind::RosBag:
-      return "a ROS1 bag (freeinit-import-bag makes a rawlog of it)";
+      return "a ROS 1 bag (freeinit-import-bag makes a rawlog of it)";
+    case FileKind::Mcap:
+      return "an MCAP file (ROS 2)";
+    case FileKind::Sqlite:
+      return "an SQLite file (a rosbag2 .db3, ROS 2)";
+    case FileKind::Rosbag2Folder:
+      return "a rosbag2 folder (ROS 2)";
+    case FileKind::Folder:
+      return "a folder without metadata.yaml (not a rosbag2 folder)";
     case FileKind::Ini:
       return "an INI configuration file";
     case FileKind::Text:
@@ -73,6 +89,11 @@ std::string describe(FileKind kind) {
       return "binary data, neither gzip nor an MRPT archive";
   }
   return "?";
+}
+
+bool isReadableInput(FileKind kind) {
+  return kind == FileKind::Rawlog || kind == FileKind::Mcap || kind == FileKind::Sqlite ||
+         kind == FileKind::Rosbag2Folder;
 }
 
 }  // namespace freeinit::app_support

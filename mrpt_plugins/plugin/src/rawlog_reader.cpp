@@ -149,6 +149,7 @@ MrptCause mrptCause(const std::exception& e) {
 
 struct RawlogReader::Impl {
   std::string path;
+  std::unique_ptr<RecordSource> source;  ///< not a rawlog: everything from there
   RawlogIndexPolicy policy;
   detail::GzInput in;
   std::unique_ptr<mrpt::serialization::CArchive> archive;
@@ -385,12 +386,21 @@ RawlogReader::RawlogReader(std::string path, RawlogIndexPolicy policy)
   m.archive = mrpt::serialization::archiveUniquePtrFrom(m.in);
 }
 
+RawlogReader::RawlogReader(std::string path, std::unique_ptr<RecordSource> source)
+    : impl_(std::make_unique<Impl>()) {
+  registerClasses();
+  impl_->path = std::move(path);
+  impl_->source = std::move(source);
+  impl_->policy.use = false;
+}
+
 RawlogReader::~RawlogReader() = default;
 
 const std::string& RawlogReader::path() const { return impl_->path; }
 
 bool RawlogReader::next(RawlogObject& out) {
   auto& m = *impl_;
+  if (m.source) return m.source->next(out);
   if (m.pending) {
     out = std::move(*m.pending);
     m.pending.reset();
@@ -402,6 +412,7 @@ bool RawlogReader::next(RawlogObject& out) {
 
 bool RawlogReader::seekToTime(double t) {
   auto& m = *impl_;
+  if (m.source) return m.source->seekToTime(t);
   if (m.pending) {
     if (m.pending->t && *m.pending->t >= t) return true;
     m.pending.reset();
@@ -432,6 +443,7 @@ bool RawlogReader::seekToTime(double t) {
 
 std::optional<double> RawlogReader::firstTime() {
   auto& m = *impl_;
+  if (m.source) return m.source->firstTime();
   for (const auto& e : m.index.records)
     if (e.ticks != kNoTime) return ticksToUnix(e.ticks);
   if (m.pending && m.pending->t) return m.pending->t;
@@ -451,19 +463,28 @@ void RawlogReader::setSalvage(bool on) { impl_->salvage = on; }
 void RawlogReader::setMaxRecordBytes(std::size_t bytes) { impl_->max_record_bytes = bytes; }
 const std::string& RawlogReader::salvageStop() const { return impl_->salvage_stop; }
 
-std::uint64_t RawlogReader::fileBytes() const { return impl_->in.fileBytes(); }
-std::uint64_t RawlogReader::bytesRead() const { return impl_->in.compressedPosition(); }
-std::size_t RawlogReader::recordsDeserialized() const { return impl_->deserialized; }
+std::uint64_t RawlogReader::fileBytes() const {
+  return impl_->source ? impl_->source->size() : impl_->in.fileBytes();
+}
+std::uint64_t RawlogReader::bytesRead() const {
+  return impl_->source ? impl_->source->position() : impl_->in.compressedPosition();
+}
+std::size_t RawlogReader::recordsDeserialized() const {
+  return impl_->source ? impl_->source->recordsRead() : impl_->deserialized;
+}
 std::size_t RawlogReader::nextRecord() const {
+  if (impl_->source) return impl_->source->nextRecord();
   return impl_->pending ? impl_->pending->index : impl_->next;
 }
-bool RawlogReader::atEnd() const { return impl_->at_end && !impl_->pending; }
+bool RawlogReader::atEnd() const {
+  return impl_->source ? impl_->source->atEnd() : impl_->at_end && !impl_->pending;
+}
 bool RawlogReader::indexLoaded() const { return impl_->index_loaded; }
 const RawlogIndex& RawlogReader::index() const { return impl_->index; }
 
 std::string RawlogReader::saveIndex(std::string* why) {
   auto& m = *impl_;
-  if (!m.policy.use || m.in.fileBytes() < m.policy.min_file_bytes) return "";
+  if (m.source || !m.policy.use || m.in.fileBytes() < m.policy.min_file_bytes) return "";
   const bool grew = m.index.records.size() > m.initial_records ||
                     m.index.points.size() > m.initial_points ||
                     m.index.complete != m.initial_complete;

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <freeinit/ros1/bag_import_config.h>
+#include <freeinit/ros2/messages.h>
 #include <freeinit/types.h>
 
 #include <string>
@@ -19,6 +20,11 @@ struct BagWriteOptions {
   bool big_endian = false;   ///< PointCloud2 data big-endian (is_bigendian = true)
   bool reflectivity = true;  ///< add the Aeva driver's float32 reflectivity field (zeros)
   enum class Compression { kNone, kBz2, kLz4 } compression = Compression::kNone;  ///< chunks
+  std::string imu_frame_id = "imu";     ///< header.frame_id of the IMU messages
+  std::string lidar_frame_id = "aeva";  ///< header.frame_id of the clouds
+  /// Written as one tf2_msgs/TFMessage on config.tf_static_topic at the first IMU stamp (none
+  /// when empty).
+  std::vector<ros2::TransformStamped> tf_static;
 };
 
 /// Writes `path` through a temporary file renamed when complete. Throws std::runtime_error.

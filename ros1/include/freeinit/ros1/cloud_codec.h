@@ -1,13 +1,13 @@
-// sensor_msgs/PointCloud2 <-> freeinit::LidarFrame with a configurable field layout.
-// Decoding checks the layout against the message (fields present, declared datatypes, sizes within
-// point_step and the buffer), reads either byte order, and drops NaN/inf points when allowed.
+// roscpp's sensor_msgs/PointCloud2 <-> freeinit::LidarFrame through the codec both ROS generations
+// share (bags/cloud_codec.h): the roscpp message is viewed (its data is not copied) or filled from
+// the neutral message.
 #pragma once
 
+#include <freeinit/bags/cloud_codec.h>
 #include <freeinit/ros1/bag_import_config.h>
 #include <freeinit/types.h>
 
-#include <cstddef>
-#include <stdexcept>
+#include <vector>
 
 namespace sensor_msgs {
 template <class Allocator>
@@ -17,27 +17,19 @@ using PointCloud2 = PointCloud2_<std::allocator<void>>;
 
 namespace freeinit::ros1 {
 
-/// A message that does not match the configured layout; the message says what and how to fix it.
-class LayoutError : public std::runtime_error {
- public:
-  using std::runtime_error::runtime_error;
-};
+using bags::DecodeStats;
+using bags::LayoutError;
 
-/// What decoding one cloud dropped.
-struct DecodeStats {
-  std::size_t invalid_points = 0;  ///< NaN/inf coordinates, Doppler or time (dropped)
-};
+/// The view of a roscpp cloud: its field list converted into `fields` (a few entries), its data
+/// pointed at. Valid while `msg` and `fields` are.
+bags::PointCloudView view(const sensor_msgs::PointCloud2& msg,
+                          std::vector<ros2::PointField>& fields);
 
-/// The frame of one cloud: stamp = header stamp + layout time offset is NOT applied here (the
-/// reader adds the LiDAR-IMU offset); points sorted by time offset (stable).
-/// Throws LayoutError on a layout mismatch, or on an invalid point when !drop_invalid.
+/// bags::decodeCloud of the roscpp message.
 LidarFrame decodeCloud(const sensor_msgs::PointCloud2& msg, const CloudLayout& layout,
                        bool drop_invalid, DecodeStats* stats = nullptr);
 
-/// Encodes a frame with `layout` (an unorganized cloud, height 1, is_dense when every value is
-/// finite). `reflectivity` adds a float32 "reflectivity" field of zeros, as the Aeva driver has
-/// one. Fields are packed in the order x y z intensity reflectivity doppler time line. `big_endian`
-/// writes every value big-endian (and sets is_bigendian). Used by tests and tools that write bags.
+/// bags::encodeCloud into the roscpp message.
 void encodeCloud(const LidarFrame& frame, const CloudLayout& layout, bool reflectivity,
                  bool big_endian, sensor_msgs::PointCloud2& msg);
 

@@ -1,10 +1,12 @@
 // The whole configuration of the Free-Init MRPT application, loaded from an INI file: the core's
-// sections (FreeInitConfig) plus [input], [extrinsics] and [output] (result_files.h).
+// sections (FreeInitConfig) plus [input], [extrinsics], [output] (result_files.h) and [bag_import]
+// (bags/import_section.h).
 // Every section is declared once (freeinit/io/config_section.h); the file is read by the project's
 // strict parser (freeinit/io/ini_file.h), not by MRPT's.
 #pragma once
 
 #include <freeinit/app_support/result_files.h>
+#include <freeinit/bags/import_section.h>
 #include <freeinit/config.h>
 
 #include <iosfwd>
@@ -43,6 +45,9 @@ struct AppConfig {
   InputParams input;
   ExtrinsicsParams extrinsics;
   OutputParams output;
+  /// [bag_import]: how a ROS recording given as the input is read (recording_source.h), as
+  /// freeinit-import-bag reads it.
+  bags::ImportSettings bag_import;
 };
 
 /// The LiDAR pose in the body frame as an [extrinsics] section writes it: R_bl (row-major) or

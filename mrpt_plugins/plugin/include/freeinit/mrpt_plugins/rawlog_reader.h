@@ -53,11 +53,30 @@ struct RawlogObject {
   mrpt::serialization::CSerializable::Ptr object;
 };
 
+/// Records that come from another kind of recording, converted as they are read (a ROS bag read
+/// straight in: app_support/recording_source.h). A RawlogReader made with one delegates to it.
+class RecordSource {
+ public:
+  virtual ~RecordSource() = default;
+  /// As RawlogReader::next, seekToTime and firstTime; records numbered from 0.
+  virtual bool next(RawlogObject& out) = 0;
+  virtual bool seekToTime(double t) = 0;
+  virtual std::optional<double> firstTime() = 0;
+  virtual std::uint64_t size() const = 0;      ///< progress: the whole (e.g. bytes)
+  virtual std::uint64_t position() const = 0;  ///< progress: done so far, in the same unit
+  virtual std::size_t recordsRead() const = 0;
+  virtual std::size_t nextRecord() const = 0;
+  virtual bool atEnd() const = 0;
+};
+
 class RawlogReader {
  public:
   /// Opens the rawlog (registering the classes first) and loads its index if it has a valid one.
   /// Throws InputError if the file is missing, empty or cannot be opened.
   explicit RawlogReader(std::string path, RawlogIndexPolicy policy = {});
+  /// Reads the records of `source` (named `path` in messages): no index, no salvage, no record
+  /// budget (the source bounds what it reads).
+  RawlogReader(std::string path, std::unique_ptr<RecordSource> source);
   ~RawlogReader();
   RawlogReader(const RawlogReader&) = delete;
   RawlogReader& operator=(const RawlogReader&) = delete;

@@ -1,9 +1,9 @@
-#include <freeinit/ros1/bag_import_config.h>
+#include <freeinit/bags/import_config.h>
 
 #include <cmath>
 #include <stdexcept>
 
-namespace freeinit::ros1 {
+namespace freeinit::bags {
 namespace {
 
 struct TypeName {
@@ -100,4 +100,4 @@ void validate(const BagImportConfig& c) {
   if (c.unit_check_samples < 1) fail("unit_check_samples", "must be >= 1");
 }
 
-}  // namespace freeinit::ros1
+}  // namespace freeinit::bags
