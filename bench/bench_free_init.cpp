@@ -1,10 +1,8 @@
 // Speed and memory of the estimator core, on one core:
 //   BM_JointForwardPass    the joint estimator's forward pass alone, with and without the returns
-//                          (their difference: the per-point stage; items_per_second = returns/s).
-//   BM_JointForwardPassFrameRuns  the same with the returns handed over as the pipeline does
-//                          with every point used: a frame's run of them per node at once.
-//   BM_JointForwardPassArrays  the same with each node's returns as the arrays the pipeline's
-//                          recorder lays out (setReturns: the filter's stage without a copy).
+//                          (their difference: the per-point stage; items_per_second = returns/s),
+//                          each node's returns given as the arrays the pipeline's recorder lays
+//                          out (setReturns: the filter's stage, without the layout).
 //   BM_VelocimeterDoppler  Doppler point updates per second through the velocimeter alone
 //                          (propagate + updateDoppler, gyro updates interleaved at 200 Hz as in the
 //                          real stream). items_per_second = points/s; target >= 3,000,000.
@@ -121,7 +119,7 @@ struct Stream {
   std::int64_t points = 0;
 };
 
-Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::VelocimeterParams& vp) {
+Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::DopplerParams& dp) {
   Stream s;
   const double t0 = rec.imu.front().t;
   std::vector<Stream::Event> pts;
@@ -129,7 +127,7 @@ Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::Velocimet
     for (const auto& p : f.points) {
       const double r = p.p_l.norm();
       const double t = f.stamp + p.time_offset - t0;
-      if (t < 0 || r < vp.min_range || r > vp.max_range) continue;
+      if (t < 0 || r < dp.min_range || r > dp.max_range) continue;
       pts.push_back({t, -1, p.p_l, p.doppler});
     }
   // Keep the points within the IMU span, merge in the gyro samples.
@@ -151,11 +149,11 @@ Stream makeStream(const freeinit::sim::Recording& rec, const freeinit::Velocimet
 void BM_VelocimeterDoppler(benchmark::State& state, const std::string& name) {
   const freeinit::sim::Recording& rec = recording(name);
   const freeinit::FreeInitConfig cfg;
-  const Stream stream = makeStream(rec, cfg.velocimeter);
+  const Stream stream = makeStream(rec, cfg.doppler);
   const auto& imu = rec.imu;
   std::int64_t accepted = 0;
   for (auto _ : state) {
-    freeinit::Velocimeter div(cfg.velocimeter, rec.extrinsics);
+    freeinit::Velocimeter div(freeinit::velocimeterParams(cfg), rec.extrinsics);
     // Started from the true LiDAR velocity with a loose covariance (the bootstrap's job).
     const freeinit::sim::TruthState x0 = rec.truth(imu.front().t);
     const freeinit::Vec3 v_b0 = x0.R_wb.transpose() * x0.v_w;
@@ -187,7 +185,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   const freeinit::sim::Recording& rec = recording(name, imu_rate);
   freeinit::FreeInitConfig cfg;
   cfg.extrinsics = rec.extrinsics;
-  if (stride > 0) cfg.velocimeter.point_stride = stride;
+  if (stride > 0) cfg.doppler.point_stride = stride;
   HeapStats before{}, after{};
   std::size_t used = 0;
   double t_div = 0, t_solve = 0, t_result = 0, t_map = 0;
@@ -211,7 +209,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   }
   if (!ok) state.SkipWithError("initialization did not succeed");
   const double n = static_cast<double>(state.iterations());
-  state.counters["stride"] = cfg.velocimeter.point_stride;  // 0: automatic (every point up to 3M/s)
+  state.counters["stride"] = cfg.doppler.point_stride;  // 0: automatic (every point up to 3M/s)
   // Diagnostics: time_velocimeter is the estimator's time but the solves.
   state.counters["ms_filter"] = 1e3 * t_div / n;
   state.counters["ms_solver"] = 1e3 * t_solve / n;
@@ -231,7 +229,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
 /// Doppler noise, as the joint pipeline sets them.
 freeinit::DopplerInertialFilterParams forwardPassParams(const freeinit::FreeInitConfig& cfg) {
   freeinit::DopplerInertialFilterParams fp;
-  fp.doppler_sigma = cfg.velocimeter.doppler_sigma;
+  fp.doppler_sigma = cfg.doppler.doppler_sigma;
   return fp;
 }
 
@@ -258,13 +256,42 @@ void startAtTruth(freeinit::DopplerInertialFilter& filter, const freeinit::sim::
   filter.start(x0, prior);
 }
 
+/// Node k's returns as the joint pipeline's recorder lays them out for the filter (setReturns):
+/// time from the node, position in the LiDAR frame, Doppler.
+struct NodeArrays {
+  std::vector<float> tau, x, y, z, doppler;
+};
+
+/// The returns of each node of the window up to node k_end, in range, as the filter's intervals
+/// have them: time in [t_k - dt_before / 2, t_k + dt_after / 2) (the last node's up to t_k).
+std::vector<NodeArrays> nodeArrays(const freeinit::sim::Recording& rec,
+                                   const freeinit::FreeInitConfig& cfg, std::size_t k_end) {
+  const double t0 = rec.imu.front().t;
+  std::vector<NodeArrays> nodes(k_end + 1);
+  for (const auto& f : rec.frames)
+    for (const auto& p : f.points) {
+      const double r = p.p_l.norm();
+      if (r < cfg.doppler.min_range || r > cfg.doppler.max_range) continue;
+      const double t = f.stamp + p.time_offset;
+      if (t < t0 || t > rec.imu[k_end].t) continue;
+      std::size_t k = 0;
+      while (k < k_end && t >= rec.imu[k].t + 0.5 * (rec.imu[k + 1].t - rec.imu[k].t)) ++k;
+      NodeArrays& n = nodes[k];
+      n.tau.push_back(static_cast<float>(t - rec.imu[k].t));
+      n.x.push_back(p.p_l.x());
+      n.y.push_back(p.p_l.y());
+      n.z.push_back(p.p_l.z());
+      n.doppler.push_back(p.doppler);
+    }
+  return nodes;
+}
+
 /// One forward pass of the filter over the window from the truth (startAtTruth) to node k_end:
-/// per node beginNode, take(filter, t_k, t_k + intervalAfter(), last) hands over the node's
-/// returns and gives their count, then update and predict. Returns the returns taken.
-template <class Take>
+/// per node beginNode, the node's returns from `nodes` (none if null), update and predict.
+/// Returns the returns given.
 std::int64_t forwardPass(const freeinit::sim::Recording& rec,
                          const freeinit::DopplerInertialFilterParams& fp, std::size_t k_end,
-                         Take&& take) {
+                         const std::vector<NodeArrays>* nodes) {
   freeinit::DopplerInertialFilter filter(fp, rec.extrinsics);
   filter.reserveNodes(k_end + 1);
   startAtTruth(filter, rec, k_end);
@@ -272,8 +299,12 @@ std::int64_t forwardPass(const freeinit::sim::Recording& rec,
   for (std::size_t k = 0;; ++k) {
     const bool last = k == k_end;
     filter.beginNode(last);
-    const double t_k = rec.imu[k].t;
-    points += take(filter, t_k, t_k + filter.intervalAfter(), last);
+    if (nodes != nullptr) {
+      const NodeArrays& n = (*nodes)[k];
+      filter.setReturns(
+          {n.tau.size(), n.tau.data(), n.x.data(), n.y.data(), n.z.data(), n.doppler.data()});
+      points += static_cast<std::int64_t>(n.tau.size());
+    }
     filter.update();
     if (last) break;
     filter.predict();
@@ -289,142 +320,25 @@ void reportReturns(benchmark::State& state, std::int64_t points) {
 }
 
 /// The joint estimator's forward pass over the 0.5 s window alone (no start decision, no
-/// smoothing), started at the truth: per node beginNode, every return of its interval through
-/// addPoint (gate and sums), update (solve, second gate with the coherence test, solve again),
-/// predict. `with_points` false: the nodes alone, so that the difference of the two is the
-/// per-point stage. items_per_second: returns per second.
+/// smoothing), started at the truth: per node beginNode, the returns of its interval as the
+/// arrays the pipeline's recorder lays out, made before the timed loop (setReturns: gate and
+/// sums), update (solve, second gate with the coherence test, solve again), predict. The
+/// filter's own per-return stage, without the layout, which BM_FreeInitRun counts.
+/// `with_points` false: the nodes alone, so that the difference of the two is the per-point
+/// stage. items_per_second: returns per second.
 void BM_JointForwardPass(benchmark::State& state, const std::string& name, bool with_points) {
   const freeinit::sim::Recording& rec = recording(name);
   const freeinit::FreeInitConfig cfg;
-  const double t0 = rec.imu.front().t;
-  struct Return {
-    double t;
-    Eigen::Vector3f p_l;
-    double doppler;
-  };
-  std::vector<Return> returns;
-  for (const auto& f : rec.frames)
-    for (const auto& p : f.points) {
-      const double r = p.p_l.norm();
-      if (r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range) continue;
-      returns.push_back({f.stamp + p.time_offset, p.p_l, p.doppler});
-    }
   const freeinit::DopplerInertialFilterParams fp = forwardPassParams(cfg);
   const std::size_t k_end = lastNodeOfWindow(rec, cfg);
+  const std::vector<NodeArrays> nodes = nodeArrays(rec, cfg, k_end);
   std::int64_t points = 0;
-  for (auto _ : state) {
-    std::size_t j = 0;
-    while (j < returns.size() && returns[j].t < t0) ++j;
-    points +=
-        forwardPass(rec, fp, k_end,
-                    [&](freeinit::DopplerInertialFilter& filter, double t_k, double hi, bool last) {
-                      const std::size_t first = j;
-                      for (; with_points && j < returns.size() &&
-                             (last ? returns[j].t <= t_k : returns[j].t < hi);
-                           ++j)
-                        filter.addPoint(returns[j].t - t_k, returns[j].p_l, returns[j].doppler);
-                      return static_cast<std::int64_t>(j - first);
-                    });
-  }
-  reportReturns(state, points);
-}
-
-/// BM_JointForwardPass with the returns handed over as the joint pipeline does with every point
-/// used: each frame's run of in-range returns in the node's interval at once (addPoints()).
-void BM_JointForwardPassFrameRuns(benchmark::State& state, const std::string& name) {
-  const freeinit::sim::Recording& rec = recording(name);
-  const freeinit::FreeInitConfig cfg;
-  const double t0 = rec.imu.front().t;
-  const freeinit::DopplerInertialFilterParams fp = forwardPassParams(cfg);
-  const std::size_t k_end = lastNodeOfWindow(rec, cfg);
-  // The range test on the squared range, as the pipeline's (no root per return).
-  const float lo2 = static_cast<float>(cfg.velocimeter.min_range * cfg.velocimeter.min_range);
-  const float hi2 = static_cast<float>(cfg.velocimeter.max_range * cfg.velocimeter.max_range);
-  auto in_range = [&](const freeinit::DopplerPoint& p) {
-    const float r2 = p.p_l.squaredNorm();
-    return !(r2 < lo2 || r2 > hi2);
-  };
-  std::int64_t points = 0;
-  for (auto _ : state) {
-    std::size_t f = 0, j = 0;  // the next return: frame f, index j
-    auto take = [&](freeinit::DopplerInertialFilter& filter, double t_k, double hi, bool last) {
-      std::int64_t taken = 0;
-      for (; f < rec.frames.size(); ++f, j = 0) {
-        const auto& pts = rec.frames[f].points;
-        const double stamp = rec.frames[f].stamp;
-        std::size_t run = j;
-        auto flush = [&] {
-          if (j > run) filter.addPoints(&pts[run], j - run, stamp, t_k);
-          taken += static_cast<std::int64_t>(j - run);
-        };
-        for (; j < pts.size(); ++j) {
-          const double t = stamp + static_cast<double>(pts[j].time_offset);
-          if (last ? t > t_k : t >= hi) break;
-          if (t >= t0 && in_range(pts[j])) continue;
-          flush();
-          run = j + 1;
-        }
-        flush();
-        if (j < pts.size()) break;
-      }
-      return taken;
-    };
-    points += forwardPass(rec, fp, k_end, take);
-  }
-  reportReturns(state, points);
-}
-
-/// BM_JointForwardPass with each node's returns handed over as the joint pipeline's recorder
-/// lays them out: arrays of the node's returns (time from the node, position, Doppler), made
-/// before the timed loop (setReturns(): no copy in the filter). The filter's own per-return stage,
-/// without the layout, which BM_FreeInitRun counts.
-void BM_JointForwardPassArrays(benchmark::State& state, const std::string& name) {
-  const freeinit::sim::Recording& rec = recording(name);
-  const freeinit::FreeInitConfig cfg;
-  const double t0 = rec.imu.front().t;
-  const freeinit::DopplerInertialFilterParams fp = forwardPassParams(cfg);
-  const std::size_t k_end = lastNodeOfWindow(rec, cfg);
-  // Node k's returns: time in [t_k - dt_before / 2, t_k + dt_after / 2) (the last node's up to
-  // t_k), in range, as the filter's intervals have them.
-  struct NodeArrays {
-    std::vector<float> tau, x, y, z, doppler;
-  };
-  std::vector<NodeArrays> nodes(k_end + 1);
-  for (const auto& f : rec.frames)
-    for (const auto& p : f.points) {
-      const double r = p.p_l.norm();
-      if (r < cfg.velocimeter.min_range || r > cfg.velocimeter.max_range) continue;
-      const double t = f.stamp + p.time_offset;
-      if (t < t0 || t > rec.imu[k_end].t) continue;
-      std::size_t k = 0;
-      while (k < k_end && t >= rec.imu[k].t + 0.5 * (rec.imu[k + 1].t - rec.imu[k].t)) ++k;
-      NodeArrays& n = nodes[k];
-      n.tau.push_back(static_cast<float>(t - rec.imu[k].t));
-      n.x.push_back(p.p_l.x());
-      n.y.push_back(p.p_l.y());
-      n.z.push_back(p.p_l.z());
-      n.doppler.push_back(p.doppler);
-    }
-  std::int64_t points = 0;
-  for (auto _ : state) {
-    std::size_t k = 0;
-    points += forwardPass(
-        rec, fp, k_end, [&](freeinit::DopplerInertialFilter& filter, double, double, bool) {
-          const NodeArrays& n = nodes[k++];
-          filter.setReturns(
-              {n.tau.size(), n.tau.data(), n.x.data(), n.y.data(), n.z.data(), n.doppler.data()});
-          return static_cast<std::int64_t>(n.tau.size());
-        });
-  }
+  for (auto _ : state) points += forwardPass(rec, fp, k_end, with_points ? &nodes : nullptr);
   reportReturns(state, points);
 }
 
 }  // namespace
 
-BENCHMARK_CAPTURE(BM_JointForwardPassFrameRuns, dyna_05_every_point, std::string("dyna_05"))
-    ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_JointForwardPassArrays, dyna_05_every_point, std::string("dyna_05"))
-    ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_JointForwardPass, dyna_05_every_point, std::string("dyna_05"), true)
     ->Unit(benchmark::kMillisecond);
 BENCHMARK_CAPTURE(BM_JointForwardPass, dyna_05_nodes_only, std::string("dyna_05"), false)
@@ -459,7 +373,7 @@ int main(int argc, char** argv) {
   // Memory stays with the process between iterations, as in one that initializes again and again:
   // fresh pages would cost each iteration page faults (~8 us each on the project's VM) that
   // depend on where glibc happens to trim the heap, not on the estimator's work. Without this, a
-  // benchmark that frees all it took (BM_JointForwardPassArrays) met them or not depending on
+  // benchmark that frees all it took (BM_JointForwardPass) met them or not depending on
   // the size of one per-node array (3.0 against 5.5 ms, 320 faults an iteration).
   mallopt(M_MMAP_THRESHOLD, 32 << 20);
   mallopt(M_TRIM_THRESHOLD, 512 << 20);

@@ -1,9 +1,9 @@
 // Speed of the start decision alone, on one core:
-//   BM_DecideStart/<preset>  decideStart over the bootstrap span (the first 0.1 s of the window)
+//   BM_DecideStart/<preset>  decideStart over the start span (the first 0.1 s of the window)
 //                            of each preset at the default configuration, the returns prepared as
 //                            the pipeline prepares them: the window starts at the first IMU sample
 //                            at or after the first LiDAR point, the span's usable returns are
-//                            thinned evenly to bootstrap_points. Time per decision in ms; target
+//                            thinned evenly to [start] points. Time per decision in ms; target
 //                            on dyna_05: <= 2 ms. Counters: points = returns handed to the
 //                            decision, hypotheses = motions it refined and kept, kind = the
 //                            decision (StartDecision::Kind as a number).
@@ -31,20 +31,20 @@ struct StartInput {
 };
 
 /// The pipeline's test of a return (finite, within the configured range).
-bool usable(const freeinit::DopplerPoint& p, const freeinit::VelocimeterParams& vp) {
+bool usable(const freeinit::DopplerPoint& p, const freeinit::DopplerParams& dp) {
   if (!p.p_l.allFinite() || !std::isfinite(p.doppler) || !std::isfinite(p.time_offset))
     return false;
   const double r = p.p_l.norm();
-  return r > 0 && r >= vp.min_range && r <= vp.max_range;
+  return r > 0 && r >= dp.min_range && r <= dp.max_range;
 }
 
 StartInput prepare(const std::string& name) {
   StartInput in;
   freeinit::sim::ScenarioConfig sc = freeinit::sim::preset(name, 1);
-  sc.duration = 0.8;  // as bench_free_init: the window and the bootstrap
+  sc.duration = 0.8;  // as bench_free_init: the window and the start span
   in.rec = freeinit::sim::simulate(sc);
   const freeinit::FreeInitConfig cfg;
-  const freeinit::VelocimeterParams& vp = cfg.velocimeter;
+  const freeinit::DopplerParams& dp = cfg.doppler;
   const auto& imu = in.rec.imu;
   // Point times in time order (frames are, and their points within them).
   struct Timed {
@@ -63,13 +63,13 @@ StartInput prepare(const std::string& name) {
   const double t_end = imu[k_last].t;
   std::size_t n_usable = 0;
   for (const Timed& q : all)
-    if (q.t <= t_end && q.t >= t_ref && usable(*q.p, vp)) ++n_usable;
+    if (q.t <= t_end && q.t >= t_ref && usable(*q.p, dp)) ++n_usable;
   const std::size_t thin =
-      std::max<std::size_t>(1, n_usable / static_cast<std::size_t>(cfg.estimator.bootstrap_points));
+      std::max<std::size_t>(1, n_usable / static_cast<std::size_t>(cfg.start.points));
   std::size_t n = 0;
   for (const Timed& q : all) {
     if (q.t > t_end) break;
-    if (q.t < t_ref || !usable(*q.p, vp)) continue;
+    if (q.t < t_ref || !usable(*q.p, dp)) continue;
     if (n++ % thin != 0) continue;
     in.points.push_back({q.t - t_ref, q.p->p_l.cast<double>().normalized(), q.p->doppler});
   }
@@ -85,7 +85,7 @@ void BM_DecideStart(benchmark::State& state, const std::string& name) {
   freeinit::StartDecision d;
   for (auto _ : state) {
     d = freeinit::decideStart(in.rec.imu, in.k_first, in.k_last, in.points, in.rec.extrinsics,
-                              cfg.velocimeter.gyro_bias_prior, in.params);
+                              cfg.imu.gyro_bias_prior, in.params);
     benchmark::DoNotOptimize(d.chosen.v_b0.data());
   }
   state.counters["points"] = static_cast<double>(in.points.size());

@@ -45,8 +45,11 @@ for h in "${harnesses[@]}"; do
   log="$build/fuzz_$h.log"
   echo "== $h: ${seconds} s (log: $log)"
   set +e
-  # The bag harness writes each input to a file: the working folder must be writable.
-  (cd "$build" && ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1} \
+  # The bag and MCAP harnesses write each input to a file: the working folder must be writable,
+  # and the temporary folder is in memory where there is one (several times the executions).
+  tmp=${TMPDIR:-/tmp}
+  [ -z "${TMPDIR:-}" ] && [ -d /dev/shm ] && [ -w /dev/shm ] && tmp=/dev/shm
+  (cd "$build" && TMPDIR=$tmp ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1} \
      "./fuzz_$h" -max_total_time="$seconds" -rss_limit_mb="${FUZZ_RSS_MB:-2048}" \
      -timeout="${FUZZ_TIMEOUT:-10}" -print_final_stats=1 -artifact_prefix="$artifacts/" \
      ${FUZZ_ARGS:-} "$work" "$here/corpus/$h") > "$log" 2>&1

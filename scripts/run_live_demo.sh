@@ -6,7 +6,10 @@
 #   ./scripts/run_live_demo.sh [SOURCE] [OUT_DIR] [PORT]
 #
 #   SOURCE   a simulator preset (e.g. dyna_05), or a .rawlog (default rawlogs/dyna_01.rawlog)
-#   OUT_DIR  output folder (default out/live); the offline run goes to OUT_DIR/offline
+#   OUT_DIR  output folder (default out/live); the offline run goes to OUT_DIR/offline. As the
+#            apps do, the script replaces only what it writes there (the apps' outputs, its
+#            online.log and offline.log); a user's files stay, and an earlier live recording is
+#            kept under another name by freeinit-online.
 #   PORT     UDP port on 127.0.0.1 (default 47800)
 # Environment: BUILD_DIR (default build), POINTS (points per frame for a preset, default 60000),
 #   STREAM_ARGS (more freeinit-stream options, e.g. "--drop 0.0005 --reorder 0.02 --duplicate 0.02";
@@ -15,7 +18,7 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 
 die() { echo "[live] error: $*" >&2; exit 1; }
-usage() { sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//'; }
+usage() { sed -n '2,17p' "$0" | sed 's/^# \{0,1\}//'; }
 case "${1:-}" in -h|--help) usage; exit 0 ;; esac
 [ $# -le 3 ] || { usage >&2; die "too many arguments"; }
 source=${1:-rawlogs/dyna_01.rawlog}
@@ -33,7 +36,6 @@ else
   play=(-P "$source" -n "${POINTS:-60000}" -d 1.0)
 fi
 
-rm -rf "$out"
 mkdir -p "$out"
 echo "[live] $bin/freeinit-online ini/freeinit.ini --port $port --out $out  (log: $out/online.log)"
 "$bin/freeinit-online" ini/freeinit.ini --port "$port" --out "$out" --wait 60 > "$out/online.log" 2>&1 &

@@ -7,7 +7,8 @@ cd "$(dirname "$0")/.."
 PACKAGES=(build-essential cmake ccache libeigen3-dev libceres-dev libgtest-dev libgmock-dev
           libbenchmark-dev libopencv-dev libmrpt-dev mrpt-apps
           libegl1 libegl-mesa0 libgl1-mesa-dri
-          librosbag-dev libsensor-msgs-dev zlib1g-dev)
+          librosbag-dev libsensor-msgs-dev zlib1g-dev
+          libzstd-dev liblz4-dev libsqlite3-dev)
 
 missing=()
 for p in "${PACKAGES[@]}"; do

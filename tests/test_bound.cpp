@@ -405,9 +405,9 @@ TEST(SimulatorBound, UsesEveryStaticPointOfTheWindowAndNothingElse) {
   EXPECT_EQ(b.nodes, 81u);
   EXPECT_DOUBLE_EQ(b.t_end, t1);
   // The estimator's priors bound the biases from above; at rest the yaw-rate bias keeps its prior.
-  EXPECT_LE(b.gyro_bias, std::sqrt(3.0) * cfg.velocimeter.gyro_bias_sigma0);
-  EXPECT_GE(b.gyro_bias, cfg.velocimeter.gyro_bias_sigma0);
-  EXPECT_LE(b.accel_bias, std::sqrt(3.0) * cfg.gravity.accel_bias_prior_sigma);
+  EXPECT_LE(b.gyro_bias, std::sqrt(3.0) * cfg.imu.gyro_bias_sigma0);
+  EXPECT_GE(b.gyro_bias, cfg.imu.gyro_bias_sigma0);
+  EXPECT_LE(b.accel_bias, std::sqrt(3.0) * cfg.imu.accel_bias_prior_sigma);
   // A result without a state has no window and no bound.
   InitResult none;
   EXPECT_FALSE(sim::cramerRaoBound(rec, cfg, none).ok);
@@ -427,9 +427,9 @@ TEST(SimulatorBound, UsesTheTrueNoiseNeverTheDeclared) {
   const sim::Recording rec = sim::simulate(sc);
   FreeInitConfig declared;  // the defaults: 0.002 rad/s, 0.02 m/s^2, 0.03 m/s
   FreeInitConfig told_more = declared;
-  told_more.velocimeter.gyro_sigma = 0.012;
-  told_more.gravity.accel_sigma = 0.12;
-  told_more.velocimeter.doppler_sigma = 0.12;
+  told_more.imu.gyro_sigma = 0.012;
+  told_more.imu.accel_sigma = 0.12;
+  told_more.doppler.doppler_sigma = 0.12;
   for (const FreeInitConfig* cfg : {&declared, &told_more}) {
     const BoundModel m = sim::boundModel(rec, *cfg);
     EXPECT_LT((m.gyroSigmaPerAxis() - Vec3(0.0024, 0.003, 0.0036)).norm(), 1e-15);

@@ -1,5 +1,6 @@
 // The configuration mechanism of the core (no MRPT): the INI parser, the key declarations
-// (loading, validation, echo) of the estimator's sections, and the window in seconds.
+// (loading, validation, echo) of the estimator's sections, the former names of their keys, and
+// the window in seconds.
 #include <freeinit/config.h>
 #include <freeinit/free_init.h>
 #include <freeinit/io/config_section.h>
@@ -7,11 +8,16 @@
 #include <freeinit/sim/simulator.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iostream>
 #include <sstream>
+#include <string>
+#include <utility>
+#include <vector>
 
 using namespace freeinit;
 using config::ConfigError;
@@ -43,12 +49,19 @@ std::string errorOf(const std::function<void()>& f) {
     EXPECT_NE(h_.find(needle), std::string::npos) << h_ << "\n  should contain: " << (needle); \
   } while (0)
 
-FreeInitConfig loadCore(const std::string& text) {
+FreeInitConfig loadCore(const std::string& text, std::vector<std::string>* notices = nullptr) {
   FreeInitConfig c;
   const IniFile ini = IniFile::parse(text, "t.ini");
-  ini.requireKnownSections(FreeInitConfig::sectionNames());
-  c.load(ini);
+  ini.requireKnownSections(FreeInitConfig::sectionNames(), FreeInitConfig::formerSectionNames());
+  std::vector<std::string> ignored;
+  c.load(ini, notices ? notices : &ignored);
   return c;
+}
+
+std::string dumpOf(const FreeInitConfig& c) {
+  std::ostringstream os;
+  c.dump(os);
+  return os.str();
 }
 
 }  // namespace
@@ -131,53 +144,78 @@ TEST(IniFile, LoadNamesMissingFilesDirectoriesAndHugeFiles) {
 }
 
 TEST(FreeInitConfigIni, MisspeltSectionsAndKeysAreErrorsWithAHint) {
+  EXPECT_CONTAINS(errorOf([] { loadCore("[dopler]\ndoppler_sigma = 0.1\n"); }),
+                  "t.ini:1: [dopler]: unknown section (did you mean [doppler]?)");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[doppler]\n\ndopler_sigma = 0.1\n"); }),
+                  "t.ini:3: [doppler] dopler_sigma: unknown key (did you mean doppler_sigma?)");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[doppler]\nxyz = 1\n"); }),
+                  "t.ini:2: [doppler] xyz: unknown key");
+  // In a section of the earlier layout, the same (its keys as they were named there).
   EXPECT_CONTAINS(errorOf([] { loadCore("[velocimetr]\ndoppler_sigma = 0.1\n"); }),
                   "t.ini:1: [velocimetr]: unknown section (did you mean [velocimeter]?)");
   EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\n\ndopler_sigma = 0.1\n"); }),
                   "t.ini:3: [velocimeter] dopler_sigma: unknown key (did you mean doppler_sigma?)");
   EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\nxyz = 1\n"); }),
                   "t.ini:2: [velocimeter] xyz: unknown key");
+  // A key of another section is not taken for its own: [window] has only duration now.
+  EXPECT_CONTAINS(errorOf([] { loadCore("[window]\nrefinement_pases = 1\n"); }),
+                  "t.ini:2: [window] refinement_pases: unknown key");
 }
 
 TEST(FreeInitConfigIni, MalformedValuesNameTheKeyAndWhatWasExpected) {
+  EXPECT_CONTAINS(errorOf([] { loadCore("[paper_bootstrap]\npoints = ten\n"); }),
+                  "t.ini:2: [paper_bootstrap] points: 'ten' is not a number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[start]\npoints = 2.5\n"); }),
+                  "[start] points: '2.5' is not a whole number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[imu]\ngyro_sigma = 0x10\n"); }),
+                  "[imu] gyro_sigma: '0x10' is not a number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[imu]\ngyro_sigma = nan\n"); }),
+                  "[imu] gyro_sigma: 'nan' is not a number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[imu]\ngyro_bias_prior = 0 0\n"); }),
+                  "[imu] gyro_bias_prior: expected 3 numbers separated by blanks, got 2");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[start]\ndetect_rest = maybe\n"); }),
+                  "[start] detect_rest: 'maybe' is not a boolean (true/false)");
+  EXPECT_CONTAINS(
+      errorOf([] { loadCore("[paper_gravity]\nformulation = numeric\n"); }),
+      "[paper_gravity] formulation: 'numeric' is not one of 'integrated', 'differentiated'");
+  // Given under a former name: both names, the line of the one given.
   EXPECT_CONTAINS(errorOf([] { loadCore("[bootstrap]\npoints = ten\n"); }),
-                  "t.ini:2: [bootstrap] points: 'ten' is not a number");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[bootstrap]\npoints = 2.5\n"); }),
-                  "[bootstrap] points: '2.5' is not a whole number");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ngyro_sigma = 0x10\n"); }),
-                  "[velocimeter] gyro_sigma: '0x10' is not a number");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ngyro_sigma = nan\n"); }),
-                  "[velocimeter] gyro_sigma: 'nan' is not a number");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ngyro_bias_prior = 0 0\n"); }),
-                  "[velocimeter] gyro_bias_prior: expected 3 numbers separated by blanks, got 2");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[static_detector]\nenabled = maybe\n"); }),
-                  "[static_detector] enabled: 'maybe' is not a boolean (true/false)");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[gravity]\nformulation = numeric\n"); }),
-                  "[gravity] formulation: 'numeric' is not one of 'integrated', 'differentiated'");
+                  "t.ini:2: [paper_bootstrap] points (given as [bootstrap] points): 'ten' is not "
+                  "a number");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[static_detector]\n\nenabled = maybe\n"); }),
+                  "t.ini:3: [start] detect_rest (given as [static_detector] enabled): 'maybe' is "
+                  "not a boolean (true/false)");
 }
 
 // Values off by orders of magnitude are refused on load with the accepted range, instead of
 // running for 22 s into NaN (a prior of 1e300) or failing later with a misleading status.
 TEST(FreeInitConfigIni, AbsurdValuesAreRefusedWithTheAcceptedRange) {
-  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ngyro_bias_sigma0 = 1e300\n"); }),
-                  "t.ini:2: [velocimeter] gyro_bias_sigma0: 1e300 is out of range: accepted "
+  EXPECT_CONTAINS(errorOf([] { loadCore("[imu]\ngyro_bias_sigma0 = 1e300\n"); }),
+                  "t.ini:2: [imu] gyro_bias_sigma0: 1e300 is out of range: accepted "
                   "[1e-06, 1] rad/s");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ndoppler_sigma = 30\n"); }),
-                  "[velocimeter] doppler_sigma: 30 is out of range: accepted [1e-04, 1] m/s");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\ndoppler_sigma = 1e999\n"); }),
-                  "[velocimeter] doppler_sigma: '1e999' is out of the range of a double");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[doppler]\ndoppler_sigma = 30\n"); }),
+                  "[doppler] doppler_sigma: 30 is out of range: accepted [1e-04, 1] m/s");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[doppler]\ndoppler_sigma = 1e999\n"); }),
+                  "[doppler] doppler_sigma: '1e999' is out of the range of a double");
   EXPECT_CONTAINS(errorOf([] { loadCore("[window]\nduration = -1\n"); }),
                   "[window] duration: -1 is out of range: accepted [0.05, 60] s");
-  EXPECT_CONTAINS(errorOf([] { loadCore("[velocimeter]\nmin_range = 5\nmax_range = 4\n"); }),
-                  "t.ini:3: [velocimeter] max_range: must exceed min_range (5 m)");
+  EXPECT_CONTAINS(errorOf([] { loadCore("[doppler]\nmin_range = 5\nmax_range = 4\n"); }),
+                  "t.ini:3: [doppler] max_range: must exceed min_range (5 m)");
   EXPECT_CONTAINS(
-      errorOf([] { loadCore("[gravity]\nuse_body_equation = false\nuse_lidar_equation = no\n"); }),
-      "t.ini:2: [gravity] use_body_equation: at least one of the body and LiDAR equations");
+      errorOf([] {
+        loadCore("[paper_gravity]\nuse_body_equation = false\nuse_lidar_equation = no\n");
+      }),
+      "t.ini:2: [paper_gravity] use_body_equation: at least one of the body and LiDAR "
+      "equations");
+  // Across the two layouts: the former name of one key, the current one of the other.
+  EXPECT_CONTAINS(
+      errorOf([] { loadCore("[velocimeter]\nmin_range = 5\n[doppler]\nmax_range = 4\n"); }),
+      "t.ini:4: [doppler] max_range: must exceed min_range (5 m)");
   // The same ranges hold for a configuration filled in code.
   FreeInitConfig c;
-  c.velocimeter.gyro_bias_sigma0 = 1e300;
+  c.imu.gyro_bias_sigma0 = 1e300;
   EXPECT_CONTAINS(errorOf([&] { c.validate(); }),
-                  "configuration key velocimeter.gyro_bias_sigma0: 1e+300 is out of range");
+                  "configuration key imu.gyro_bias_sigma0: 1e+300 is out of range");
 }
 
 TEST(FreeInitConfigIni, TheWindowKeysInSamplesAreGoneWithAPointerToTheirReplacement) {
@@ -185,55 +223,250 @@ TEST(FreeInitConfigIni, TheWindowKeysInSamplesAreGoneWithAPointerToTheirReplacem
                   "t.ini:2: [window] imu_samples: no longer a key: the window is given in "
                   "seconds, [window] duration");
   EXPECT_CONTAINS(errorOf([] { loadCore("[window]\nseed_imu_samples = 60\n"); }),
-                  "[window] seed_imu_samples: no longer a key");
+                  "[window] seed_imu_samples: no longer a key: the seed passes are given in "
+                  "seconds, [paper_passes] seed_duration");
+}
+
+// An INI written for the earlier layout (sections named after the paper's stages) still loads:
+// each key given under its former name is read as its current one, with one notice line naming
+// both; the echo has the current names.
+TEST(FreeInitConfigFormerNames, AreReadWithOneNoticePerKey) {
+  std::vector<std::string> notices;
+  const FreeInitConfig c = loadCore(
+      "[velocimeter]\ndoppler_sigma = 0.05\ngyro_sigma = 0.004\n[window]\nduration = 0.6\n"
+      "refinement_passes = 0\n[estimator]\nmethod = paper\nbootstrap_duration = 0.2\n"
+      "[static_detector]\nenabled = false\n",
+      &notices);
+  EXPECT_EQ(c.doppler.doppler_sigma, 0.05);
+  EXPECT_EQ(c.imu.gyro_sigma, 0.004);
+  EXPECT_EQ(c.window.duration, 0.6);
+  EXPECT_EQ(c.paper_passes.refinement_passes, 0);
+  EXPECT_EQ(c.estimator.method, EstimatorParams::Method::Paper);
+  EXPECT_EQ(c.start.duration, 0.2);
+  EXPECT_FALSE(c.start.detect_rest);
+  const std::vector<std::string> expected = {
+      "t.ini:2: [velocimeter] doppler_sigma is now [doppler] doppler_sigma (the old name is read "
+      "for now)",
+      "t.ini:3: [velocimeter] gyro_sigma is now [imu] gyro_sigma (the old name is read for now)",
+      "t.ini:6: [window] refinement_passes is now [paper_passes] refinement_passes (the old name "
+      "is read for now)",
+      "t.ini:9: [estimator] bootstrap_duration is now [start] duration (the old name is read for "
+      "now)",
+      "t.ini:11: [static_detector] enabled is now [start] detect_rest (the old name is read for "
+      "now)"};
+  EXPECT_EQ(notices, expected);
+  // Without a list for them, the notices go to std::cerr.
+  std::ostringstream err;
+  std::streambuf* const cerr = std::cerr.rdbuf(err.rdbuf());
+  FreeInitConfig d;
+  d.load(IniFile::parse("[gravity]\naccel_sigma = 0.03\n", "u.ini"));
+  std::cerr.rdbuf(cerr);
+  EXPECT_EQ(err.str(),
+            "u.ini:2: [gravity] accel_sigma is now [imu] accel_sigma (the old name is read for "
+            "now)\n");
+  EXPECT_EQ(d.imu.accel_sigma, 0.03);
+}
+
+// A key given under its former and its current name (or two former ones) is an error naming
+// both, whatever their order; so is an unknown key in a former section.
+TEST(FreeInitConfigFormerNames, AKeyGivenUnderTwoNamesIsAnError) {
+  EXPECT_EQ(errorOf([] {
+              loadCore("[velocimeter]\ndoppler_sigma = 0.05\n[doppler]\ndoppler_sigma = 0.06\n");
+            }),
+            "t.ini:2: [velocimeter] doppler_sigma: is now [doppler] doppler_sigma, also given "
+            "(line 4): give it once");
+  EXPECT_EQ(
+      errorOf([] { loadCore("[start]\ndetect_rest = true\n[static_detector]\nenabled = true\n"); }),
+      "t.ini:4: [static_detector] enabled: is now [start] detect_rest, also given (line "
+      "2): give it once");
+  EXPECT_EQ(
+      errorOf([] { loadCore("[estimator]\nmax_iterations = 5\n[joint]\nmax_iterations = 6\n"); }),
+      "t.ini:2: [estimator] max_iterations: is now [joint] max_iterations, also given "
+      "(line 4): give it once");
+  // [gravity] max_iterations (the Ceres solve's) and [estimator] max_iterations (the
+  // smoother's) are two keys.
+  const FreeInitConfig c =
+      loadCore("[estimator]\nmax_iterations = 5\n[gravity]\nmax_iterations = 40\n");
+  EXPECT_EQ(c.joint.max_iterations, 5);
+  EXPECT_EQ(c.paper_gravity.max_iterations, 40);
+  // Two former names of one key.
+  const auto renames = std::vector<config::KeyRename>{{"a", "x", "c", "x"}, {"b", "y", "c", "x"}};
+  std::vector<std::string> notices;
+  EXPECT_EQ(errorOf([&] {
+              IniFile::parse("[a]\nx = 1\n[b]\ny = 2\n", "r.ini")
+                  .withRenames(renames, {"a", "b"}, notices);
+            }),
+            "r.ini:4: [b] y: is now [c] x, also given as [a] x (line 2): give it once");
+}
+
+// Every key of the earlier layout maps to exactly one current key, which takes the same value:
+// the earlier layout as it was, each key with a value other than its default.
+TEST(FreeInitConfigFormerNames, EveryFormerKeyIsOneCurrentKeyWithTheSameValue) {
+  struct Former {
+    const char* section;
+    const char* key;
+    const char* value;
+  };
+  const std::vector<Former> former = {
+      {"estimator", "method", "paper"},
+      {"estimator", "bootstrap_duration", "0.2"},
+      {"estimator", "bootstrap_points", "1234"},
+      {"estimator", "initial_tilt_sigma", "0.3"},
+      {"estimator", "max_iterations", "7"},
+      {"estimator", "zero_rate_at_rest", "false"},
+      {"estimator", "lever_arm_gyro_noise", "false"},
+      {"estimator", "rest_velocity_sigma", "0.006"},
+      {"estimator", "accel_bias_random_walk", "0.002"},
+      {"estimator", "calibration_rotation_sigma_deg", "0.5"},
+      {"estimator", "time_offset_sigma", "0.001"},
+      {"estimator", "test_rotation_sigma_deg", "1"},
+      {"estimator", "test_time_offset_sigma", "0.02"},
+      {"velocimeter", "doppler_sigma", "0.04"},
+      {"velocimeter", "gyro_sigma", "0.003"},
+      {"velocimeter", "vel_random_walk", "11"},
+      {"velocimeter", "omega_random_walk", "2"},
+      {"velocimeter", "aided_vel_random_walk", "0.04"},
+      {"velocimeter", "gyro_bias_random_walk", "2e-4"},
+      {"velocimeter", "gyro_bias_tau", "500"},
+      {"velocimeter", "gyro_bias_sigma0", "0.02"},
+      {"velocimeter", "gyro_bias_prior", "0.001 -0.002 0.003"},
+      {"velocimeter", "kinematic_propagation", "false"},
+      {"velocimeter", "doppler_updates_omega", "true"},
+      {"velocimeter", "min_range", "2"},
+      {"velocimeter", "max_range", "100"},
+      {"velocimeter", "point_stride", "2"},
+      {"velocimeter", "max_point_rate", "1e6"},
+      {"velocimeter", "gate_sigma", "5"},
+      {"velocimeter", "gate_min", "0.2"},
+      {"velocimeter", "gate_rel", "0.02"},
+      {"velocimeter", "doppler_ego_compensated", "true"},
+      {"bootstrap", "points", "5000"},
+      {"bootstrap", "iterations", "11"},
+      {"bootstrap", "cauchy_scale", "0.2"},
+      {"bootstrap", "prior_sigma", "30"},
+      {"bootstrap", "min_info_eigen", "50"},
+      {"static_detector", "enabled", "false"},
+      {"static_detector", "max_speed", "0.06"},
+      {"static_detector", "max_gyro_dev", "0.04"},
+      {"static_detector", "zupt_sigma", "0.003"},
+      {"static_detector", "check_period", "0.03"},
+      {"window", "duration", "0.6"},
+      {"window", "refinement_passes", "2"},
+      {"window", "seed_pass_stride", "4"},
+      {"window", "seed_duration", "0.2"},
+      {"gravity", "formulation", "differentiated"},
+      {"gravity", "use_body_equation", "false"},
+      {"gravity", "use_lidar_equation", "false"},
+      {"gravity", "accel_sigma", "0.03"},
+      {"gravity", "accel_bias_bound", "0.6"},
+      {"gravity", "accel_bias_prior_sigma", "0.2"},
+      {"gravity", "lowpass_cutoff_hz", "5"},
+      {"gravity", "velocity_error_correlation_time", "0.1"},
+      {"gravity", "equations_share_errors", "false"},
+      {"gravity", "estimate_gyro_bias", "false"},
+      {"gravity", "loss_scale", "2"},
+      {"gravity", "max_iterations", "40"},
+  };
+  // The current key of each former one: declared as its former name, or the same name in a
+  // section that still has it.
+  const auto renames = config::formerNames(FreeInitConfig::sections());
+  std::size_t unchanged = 0;
+  for (const Former& f : former) {
+    SCOPED_TRACE(std::string(f.section) + "." + f.key);
+    std::vector<std::pair<std::string, std::string>> current;
+    for (const config::KeyRename& r : renames)
+      if (r.from_section == f.section && r.from_key == f.key)
+        current.push_back({r.to_section, r.to_key});
+    for (const config::SectionBase* s : FreeInitConfig::sections())
+      for (const config::KeyInfo& k : s->keys())
+        if (s->name() == f.section && k.name == f.key) current.push_back({s->name(), k.name});
+    ASSERT_EQ(current.size(), 1u);
+    unchanged += current[0] == std::make_pair(std::string(f.section), std::string(f.key)) ? 1 : 0;
+    std::vector<std::string> notices;
+    const FreeInitConfig old =
+        loadCore("[" + std::string(f.section) + "]\n" + f.key + " = " + f.value + "\n", &notices);
+    EXPECT_EQ(notices.size(),
+              current[0].first == f.section && current[0].second == f.key ? 0u : 1u);
+    const FreeInitConfig now =
+        loadCore("[" + current[0].first + "]\n" + current[0].second + " = " + f.value + "\n");
+    EXPECT_EQ(dumpOf(old), dumpOf(now));
+    EXPECT_NE(dumpOf(now), dumpOf(FreeInitConfig{}));  // the value was taken
+  }
+  EXPECT_EQ(unchanged, 2u);  // [estimator] method, [window] duration
+  // No former name is declared that the earlier layout did not have.
+  for (const config::KeyRename& r : renames) {
+    const bool known = std::any_of(former.begin(), former.end(), [&](const Former& f) {
+      return r.from_section == f.section && r.from_key == f.key;
+    });
+    EXPECT_TRUE(known) << r.from_section << "." << r.from_key;
+  }
+  EXPECT_EQ(renames.size(), former.size() - unchanged);
+  EXPECT_EQ(FreeInitConfig::formerSectionNames(),
+            (std::vector<std::string>{"velocimeter", "gravity", "bootstrap", "static_detector"}));
 }
 
 // The echo of a configuration loads back to the same configuration: every key of every section
 // changed from its default, dumped, loaded and dumped again.
 TEST(FreeInitConfigIni, EffectiveConfigEchoLoadsBackToTheSameConfig) {
   FreeInitConfig c;
-  c.velocimeter.doppler_sigma = 0.0123456789012345;
-  c.velocimeter.gyro_bias_prior = Vec3(1e-3, -2.5e-4, 1.0 / 3.0 * 1e-2);
-  c.velocimeter.kinematic_propagation = false;
-  c.velocimeter.point_stride = 7;
-  c.bootstrap.points = 1234;
-  c.static_detector.enabled = false;
+  c.doppler.doppler_sigma = 0.0123456789012345;
+  c.imu.gyro_bias_prior = Vec3(1e-3, -2.5e-4, 1.0 / 3.0 * 1e-2);
+  c.paper_velocimeter.kinematic_propagation = false;
+  c.doppler.point_stride = 7;
+  c.paper_bootstrap.points = 1234;
+  c.start.detect_rest = false;
   c.window.duration = 0.75;
-  c.window.seed_duration = 0;
-  c.gravity.formulation = GravityFormulation::Differentiated;
-  c.gravity.loss_scale = 2.0 / 3.0;
+  c.paper_passes.seed_duration = 0;
+  c.paper_gravity.formulation = GravityFormulation::Differentiated;
+  c.paper_gravity.loss_scale = 2.0 / 3.0;
   std::ostringstream a;
   c.dump(a);
-  const FreeInitConfig d = loadCore(a.str());
+  std::vector<std::string> notices;
+  const FreeInitConfig d = loadCore(a.str(), &notices);
+  EXPECT_TRUE(notices.empty()) << notices.front();  // the echo has the current names only
   std::ostringstream b;
   d.dump(b);
   EXPECT_EQ(a.str(), b.str());
-  EXPECT_EQ(d.velocimeter.doppler_sigma, c.velocimeter.doppler_sigma);  // exact: shortest digits
-  EXPECT_EQ(d.velocimeter.gyro_bias_prior, c.velocimeter.gyro_bias_prior);
-  EXPECT_EQ(d.gravity.loss_scale, c.gravity.loss_scale);
-  EXPECT_EQ(d.gravity.formulation, GravityFormulation::Differentiated);
+  EXPECT_EQ(d.doppler.doppler_sigma, c.doppler.doppler_sigma);  // exact: shortest digits
+  EXPECT_EQ(d.imu.gyro_bias_prior, c.imu.gyro_bias_prior);
+  EXPECT_EQ(d.paper_gravity.loss_scale, c.paper_gravity.loss_scale);
+  EXPECT_EQ(d.paper_gravity.formulation, GravityFormulation::Differentiated);
   EXPECT_EQ(d.window.duration, 0.75);
-  EXPECT_FALSE(d.static_detector.enabled);
+  EXPECT_FALSE(d.start.detect_rest);
   // Each default differs from the value above, so every line was loaded, not defaulted.
   std::ostringstream defaults;
   FreeInitConfig().dump(defaults);
   EXPECT_NE(defaults.str(), a.str());
 }
 
-// The declared keys carry their unit, doc, default (the struct's own) and accepted values.
+// The declared keys carry their unit, doc, default (the struct's own), accepted values and what
+// reads them; a section named for one estimator has only keys that estimator reads.
 TEST(FreeInitConfigIni, DeclarationsDocumentEveryKey) {
   std::size_t n = 0;
-  for (const config::SectionBase* s : std::initializer_list<const config::SectionBase*>{
-           &velocimeterSection(), &bootstrapSection(), &staticDetectorSection(), &windowSection(),
-           &gravitySection()}) {
+  for (const config::SectionBase* s : FreeInitConfig::sections()) {
     for (const config::KeyInfo& k : s->keys()) {
       EXPECT_FALSE(k.unit.empty()) << s->name() << "." << k.name;
       EXPECT_FALSE(k.doc.empty()) << s->name() << "." << k.name;
       EXPECT_FALSE(k.default_value.empty()) << s->name() << "." << k.name;
+      EXPECT_FALSE(k.readers.empty()) << s->name() << "." << k.name;
+      if (s->name().rfind("paper_", 0) == 0) {
+        EXPECT_EQ(k.readers.rfind("paper", 0), 0u) << s->name() << "." << k.name;
+      }
+      if (s->name() == "joint") {
+        EXPECT_EQ(k.readers, "joint") << k.name;
+      }
       ++n;
     }
   }
-  EXPECT_EQ(n, 45u);
+  EXPECT_EQ(n, 58u);
+  // The readers are shown in the echo: after each key's doc, and per section.
+  const std::string dump = dumpOf(FreeInitConfig{});
+  EXPECT_CONTAINS(dump, "[imu]\n; the IMU's noise and bias model");
+  EXPECT_CONTAINS(dump, "; read by: joint, paper, odometry, input checks\n");
+  EXPECT_CONTAINS(dump, "; [-] smoother iterations, at most (accepted: [1, 100]) (joint)\n");
+  EXPECT_CONTAINS(dump,
+                  "; [bool] use a start at rest (joint: zero velocity and rate while the IMU "
+                  "shows rest; paper: zero-velocity mode) (joint, paper)\n");
   const auto w = windowSection().keys();
   EXPECT_EQ(w[0].name, "duration");
   EXPECT_EQ(w[0].unit, "s");

@@ -570,6 +570,98 @@ TEST(Plot, WritesAReadablePngWithTheData) {
   std::filesystem::remove(path);
 }
 
+/// A font of 7 x 11 px boxes that draws nothing and keeps what it was asked to draw.
+class RecordingFont : public PanelFont {
+ public:
+  struct Text {
+    std::string text;
+    cv::Point top_left;
+    Role role;
+  };
+  cv::Size size(const std::string& text, Role) const override {
+    return {7 * static_cast<int>(text.size()), 11};
+  }
+  void draw(cv::Mat&, const std::string& text, cv::Point top_left, Role role,
+            const plot::Rgb&) const override {
+    drawn.push_back({text, top_left, role});
+  }
+  const Text* find(const std::string& text) const {
+    for (const Text& t : drawn)
+      if (t.text == text) return &t;
+    return nullptr;
+  }
+  mutable std::vector<Text> drawn;
+};
+
+/// A stacked panel of one rising line over x in [0, 1] s.
+plot::PanelSpec stackedPanel() {
+  plot::PanelSpec spec;
+  spec.title = "v_b.x [m/s]";
+  spec.x.min = 0;
+  spec.x.max = 1;
+  spec.x.unit = " s";
+  spec.y.min = 0;
+  spec.y.max = 1;
+  Series s;
+  s.x = {0, 1};
+  s.y = {0, 1};
+  spec.series = {s};
+  return spec;
+}
+
+TEST(Plot, EveryTextOfAPanelIsDrawnInItsFont) {
+  const plot::Box cell{0.1, 0.1, 0.9, 0.5};
+  const auto width = [](const std::string& t) { return 7.0 * static_cast<double>(t.size()) / 640; };
+  cv::Mat img(400, 640, CV_8UC3, cv::Scalar(255, 255, 255));
+  plot::PanelSpec spec = stackedPanel();
+  const plot::PanelLayout l = plot::layoutPanel(spec, cell, plot::stackedPanelStyle(), width);
+  RecordingFont font;
+  drawPanel(img, spec, cell, plot::stackedPanelStyle(), font);
+  // The title at the layout's top-left corner inside the area; each tick label 8 px under the
+  // area (centred on its tick) or 6 px left of it (centred on its height).
+  const RecordingFont::Text* title = font.find("v_b.x [m/s]");
+  ASSERT_NE(title, nullptr);
+  EXPECT_EQ(title->role, PanelFont::Role::Title);
+  EXPECT_EQ(title->top_left, cv::Point(static_cast<int>(std::lround(l.title_x * 640)),
+                                       static_cast<int>(std::lround(l.title_y * 400))));
+  const int area_x0 = static_cast<int>(std::lround(l.area.x0 * 640));
+  const int area_y1 = static_cast<int>(std::lround(l.area.y1 * 400));
+  ASSERT_EQ(l.x.labels.front(), "0.0 s");
+  const RecordingFont::Text* x0 = font.find("0.0 s");
+  ASSERT_NE(x0, nullptr);
+  EXPECT_EQ(x0->top_left, cv::Point(area_x0 - 7 * 5 / 2, area_y1 + 8));
+  ASSERT_EQ(l.y.labels.front(), "0.0");
+  const RecordingFont::Text* y0 = font.find("0.0");
+  ASSERT_NE(y0, nullptr);
+  EXPECT_EQ(y0->top_left, cv::Point(area_x0 - 7 * 3 - 6, area_y1 - 11 / 2));
+  EXPECT_EQ(font.drawn.size(), 1 + l.x.labels.size() + l.y.labels.size());
+
+  // Without tick labels on x (a panel over a shared time axis) only the title and y are drawn.
+  spec.x.tick_labels = false;
+  RecordingFont bare;
+  drawPanel(img, spec, cell, plot::stackedPanelStyle(), bare);
+  EXPECT_EQ(bare.find("0.0 s"), nullptr);
+  EXPECT_EQ(bare.drawn.size(), 1 + l.y.labels.size());
+}
+
+TEST(Plot, ATitleInsideTheAreaStaysOnItsWhiteBoxOverTheData) {
+  // A line 40 px wide along the top of the area runs under the title's corner.
+  const plot::Box cell{0, 0, 1, 1};
+  plot::PanelSpec spec = stackedPanel();
+  spec.series[0].y = {1, 1};
+  spec.series[0].thickness = 40;
+  spec.series[0].color = plot::Rgb{255, 0, 0};
+  cv::Mat img(200, 640, CV_8UC3, cv::Scalar(255, 255, 255));
+  RecordingFont font;
+  drawPanel(img, spec, cell, plot::stackedPanelStyle(), font);
+  const RecordingFont::Text* title = font.find("v_b.x [m/s]");
+  ASSERT_NE(title, nullptr);
+  // Left of the text and under it: the box; right of the box: the line.
+  EXPECT_EQ(img.at<cv::Vec3b>(title->top_left + cv::Point(-3, 5)), cv::Vec3b(255, 255, 255));
+  EXPECT_EQ(img.at<cv::Vec3b>(title->top_left + cv::Point(40, 11)), cv::Vec3b(255, 255, 255));
+  EXPECT_EQ(img.at<cv::Vec3b>(title->top_left + cv::Point(7 * 11 + 10, 5)), cv::Vec3b(0, 0, 255));
+}
+
 // The methods in the order of the tables, each with its kind of velocity track.
 TEST(RunMethods, EveryMethodInTableOrderWithItsTrack) {
   sim::ScenarioConfig sc = sim::preset("stat_01", 1);
@@ -838,7 +930,7 @@ TEST(EvalApp, TheRowSaysWhatTheEstimatorWasHandedAndTheTruth) {
     EXPECT_NEAR(
         r.crb_gyro_bias_zero_rate,
         eval::zeroRateGyroBiasBound(sc.gyroSigmaPerAxis(), static_cast<std::size_t>(r.rest_samples),
-                                    FreeInitConfig{}.velocimeter.gyro_bias_sigma0),
+                                    FreeInitConfig{}.imu.gyro_bias_sigma0),
         1e-12);
   }
   // The bound is the truth's: the same whatever the estimator was told.

@@ -43,9 +43,8 @@ Outcome runPreset(const std::string& name, std::uint64_t seed, double gyro_prior
   if (gyro_prior_sigma > 0) {
     std::mt19937_64 rng(777 + seed);
     std::normal_distribution<double> n01;
-    cfg.velocimeter.gyro_bias_prior =
-        rec.b_g + gyro_prior_sigma * Vec3(n01(rng), n01(rng), n01(rng));
-    cfg.velocimeter.gyro_bias_sigma0 = gyro_prior_sigma;
+    cfg.imu.gyro_bias_prior = rec.b_g + gyro_prior_sigma * Vec3(n01(rng), n01(rng), n01(rng));
+    cfg.imu.gyro_bias_sigma0 = gyro_prior_sigma;
   }
   Outcome o;
   o.result = FreeInit::run(cfg, rec.imu, rec.frames);

@@ -72,9 +72,9 @@ TEST(FreeInitBehaviour, SeedLongerThanTheWindowIsTheWholeWindow) {
   const sim::Recording rec = simulatePreset("dyna_01", 0.5, 5000);
   FreeInitConfig cfg = configFor(rec);
   cfg.window.duration = 0.2;
-  ASSERT_GT(cfg.window.seed_duration, cfg.window.duration);
+  ASSERT_GT(cfg.paper_passes.seed_duration, cfg.window.duration);
   const InitResult a = FreeInit::run(cfg, rec.imu, rec.frames);
-  cfg.window.seed_duration = 0;
+  cfg.paper_passes.seed_duration = 0;
   const InitResult b = FreeInit::run(cfg, rec.imu, rec.frames);
   ASSERT_TRUE(a.state.ok()) << a.state.message;
   EXPECT_EQ(a.state.v_w, b.state.v_w);
@@ -91,7 +91,7 @@ TEST(FreeInitBehaviour, NoLidarIsNotEnoughData) {
 TEST(FreeInitBehaviour, EgoCompensatedDopplerIsRefused) {
   const sim::Recording rec = simulatePreset("dyna_01", 0.7, 5000);
   FreeInitConfig cfg = configFor(rec);
-  cfg.velocimeter.doppler_ego_compensated = true;
+  cfg.doppler.doppler_ego_compensated = true;
   const InitResult r = FreeInit::run(cfg, rec.imu, rec.frames);
   EXPECT_EQ(r.state.status, InitStatus::NoDoppler);
 }
@@ -110,7 +110,7 @@ TEST(FreeInitBehaviour, DegenerateDirectionsAreReported) {
 TEST(FreeInitBehaviour, GatingRejectsOutliersAndMovingObjects) {
   const sim::Recording rec = simulatePreset("dyna_05", 0.7, 30000);
   FreeInitConfig cfg = configFor(rec);
-  cfg.velocimeter.point_stride = 1;  // every point is gated: comparable with the labels
+  cfg.doppler.point_stride = 1;  // every point is gated: comparable with the labels
   const InitResult r = FreeInit::run(cfg, rec.imu, rec.frames);
   ASSERT_TRUE(r.state.ok());
   std::size_t in_window = 0, non_static = 0;
@@ -263,12 +263,12 @@ TEST(FreeInitBehaviour, NonFiniteTimeOffsetsAndOverlappingFramesAreErrors) {
 
 TEST(FreeInitBehaviour, InvalidConfigurationNamesTheKey) {
   FreeInitConfig cfg;
-  cfg.velocimeter.doppler_sigma = -1;
+  cfg.doppler.doppler_sigma = -1;
   try {
     FreeInit fi(cfg);
     FAIL() << "expected an exception";
   } catch (const std::invalid_argument& e) {
-    EXPECT_NE(std::string(e.what()).find("velocimeter.doppler_sigma"), std::string::npos);
+    EXPECT_NE(std::string(e.what()).find("doppler.doppler_sigma"), std::string::npos);
   }
   cfg = FreeInitConfig();
   cfg.extrinsics.R_bl(0, 0) = 2;

@@ -33,9 +33,9 @@ RandomRun runSeed(std::uint64_t seed) {
   r.scenario.config.points_per_frame = std::min(r.scenario.config.points_per_frame, 20000);
   r.rec = sim::simulate(r.scenario.config);
   r.cfg.extrinsics = r.rec.declared_extrinsics;
-  r.cfg.velocimeter.doppler_sigma = r.rec.config.doppler_sigma;
-  r.cfg.velocimeter.gyro_sigma = r.rec.config.gyro_sigma;
-  r.cfg.gravity.accel_sigma = r.rec.config.accel_sigma;
+  r.cfg.doppler.doppler_sigma = r.rec.config.doppler_sigma;
+  r.cfg.imu.gyro_sigma = r.rec.config.gyro_sigma;
+  r.cfg.imu.accel_sigma = r.rec.config.accel_sigma;
   r.result = FreeInit::run(r.cfg, r.rec.imu, r.rec.frames);
   return r;
 }
@@ -118,7 +118,7 @@ TEST(FreeInitRandomized, MoverCloseToAMovingRigLeavesTheEstimate) {
   EXPECT_FALSE(warnsOfResiduals(r.result.state));
   EXPECT_LT(sim::evaluate(r.result.state, r.rec).nees_vel_b, 16.27);
 
-  r.cfg.velocimeter.doppler_sigma = 0.9 * r.rec.config.doppler_sigma;
+  r.cfg.doppler.doppler_sigma = 0.9 * r.rec.config.doppler_sigma;
   r.result = FreeInit::run(r.cfg, r.rec.imu, r.rec.frames);
   ASSERT_TRUE(r.result.state.ok()) << r.result.state.message;
   EXPECT_TRUE(warnsOfResiduals(r.result.state));

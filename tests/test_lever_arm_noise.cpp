@@ -69,10 +69,10 @@ std::vector<Replicas> runReplicas(const sim::ScenarioConfig& base, int count) {
     for (int modelled = 0; modelled < 2; ++modelled) {
       FreeInitConfig cfg;
       cfg.extrinsics = rec.declared_extrinsics;
-      cfg.velocimeter.doppler_sigma = c.doppler_sigma;
-      cfg.velocimeter.gyro_sigma = c.gyro_sigma;
-      cfg.gravity.accel_sigma = c.accel_sigma;
-      cfg.estimator.lever_arm_gyro_noise = modelled == 1;
+      cfg.doppler.doppler_sigma = c.doppler_sigma;
+      cfg.imu.gyro_sigma = c.gyro_sigma;
+      cfg.imu.accel_sigma = c.accel_sigma;
+      cfg.joint.lever_arm_gyro_noise = modelled == 1;
       const InitResult r = FreeInit::run(cfg, rec.imu, rec.frames);
       if (!r.state.ok()) continue;
       const sim::InitErrors e = sim::evaluate(r.state, rec);

@@ -166,6 +166,23 @@ TEST(PlotLayout, FigurePanelAtItsReferenceSize) {
   ASSERT_EQ(l.y.ticks.size(), l.y.labels.size());
 }
 
+TEST(PlotLayout, AnAxisWithoutTickLabelsKeepsItsTicks) {
+  // A stacked panel over a shared time axis: the grid at the same ticks, the labels only once.
+  PanelSpec spec;
+  spec.series = {line({0, 0.5}, {1, 2})};
+  spec.x.unit = " s";
+  const auto width = [](const std::string&) { return 0.0; };
+  const PanelLayout labelled = layoutPanel(spec, {0, 0, 1, 1}, stackedPanelStyle(), width);
+  spec.x.tick_labels = false;
+  const PanelLayout bare = layoutPanel(spec, {0, 0, 1, 1}, stackedPanelStyle(), width);
+  ASSERT_GE(labelled.x.ticks.size(), 2u);
+  EXPECT_EQ(bare.x.ticks, labelled.x.ticks);
+  EXPECT_EQ(labelled.x.labels.size(), labelled.x.ticks.size());
+  EXPECT_EQ(labelled.x.labels.front(), "0.0 s");
+  EXPECT_TRUE(bare.x.labels.empty());
+  EXPECT_EQ(bare.y.labels.size(), bare.y.ticks.size());
+}
+
 TEST(PlotLayout, LegendWrapsIntoRowsInsideTheCell) {
   PanelSpec spec;
   for (int i = 0; i < 5; ++i) {

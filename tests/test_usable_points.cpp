@@ -44,7 +44,7 @@ std::vector<DopplerPoint> pointsAround(double range, int steps) {
   return out;
 }
 
-void expectSameVerdicts(const VelocimeterParams& vp, const std::vector<DopplerPoint>& pts) {
+void expectSameVerdicts(const DopplerParams& vp, const std::vector<DopplerPoint>& pts) {
   const UsablePoints usable(vp);
   for (const DopplerPoint& p : pts)
     ASSERT_EQ(usable(p), usablePoint(p, vp))
@@ -55,7 +55,7 @@ void expectSameVerdicts(const VelocimeterParams& vp, const std::vector<DopplerPo
 TEST(UsablePoints, SameVerdictAtTheRangeLimits) {
   for (const auto& [lo, hi] : {std::pair{1.0, 150.0}, std::pair{0.3, 80.0}, std::pair{0.0, 1e4},
                                std::pair{1.0 / 3.0, 100.0 / 3.0}, std::pair{2.5, 2.5}}) {
-    VelocimeterParams vp;
+    DopplerParams vp;
     vp.min_range = lo;
     vp.max_range = hi;
     std::vector<DopplerPoint> pts = pointsAround(lo, 64);
@@ -73,7 +73,7 @@ TEST(UsablePoints, SameVerdictOnRandomPoints) {
   std::uniform_real_distribution<float> c(-200.0f, 200.0f);
   std::vector<DopplerPoint> pts;
   for (int i = 0; i < 200000; ++i) pts.push_back(pointAt(Eigen::Vector3f(c(rng), c(rng), c(rng))));
-  expectSameVerdicts(VelocimeterParams{}, pts);
+  expectSameVerdicts(DopplerParams{}, pts);
 }
 
 TEST(UsablePoints, NonFiniteValuesAreNotUsable) {
@@ -91,7 +91,7 @@ TEST(UsablePoints, NonFiniteValuesAreNotUsable) {
   // Finite coordinates whose squared range overflows the float.
   pts.push_back(pointAt(Eigen::Vector3f(3e19f, 0, 0)));
   for (const double hi : {150.0, std::numeric_limits<double>::infinity()}) {
-    VelocimeterParams vp;
+    DopplerParams vp;
     vp.max_range = hi;
     expectSameVerdicts(vp, pts);
     EXPECT_TRUE(UsablePoints(vp)(pts.front()));
@@ -108,7 +108,7 @@ TEST(UsablePoints, LimitsThatExcludeEverythingOrNothing) {
   for (const auto& [lo, hi] : {std::pair{-1.0, inf}, std::pair{0.0, inf}, std::pair{2.0, 1.0},
                                std::pair{nan, 10.0}, std::pair{0.5, nan}, std::pair{inf, inf},
                                std::pair{-inf, -1.0}, std::pair{0.0, 0.0}, std::pair{1e40, 1e41}}) {
-    VelocimeterParams vp;
+    DopplerParams vp;
     vp.min_range = lo;
     vp.max_range = hi;
     expectSameVerdicts(vp, pts);

@@ -49,7 +49,7 @@ TEST(VelocityBootstrap, RecoversVelocityWithTenPercentGrossOutliers) {
   // (scale 0.1 m/s) leave each outlier an influence w r ~ 0.01 / r, a residual bias ~1e-4 m/s.
   // Asserted: each axis within 5 oracle sigmas; the inlier count is exact (inliers are within
   // 10 sigma = 0.3 m/s = 3 Cauchy scales, outliers beyond 1 m/s).
-  const BootstrapParams params;
+  const VelocityFitParams params;
   const double sigma = 0.03;
   const Vec3 v_true(3.0, -1.0, 0.5);
   for (int seed = 0; seed < 10; ++seed) {
@@ -85,7 +85,7 @@ TEST(VelocityBootstrap, HighSpeedWithDynamicObjectConverges) {
   // all with the same +8 m/s Doppler offset (a one-sided outlier set that biases the first,
   // plain least-squares pass). Each axis within 5 oracle sigmas (the vehicle's residual pull
   // after reweighting is ~200 * 0.1^2 / 8 / 600 ~ 4e-4 m/s, below one sigma).
-  const BootstrapParams params;
+  const VelocityFitParams params;
   const double sigma = 0.03;
   const Vec3 v_true(19.5, -7.0, 2.5);
   ASSERT_NEAR(v_true.norm(), 20.9, 0.1);
@@ -113,7 +113,7 @@ TEST(VelocityBootstrap, HighSpeedWithDynamicObjectConverges) {
 
 TEST(VelocityBootstrap, DegenerateDirectionsAreRejected) {
   // Noise-free Doppler, so only the geometry can make the fit fail.
-  const BootstrapParams params;
+  const VelocityFitParams params;
   const Vec3 v_true(1.0, 2.0, 3.0);
   std::mt19937_64 rng(9);
   std::uniform_real_distribution<double> az(-kPi, kPi);
@@ -147,7 +147,7 @@ TEST(VelocityBootstrap, DegenerateDirectionsAreRejected) {
 }
 
 TEST(VelocityBootstrap, TooFewPointsFail) {
-  const BootstrapParams params;
+  const VelocityFitParams params;
   const double sigma = 0.03;
   const Vec3 v_true(1.0, -2.0, 0.5);
   // Ten axis-like, well-spread directions.
@@ -183,7 +183,7 @@ TEST(VelocityBootstrap, CovarianceIsConsistentOverSeeds) {
   // chi-square(300) two-sided 0.999 interval. (The Cauchy weights ~0.92 at 0.3 scales and the
   // MAD inflation make the reported covariance a few % conservative, well inside the interval;
   // a covariance off by a factor of 2 either way is not.)
-  const BootstrapParams params;
+  const VelocityFitParams params;
   const double sigma = 0.03;
   const Vec3 v_true(5.0, 1.0, -0.3);
   double nees = 0;

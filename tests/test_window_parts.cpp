@@ -69,7 +69,7 @@ TEST(WindowParts, LayOutCopiesAndTestsEachReturn) {
     if (i % 19 == 0) p.time_offset = odd[(i + 1) % 5];
   }
   for (const double max_range : {150.0, std::numeric_limits<double>::infinity()}) {
-    VelocimeterParams vp;
+    DopplerParams vp;
     vp.min_range = 0.5;
     vp.max_range = max_range;
     const UsablePoints usable(vp);

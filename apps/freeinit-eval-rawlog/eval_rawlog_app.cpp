@@ -85,7 +85,9 @@ int EvalRawlogApp::run(std::ostream& log) {
     plots_set =
         std::make_unique<app_support::OutputSet>(params.plots_dir, "velocity_error", options, log);
   }
-  const app_support::AppConfig config = app_support::loadAppConfig(params.config_file);
+  std::vector<std::string> notices;  // keys given under their former names
+  const app_support::AppConfig config = app_support::loadAppConfig(params.config_file, &notices);
+  for (const std::string& n : notices) log << n << "\n";
   report::MethodOptions options;
   options.baselines = params.baselines;
   options.dlio_duration = params.dlio_duration;

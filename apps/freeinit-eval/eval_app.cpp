@@ -41,7 +41,7 @@ const char* const kUsage =
     "                       noise, as a user would)\n"
     "  --seed-base S        first seed of --random (1)\n"
     "  --calibration-sigma DEG, --time-offset-sigma S: the declared calibration's accuracy\n"
-    "                       ([estimator] calibration_rotation_sigma_deg, time_offset_sigma)\n"
+    "                       ([joint] calibration_rotation_sigma_deg, time_offset_sigma)\n"
     "  --imu-noise-factor F | LO:HI\n"
     "  --doppler-noise-factor F | LO:HI\n"
     "                       the true noise over the one the estimator is handed (it gets the\n"
@@ -67,7 +67,7 @@ const char* const kUsage =
     "  --duration S         simulated seconds (3.2: DLIO's 3 s calibration; 1.2 with\n"
     "                       --no-baselines)\n"
     "  --points P           points per frame (preset: 60000)\n"
-    "  --stride K           velocimeter point stride (configuration default)\n"
+    "  --stride K           point stride, [doppler] point_stride (configuration default)\n"
     "  --window S           window length [s] (configuration default: 0.5)\n"
     "  --no-baselines       Free-Init only\n"
     "  --dlio-duration S    DLIO's static calibration time (3)\n"
@@ -304,28 +304,28 @@ bool declaresDatasheetNoise(const EvalAppParams& o) {
 
 FreeInitConfig configFor(const EvalAppParams& o, const EvalCase& c, const sim::Recording& rec) {
   FreeInitConfig cfg;
-  if (o.calibration_sigma >= 0) cfg.estimator.calibration_rotation_sigma_deg = o.calibration_sigma;
-  if (o.time_offset_sigma >= 0) cfg.estimator.time_offset_sigma = o.time_offset_sigma;
+  if (o.calibration_sigma >= 0) cfg.joint.calibration_rotation_sigma_deg = o.calibration_sigma;
+  if (o.time_offset_sigma >= 0) cfg.joint.time_offset_sigma = o.time_offset_sigma;
   if (declaresDatasheetNoise(o)) {
     // What a user of this rig would configure: the datasheet noise (the unit's own per-axis
     // values scatter about it), wrong by the run's factors, and the calibration as declared
     // (runMethods takes the extrinsics).
-    cfg.velocimeter.doppler_sigma = rec.config.doppler_sigma / c.misdeclared.doppler_noise_factor;
-    cfg.velocimeter.gyro_sigma = rec.config.gyro_sigma / c.misdeclared.imu_noise_factor;
-    cfg.gravity.accel_sigma = rec.config.accel_sigma / c.misdeclared.imu_noise_factor;
+    cfg.doppler.doppler_sigma = rec.config.doppler_sigma / c.misdeclared.doppler_noise_factor;
+    cfg.imu.gyro_sigma = rec.config.gyro_sigma / c.misdeclared.imu_noise_factor;
+    cfg.imu.accel_sigma = rec.config.accel_sigma / c.misdeclared.imu_noise_factor;
   }
-  if (o.stride > 0) cfg.velocimeter.point_stride = o.stride;
+  if (o.stride > 0) cfg.doppler.point_stride = o.stride;
   if (o.window > 0) cfg.window.duration = o.window;
-  if (o.passes >= 0) cfg.window.refinement_passes = o.passes;
-  if (o.seed_samples >= 0) cfg.window.seed_duration = o.seed_samples / rec.config.imu_rate;
-  if (o.tau >= 0) cfg.gravity.velocity_error_correlation_time = o.tau;
-  if (o.no_db) cfg.gravity.estimate_gyro_bias = false;
+  if (o.passes >= 0) cfg.paper_passes.refinement_passes = o.passes;
+  if (o.seed_samples >= 0) cfg.paper_passes.seed_duration = o.seed_samples / rec.config.imu_rate;
+  if (o.tau >= 0) cfg.paper_gravity.velocity_error_correlation_time = o.tau;
+  if (o.no_db) cfg.paper_gravity.estimate_gyro_bias = false;
   if (o.gyro_prior > 0) {
     // A gyro-bias prior as from a static calibration: the truth plus noise of that std.
     std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(c.seed));
     std::normal_distribution<double> n01;
-    cfg.velocimeter.gyro_bias_prior = rec.b_g + o.gyro_prior * Vec3(n01(rng), n01(rng), n01(rng));
-    cfg.velocimeter.gyro_bias_sigma0 = o.gyro_prior;
+    cfg.imu.gyro_bias_prior = rec.b_g + o.gyro_prior * Vec3(n01(rng), n01(rng), n01(rng));
+    cfg.imu.gyro_bias_sigma0 = o.gyro_prior;
   }
   return cfg;
 }
@@ -359,12 +359,12 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
     row.block = c.block;
     const bool datasheet = declaresDatasheetNoise(o);
     row.imu_noise_factor = datasheet ? c.misdeclared.imu_noise_factor
-                                     : rec.config.gyro_sigma / cfg.velocimeter.gyro_sigma;
+                                     : rec.config.gyro_sigma / cfg.imu.gyro_sigma;
     row.doppler_noise_factor = datasheet ? c.misdeclared.doppler_noise_factor
-                                         : rec.config.doppler_sigma / cfg.velocimeter.doppler_sigma;
-    row.noise_gyro.declared = cfg.velocimeter.gyro_sigma;
-    row.noise_accel.declared = cfg.gravity.accel_sigma;
-    row.noise_doppler.declared = cfg.velocimeter.doppler_sigma;
+                                         : rec.config.doppler_sigma / cfg.doppler.doppler_sigma;
+    row.noise_gyro.declared = cfg.imu.gyro_sigma;
+    row.noise_accel.declared = cfg.imu.accel_sigma;
+    row.noise_doppler.declared = cfg.doppler.doppler_sigma;
     row.noise_gyro.truth = truth_noise.gyro;
     row.noise_accel.truth = truth_noise.accel;
     row.noise_doppler.truth = truth_noise.doppler;
@@ -395,7 +395,7 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
     if (m.method == "free-init")
       appendf(
           out.log, "  rms/sigma=%.3f node-chi2/dof=%.2f used=%.2f",
-          m.result.diag.doppler_residual_rms / cfg.velocimeter.doppler_sigma,
+          m.result.diag.doppler_residual_rms / cfg.doppler.doppler_sigma,
           m.result.diag.node_residual_ratio,
           static_cast<double>(m.result.diag.points_used) /
               std::max<std::size_t>(1, m.result.diag.points_used + m.result.diag.points_rejected));

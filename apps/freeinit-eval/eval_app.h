@@ -24,7 +24,7 @@ struct EvalAppParams {
   int seeds = 3;            ///< seeds 1..N per preset
   int random = 0;           ///< > 0: this many randomized scenarios instead of the presets
   long long seed_base = 1;  ///< first seed of the randomized scenarios
-  /// The declared calibration's accuracy ([estimator] calibration_rotation_sigma_deg [deg],
+  /// The declared calibration's accuracy ([joint] calibration_rotation_sigma_deg [deg],
   /// time_offset_sigma [s]); < 0: the configuration default.
   double calibration_sigma = -1, time_offset_sigma = -1;
   unsigned jobs = 0;  ///< parallel jobs (0: hardware concurrency)
@@ -34,7 +34,7 @@ struct EvalAppParams {
   report::FailureThresholds thresholds;
   double duration = -1;   ///< [s] simulated; < 0: dlio_duration + 0.2 with baselines, else 1.2
   int points = 0;         ///< points per frame; 0: the preset's
-  int stride = 0;         ///< velocimeter point stride; 0: the configuration default
+  int stride = 0;         ///< [doppler] point_stride; 0: the configuration default
   int passes = -1;        ///< window refinement passes; < 0: the configuration default
   int seed_samples = -1;  ///< IMU samples of the seed; < 0: the configuration default
   double window = 0;      ///< [s] window length; 0: the configuration default

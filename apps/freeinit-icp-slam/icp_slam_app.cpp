@@ -258,7 +258,9 @@ class IcpSlamJob {
   void readInputs() {
     loadIcpIni(params_.icp_ini, ini_);
     slice_ = app_support::loadScanSliceParams(params_.icp_ini);
-    config_ = app_support::loadAppConfig(params_.freeinit_ini);
+    std::vector<std::string> notices;  // keys given under their former names
+    config_ = app_support::loadAppConfig(params_.freeinit_ini, &notices);
+    for (const std::string& n : notices) log_ << n << "\n";
     log_ << "Reading " << params_.rawlog << "\n";
     in_ = app_support::readRecording(params_.rawlog, config_);
     for (const auto& w : in_.warnings) log_ << "Warning: " << w << "\n";

@@ -162,7 +162,9 @@ class OnlineRun {
   /// The configuration (echoed, and staged as effective_config.ini) and the recording, written
   /// into the staging folder and kept whatever happens.
   void prepare() {
-    app_.config = app_support::loadAppConfig(p_.config_file);
+    std::vector<std::string> notices;  // keys given under their former names
+    app_.config = app_support::loadAppConfig(p_.config_file, &notices);
+    for (const std::string& n : notices) log_ << n << "\n";
     std::ostringstream effective;
     app_support::dumpAppConfig(app_.config, effective);
     log_ << "Effective configuration (" << p_.config_file << "):\n" << effective.str() << "\n";
@@ -337,7 +339,7 @@ class OnlineRun {
   }
 
  private:
-  double dopplerSigma() const { return app_.config.core.velocimeter.doppler_sigma; }
+  double dopplerSigma() const { return app_.config.core.doppler.doppler_sigma; }
 
   void writeState(const InitResult& r) {
     set_.write(kStateFile, [&](const std::string& path) {

@@ -13,12 +13,13 @@
 #include <freeinit/input_checks.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cmath>
 #include <ctime>
 #include <deque>
 #include <filesystem>
-#include <fstream>
+#include <functional>
 #include <iomanip>
 #include <iostream>
 #include <limits>
@@ -30,6 +31,7 @@ namespace freeinit::apps {
 namespace {
 
 namespace fs = std::filesystem;
+using Clock = std::chrono::steady_clock;
 
 std::string v3(const Vec3& v) {
   std::ostringstream os;
@@ -41,34 +43,7 @@ constexpr const char* kStateFile = "initial_state.ini";
 constexpr const char* kErrorsFile = "errors_wrt_gt.ini";
 constexpr const char* kConfigFile = "effective_config.ini";
 
-/// The starts of a run, in increasing order: one (possibly -inf: from the first record), a
-/// list, or `first + k * every` without end.
-class StartPlan {
- public:
-  static StartPlan single(double t) { return StartPlan({t}, 0); }
-  static StartPlan list(std::vector<double> t) { return StartPlan(std::move(t), 0); }
-  static StartPlan every(double t0, double step) { return StartPlan({t0}, step); }
-
-  std::optional<double> peek() const {
-    if (step_ > 0) return list_.front() + static_cast<double>(next_) * step_;
-    if (next_ < list_.size()) return list_[next_];
-    return std::nullopt;
-  }
-  std::size_t index() const { return next_; }
-  void pop() { ++next_; }
-  /// The explicit starts not reached (none for `every`).
-  std::vector<double> rest() const {
-    if (step_ > 0) return {};
-    return {list_.begin() + static_cast<std::ptrdiff_t>(next_), list_.end()};
-  }
-
- private:
-  StartPlan(std::vector<double> t, double step) : list_(std::move(t)), step_(step) {}
-  std::vector<double> list_;
-  double step_;
-  std::size_t next_ = 0;
-};
-
+/// One start's initialization, open from its start on.
 struct Slot {
   std::size_t index = 0;
   double start = 0;
@@ -86,7 +61,7 @@ void writeStateSet(app_support::OutputSet& set, const std::string& prefix,
       writeFileAtomically(p, [&](std::ostream& o) { o << *effective; });
     });
   const app_support::StateVerdict verdict =
-      app_support::verdictOf(result, config.core.velocimeter.doppler_sigma);
+      app_support::verdictOf(result, config.core.doppler.doppler_sigma);
   set.write(prefix + kStateFile, [&](const std::string& p) {
     app_support::writeInitialStateIni(p, result.state, &verdict);
   });
@@ -119,6 +94,98 @@ std::string localStamp() {
   char buf[32];
   std::strftime(buf, sizeof(buf), "%Y%m%d-%H%M%S", &tm);
   return buf;
+}
+
+/// Refuses what no run takes (std::invalid_argument): a bad --every or --start, --every with
+/// --starts, arguments argumentsProblem() tells apart.
+void checkParams(const FreeInitAppParams& p) {
+  if (p.every < 0 || !std::isfinite(p.every)) throw std::invalid_argument("--every must be > 0");
+  if (p.every > 0 && !p.starts_file.empty())
+    throw std::invalid_argument("--every and --starts exclude each other");
+  if (p.start && !(*p.start >= 0)) throw std::invalid_argument("--start must be >= 0");
+  if (const std::string problem = p.argumentsProblem(); !problem.empty())
+    throw std::invalid_argument(problem);
+}
+
+/// --every or --starts: many starts, each in its folder, with a table of them.
+bool severalStarts(const FreeInitAppParams& p) { return p.every > 0 || !p.starts_file.empty(); }
+
+/// The output folder made for this run (no --out), under `sweep` so that a failed run leaves no
+/// empty folder behind (nor the root, when made for it).
+std::string newOutputFolder(const FreeInitAppParams& p, EmptyFolderSweep& sweep) {
+  if (!fs::exists(p.new_out_root)) sweep.add(p.new_out_root);
+  const std::string dir = createNewOutputFolder(p.new_out_root, p.rawlog);
+  sweep.add(dir);
+  return dir;
+}
+
+/// The run's starts: --every or --starts, else the one at `from` [UNIX s] (-inf: the first
+/// record). `first` [UNIX s]: the first record's stamp, known with --start and several starts.
+StartPlan startPlan(const FreeInitAppParams& p, double from, const std::optional<double>& first) {
+  if (p.every > 0) return StartPlan::every(p.start ? from : *first, p.every);
+  if (!p.starts_file.empty()) {
+    std::vector<double> t = readStartsFile(p.starts_file);
+    for (double& x : t) x = startTime(x, *first);
+    return StartPlan::list(std::move(t));
+  }
+  return StartPlan::single(from);
+}
+
+/// The result of the only start's session, with a line on what went in. Throws InputError with
+/// its errors (each on the log) when it failed, or why there is no window when the file ended
+/// before the window closed.
+const InitResult& resultOf(const app_support::InitSession& s, std::ostream& log) {
+  if (s.failed()) {
+    for (const auto& e : s.errors()) log << "Error: " << e << "\n";
+    const auto n = s.errors().size();
+    throw mrpt_plugins::InputError(
+        s.errors().front() +
+        (n > 1 ? " (and " + std::to_string(n - 1) + " more, listed above)" : ""));
+  }
+  // The file ended before the window closed.
+  if (!s.ready() || s.result().state.status == InitStatus::NotEnoughData)
+    throw mrpt_plugins::InputError(s.endOfDataReason());
+  log << "Input: " << s.imuCount() << " IMU samples and " << s.frameCount() << " point clouds from "
+      << input::formatStamp(s.firstTime().value_or(0)) << " to "
+      << input::formatStamp(s.lastTime().value_or(0)) << "\n";
+  return s.result();
+}
+
+/// The state on the log: status, values, points, the verdict, warnings and, when the
+/// configuration takes them from there, the extrinsics the clouds' sensorPoses give.
+void printInitialState(std::ostream& log, const InitResult& result,
+                       const app_support::AppConfig& config,
+                       const std::optional<Extrinsics>& cloud_extrinsics) {
+  const InitialState& s = result.state;
+  log << "Initialization: " << toString(s.status)
+      << (s.message.empty() ? "" : " (" + s.message + ")") << "\n";
+  log << std::fixed << std::setprecision(6) << "  timestamp " << s.timestamp << "\n"
+      << std::setprecision(4) << "  v_b  " << v3(s.v_b()) << " m/s\n  g_b  " << v3(s.g_b())
+      << " m/s^2\n  b_g  " << v3(s.b_g) << " rad/s\n  b_a  " << v3(s.b_a) << " m/s^2\n"
+      << std::defaultfloat << "  points: " << result.diag.points_used << " used, "
+      << result.diag.points_rejected << " rejected, " << result.diag.points_skipped
+      << " skipped; static start: " << (result.diag.static_start ? "yes" : "no") << "\n";
+  if (s.ok())
+    app_support::printVerdict(log,
+                              app_support::verdictOf(result, config.core.doppler.doppler_sigma));
+  for (const auto& w : s.warnings) log << "  warning: " << w << "\n";
+  if (config.extrinsics.from_sensor_pose && cloud_extrinsics)
+    log << "Extrinsics from sensorPose: p_bl = " << v3(cloud_extrinsics->p_bl) << " m\n";
+}
+
+/// The errors against the ground truth (from `truth_file`) on the log.
+void printTruthErrors(std::ostream& log, const std::string& truth_file,
+                      const app_support::TruthErrors& e) {
+  log << "Errors w.r.t. ground truth (" << truth_file << "):\n"
+      << "  velocity    " << e.velocity << " m/s\n"
+      << "  gravity     " << e.gravity_deg << " deg\n"
+      << "  gyro bias   " << e.gyro_bias << " rad/s\n"
+      << "  accel bias  " << e.accel_bias << " m/s^2\n";
+}
+
+/// [s] since `t`.
+double secondsSince(Clock::time_point t) {
+  return std::chrono::duration<double>(Clock::now() - t).count();
 }
 
 }  // namespace
@@ -156,52 +223,177 @@ std::string FreeInitAppParams::argumentsProblem() const {
   return "";
 }
 
-double startTime(double value, double first) {
-  return value > kUnixStampThreshold ? value : first + value;
-}
+/// What the steps of one run share.
+struct FreeInitApp::Job {
+  Job(Clock::time_point t0, app_support::OutputSet& outputs, std::string effective)
+      : t_start(t0), set(outputs), effective_config(std::move(effective)) {}
 
-std::vector<double> readStartsFile(const std::string& path) {
-  std::ifstream f(path);
-  if (!f) throw mrpt_plugins::InputError(path + ": cannot open the starts file");
-  std::vector<double> out;
-  std::string line;
-  for (int n = 1; std::getline(f, line); ++n) {
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.erase(hash);
-    std::istringstream is(line);
-    double v = 0;
-    if (!(is >> v)) {
-      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
-      throw mrpt_plugins::InputError(path + ": line " + std::to_string(n) + ": '" + line +
-                                     "' is not a number");
+  Clock::time_point t_start;
+  app_support::OutputSet& set;
+  std::string effective_config;  ///< the configuration's text, as effective_config.ini holds it
+  std::unique_ptr<mrpt_plugins::RawlogReader> reader;
+  std::optional<double> first;  ///< [UNIX s] the first record's stamp (with --start, many starts)
+  StartPlan plan = StartPlan::single(-std::numeric_limits<double>::infinity());
+  std::vector<app_support::TruthSample> truth;  ///< from truth_file, when it is beside the rawlog
+  std::string truth_file;
+};
+
+/// One pass over the records through the ingest path (ingest_sources.h) for the starts of the
+/// job's plan: a session opens at each start the records reach, takes the checked items from its
+/// start on and closes when its state is ready or it failed; `close` then gets it, its warnings
+/// logged. With no session open the reader seeks to the next start, and the reading stops when
+/// no start is left (with --check-all every record is read and checked).
+class FreeInitApp::StartPass {
+ public:
+  /// One start's end. `at_end`: the file ended before its window closed.
+  using Close = std::function<void(const Slot& slot, bool at_end)>;
+
+  StartPass(FreeInitApp& app, Job& job, std::ostream& log, Close close)
+      : app_(app),
+        job_(job),
+        reader_(*job.reader),
+        log_(log),
+        close_(std::move(close)),
+        decoder_(app.config.input),
+        checker_(app.config),
+        bar_(log, "  reading", "MB", app.params.progress_terminal, 1e6) {}
+
+  /// Reads to the end of the file, to an unreadable record, or as far as the starts need, and
+  /// closes every session: those still open fail at an unreadable record, else they finish with
+  /// what the file holds.
+  void read() {
+    for (;;) {
+      mrpt_plugins::RawlogObject rec;
+      if (!nextRecord(rec)) break;
+      if (app_.params.progress) bar_.update(reader_.bytesRead(), reader_.fileBytes());
+      app_support::checkRecord(
+          decoder_, checker_, rec, [this](const app_support::CheckedItem& c) { dispatch(c); },
+          [this](const app_support::IngestItem& item) { return admit(item); });
+      closeDone();
     }
-    std::string rest;
-    if (is >> rest)
-      throw mrpt_plugins::InputError(path + ": line " + std::to_string(n) + ": one start per line");
-    if (!std::isfinite(v) || v < 0)
-      throw mrpt_plugins::InputError(path + ": line " + std::to_string(n) +
-                                     ": a start must be >= 0");
-    if (!out.empty() && !(v > out.back()))
-      throw mrpt_plugins::InputError(path + ": line " + std::to_string(n) +
-                                     ": starts must increase (after " +
-                                     input::formatStamp(out.back()) + ")");
-    out.push_back(v);
+    last_record_ = reader_.nextRecord();
+    app_.records_read = reader_.recordsDeserialized();
+    app_.read_to_end = reader_.atEnd();
+    app_.salvage_stop = reader_.salvageStop();
+    if (!app_.salvage_stop.empty()) app_.warn(log_, app_.salvage_stop);
+
+    if (read_error_) {
+      // Unreadable from here on: the open windows fail; what comes after is not checked.
+      for (auto& s : active_) s.session->fail(*read_error_);
+      if (active_.empty() && !job_.plan.peek())
+        outside_.push_back(*read_error_ + "; the rest of the file was not checked");
+    } else if (!stopped_early_) {
+      // The end of the file: windows still open close with what is there.
+      std::vector<app_support::CheckedItem> checked;
+      checker_.finish(checked);
+      for (const auto& c : checked) dispatch(c);
+      for (auto& s : active_) s.session->finish();
+    }
+    for (auto& s : active_) closeSlot(s, !read_error_);
+    active_.clear();
   }
-  if (out.empty()) throw mrpt_plugins::InputError(path + ": no start in the file");
-  return out;
-}
+
+  /// The reading's end on the log: the progress bar, the bad records no session took, where the
+  /// reading stopped; the seek index, written when due.
+  void end() {
+    if (app_.params.progress)
+      bar_.finish(stopped_early_ ? "(state ready: the rest of the input is not needed)" : "");
+    for (const auto& w : outside_) app_.warn(log_, w);
+    if (stopped_early_)
+      log_ << "Read up to record " << (last_record_ == 0 ? 0 : last_record_ - 1)
+           << "; the rest was not checked (use --check-all)\n";
+    std::string why;
+    app_.index_written = reader_.saveIndex(&why);
+    if (!app_.index_written.empty()) log_ << "Seek index written to " << app_.index_written << "\n";
+    if (!why.empty()) log_ << "Warning: the seek index could not be written: " << why << "\n";
+  }
+
+  /// The reader's error that ended the reading, if one did.
+  const std::optional<std::string>& readError() const { return read_error_; }
+  const app_support::RecordChecker& checker() const { return checker_; }
+
+ private:
+  /// No session open and no need to read on but for the next start.
+  bool idle() const { return active_.empty() && !app_.params.check_all; }
+
+  /// The next record to read; false at the end of the file, at an unreadable record, or when no
+  /// start is left for an idle pass (stopped early unless at the end).
+  bool nextRecord(mrpt_plugins::RawlogObject& rec) {
+    if (idle() && !job_.plan.peek()) {
+      stopped_early_ = !reader_.atEnd();
+      return false;
+    }
+    app_support::throwIfStopRequested();
+    try {
+      // Idle: straight to the next start (no record at or after it: the end).
+      if (idle() && !reader_.seekToTime(*job_.plan.peek())) return false;
+      return reader_.next(rec);
+    } catch (const mrpt_plugins::InputError& e) {
+      read_error_ = e.what();
+      return false;
+    }
+  }
+
+  /// Opens the sessions of the starts `item` reaches; false when it is not needed (idle).
+  bool admit(const app_support::IngestItem& item) {
+    while (std::isfinite(item.t)) {
+      const auto next = job_.plan.peek();
+      if (!next || item.t < *next) break;
+      active_.push_back(
+          {job_.plan.index(), *next,
+           std::make_unique<app_support::InitSession>(app_.config, app_.params.rawlog)});
+      job_.plan.pop();
+    }
+    return !idle();  // before the next start: not needed
+  }
+
+  /// A checked item to every open session it is at or after the start of.
+  void dispatch(const app_support::CheckedItem& c) {
+    bool taken = false;
+    for (auto& s : active_) {
+      if (s.session->done() || !(c.item.t >= s.start)) continue;
+      s.session->push(c);
+      taken = true;
+    }
+    if (!taken && !c.ok())
+      outside_.push_back(app_.params.rawlog + ": record " + std::to_string(c.item.record) + ": " +
+                         c.problem + " (not used: outside every initialization window)");
+  }
+
+  void closeDone() {
+    for (auto it = active_.begin(); it != active_.end();) {
+      if (!it->session->done()) {
+        ++it;
+        continue;
+      }
+      closeSlot(*it, false);
+      it = active_.erase(it);
+    }
+  }
+
+  void closeSlot(const Slot& slot, bool at_end) {
+    for (const auto& w : slot.session->warnings()) app_.warn(log_, w);
+    close_(slot, at_end);
+  }
+
+  FreeInitApp& app_;
+  Job& job_;
+  mrpt_plugins::RawlogReader& reader_;
+  std::ostream& log_;
+  Close close_;
+  app_support::ObservationDecoder decoder_;
+  app_support::RecordChecker checker_;
+  app_support::ProgressBar bar_;
+  std::deque<Slot> active_;
+  std::vector<std::string> outside_;  ///< bad records no session took
+  std::optional<std::string> read_error_;
+  bool stopped_early_ = false;  ///< the starts needed no more (the file goes on)
+  std::size_t last_record_ = 0;
+};
 
 int FreeInitApp::run(std::ostream& log) {
-  using Clock = std::chrono::steady_clock;
   const auto t_start = Clock::now();
-  const bool multi = params.every > 0 || !params.starts_file.empty();
-  if (params.every < 0 || !std::isfinite(params.every))
-    throw std::invalid_argument("--every must be > 0");
-  if (params.every > 0 && !params.starts_file.empty())
-    throw std::invalid_argument("--every and --starts exclude each other");
-  if (params.start && !(*params.start >= 0)) throw std::invalid_argument("--start must be >= 0");
-  if (const std::string problem = params.argumentsProblem(); !problem.empty())
-    throw std::invalid_argument(problem);
+  checkParams(params);
   rows.clear();
   warnings.clear();
   result = InitResult{};
@@ -209,18 +401,21 @@ int FreeInitApp::run(std::ostream& log) {
   // A new folder for this run when none is given; removed again if the run fails.
   EmptyFolderSweep sweep;
   out_dir = params.out_dir;
-  if (out_dir.empty()) {
-    if (!fs::exists(params.new_out_root)) sweep.add(params.new_out_root);
-    out_dir = createNewOutputFolder(params.new_out_root, params.rawlog);
-    sweep.add(out_dir);
-  }
+  if (out_dir.empty()) out_dir = newOutputFolder(params, sweep);
   // The outputs' set: locked now, installed as a whole at the end; on any failure (an exception
   // through here) the earlier run's outputs are removed with the staging folder.
   app_support::OutputSet set(out_dir, "", app_support::folderSetOptions(), log);
 
-  // 1. Configuration (the defaults without a file), echoed.
+  Job job(t_start, set, loadConfiguration(log));
+  openRecording(job, log);
+  return severalStarts(params) ? initializeAtStarts(job, log) : initializeOnce(job, log);
+}
+
+std::string FreeInitApp::loadConfiguration(std::ostream& log) {
+  std::vector<std::string> notices;  // keys given under their former names
   config = params.config_file.empty() ? app_support::loadAppConfigFromText("", "the defaults")
-                                      : app_support::loadAppConfig(params.config_file);
+                                      : app_support::loadAppConfig(params.config_file, &notices);
+  for (const std::string& n : notices) log << n << "\n";
   std::ostringstream effective;
   app_support::dumpAppConfig(config, effective);
   if (params.echo_config)
@@ -228,302 +423,118 @@ int FreeInitApp::run(std::ostream& log) {
         << (params.config_file.empty() ? "the defaults: no configuration file" : params.config_file)
         << "):\n"
         << effective.str() << "\n";
+  return effective.str();
+}
 
-  // 2. The starts.
+void FreeInitApp::openRecording(Job& job, std::ostream& log) {
   log << "Reading " << params.rawlog << "\n";
-  mrpt_plugins::RawlogReader reader(params.rawlog, params.index);
+  job.reader = std::make_unique<mrpt_plugins::RawlogReader>(params.rawlog, params.index);
+  mrpt_plugins::RawlogReader& reader = *job.reader;
   reader.setSalvage(params.salvage);
   reader.setMaxRecordBytes(static_cast<std::size_t>(config.input.max_record_mb * 1e6));
   index_used = reader.indexLoaded();
   if (index_used) log << "  seek index found (" << reader.index().records.size() << " records)\n";
-  std::optional<double> first;
-  if (params.start || multi) {
-    first = reader.firstTime();
-    if (!first) throw mrpt_plugins::InputError(params.rawlog + ": no record has a timestamp");
+  if (params.start || severalStarts(params)) {
+    job.first = reader.firstTime();
+    if (!job.first) throw mrpt_plugins::InputError(params.rawlog + ": no record has a timestamp");
   }
-  const double from =
-      params.start ? startTime(*params.start, *first) : -std::numeric_limits<double>::infinity();
-  StartPlan plan = StartPlan::single(from);
-  if (params.every > 0) {
-    plan = StartPlan::every(params.start ? from : *first, params.every);
-  } else if (!params.starts_file.empty()) {
-    std::vector<double> t = readStartsFile(params.starts_file);
-    for (double& x : t) x = startTime(x, *first);
-    plan = StartPlan::list(std::move(t));
-  }
+  const double from = params.start ? startTime(*params.start, *job.first)
+                                   : -std::numeric_limits<double>::infinity();
+  job.plan = startPlan(params, from, job.first);
   if (params.start)
-    log << "  start at " << input::formatStamp(from) << " (" << from - *first
+    log << "  start at " << input::formatStamp(from) << " (" << from - *job.first
         << " s after the first record)\n";
 
-  std::vector<app_support::TruthSample> truth;
-  const std::string truth_file = app_support::truthPathFor(params.rawlog);
-  if (fs::is_regular_file(truth_file)) truth = app_support::readTruthCsv(truth_file);
+  job.truth_file = app_support::truthPathFor(params.rawlog);
+  if (fs::is_regular_file(job.truth_file)) job.truth = app_support::readTruthCsv(job.truth_file);
+}
 
-  // 3. One pass: records -> items -> checks -> the sessions whose start has come.
-  app_support::ObservationDecoder decoder(config.input);
-  app_support::RecordChecker checker(config);
-  std::deque<Slot> active;
-  std::vector<std::string> outside;  // bad records no session took
-  std::optional<std::string> read_error;
-  std::vector<app_support::IngestItem> items;
-  std::vector<app_support::CheckedItem> checked;
-  app_support::ProgressBar bar(log, "  reading", "MB", params.progress_terminal, 1e6);
-  const fs::path out(out_dir);
-  int exit_code = 0;
-
-  auto dispatch = [&](const app_support::CheckedItem& c) {
-    bool taken = false;
-    for (auto& s : active) {
-      if (s.session->done() || !(c.item.t >= s.start)) continue;
-      s.session->push(c);
-      taken = true;
-    }
-    if (!taken && !c.ok())
-      outside.push_back(params.rawlog + ": record " + std::to_string(c.item.record) + ": " +
-                        c.problem + " (not used: outside every initialization window)");
-  };
-
-  // One start's end: its log lines, outputs and table row. `at_end`: the file ended before its
-  // window closed (listed, but not a failure to initialize).
-  auto finalize = [&](Slot& slot, bool at_end) {
-    app_support::InitSession& s = *slot.session;
-    for (const auto& w : s.warnings()) {
-      log << "Warning: " << w << "\n";
-      warnings.push_back(w);
-    }
-    if (!multi) {
-      if (s.failed()) {
-        for (const auto& e : s.errors()) log << "Error: " << e << "\n";
-        const auto n = s.errors().size();
-        throw mrpt_plugins::InputError(
-            s.errors().front() +
-            (n > 1 ? " (and " + std::to_string(n - 1) + " more, listed above)" : ""));
-      }
-      // The file ended before the window closed.
-      if (!s.ready() || s.result().state.status == InitStatus::NotEnoughData)
-        throw mrpt_plugins::InputError(s.endOfDataReason());
-      result = s.result();
-      log << "Input: " << s.imuCount() << " IMU samples and " << s.frameCount()
-          << " point clouds from " << input::formatStamp(s.firstTime().value_or(0)) << " to "
-          << input::formatStamp(s.lastTime().value_or(0)) << "\n";
-      return;
-    }
-    StartRow row;
-    row.index = slot.index;
-    row.start = slot.start;
-    row.start_offset = slot.start - *first;
-    const std::string name = startFolderName(row.start_offset);
-    if (s.failed()) {
-      row.status = "input_error";
-      for (const auto& e : s.errors()) row.message += (row.message.empty() ? "" : "; ") + e;
-    } else if (!s.ready() || (at_end && s.result().state.status == InitStatus::NotEnoughData)) {
-      // The file ends before the window closes: listed, no outputs.
-      row.status = toString(InitStatus::NotEnoughData);
-      std::ostringstream why;
-      why << std::setprecision(3) << "the recording ends "
-          << s.lastTime().value_or(slot.start) - slot.start
-          << " s after this start, before a window closes";
-      row.message = why.str();
-    } else {
-      const InitResult& r = s.result();
-      row.state = r.state;
-      row.status = toString(r.state.status);
-      row.message = r.state.message;
-      std::optional<app_support::TruthErrors> errs;
-      if (r.state.ok()) {
-        row.window_begin = r.trajectory.front().t;
-        if (!truth.empty() && app_support::truthAt(truth, r.state.timestamp)) {
-          row.truth = stateNees(r.state, truth);
-          errs = row.truth->errors;
-        }
-      }
-      writeStateSet(set, name + "/", config, r, errs, truth, nullptr);
-      row.folder = name;
-    }
-    log << "Start " << row.index << " at " << std::fixed << std::setprecision(3) << row.start_offset
-        << " s: " << row.status << std::defaultfloat
-        << (row.message.empty() ? "" : " (" + row.message + ")");
-    if (row.state && row.state->ok())
-      log << ", |v_b| " << std::setprecision(4) << row.state->v_b().norm() << " m/s"
-          << std::defaultfloat;
-    if (row.truth)
-      log << ", errors: velocity " << row.truth->errors.velocity << " m/s, gravity "
-          << row.truth->errors.gravity_deg << " deg";
-    log << (row.folder.empty() ? "" : " -> " + (out / row.folder).string()) << "\n";
-    const bool cut_by_end = at_end && row.status == toString(InitStatus::NotEnoughData);
-    if (row.status != toString(InitStatus::Ok) && !cut_by_end) exit_code = 3;
-    rows.push_back(std::move(row));
-  };
-
-  auto finalizeDone = [&] {
-    for (auto it = active.begin(); it != active.end();) {
-      if (!it->session->done()) {
-        ++it;
-        continue;
-      }
-      finalize(*it, false);
-      it = active.erase(it);
-    }
-  };
-
-  bool stopped_early = false;
-  for (;;) {
-    if (active.empty() && !params.check_all) {
-      const auto next = plan.peek();
-      if (!next) {
-        stopped_early = !reader.atEnd();
-        break;
-      }
-    }
-    app_support::throwIfStopRequested();
-    mrpt_plugins::RawlogObject rec;
-    try {
-      // Idle: straight to the next start (no record at or after it: the end).
-      if (active.empty() && !params.check_all && !reader.seekToTime(*plan.peek())) break;
-      if (!reader.next(rec)) break;
-    } catch (const mrpt_plugins::InputError& e) {
-      read_error = e.what();
-      break;
-    }
-    if (params.progress) bar.update(reader.bytesRead(), reader.fileBytes());
-    items.clear();
-    decoder.decode(rec.index, rec.object, items);
-    rec.object.reset();
-    for (auto& item : items) {
-      while (std::isfinite(item.t)) {
-        const auto next = plan.peek();
-        if (!next || item.t < *next) break;
-        active.push_back({plan.index(), *next,
-                          std::make_unique<app_support::InitSession>(config, params.rawlog)});
-        plan.pop();
-      }
-      if (active.empty() && !params.check_all) continue;  // before the next start: not needed
-      checked.clear();
-      checker.push(std::move(item), checked);
-      for (const auto& c : checked) dispatch(c);
-    }
-    finalizeDone();
-  }
-  const std::size_t last_record = reader.nextRecord();
-  records_read = reader.recordsDeserialized();
-  read_to_end = reader.atEnd();
-  salvage_stop = reader.salvageStop();
-  if (!salvage_stop.empty()) {
-    log << "Warning: " << salvage_stop << "\n";
-    warnings.push_back(salvage_stop);
-  }
-
-  if (read_error) {
-    // Unreadable from here on: the open windows fail; what comes after is not checked.
-    for (auto& s : active) s.session->fail(*read_error);
-    if (!multi && active.empty() && plan.peek())
-      throw mrpt_plugins::InputError(*read_error);  // not reached
-    if (active.empty() && !plan.peek())
-      outside.push_back(*read_error + "; the rest of the file was not checked");
-  } else if (!stopped_early) {
-    // The end of the file: windows still open close with what is there.
-    checked.clear();
-    checker.finish(checked);
-    for (const auto& c : checked) dispatch(c);
-    for (auto& s : active) s.session->finish();
-  }
-  for (auto& s : active) finalize(s, !read_error);
-  active.clear();
-  if (!multi && plan.peek())
+int FreeInitApp::initializeOnce(Job& job, std::ostream& log) {
+  StartPass pass(*this, job, log,
+                 [&](const Slot& slot, bool) { result = resultOf(*slot.session, log); });
+  pass.read();
+  if (const auto start = job.plan.peek()) {
+    if (pass.readError()) throw mrpt_plugins::InputError(*pass.readError());
     throw mrpt_plugins::InputError(
-        params.rawlog + ": no record at or after the start " + input::formatStamp(*plan.peek()) +
-        (first ? " (" + std::to_string(*plan.peek() - *first) + " s after the first record)"
-               : std::string()));
-  if (multi) {
-    // Starts the file does not reach.
-    std::size_t k = plan.index();
-    for (double t : plan.rest()) {
-      StartRow row;
-      row.index = k++;
-      row.start = t;
-      row.start_offset = t - *first;
-      row.status = read_error ? "unreadable" : toString(InitStatus::NotEnoughData);
-      row.message = read_error ? *read_error : "no record at or after this start";
-      rows.push_back(row);
-      if (read_error) exit_code = 3;
-    }
-    if (read_error && params.every > 0)
-      log << "Warning: no start from " << std::fixed << std::setprecision(3)
-          << *plan.peek() - *first << std::defaultfloat << " s on: " << *read_error << "\n";
+        params.rawlog + ": no record at or after the start " + input::formatStamp(*start) +
+        (job.first ? " (" + std::to_string(*start - *job.first) + " s after the first record)"
+                   : std::string()));
   }
-  if (params.progress)
-    bar.finish(stopped_early ? "(state ready: the rest of the input is not needed)" : "");
-  for (const auto& w : outside) {
-    log << "Warning: " << w << "\n";
-    warnings.push_back(w);
-  }
-  if (stopped_early)
-    log << "Read up to record " << (last_record == 0 ? 0 : last_record - 1)
-        << "; the rest was not checked (use --check-all)\n";
-  std::string why;
-  index_written = reader.saveIndex(&why);
-  if (!index_written.empty()) log << "Seek index written to " << index_written << "\n";
-  if (!why.empty()) log << "Warning: the seek index could not be written: " << why << "\n";
-
-  if (multi) {
-    set.write(kConfigFile, [&](const std::string& p) {
-      writeFileAtomically(p, [&](std::ostream& o) { o << effective.str(); });
-    });
-    std::sort(rows.begin(), rows.end(),
-              [](const StartRow& a, const StartRow& b) { return a.index < b.index; });
-    if (std::any_of(rows.begin(), rows.end(),
-                    [](const StartRow& r) { return r.state && r.state->ok(); }))
-      set.write("starts.png", [&](const std::string& p) {
-        renderStartPlot(p, rows, config.output.snapshot_width, config.output.snapshot_height);
-      });
-    set.write("starts.csv", [&](const std::string& p) { writeStartTableCsv(p, rows); });
-    set.write("starts.md", [&](const std::string& p) {
-      writeStartTableMarkdown(p, rows, params.rawlog,
-                              params.command.empty() ? "freeinit" : params.command);
-    });
-    set.commit();
-    const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
-    std::size_t ok = 0;
-    for (const auto& r : rows) ok += r.status == toString(InitStatus::Ok) ? 1 : 0;
-    log << rows.size() << " start(s), " << ok << " initialized; table in "
-        << (out / "starts.md").string() << " (" << std::setprecision(3) << secs << " s total)\n";
-    return rows.empty() ? 3 : exit_code;
-  }
+  pass.end();
 
   const InitialState& s = result.state;
-  log << "Initialization: " << toString(s.status)
-      << (s.message.empty() ? "" : " (" + s.message + ")") << "\n";
-  log << std::fixed << std::setprecision(6) << "  timestamp " << s.timestamp << "\n"
-      << std::setprecision(4) << "  v_b  " << v3(s.v_b()) << " m/s\n  g_b  " << v3(s.g_b())
-      << " m/s^2\n  b_g  " << v3(s.b_g) << " rad/s\n  b_a  " << v3(s.b_a) << " m/s^2\n"
-      << std::defaultfloat << "  points: " << result.diag.points_used << " used, "
-      << result.diag.points_rejected << " rejected, " << result.diag.points_skipped
-      << " skipped; static start: " << (result.diag.static_start ? "yes" : "no") << "\n";
-  if (s.ok())
-    app_support::printVerdict(
-        log, app_support::verdictOf(result, config.core.velocimeter.doppler_sigma));
-  for (const auto& w : s.warnings) log << "  warning: " << w << "\n";
-  if (config.extrinsics.from_sensor_pose && decoder.firstCloudExtrinsics())
-    log << "Extrinsics from sensorPose: p_bl = " << v3(decoder.firstCloudExtrinsics()->p_bl)
-        << " m\n";
-
-  // 4. Ground truth, when it sits beside the rawlog.
-  if (!truth.empty() && s.ok()) {
-    errors_wrt_gt = app_support::compareWithTruth(s, truth);
-    log << "Errors w.r.t. ground truth (" << truth_file << "):\n"
-        << "  velocity    " << errors_wrt_gt->velocity << " m/s\n"
-        << "  gravity     " << errors_wrt_gt->gravity_deg << " deg\n"
-        << "  gyro bias   " << errors_wrt_gt->gyro_bias << " rad/s\n"
-        << "  accel bias  " << errors_wrt_gt->accel_bias << " m/s^2\n";
+  printInitialState(log, result, config, pass.checker().declaredExtrinsics());
+  // Ground truth, when it sits beside the rawlog.
+  if (!job.truth.empty() && s.ok()) {
+    errors_wrt_gt = app_support::compareWithTruth(s, job.truth);
+    printTruthErrors(log, job.truth_file, *errors_wrt_gt);
   }
 
-  // 5. The outputs, staged, then installed as one set.
-  const std::string effective_text = effective.str();
-  writeStateSet(set, "", config, result, errors_wrt_gt, truth, &effective_text);
-  set.commit();
-  const double secs = std::chrono::duration<double>(Clock::now() - t_start).count();
-  log << "Outputs in " << out.string() << " (" << std::setprecision(3) << secs << " s total)\n";
+  // The outputs, staged, then installed as one set.
+  writeStateSet(job.set, "", config, result, errors_wrt_gt, job.truth, &job.effective_config);
+  job.set.commit();
+  log << "Outputs in " << out_dir << " (" << std::setprecision(3) << secondsSince(job.t_start)
+      << " s total)\n";
   return s.ok() ? 0 : 3;
+}
+
+int FreeInitApp::initializeAtStarts(Job& job, std::ostream& log) {
+  int exit_code = 0;
+  StartPass pass(*this, job, log, [&](const Slot& slot, bool at_end) {
+    const app_support::InitSession& s = *slot.session;
+    StartRow row = startRow(slot.index, slot.start, *job.first, s, at_end, job.truth);
+    if (!row.folder.empty())
+      writeStateSet(job.set, row.folder + "/", config, s.result(),
+                    row.truth ? std::optional(row.truth->errors) : std::nullopt, job.truth,
+                    nullptr);
+    printStartRow(log, row, out_dir);
+    if (startFailed(row, at_end)) exit_code = 3;
+    rows.push_back(std::move(row));
+  });
+  pass.read();
+  // Starts the file does not reach.
+  const std::optional<std::string>& read_error = pass.readError();
+  std::size_t k = job.plan.index();
+  for (double t : job.plan.rest()) {
+    rows.push_back(unreachedStartRow(k++, t, *job.first, read_error));
+    if (read_error) exit_code = 3;
+  }
+  if (read_error && params.every > 0)
+    log << "Warning: no start from " << std::fixed << std::setprecision(3)
+        << *job.plan.peek() - *job.first << std::defaultfloat << " s on: " << *read_error << "\n";
+  pass.end();
+
+  writeStartTable(job, log);
+  return rows.empty() ? 3 : exit_code;
+}
+
+void FreeInitApp::writeStartTable(Job& job, std::ostream& log) {
+  job.set.write(kConfigFile, [&](const std::string& p) {
+    writeFileAtomically(p, [&](std::ostream& o) { o << job.effective_config; });
+  });
+  std::sort(rows.begin(), rows.end(),
+            [](const StartRow& a, const StartRow& b) { return a.index < b.index; });
+  if (std::any_of(rows.begin(), rows.end(),
+                  [](const StartRow& r) { return r.state && r.state->ok(); }))
+    job.set.write("starts.png", [&](const std::string& p) {
+      renderStartPlot(p, rows, config.output.snapshot_width, config.output.snapshot_height);
+    });
+  job.set.write("starts.csv", [&](const std::string& p) { writeStartTableCsv(p, rows); });
+  job.set.write("starts.md", [&](const std::string& p) {
+    writeStartTableMarkdown(p, rows, params.rawlog,
+                            params.command.empty() ? "freeinit" : params.command);
+  });
+  job.set.commit();
+  std::size_t ok = 0;
+  for (const auto& r : rows) ok += r.status == toString(InitStatus::Ok) ? 1 : 0;
+  log << rows.size() << " start(s), " << ok << " initialized; table in "
+      << (fs::path(out_dir) / "starts.md").string() << " (" << std::setprecision(3)
+      << secondsSince(job.t_start) << " s total)\n";
+}
+
+void FreeInitApp::warn(std::ostream& log, const std::string& warning) {
+  log << "Warning: " << warning << "\n";
+  warnings.push_back(warning);
 }
 
 int FreeInitApp::main(int argc, char** argv) {

@@ -26,18 +26,10 @@
 #include <string>
 #include <vector>
 
+#include "start_plan.h"
 #include "start_table.h"
 
 namespace freeinit::apps {
-
-/// Start values above this are UNIX stamps [s], others seconds after the first record (1e8 s is
-/// in 1973: no recording is that long, no real stamp is that early).
-inline constexpr double kUnixStampThreshold = 1e8;
-/// [UNIX s] of a start value given `first` [UNIX s], the first record's stamp.
-double startTime(double value, double first);
-/// Start values from a file, one per line ('#' comments and blank lines ignored), in increasing
-/// order. Throws InputError naming the file and line.
-std::vector<double> readStartsFile(const std::string& path);
 
 /// The output folder of `freeinit <config.ini> <input.rawlog>` without --out.
 inline constexpr const char* kDefaultOutDir = "freeinit_out";
@@ -101,6 +93,22 @@ class FreeInitApp {
   std::string salvage_stop;           ///< --salvage: where a cut file stopped ("" if whole)
   bool index_used = false;            ///< the rawlog's index was found and used
   std::string index_written;          ///< where the index was written ("" if not)
+
+ private:
+  struct Job;       // what the steps of one run share (free_init_app.cpp)
+  class StartPass;  // the pass over the records for the run's starts (free_init_app.cpp)
+
+  /// The configuration (the defaults without a file) into `config`, echoed; returns its text.
+  std::string loadConfiguration(std::ostream& log);
+  /// Opens the rawlog and plans the starts; reads the ground truth beside it.
+  void openRecording(Job& job, std::ostream& log);
+  /// One start: its window through the ingest path, the state, its outputs.
+  int initializeOnce(Job& job, std::ostream& log);
+  /// --every / --starts: every start's window in one pass, the table of them.
+  int initializeAtStarts(Job& job, std::ostream& log);
+  void writeStartTable(Job& job, std::ostream& log);
+  /// Logs a warning and keeps it in `warnings`.
+  void warn(std::ostream& log, const std::string& warning);
 };
 
 }  // namespace freeinit::apps

@@ -7,6 +7,7 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
 #include <iomanip>
 #include <ostream>
 #include <sstream>
@@ -88,6 +89,67 @@ std::string startFolderName(double offset) {
   os << "start_" << std::fixed << std::setprecision(3) << std::setw(8) << std::setfill('0')
      << offset;
   return os.str();
+}
+
+StartRow startRow(std::size_t index, double start, double first, const app_support::InitSession& s,
+                  bool at_end, const std::vector<app_support::TruthSample>& truth) {
+  StartRow row;
+  row.index = index;
+  row.start = start;
+  row.start_offset = start - first;
+  if (s.failed()) {
+    row.status = "input_error";
+    for (const auto& e : s.errors()) row.message += (row.message.empty() ? "" : "; ") + e;
+  } else if (!s.ready() || (at_end && s.result().state.status == InitStatus::NotEnoughData)) {
+    // The file ends before the window closes: listed, no outputs.
+    row.status = toString(InitStatus::NotEnoughData);
+    std::ostringstream why;
+    why << std::setprecision(3) << "the recording ends " << s.lastTime().value_or(start) - start
+        << " s after this start, before a window closes";
+    row.message = why.str();
+  } else {
+    const InitResult& r = s.result();
+    row.state = r.state;
+    row.status = toString(r.state.status);
+    row.message = r.state.message;
+    if (r.state.ok()) {
+      row.window_begin = r.trajectory.front().t;
+      if (!truth.empty() && app_support::truthAt(truth, r.state.timestamp))
+        row.truth = stateNees(r.state, truth);
+    }
+    row.folder = startFolderName(row.start_offset);
+  }
+  return row;
+}
+
+StartRow unreachedStartRow(std::size_t index, double start, double first,
+                           const std::optional<std::string>& read_error) {
+  StartRow row;
+  row.index = index;
+  row.start = start;
+  row.start_offset = start - first;
+  row.status = read_error ? "unreadable" : toString(InitStatus::NotEnoughData);
+  row.message = read_error ? *read_error : "no record at or after this start";
+  return row;
+}
+
+bool startFailed(const StartRow& row, bool at_end) {
+  const bool cut_by_end = at_end && row.status == toString(InitStatus::NotEnoughData);
+  return row.status != toString(InitStatus::Ok) && !cut_by_end;
+}
+
+void printStartRow(std::ostream& log, const StartRow& row, const std::string& out_dir) {
+  log << "Start " << row.index << " at " << std::fixed << std::setprecision(3) << row.start_offset
+      << " s: " << row.status << std::defaultfloat
+      << (row.message.empty() ? "" : " (" + row.message + ")");
+  if (row.state && row.state->ok())
+    log << ", |v_b| " << std::setprecision(4) << row.state->v_b().norm() << " m/s"
+        << std::defaultfloat;
+  if (row.truth)
+    log << ", errors: velocity " << row.truth->errors.velocity << " m/s, gravity "
+        << row.truth->errors.gravity_deg << " deg";
+  log << (row.folder.empty() ? "" : " -> " + (std::filesystem::path(out_dir) / row.folder).string())
+      << "\n";
 }
 
 void writeStartTableCsv(const std::string& path, const std::vector<StartRow>& rows) {

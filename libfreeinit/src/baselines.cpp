@@ -178,7 +178,7 @@ FrameVelocity dopplerFrameVelocity(const LidarFrame& frame, const std::vector<Im
   }
 
   // The same robust least squares (IRLS, Cauchy) as Free-Init's bootstrap, on the whole frame.
-  const VelocityFit fit = fitLidarVelocity(d_l, doppler, BootstrapParams{}, 0.03);
+  const VelocityFit fit = fitLidarVelocity(d_l, doppler, VelocityFitParams{}, 0.03);
   if (!fit.ok) {
     out.status = InitStatus::DegenerateGeometry;
     out.message = fit.message;

@@ -1,20 +1,11 @@
 #include <freeinit/free_init.h>
 
-#include <chrono>
 #include <stdexcept>
 
 #include "measurement_sequencer.h"
 #include "pipeline.h"
 
 namespace freeinit {
-namespace {
-
-double wallSeconds() {
-  using Clock = std::chrono::steady_clock;
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
-
-}  // namespace
 
 // The facade owns its parts: the sequencer that buffers and orders the two streams, and the
 // pipeline the configuration selects (joint_pipeline.cpp, paper_pipeline.cpp), which reads the
@@ -29,17 +20,17 @@ struct FreeInit::Impl {
 
   void processBuffered() {
     if (done) return;
-    const double t0 = wallSeconds();
+    const double t0 = detail::wallSeconds();
     done = pipeline->processBuffered(result);
-    if (done) result.diag.time_to_result = wallSeconds() - t0;
+    if (done) result.diag.time_to_result = detail::wallSeconds() - t0;
   }
 
   void completeMap() {
     if (!done || mapped) return;
     mapped = true;
-    const double t0 = wallSeconds();
+    const double t0 = detail::wallSeconds();
     pipeline->completeMap(result);
-    result.diag.time_map = wallSeconds() - t0;
+    result.diag.time_map = detail::wallSeconds() - t0;
   }
 
   FreeInitConfig cfg;

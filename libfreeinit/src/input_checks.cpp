@@ -157,13 +157,12 @@ std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, b
 
 RestParams restParams(const FreeInitConfig& config) {
   RestParams p;
-  const auto& sp = config.static_detector;
-  const auto& vp = config.velocimeter;
-  p.max_gyro_dev = sp.max_gyro_dev;
-  p.max_gyro_bias = sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
-  p.gyro_bias_prior = vp.gyro_bias_prior;
-  p.max_accel_dev = std::max(0.3, 6.0 * config.gravity.accel_sigma);
-  p.max_accel_bias = std::sqrt(3.0) * config.gravity.accel_bias_bound;
+  const ImuParams& imu = config.imu;
+  p.max_gyro_dev = config.paper_rest.max_gyro_dev;
+  p.max_gyro_bias = p.max_gyro_dev + 3.0 * imu.gyro_bias_sigma0;
+  p.gyro_bias_prior = imu.gyro_bias_prior;
+  p.max_accel_dev = std::max(0.3, 6.0 * imu.accel_sigma);
+  p.max_accel_bias = std::sqrt(3.0) * imu.accel_bias_bound;
   return p;
 }
 

@@ -4,10 +4,13 @@
 #include <freeinit/config.h>
 #include <freeinit/initial_state.h>
 
+#include <chrono>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "measurement_sequencer.h"
+#include "usable_points.h"
 
 namespace freeinit::detail {
 
@@ -34,6 +37,22 @@ std::unique_ptr<Pipeline> makePaperPipeline(const FreeInitConfig& config,
 inline void failResult(InitResult& result, InitStatus status, const std::string& message) {
   result.state.status = status;
   result.state.message = message;
+}
+
+/// [s] a monotonic clock, for the durations the diagnostics report.
+inline double wallSeconds() {
+  using Clock = std::chrono::steady_clock;
+  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
+}
+
+/// automaticPointStride() over the frames the sequencer has buffered.
+inline int automaticPointStride(const MeasurementSequencer& sequencer, double max_point_rate) {
+  struct FramePoints {
+    const std::vector<DopplerPoint>& points;
+  };
+  std::vector<FramePoints> frames;
+  for (const MeasurementSequencer::FrameRef& f : sequencer.frames()) frames.push_back({*f.points});
+  return automaticPointStride(frames, max_point_rate);
 }
 
 }  // namespace freeinit::detail

@@ -13,13 +13,13 @@
 
 namespace freeinit::detail {
 
-/// A point the velocimeter can use: finite, with a range inside [min_range, max_range]. The
-/// definition; the per-return loops use UsablePoints, which decides the same without a root.
-inline bool usablePoint(const DopplerPoint& p, const VelocimeterParams& vp) {
+/// A point the estimators can use: finite, with a range inside [doppler] [min_range, max_range].
+/// The definition; the per-return loops use UsablePoints, which decides the same without a root.
+inline bool usablePoint(const DopplerPoint& p, const DopplerParams& dp) {
   if (!p.p_l.allFinite() || !std::isfinite(p.doppler) || !std::isfinite(p.time_offset))
     return false;
   const double r = p.p_l.norm();
-  return r > 0 && r >= vp.min_range && r <= vp.max_range;
+  return r > 0 && r >= dp.min_range && r <= dp.max_range;
 }
 
 /// usablePoint() on the squared range: the range limits become limits on the float squared
@@ -27,10 +27,10 @@ inline bool usablePoint(const DopplerPoint& p, const VelocimeterParams& vp) {
 /// that every point gets the same verdict, at the limits too.
 class UsablePoints {
  public:
-  explicit UsablePoints(const VelocimeterParams& vp) {
+  explicit UsablePoints(const DopplerParams& dp) {
     // The root is monotone in the squared range: each test holds on one end of the floats
     // [0, inf] (the squared range of finite coordinates may overflow to inf).
-    const double lo = vp.min_range, hi = vp.max_range;
+    const double lo = dp.min_range, hi = dp.max_range;
     lo2_ = firstPassing([lo](float r2) {
       const float r = std::sqrt(r2);
       return r > 0 && r >= lo;

@@ -8,24 +8,27 @@
 #include <opencv2/imgproc.hpp>
 #include <ostream>
 #include <stdexcept>
+#include <utility>
 
 namespace freeinit::report {
 namespace {
 
-constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
-constexpr double kFontScale = 0.45;  // ticks and legend
+constexpr int kHershey = cv::FONT_HERSHEY_SIMPLEX;
 const cv::Scalar kBlack(0, 0, 0), kWhite(255, 255, 255);
 
 cv::Scalar bgr(const plot::Rgb& c) { return cv::Scalar(c.b, c.g, c.r); }
 
-void text(cv::Mat& img, const std::string& s, cv::Point org, double scale, int thickness = 1,
-          const cv::Scalar& color = kBlack) {
-  cv::putText(img, s, org, kFont, scale, color, thickness, cv::LINE_AA);
-}
-
-cv::Size textSize(const std::string& s, double scale, int thickness = 1) {
-  int baseline = 0;
-  return cv::getTextSize(s, kFont, scale, thickness, &baseline);
+/// The Hershey font's scale and stroke thickness per role.
+std::pair<double, int> hersheyScale(PanelFont::Role role) {
+  switch (role) {
+    case PanelFont::Role::Label:
+      return {0.5, 1};
+    case PanelFont::Role::Title:
+      return {0.6, 2};
+    case PanelFont::Role::Tick:
+      break;
+  }
+  return {0.45, 1};
 }
 
 /// A series' line through `pts`; dashed: every other run of four segments.
@@ -41,18 +44,34 @@ void drawLine(cv::Mat& img, const std::vector<cv::Point>& pts, const plot::Serie
 
 }  // namespace
 
-void drawPanel(cv::Mat& img, const plot::PanelSpec& spec) {
+cv::Size HersheyFont::size(const std::string& text, Role role) const {
+  const auto [scale, thickness] = hersheyScale(role);
+  int baseline = 0;
+  return cv::getTextSize(text, kHershey, scale, thickness, &baseline);
+}
+
+void HersheyFont::draw(cv::Mat& img, const std::string& text, cv::Point top_left, Role role,
+                       const plot::Rgb& color) const {
+  const auto [scale, thickness] = hersheyScale(role);
+  const cv::Point baseline_left(top_left.x, top_left.y + size(text, role).height);
+  cv::putText(img, text, baseline_left, kHershey, scale, bgr(color), thickness, cv::LINE_AA);
+}
+
+void drawPanel(cv::Mat& img, const plot::PanelSpec& spec, const plot::Box& cell,
+               const plot::PanelStyle& style, const PanelFont& font) {
   using Style = plot::Series::Style;
+  using Role = PanelFont::Role;
   const double W = img.cols, H = img.rows;
-  const plot::PanelLayout l =
-      plot::layoutPanel(spec, {0, 0, 1, 1}, plot::figurePanelStyle(),
-                        [&](const std::string& s) { return textSize(s, kFontScale).width / W; });
+  const plot::PanelLayout l = plot::layoutPanel(
+      spec, cell, style, [&](const std::string& s) { return font.size(s, Role::Tick).width / W; });
   auto at = [&](double nx, double ny) {
     return cv::Point(static_cast<int>(std::lround(nx * W)), static_cast<int>(std::lround(ny * H)));
   };
+  const cv::Rect box(at(cell.x0, cell.y0), at(cell.x1, cell.y1));
   const cv::Rect area(at(l.area.x0, l.area.y0), at(l.area.x1, l.area.y1));
   auto X = [&](double v) { return static_cast<int>(std::lround(l.toX(v) * W)); };
   auto Y = [&](double v) { return static_cast<int>(std::lround(l.toY(v) * H)); };
+  const plot::Rgb black = plot::kBlack;
 
   if (spec.shade) {
     const int x0 = std::max(area.x, X(spec.shade->lo));
@@ -61,19 +80,22 @@ void drawPanel(cv::Mat& img, const plot::PanelSpec& spec) {
       cv::rectangle(img, cv::Rect(x0, area.y, x1 - x0, area.height), bgr(plot::kShade), cv::FILLED);
   }
 
-  // Grid and ticks.
+  // Grid and ticks; a tick label 8 px under the area, or 6 px left of it, centred on its tick.
   for (std::size_t i = 0; i < l.x.ticks.size(); ++i) {
     const int x = X(l.x.ticks[i]);
     cv::line(img, {x, area.y}, {x, area.y + area.height}, bgr(plot::kGrid), 1);
+    if (i >= l.x.labels.size()) continue;
     const std::string& s = l.x.labels[i];
-    text(img, s, {x - textSize(s, kFontScale).width / 2, area.y + area.height + 18}, kFontScale);
+    font.draw(img, s, {x - font.size(s, Role::Tick).width / 2, area.y + area.height + 8},
+              Role::Tick, black);
   }
   for (std::size_t i = 0; i < l.y.ticks.size(); ++i) {
     const int y = Y(l.y.ticks[i]);
     cv::line(img, {area.x, y}, {area.x + area.width, y}, bgr(plot::kGrid), 1);
+    if (i >= l.y.labels.size()) continue;
     const std::string& s = l.y.labels[i];
-    const auto sz = textSize(s, kFontScale);
-    text(img, s, {area.x - sz.width - 6, y + sz.height / 2}, kFontScale);
+    const cv::Size sz = font.size(s, Role::Tick);
+    font.draw(img, s, {area.x - sz.width - 6, y - sz.height / 2}, Role::Tick, black);
   }
   for (double m : l.y.minor) {  // log axis: short ticks at 2..9 times each decade
     const int y = Y(m);
@@ -81,24 +103,22 @@ void drawPanel(cv::Mat& img, const plot::PanelSpec& spec) {
   }
   cv::rectangle(img, area, kBlack, 1);
 
-  // Labels and title.
+  // Axis labels: x centred under the area, 8 px above the cell's bottom; y turned a quarter to
+  // the left, 4 px right of the cell's left edge.
   if (!l.x.label.empty()) {
-    const auto sz = textSize(l.x.label, 0.5);
-    text(img, l.x.label, {area.x + (area.width - sz.width) / 2, img.rows - 8}, 0.5);
+    const cv::Size sz = font.size(l.x.label, Role::Label);
+    font.draw(img, l.x.label,
+              {area.x + (area.width - sz.width) / 2, box.y + box.height - 8 - sz.height},
+              Role::Label, black);
   }
   if (!l.y.label.empty()) {
-    const auto sz = textSize(l.y.label, 0.5);
+    const cv::Size sz = font.size(l.y.label, Role::Label);
     cv::Mat label(sz.height + 8, sz.width + 4, CV_8UC3, kWhite);
-    text(label, l.y.label, {2, sz.height + 2}, 0.5);
+    font.draw(label, l.y.label, {2, 2}, Role::Label, black);
     cv::rotate(label, label, cv::ROTATE_90_COUNTERCLOCKWISE);
-    const int y = std::max(0, area.y + (area.height - label.rows) / 2);
-    if (y + label.rows <= img.rows) label.copyTo(img(cv::Rect(4, y, label.cols, label.rows)));
-  }
-  if (!spec.title.empty()) {
-    const auto sz = textSize(spec.title, 0.6, 2);
-    const cv::Point c = at(l.title_x, l.title_y);
-    text(img, spec.title, {c.x - sz.width / 2, c.y}, 0.6, 2,
-         bgr(spec.title_color.value_or(plot::kBlack)));
+    const cv::Rect to(box.x + 4, std::max(box.y, area.y + (area.height - label.rows) / 2),
+                      label.cols, label.rows);
+    if ((to & box) == to) label.copyTo(img(to));
   }
 
   // Data, clipped to the plot area: the bands first, then the series in order, then the marks.
@@ -149,8 +169,27 @@ void drawPanel(cv::Mat& img, const plot::PanelSpec& spec) {
     } else {
       cv::line(img, p, p + cv::Point(30, 0), bgr(s.color), s.thickness, cv::LINE_AA);
     }
-    text(img, s.label, p + cv::Point(36, 5), kFontScale);
+    font.draw(img, s.label, {p.x + 36, p.y - font.size(s.label, Role::Tick).height / 2}, Role::Tick,
+              black);
   }
+
+  // The title last: centred on its baseline above the area, or inside it at its top-left corner
+  // on a white box over the data.
+  if (!spec.title.empty()) {
+    const cv::Size sz = font.size(spec.title, Role::Title);
+    const cv::Point c = at(l.title_x, l.title_y);
+    cv::Point top_left(c.x - sz.width / 2, c.y - sz.height);
+    if (l.title_inside) {
+      top_left = c;
+      cv::rectangle(img, c - cv::Point(6, 2), c + cv::Point(sz.width + 4, sz.height + 1), kWhite,
+                    cv::FILLED);
+    }
+    font.draw(img, spec.title, top_left, Role::Title, spec.title_color.value_or(plot::kBlack));
+  }
+}
+
+void drawPanel(cv::Mat& img, const plot::PanelSpec& spec) {
+  drawPanel(img, spec, {0, 0, 1, 1}, plot::figurePanelStyle(), HersheyFont());
 }
 
 cv::Mat Plot::render(int width, int height) const {

@@ -150,6 +150,7 @@ Axis makeAxis(const AxisSpec& spec, const Range& range, int target) {
     const double step = a.ticks.size() >= 2 ? a.ticks[1] - a.ticks[0] : range.span();
     for (double t : a.ticks) a.labels.push_back(tickLabel(t, step) + spec.unit);
   }
+  if (!spec.tick_labels) a.labels.clear();
   return a;
 }
 

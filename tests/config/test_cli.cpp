@@ -211,15 +211,19 @@ TEST(CommandLine, BadIniFilesStopTheAppsBeforeAnyOutput) {
     std::string name, ini, message;
   };
   const std::vector<Case> cases = {
-      {"misspelt_section", "[velocimetr]\ndoppler_sigma = 0.05\n",
-       "../bad.ini:1: [velocimetr]: unknown section (did you mean [velocimeter]?)"},
-      {"duplicated_key", "[velocimeter]\ndoppler_sigma = 0.05\ndoppler_sigma = 0.06\n",
-       "../bad.ini:3: [velocimeter] doppler_sigma: key given twice (first at line 2)"},
-      {"huge_prior", "[velocimeter]\ngyro_bias_sigma0 = 1e300\n",
-       "../bad.ini:2: [velocimeter] gyro_bias_sigma0: 1e300 is out of range: accepted [1e-06, 1] "
-       "rad/s"},
-      {"doppler_sigma", "[velocimeter]\ndoppler_sigma = 30\n",
-       "../bad.ini:2: [velocimeter] doppler_sigma: 30 is out of range: accepted [1e-04, 1] m/s"},
+      {"misspelt_section", "[dopler]\ndoppler_sigma = 0.05\n",
+       "../bad.ini:1: [dopler]: unknown section (did you mean [doppler]?)"},
+      {"duplicated_key", "[doppler]\ndoppler_sigma = 0.05\ndoppler_sigma = 0.06\n",
+       "../bad.ini:3: [doppler] doppler_sigma: key given twice (first at line 2)"},
+      {"huge_prior", "[imu]\ngyro_bias_sigma0 = 1e300\n",
+       "../bad.ini:2: [imu] gyro_bias_sigma0: 1e300 is out of range: accepted [1e-06, 1] rad/s"},
+      {"doppler_sigma", "[doppler]\ndoppler_sigma = 30\n",
+       "../bad.ini:2: [doppler] doppler_sigma: 30 is out of range: accepted [1e-04, 1] m/s"},
+      {"former_and_current_name",
+       "[velocimeter]\ndoppler_sigma = 0.05\n[doppler]\ndoppler_sigma = 0.06\n",
+       "../bad.ini:2: [velocimeter] doppler_sigma: is now [doppler] doppler_sigma, also given "
+       "(line "
+       "4): give it once"},
       {"variable", "[input]\nimu_label = ${FOO\n",
        "../bad.ini:2: [input] imu_label: '${FOO': variables and expressions ($...{...}) are not "
        "expanded"},

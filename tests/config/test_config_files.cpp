@@ -141,9 +141,9 @@ TEST(AppConfigIni, ExtrinsicsFromSensorPoseByDefaultOrExplicitlyFromTheIni) {
 // either way.
 TEST(AppConfigIni, EffectiveConfigEchoLoadsBackToTheSameConfig) {
   AppConfig c;
-  c.core.velocimeter.doppler_sigma = 0.047;
+  c.core.doppler.doppler_sigma = 0.047;
   c.core.window.duration = 0.4;
-  c.core.gravity.formulation = GravityFormulation::Differentiated;
+  c.core.paper_gravity.formulation = GravityFormulation::Differentiated;
   c.input.imu_label = "xsens imu";
   c.input.lidar_label = "";
   c.input.min_imu_rate = 123.5;
@@ -163,7 +163,7 @@ TEST(AppConfigIni, EffectiveConfigEchoLoadsBackToTheSameConfig) {
     EXPECT_EQ(d.core.extrinsics.p_bl, c.core.extrinsics.p_bl);
     EXPECT_EQ(d.input.imu_label, "xsens imu");
     EXPECT_EQ(d.input.lidar_label, "");
-    EXPECT_EQ(d.core.velocimeter.doppler_sigma, 0.047);
+    EXPECT_EQ(d.core.doppler.doppler_sigma, 0.047);
     EXPECT_EQ(d.core.window.duration, 0.4);
     EXPECT_EQ(d.output.snapshot_height, 601);
   }

@@ -287,6 +287,37 @@ TEST(FreeInitAppEndToEnd, QuietLeavesTheConfigurationToItsFile) {
   }
 }
 
+// An INI written for the earlier sections runs as the same one with today's names: one notice
+// per key given under its former name in the log, the same state, an echo with today's names.
+TEST(FreeInitAppEndToEnd, AnIniWithFormerKeyNamesRunsTheSameWithANoticePerKey) {
+  const std::string former = tmpFile("former.ini"), current = tmpFile("current.ini");
+  std::ofstream(former) << "[output]\nsnapshots = false\n[velocimeter]\ndoppler_sigma = 0.035\n"
+                           "[static_detector]\nmax_speed = 0.04\n";
+  std::ofstream(current) << "[output]\nsnapshots = false\n[doppler]\ndoppler_sigma = 0.035\n"
+                            "[start]\nrest_speed = 0.04\n";
+  auto a = makeApp(kStat, outDir("former"), former);
+  std::ostringstream log;
+  ASSERT_EQ(a.run(log), 0) << log.str();
+  EXPECT_NE(log.str().find(former + ":4: [velocimeter] doppler_sigma is now [doppler] "
+                                    "doppler_sigma (the old name is read for now)\n"),
+            std::string::npos)
+      << log.str();
+  EXPECT_NE(log.str().find(former + ":6: [static_detector] max_speed is now [start] rest_speed "
+                                    "(the old name is read for now)\n"),
+            std::string::npos)
+      << log.str();
+  auto b = makeApp(kStat, outDir("current"), current);
+  std::ostringstream log_b;
+  ASSERT_EQ(b.run(log_b), 0) << log_b.str();
+  EXPECT_EQ(log_b.str().find("the old name"), std::string::npos) << log_b.str();
+  EXPECT_EQ(readText(a.params.out_dir + "/initial_state.ini"),
+            readText(b.params.out_dir + "/initial_state.ini"));
+  const std::string echo = readText(a.params.out_dir + "/effective_config.ini");
+  EXPECT_EQ(echo, readText(b.params.out_dir + "/effective_config.ini"));
+  EXPECT_NE(echo.find("doppler_sigma                   = 0.035"), std::string::npos) << echo;
+  EXPECT_EQ(echo.find("[velocimeter]"), std::string::npos) << echo;
+}
+
 // A file cut inside the window (the first third of the sample holds it).
 TEST(FreeInitAppEndToEnd, BadInputFailsBeforeAnyOutputIsWritten) {
   const std::string out = outDir("bad");
@@ -510,7 +541,7 @@ TEST(FreeInitAppStreaming, StopsAtTheWindowWithTheStateOfTheWholeRecording) {
     if (config.extrinsics.from_sensor_pose) config.core.extrinsics = *in.sensor_pose_extrinsics;
     const InitResult whole = FreeInit::run(config.core, in.imu, in.frames);
     const std::string path = tmpFile("whole_initial_state.ini");
-    const StateVerdict verdict = verdictOf(whole, config.core.velocimeter.doppler_sigma);
+    const StateVerdict verdict = verdictOf(whole, config.core.doppler.doppler_sigma);
     writeInitialStateIni(path, whole.state, &verdict);
     EXPECT_EQ(state, readText(path));
   }

@@ -3,6 +3,7 @@
 // ingest path on whole recordings (INI loading: tests/config).
 #include <freeinit/app_support/app_config.h>
 #include <freeinit/app_support/checked_recording.h>
+#include <freeinit/app_support/ingest.h>
 #include <freeinit/app_support/output_writers.h>
 #include <freeinit/mrpt_plugins/conversions.h>
 #include <freeinit/mrpt_plugins/points_map_doppler.h>
@@ -717,4 +718,85 @@ TEST(RawlogIndex, WhatLiesAtItsPathIsCheckedBeforeUse) {
   EXPECT_FALSE(loadRawlogIndex(idx, rawlogIdentity(fx.path), reloaded));
   EXPECT_EQ(seekAndRead(false), idx);
   EXPECT_TRUE(loadRawlogIndex(idx, rawlogIdentity(fx.path), reloaded));
+}
+
+// The extrinsics of a rawlog are each cloud's sensorPose relative to the IMU's, whatever the order
+// of the records: a cloud before the first IMU sample (goodRecords starts with one) waits for the
+// IMU's sensorPose instead of taking the cloud's own as if the IMU sat at the origin. Every later
+// cloud must give the same, and every IMU sample the same sensorPose.
+TEST(InputValidator, ExtrinsicsAreOneRuleWhateverTheRecordOrder) {
+  const mrpt::poses::CPose3D imu_pose(0.4, -0.2, 1.1, 0.3, -0.05, 0.02);  // the IMU on a mount
+  const mrpt::poses::CPose3D lidar_in_imu = poseFromExtrinsics(someExtrinsics());
+  auto mounted = [&](std::vector<RawlogRecord> r) {
+    for (auto& x : r)
+      x.obs->setSensorPose(x.obs->GetRuntimeClass() == CLASS_ID(mrpt::obs::CObservationIMU)
+                               ? imu_pose
+                               : imu_pose + lidar_in_imu);
+    return r;
+  };
+  auto expectExtrinsics = [](const CheckedRecording& in) {
+    ASSERT_TRUE(in.sensor_pose_extrinsics);
+    EXPECT_LT((in.sensor_pose_extrinsics->R_bl - someExtrinsics().R_bl).norm(), 1e-9);
+    EXPECT_LT((in.sensor_pose_extrinsics->p_bl - someExtrinsics().p_bl).norm(), 1e-9);
+  };
+  const std::vector<RawlogRecord> cloud_first = mounted(goodRecords());
+  ASSERT_TRUE(std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(cloud_first[0].obs));
+  expectExtrinsics(validate(cloud_first, sensorPoseConfig(), "cloud_first.rawlog"));
+  std::vector<RawlogRecord> imu_first = cloud_first;
+  std::swap(imu_first[0], imu_first[1]);
+  expectExtrinsics(validate(imu_first, sensorPoseConfig(), "imu_first.rawlog"));
+
+  // A later cloud placing the LiDAR elsewhere is a bad record, named.
+  std::vector<RawlogRecord> moved = cloud_first;
+  std::size_t later = 0;
+  for (std::size_t i = 1; i < moved.size() && later == 0; ++i)
+    if (std::dynamic_pointer_cast<mrpt::obs::CObservationPointCloud>(moved[i].obs)) later = i;
+  ASSERT_GT(later, 0u);
+  moved[later].obs->setSensorPose(imu_pose + mrpt::poses::CPose3D(0.1, -0.05, 0.13, 0.0, 0.0, 0.0));
+  expectThrowsWith([&] { validate(moved, sensorPoseConfig(), "moved.rawlog"); },
+                   "record " + std::to_string(later) +
+                       ": its sensorPose gives the LiDAR another pose in the IMU frame");
+
+  // An IMU sample that moved on the platform, likewise.
+  std::vector<RawlogRecord> imu_moved = cloud_first;
+  imu_moved[5].obs->setSensorPose(mrpt::poses::CPose3D(0.4, -0.2, 1.2, 0.3, -0.05, 0.02));
+  expectThrowsWith([&] { validate(imu_moved, sensorPoseConfig(), "imu_moved.rawlog"); },
+                   "record 5: its sensorPose");
+
+  // Configured extrinsics: the sensor poses are not read.
+  const AppConfig ini = loadAppConfigFromText(
+      "[extrinsics]\nfrom_sensor_pose = false\np_bl = 0.1 -0.05 0.12\n", "test.ini");
+  EXPECT_NO_THROW(validate(moved, ini, "moved_ini.rawlog"));
+}
+
+// A pose whose rotation is not one (a corrupt or hand-made record) is refused on every cloud,
+// not only the first.
+TEST(InputValidator, ACloudWhoseExtrinsicsAreNotARigidPoseIsABadRecord) {
+  RecordChecker checker(sensorPoseConfig());
+  std::vector<CheckedItem> out;
+  auto cloud = [](std::size_t record, double t, const Mat3& R) {
+    IngestItem it;
+    it.kind = IngestItem::Kind::Frame;
+    it.record = record;
+    it.t = t;
+    it.frame = std::make_shared<LidarFrame>(randomFrame(t, 50, static_cast<unsigned>(record)));
+    Extrinsics pose;
+    pose.R_bl = R;
+    it.sensor_pose = pose;
+    return it;
+  };
+  IngestItem imu;
+  imu.kind = IngestItem::Kind::Imu;
+  imu.record = 0;
+  imu.t = 1700000000.0;
+  imu.imu.t = imu.t;
+  imu.imu.accel = Vec3(0, 0, kGravity);
+  imu.sensor_pose = Extrinsics{};
+  checker.push(imu, out);
+  checker.push(cloud(1, 1700000000.0, Mat3::Identity()), out);
+  checker.push(cloud(2, 1700000000.1, 2.0 * Mat3::Identity()), out);
+  checker.finish(out);
+  ASSERT_EQ(out.size(), 3u);
+  EXPECT_TRUE(out[1].ok()) << out[1].problem;
+  EXPECT_NE(out[2].problem.find("not a rigid pose"), std::string::npos) << out[2].problem;
 }

@@ -271,7 +271,7 @@ TEST(RadarBag, DopplerFitWhileMovingAgreesWithTheImu) {
   // The shipped estimator INI's doppler_sigma is this test's measurement: with the fits'
   // covariances scaled by its ratio to their residuals' 0.044 m/s, the chi-square has its mean.
   const double scale =
-      app_support::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core.velocimeter.doppler_sigma /
+      app_support::loadAppConfig(kSrc + "/ini/freeinit_radar.ini").core.doppler.doppler_sigma /
       0.044;
   double chi2_scaled = 0;
   std::size_t pairs = 0, agree = 0;
@@ -402,11 +402,11 @@ TEST(RadarBag, BagTimeStampsWithADeclaredClockOffset) {
 // samples of the recording, 20 scans) whose seed passes span all of it.
 TEST(RadarBag, EstimatorIniLoads) {
   const auto c = app_support::loadAppConfig(kSrc + "/ini/freeinit_radar.ini");
-  EXPECT_DOUBLE_EQ(c.core.velocimeter.doppler_sigma, 0.11);
-  EXPECT_EQ(c.core.bootstrap.points, 40);
+  EXPECT_DOUBLE_EQ(c.core.doppler.doppler_sigma, 0.11);
+  EXPECT_EQ(c.core.paper_bootstrap.points, 40);
   EXPECT_DOUBLE_EQ(c.core.window.duration, 2.0);
-  EXPECT_DOUBLE_EQ(c.core.window.seed_duration, 0.0);
-  EXPECT_EQ(c.core.window.seed_pass_stride, 1);
+  EXPECT_DOUBLE_EQ(c.core.paper_passes.seed_duration, 0.0);
+  EXPECT_EQ(c.core.paper_passes.seed_pass_stride, 1);
 }
 
 // The estimator on the recording, as `freeinit ini/freeinit_radar.ini --start T` runs it: the
@@ -561,8 +561,8 @@ TEST(RadarBag, EstimatorAlongTheRecordingIsSelfConsistent) {
       const double dt = r.imu[k + 1].t - r.imu[k].t;
       x = F::propagate(x, r.imu, k);
       P = J * P * J.transpose();
-      const double qg = std::pow(cfg.velocimeter.gyro_sigma * dt, 2);
-      const double qa = std::pow(cfg.gravity.accel_sigma * dt, 2);
+      const double qg = std::pow(cfg.imu.gyro_sigma * dt, 2);
+      const double qa = std::pow(cfg.imu.accel_sigma * dt, 2);
       for (int j = 0; j < 3; ++j) {
         P(F::kTheta + j, F::kTheta + j) += qg;
         P(F::kVel + j, F::kVel + j) += qa;

@@ -66,13 +66,13 @@ std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, b
 
 /// Thresholds of the rest test, from the estimator's configuration.
 struct RestParams {
-  double max_gyro_dev = 0.03;    ///< [rad/s] gyro deviation from its mean ([static_detector])
-  double max_gyro_bias = 0.075;  ///< [rad/s] |mean gyro - prior| (max_gyro_dev + 3 sigma0)
+  double max_gyro_dev = 0.03;           ///< [rad/s] gyro deviation from its mean ([paper_rest])
+  double max_gyro_bias = 0.075;         ///< [rad/s] |mean gyro - prior| (max_gyro_dev + 3 sigma0)
   Vec3 gyro_bias_prior = Vec3::Zero();  ///< [rad/s]
   double max_accel_dev = 0.3;           ///< [m/s^2] specific-force deviation from its mean
   double max_accel_bias = 0.87;         ///< [m/s^2] ||mean f| - g| (the bias bound on each axis)
 };
-/// max_gyro_dev from [static_detector]; the gyro bias bound as the static start detector's;
+/// max_gyro_dev from [paper_rest]; the gyro bias bound as the paper's static start detector's;
 /// the accelerometer deviation max(0.3, 6 accel_sigma); ||f| - g| within sqrt(3) bias bounds.
 RestParams restParams(const FreeInitConfig& config);
 

@@ -130,9 +130,55 @@ void Checker::fail(const std::string& key, const std::string& what) const {
   throw ConfigError("configuration key " + section_ + "." + key + ": " + what);
 }
 
-void dumpSectionHeader(std::ostream& out, const std::string& name, const std::string& doc) {
+void dumpSectionHeader(std::ostream& out, const std::string& name, const std::string& doc,
+                       const std::vector<KeyInfo>& keys) {
   out << "[" << name << "]\n";
   if (!doc.empty()) out << "; " << doc << "\n";
+  std::vector<std::string> readers;
+  for (const KeyInfo& k : keys) {
+    std::size_t begin = 0;
+    while (begin < k.readers.size()) {
+      const std::size_t comma = std::min(k.readers.find(',', begin), k.readers.size());
+      std::size_t b = begin, e = comma;
+      while (b < e && k.readers[b] == ' ') ++b;
+      while (e > b && k.readers[e - 1] == ' ') --e;
+      const std::string reader = k.readers.substr(b, e - b);
+      if (!reader.empty() && std::find(readers.begin(), readers.end(), reader) == readers.end())
+        readers.push_back(reader);
+      begin = comma + 1;
+    }
+  }
+  if (readers.empty()) return;
+  out << "; read by:";
+  for (std::size_t i = 0; i < readers.size(); ++i) out << (i ? ", " : " ") << readers[i];
+  out << "\n";
+}
+
+std::vector<KeyRename> formerNames(const std::vector<const SectionBase*>& sections) {
+  std::vector<KeyRename> out;
+  for (const SectionBase* s : sections)
+    for (const KeyInfo& k : s->keys())
+      for (const FormerName& f : k.former) out.push_back({f.section, f.key, s->name(), k.name});
+  return out;
+}
+
+std::vector<std::string> formerSectionNames(const std::vector<const SectionBase*>& sections) {
+  std::vector<std::string> out;
+  for (const KeyRename& r : formerNames(sections)) {
+    const bool current = std::any_of(sections.begin(), sections.end(), [&](const SectionBase* s) {
+      return sameName(s->name(), r.from_section);
+    });
+    const bool listed = std::any_of(out.begin(), out.end(), [&](const std::string& name) {
+      return sameName(name, r.from_section);
+    });
+    if (!current && !listed) out.push_back(r.from_section);
+  }
+  return out;
+}
+
+IniFile renameFormerKeys(const IniFile& ini, const std::vector<const SectionBase*>& sections,
+                         std::vector<std::string>& notices) {
+  return ini.withRenames(formerNames(sections), formerSectionNames(sections), notices);
 }
 
 namespace detail {
@@ -146,6 +192,7 @@ void dumpLine(std::ostream& out, const KeyInfo& k, const std::string& value, boo
   line.resize(std::max(line.size() + 1, kKeyWidth + 2 + kValueWidth), ' ');
   line += "; [" + k.unit + "] " + k.doc;
   if (!k.accepted.empty() && k.unit != "bool") line += " (accepted: " + k.accepted + ")";
+  if (!k.readers.empty()) line += " (" + k.readers + ")";
   out << line << "\n";
 }
 

@@ -111,11 +111,79 @@ std::string IniFile::where(int line) const {
 void IniFile::fail(const std::string& section, const std::string& key,
                    const std::string& what) const {
   int line = 0;
+  std::string in = prefix(section, key);
   if (const IniSection* s = this->section(section)) {
     line = s->line;
-    if (const IniEntry* e = key.empty() ? nullptr : s->find(key)) line = e->line;
+    if (const IniEntry* e = key.empty() ? nullptr : s->find(key)) {
+      line = e->line;
+      if (!e->given_as.empty())
+        in = "[" + section + "] " + key + " (given as " + e->given_as + "): ";
+    }
   }
-  throw ConfigError(where(line) + ": " + prefix(section, key) + what);
+  throw ConfigError(where(line) + ": " + in + what);
+}
+
+IniFile IniFile::withRenames(const std::vector<KeyRename>& renames,
+                             const std::vector<std::string>& retired,
+                             std::vector<std::string>& notices) const {
+  const auto isRetired = [&](const std::string& name) {
+    return std::any_of(retired.begin(), retired.end(),
+                       [&](const std::string& r) { return sameName(r, name); });
+  };
+  const auto renameOf = [&](const IniSection& s, const IniEntry& e) -> const KeyRename* {
+    for (const KeyRename& r : renames)
+      if (sameName(r.from_section, s.name) && sameName(r.from_key, e.key)) return &r;
+    return nullptr;
+  };
+  // The sections that stay, without the keys that move.
+  IniFile out(source_);
+  for (const IniSection& s : sections_) {
+    if (s.checked && isRetired(s.name)) continue;
+    IniSection kept = s;
+    if (s.checked)
+      kept.entries.erase(std::remove_if(kept.entries.begin(), kept.entries.end(),
+                                        [&](const IniEntry& e) { return renameOf(s, e); }),
+                         kept.entries.end());
+    out.sections_.push_back(std::move(kept));
+  }
+  // The keys that move, in the order of the file.
+  for (const IniSection& s : sections_) {
+    if (!s.checked) continue;
+    for (const IniEntry& e : s.entries) {
+      const std::string given = "[" + s.name + "] " + e.key;
+      const KeyRename* r = renameOf(s, e);
+      if (!r) {
+        if (!isRetired(s.name)) continue;
+        std::vector<std::string> known;
+        for (const KeyRename& k : renames)
+          if (sameName(k.from_section, s.name)) known.push_back(k.from_key);
+        const std::string near = closestName(e.key, known);
+        throw ConfigError(where(e.line) + ": " + given + ": unknown key" +
+                          (near.empty() ? "" : " (did you mean " + near + "?)"));
+      }
+      const std::string now = "[" + r->to_section + "] " + r->to_key;
+      IniSection* target = nullptr;
+      for (IniSection& t : out.sections_)
+        if (sameName(t.name, r->to_section)) target = &t;
+      if (!target) {
+        IniSection created;
+        created.name = r->to_section;
+        out.sections_.push_back(std::move(created));
+        target = &out.sections_.back();
+      }
+      if (const IniEntry* other = target->find(r->to_key))
+        throw ConfigError(where(e.line) + ": " + given + ": is now " + now + ", also given" +
+                          (other->given_as.empty() ? "" : " as " + other->given_as) + " (line " +
+                          std::to_string(other->line) + "): give it once");
+      IniEntry moved = e;
+      moved.key = r->to_key;
+      moved.given_as = given;
+      target->entries.push_back(std::move(moved));
+      notices.push_back(where(e.line) + ": " + given + " is now " + now +
+                        " (the old name is read for now)");
+    }
+  }
+  return out;
 }
 
 IniFile IniFile::parse(std::string_view text, std::string source, const ParseOptions& options) {
@@ -184,7 +252,7 @@ IniFile IniFile::parse(std::string_view text, std::string source, const ParseOpt
     if (const IniEntry* earlier = current->find(key))
       fail(where_in + key + ": ",
            "key given twice (first at line " + std::to_string(earlier->line) + ")");
-    current->entries.push_back({key, std::move(value), line_no});
+    current->entries.push_back({key, std::move(value), line_no, ""});
   }
   return ini;
 }
@@ -235,18 +303,23 @@ void IniFile::add(IniSection section) {
       throw ConfigError(where(e.line) + ": [" + section.name + "] " + e.key + ": " + err);
     if (clean.find(e.key))
       throw ConfigError(where(e.line) + ": [" + section.name + "] " + e.key + ": key given twice");
-    clean.entries.push_back({e.key, std::move(value), e.line});
+    clean.entries.push_back({e.key, std::move(value), e.line, ""});
   }
   sections_.push_back(std::move(clean));
 }
 
-void IniFile::requireKnownSections(const std::vector<std::string>& known) const {
+void IniFile::requireKnownSections(const std::vector<std::string>& known,
+                                   const std::vector<std::string>& former) const {
+  const auto in = [](const std::vector<std::string>& names, const std::string& name) {
+    return std::any_of(names.begin(), names.end(),
+                       [&](const auto& k) { return sameName(k, name); });
+  };
   for (const auto& s : sections_) {
-    if (std::any_of(known.begin(), known.end(), [&](const auto& k) { return sameName(k, s.name); }))
-      continue;
+    if (in(known, s.name) || in(former, s.name)) continue;
     std::string list;
     for (const auto& k : known) list += (list.empty() ? "[" : ", [") + k + "]";
-    const std::string near = closestName(s.name, known);
+    std::string near = closestName(s.name, known);
+    if (near.empty()) near = closestName(s.name, former);
     throw ConfigError(where(s.line) + ": [" + s.name + "]: unknown section" +
                       (near.empty() ? "" : " (did you mean [" + near + "]?)") + "; expected " +
                       list);

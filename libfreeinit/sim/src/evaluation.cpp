@@ -56,8 +56,8 @@ eval::BoundModel boundModel(const Recording& rec, const FreeInitConfig& config) 
   m.accel_sigma = rec.config.accel_sigma;
   m.gyro_axis_scale = rec.config.gyro_sigma_scale;
   m.accel_axis_scale = rec.config.accel_sigma_scale;
-  m.gyro_bias_prior_sigma = config.velocimeter.gyro_bias_sigma0;
-  m.accel_bias_prior_sigma = config.gravity.accel_bias_prior_sigma;
+  m.gyro_bias_prior_sigma = config.imu.gyro_bias_sigma0;
+  m.accel_bias_prior_sigma = config.imu.accel_bias_prior_sigma;
   return m;
 }
 

@@ -461,7 +461,7 @@ ScenarioConfig scenarioFromKeys(const ScenarioKeyValues& section, const Scenario
   config::IniFile ini("scenario keys");
   config::IniSection sec;
   sec.name = kSection;
-  for (const auto& [key, value] : section) sec.entries.push_back({key, value, 0});
+  for (const auto& [key, value] : section) sec.entries.push_back({key, value, 0, ""});
   ini.add(std::move(sec));
   return scenarioFromIni(ini, base);
 }

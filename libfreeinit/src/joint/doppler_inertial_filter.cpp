@@ -810,44 +810,13 @@ void DopplerInertialFilter::beginNode(bool last) {
   gate_speed_open_ = params_.gate_rel * q_open_.head<3>().norm();
 }
 
-void DopplerInertialFilter::addPoints(const DopplerPoint* p, std::size_t count, double stamp,
-                                      double t_node) {
-  OpenReturns& o = open_;
-  if (o.external) throw std::logic_error("DopplerInertialFilter::addPoints: after setReturns");
-  const std::size_t m = o.append(count);
-  float* __restrict tau = o.tau.data() + m;
-  float* __restrict px = o.px.data() + m;
-  float* __restrict py = o.py.data() + m;
-  float* __restrict pz = o.pz.data() + m;
-  float* __restrict z = o.z.data() + m;
-  for (std::size_t i = 0; i < count; ++i) {
-    const double t = stamp + static_cast<double>(p[i].time_offset);
-    tau[i] = static_cast<float>(t - t_node);
-    px[i] = p[i].p_l.x();
-    py[i] = p[i].p_l.y();
-    pz[i] = p[i].p_l.z();
-    z[i] = p[i].doppler;
-  }
-}
-
 void DopplerInertialFilter::setReturns(const OpenArrays& returns) {
   OpenReturns& o = open_;
-  if (o.given > 0) throw std::logic_error("DopplerInertialFilter::setReturns: after addPoint");
+  if (o.given > 0)
+    throw std::logic_error("DopplerInertialFilter::setReturns: the node has its returns already");
   o.reserve(returns.count);
   o.in = returns;
-  o.external = true;
   o.given = returns.count;
-}
-
-std::size_t DopplerInertialFilter::OpenReturns::append(std::size_t count) {
-  const std::size_t m = given;
-  if (m + count > tau.size()) {
-    const std::size_t size = std::max(m + count, 2 * tau.size());
-    for (std::vector<float>* v : {&tau, &px, &py, &pz, &z}) v->resize(size);
-  }
-  reserve(m + count);
-  given = m + count;
-  return m;
 }
 
 void DopplerInertialFilter::OpenReturns::reserve(std::size_t n) {
@@ -865,7 +834,6 @@ void DopplerInertialFilter::OpenReturns::reserve(std::size_t n) {
 void DopplerInertialFilter::gateAndSum(Node& n) {
   OpenReturns& o = open_;
   const std::size_t m = o.given;
-  if (!o.external) o.in = {m, o.tau.data(), o.px.data(), o.py.data(), o.pz.data(), o.z.data()};
   GatePrediction g;
   for (int i = 0; i < 9; ++i) g.q[i] = q_open_(i);
   g.setCovariance(M_open_);
@@ -1461,10 +1429,6 @@ std::size_t DopplerInertialFilter::acceptedPointsTotal() const {
   std::size_t total = 0;
   for (const Node& n : nodes_) total += n.sums.n;
   return total;
-}
-
-Mat3 DopplerInertialFilter::dopplerInformation(std::size_t k) const {
-  return nodes_[k].sums.moment(0) / r_doppler_;
 }
 
 DopplerInertialFilter::NodeResiduals DopplerInertialFilter::nodeResiduals(

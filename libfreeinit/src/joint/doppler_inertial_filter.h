@@ -49,7 +49,6 @@
 #include <array>
 #include <cstdint>
 #include <limits>
-#include <stdexcept>
 #include <vector>
 
 namespace freeinit {
@@ -123,7 +122,6 @@ class DopplerInertialFilter {
   /// through the samples around them, so the filter wants sample k + 2 before it predicts node
   /// k + 1 or takes the points of node k (with fewer it falls back to lower orders).
   void addImu(const ImuSample& s);
-  std::size_t imuSamples() const { return imu_.size(); }
 
   /// The prior of the window's first node, in terms the filter re-expresses wherever node 0's
   /// estimate moves in the smoother's iterations: roll and pitch in the world (the yaw and the
@@ -164,28 +162,12 @@ class DopplerInertialFilter {
   double intervalBefore() const { return before_; }
   double intervalAfter() const { return after_; }
 
-  /// One Doppler return of the open node: tau [s] from the node time (kept in float, the form
-  /// normalizedTime() rounds it to), position in the LiDAR frame (non-zero), Doppler [m/s] (in
-  /// float, as a DopplerPoint holds it). Kept as given; update() gates the node's returns against
-  /// the prediction (all at once: the prediction does not change while the node is open) and the
-  /// accepted ones enter the node's sums.
-  void addPoint(double tau, const Eigen::Vector3f& p_l, double doppler) {
-    OpenReturns& o = open_;
-    if (o.external) throw std::logic_error("DopplerInertialFilter::addPoint: after setReturns");
-    const std::size_t i =
-        o.given < o.tau.size() && o.given < o.residual.size() ? o.given++ : o.append(1);
-    o.tau[i] = static_cast<float>(tau);
-    o.px[i] = p_l.x();
-    o.py[i] = p_l.y();
-    o.pz[i] = p_l.z();
-    o.z[i] = static_cast<float>(doppler);
-  }
-  /// count consecutive returns of one frame (stamp [s]) given to the open node at once, each as
-  /// addPoint(stamp + time_offset - t_node, p_l, doppler) takes it.
-  void addPoints(const DopplerPoint* p, std::size_t count, double stamp, double t_node);
-  /// The open node's returns as arrays of `count` (tau [s] from the node time, position in the
-  /// LiDAR frame, Doppler [m/s]), held by the caller until update() returns: instead of
-  /// addPoint() or addPoints() (the same returns give the same results), without a copy.
+  /// The open node's returns as arrays of `count` (tau [s] from the node time, kept in float,
+  /// the form normalizedTime() rounds it to; position in the LiDAR frame, non-zero; Doppler
+  /// [m/s]), held by the caller until update() returns: the filter reads them there, without a
+  /// copy. update() gates them against the prediction (all at once: the prediction does not
+  /// change while the node is open) and the accepted ones enter the node's sums. Once per node
+  /// (none: a node without returns).
   struct OpenArrays {
     std::size_t count = 0;
     const float *tau = nullptr, *x = nullptr, *y = nullptr, *z = nullptr, *doppler = nullptr;
@@ -195,18 +177,18 @@ class DopplerInertialFilter {
   /// Applies the open node's sums (iterated update of the node), then gates the node's points
   /// again against the update (regate_sigma) and solves the node again with those that pass.
   void update();
-  /// After update(): whether the i-th point given to the open node was used in the end, and its
+  /// After update(): whether the i-th return given to the open node was used in the end, and its
   /// residual against the update (against the prediction if the first gate rejected it).
   bool pointAccepted(std::size_t i) const { return open_.accepted[i] != 0; }
   double pointResidual(std::size_t i) const {
     return static_cast<double>(static_cast<float>(open_.residual[i]));
   }
   /// Takes back an accepted point of node k, a node already updated (exactly as given to
-  /// addPoint() while it was open: the same tau, position and Doppler), e.g. once the whole window
-  /// shows it on a moving object. smooth() next: it rebuilds the node's rows, which nothing else
-  /// may use until then.
+  /// setReturns() while it was open: the same tau, position and Doppler), e.g. once the whole
+  /// window shows it on a moving object. smooth() next: it rebuilds the node's rows, which nothing
+  /// else may use until then.
   void removePoint(std::size_t k, double tau, const Eigen::Vector3f& p_l, double doppler);
-  /// The normalized time of a point at tau [s] from node k's time, as addPoint() and
+  /// The normalized time of a point at tau [s] from node k's time, as update() and
   /// removePoint() compute it (tau rounded to float: the form in which the caller keeps it).
   double normalizedTime(std::size_t k, double tau) const {
     return static_cast<double>(static_cast<float>(tau)) * nodes_[k].inv_h;
@@ -257,14 +239,11 @@ class DopplerInertialFilter {
   const FilterState& state(std::size_t k) const { return nodes_[k].xs; }
   /// Covariance of the last node's state (the filter's of the last pass).
   const MatS& covariance() const { return nodes_.back().P; }
-  std::size_t acceptedPoints(std::size_t k) const { return nodes_[k].sums.n; }
   /// Sum of squared residuals of the accepted points at the current estimate, and their count.
   double residualSumOfSquares() const { return residualSumOfSquares(lidarVelocityPolynomials()); }
   /// The same with the nodes' polynomials given (lidarVelocityPolynomials()).
   double residualSumOfSquares(const std::vector<Vec9>& Q) const;
   std::size_t acceptedPointsTotal() const;
-  /// Weighted information the Doppler gave about v_l at node k (sum d d^T / sigma^2).
-  Mat3 dopplerInformation(std::size_t k) const;
   /// Whether each node's returns agree with its smoothed LiDAR velocity as the noise model says
   /// (after smooth()): for every node with at least min_returns accepted returns and no rest
   /// knowledge (rest is a model of its own, approximate for a hand-held rig's tremor), g = sum r d
@@ -388,16 +367,14 @@ class DopplerInertialFilter {
   /// Adds a point to the sums (w = 1) or takes it out (w = -1).
   static void accumulate(DopplerSums& sums, double s, const Vec3& d, double z, double w = 1.0);
 
-  /// The open node's returns, structure of arrays. As given: `in`, the caller's (setReturns) or
-  /// the node's own copies (addPoint, addPoints: tau, px, py, pz, z); after update()'s gates,
-  /// per return in the order given: the residual (against the prediction, then against the
-  /// update for those the first gate accepted), whether it is used, and the second gate's
-  /// residual, its variance and verdict. The arrays only grow (to what the largest node needed),
-  /// so that no return is written twice; `given` and `used` count what is valid in them.
+  /// The open node's returns, structure of arrays. As given: `in`, the caller's (setReturns);
+  /// after update()'s gates, per return in the order given: the residual (against the
+  /// prediction, then against the update for those the first gate accepted), whether it is used,
+  /// and the second gate's residual, its variance and verdict. The arrays only grow (to what the
+  /// largest node needed), so that no return is written twice; `given` and `used` count what is
+  /// valid in them.
   struct OpenReturns {
-    std::vector<float> tau, px, py, pz, z;  ///< the copies
-    OpenArrays in;
-    bool external = false;  ///< `in` is the caller's
+    OpenArrays in;  ///< the caller's
     // The per-return results, all 8 bytes wide: the loops over them vectorize without
     // conversions.
     std::vector<double> residual, residual2, variance2;
@@ -413,10 +390,7 @@ class DopplerInertialFilter {
     void clear() {
       given = used = 0;
       in = {};
-      external = false;
     }
-    /// Room for count more copies, counted as given; returns the first one's index.
-    std::size_t append(std::size_t count);
     /// Room for the results of n given returns.
     void reserve(std::size_t n);
   };

@@ -10,7 +10,6 @@
 #include <freeinit/rotation.h>
 
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -45,11 +44,6 @@ constexpr double kEarlySmoothing = 0.75;
 /// 0.04 of it but in the runs confidently wrong either way (their answers depend on the path).
 constexpr double kEarlyLooseness = 100.0;
 
-double wallSeconds() {
-  using Clock = std::chrono::steady_clock;
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
-
 using BodyVelocityJacobian = Eigen::Matrix<double, 3, DopplerInertialFilter::kStateDim>;
 
 /// The body velocity's derivative w.r.t. the filter's error state at x: dv_b = R^T dv_w +
@@ -65,7 +59,7 @@ BodyVelocityJacobian bodyVelocityJacobian(const FilterState& x) {
 class JointPipeline final : public Pipeline {
  public:
   JointPipeline(const FreeInitConfig& cfg, const MeasurementSequencer& seq)
-      : cfg_(cfg), seq_(seq), usable_(cfg.velocimeter) {}
+      : cfg_(cfg), seq_(seq), usable_(cfg.doppler) {}
 
   bool processBuffered(InitResult& r) override {
     if (phase_ == Phase::Done) return true;
@@ -97,23 +91,24 @@ class JointPipeline final : public Pipeline {
 
   DopplerInertialFilterParams filterParams() const {
     DopplerInertialFilterParams p;
-    const VelocimeterParams& v = cfg_.velocimeter;
-    p.doppler_sigma = v.doppler_sigma;
-    p.gyro_sigma = v.gyro_sigma;
-    p.accel_sigma = cfg_.gravity.accel_sigma;
-    p.gyro_bias_random_walk = v.gyro_bias_random_walk;
-    p.accel_bias_random_walk = cfg_.estimator.accel_bias_random_walk;
-    p.gate_sigma = v.gate_sigma;
-    p.gate_min = v.gate_min;
-    p.gate_rel = v.gate_rel;
-    p.max_iterations = cfg_.estimator.max_iterations;
-    p.lever_arm_gyro_noise = cfg_.estimator.lever_arm_gyro_noise;
+    const DopplerParams& d = cfg_.doppler;
+    const ImuParams& imu = cfg_.imu;
+    p.doppler_sigma = d.doppler_sigma;
+    p.gyro_sigma = imu.gyro_sigma;
+    p.accel_sigma = imu.accel_sigma;
+    p.gyro_bias_random_walk = imu.gyro_bias_random_walk;
+    p.accel_bias_random_walk = imu.accel_bias_random_walk;
+    p.gate_sigma = d.gate_sigma;
+    p.gate_min = d.gate_min;
+    p.gate_rel = d.gate_rel;
+    p.max_iterations = cfg_.joint.max_iterations;
+    p.lever_arm_gyro_noise = cfg_.joint.lever_arm_gyro_noise;
     return p;
   }
 
   void tryStart(InitResult& r) {
-    const VelocimeterParams& vp = cfg_.velocimeter;
-    if (vp.doppler_ego_compensated) {
+    const DopplerParams& dp = cfg_.doppler;
+    if (dp.doppler_ego_compensated) {
       fail(r, InitStatus::NoDoppler,
            "the Doppler values are ego-compensated: they carry no ego velocity; Free-Init needs "
            "the raw (range-rate) Doppler");
@@ -123,7 +118,7 @@ class JointPipeline final : public Pipeline {
     MeasurementSequencer::Cursor c;
     if (!seq_.normalize(c) || imu.empty()) return;
     // Window start: the first IMU sample at or after the first LiDAR point; the start
-    // decision's span: bootstrap_duration, within the window.
+    // decision's span: [start] duration, within the window.
     const StartSpan start = startSpan(imu, seq_.time(c), cfg_);
     if (!start.valid) return;
     const std::size_t k = start.k_first, k_last = start.k_last;
@@ -134,7 +129,7 @@ class JointPipeline final : public Pipeline {
     // that it does not depend on how far the IMU stream happens to be ahead.
     if (k_last + 2 >= imu.size() && !seq_.finished()) return;
 
-    // Returns of the span, evenly thinned to bootstrap_points: the usable ones (in time order,
+    // Returns of the span, evenly thinned to [start] points: the usable ones (in time order,
     // up to the first return after the span), then every thin-th. A frame's times do not
     // decrease (the sequencer checks it): its part of the span is found by bisection, and the
     // verdicts on that part come from the recorder's vectorized layout, a block at a time.
@@ -184,16 +179,16 @@ class JointPipeline final : public Pipeline {
             usable.push_back({fp + b + i, stamp + static_cast<double>(fp[b + i].time_offset)});
       }
     }
-    const std::size_t thin = std::max<std::size_t>(
-        1, usable.size() / static_cast<std::size_t>(cfg_.estimator.bootstrap_points));
+    const std::size_t thin =
+        std::max<std::size_t>(1, usable.size() / static_cast<std::size_t>(cfg_.start.points));
     std::vector<StartPoint> pts;
     pts.reserve(usable.size() / thin + 1);
     for (std::size_t i = 0; i < usable.size(); i += thin) {
       const DopplerPoint& p = *usable[i].p;
       pts.push_back({usable[i].t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
     }
-    const StartDecision d = decideStart(imu, k, k_last, pts, cfg_.extrinsics, vp.gyro_bias_prior,
-                                        startDetectorParams(cfg_));
+    const StartDecision d = decideStart(imu, k, k_last, pts, cfg_.extrinsics,
+                                        cfg_.imu.gyro_bias_prior, startDetectorParams(cfg_));
     r.diag.imu_at_rest_at_start = d.imu_still;
     switch (d.kind) {
       case StartDecision::Kind::NoData:
@@ -211,8 +206,7 @@ class JointPipeline final : public Pipeline {
     }
     k_first_ = k;
     t_ref_ = t_ref;
-    stride_ = vp.point_stride > 0 ? vp.point_stride
-                                  : automaticPointStride(frameList(), vp.max_point_rate);
+    stride_ = dp.point_stride > 0 ? dp.point_stride : automaticPointStride(seq_, dp.max_point_rate);
     reserveRecorder();
     startFilter(d);
     Vec3 gm = Vec3::Zero(), am = Vec3::Zero();
@@ -221,10 +215,9 @@ class JointPipeline final : public Pipeline {
       am += imu[i].accel;
     }
     const double cnt = static_cast<double>(k_last - k + 1);
-    const bool rest =
-        d.kind == StartDecision::Kind::Rest && d.imu_still && cfg_.static_detector.enabled;
-    rest_.start(rest, gm / cnt, am / cnt, vp.gyro_sigma, cfg_.gravity.accel_sigma);
-    r.diag.static_start = d.kind == StartDecision::Kind::Rest && cfg_.static_detector.enabled;
+    const bool rest = d.kind == StartDecision::Kind::Rest && d.imu_still && cfg_.start.detect_rest;
+    rest_.start(rest, gm / cnt, am / cnt, cfg_.imu.gyro_sigma, cfg_.imu.accel_sigma);
+    r.diag.static_start = d.kind == StartDecision::Kind::Rest && cfg_.start.detect_rest;
     cursor_ = c;
     node_open_ = false;
     phase_ = Phase::Running;
@@ -250,16 +243,6 @@ class JointPipeline final : public Pipeline {
                       static_cast<std::size_t>(0.02 * reserved));
   }
 
-  /// Frames as the automatic stride wants them (anything with a `points` vector).
-  struct FramePoints {
-    const std::vector<DopplerPoint>& points;
-  };
-  std::vector<FramePoints> frameList() const {
-    std::vector<FramePoints> out;
-    for (const auto& f : seq_.frames()) out.push_back({*f.points});
-    return out;
-  }
-
   /// The filter's first node: attitude from the decision's gravity (yaw zero: the world's
   /// gauge), velocity from its v_b0; covariance: tilt uninformative (initial_tilt_sigma), the body
   /// velocity from the decision (inflated: the filter sees those returns again), the bias priors.
@@ -268,17 +251,17 @@ class JointPipeline final : public Pipeline {
     FilterState x0;
     x0.R_wb = R0;
     x0.v_w = R0 * d.chosen.v_b0;
-    x0.b_g = cfg_.velocimeter.gyro_bias_prior;
+    x0.b_g = cfg_.imu.gyro_bias_prior;
     x0.b_a = Vec3::Zero();
     DopplerInertialFilter::StartPrior prior;
-    prior.tilt_sigma = cfg_.estimator.initial_tilt_sigma;
+    prior.tilt_sigma = cfg_.joint.initial_tilt_sigma;
     constexpr double kInflation = 9.0;  // variance factor: the filter counts those returns again
     prior.cov_v_b = d.chosen.cov.topLeftCorner<3, 3>() * kInflation;
     prior.gate_velocity_scale = 1.0 / kInflation;
-    prior.gyro_bias_sigma = cfg_.velocimeter.gyro_bias_sigma0;
-    prior.accel_bias_sigma = cfg_.gravity.accel_bias_prior_sigma;
-    prior.rotation_sigma = cfg_.estimator.calibration_rotation_sigma_deg * kPi / 180.0;
-    prior.time_sigma = cfg_.estimator.time_offset_sigma;
+    prior.gyro_bias_sigma = cfg_.imu.gyro_bias_sigma0;
+    prior.accel_bias_sigma = cfg_.imu.accel_bias_prior_sigma;
+    prior.rotation_sigma = cfg_.joint.calibration_rotation_sigma_deg * kPi / 180.0;
+    prior.time_sigma = cfg_.joint.time_offset_sigma;
     filter_.emplace(filterParams(), cfg_.extrinsics);
     // The window's nodes at the IMU rate of the start span (a few more if the rate varies: the
     // nodes then grow as needed).
@@ -353,7 +336,6 @@ class JointPipeline final : public Pipeline {
 
   void run(InitResult& r) {
     const auto& imu = seq_.imu();
-    const VelocimeterParams& vp = cfg_.velocimeter;
     while (true) {
       const std::size_t k = k_first_ + filter_->nodes() - 1;
       if (!node_open_) {
@@ -407,8 +389,8 @@ class JointPipeline final : public Pipeline {
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
       }
       if (rest)
-        filter_->updateRest(cfg_.estimator.rest_velocity_sigma,
-                            cfg_.estimator.zero_rate_at_rest ? vp.gyro_sigma : 0.0);
+        filter_->updateRest(cfg_.joint.rest_velocity_sigma,
+                            cfg_.joint.zero_rate_at_rest ? cfg_.imu.gyro_sigma : 0.0);
       if (rest) r.diag.static_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
       // A rest node's accepted returns are in the rest cells as long as it stays one.
@@ -597,7 +579,7 @@ class JointPipeline final : public Pipeline {
     constexpr double kSigmas = 4.0;
     constexpr std::uint32_t kMinCount = 8;
     constexpr std::size_t kMinReturns = 200;
-    const double sigma = cfg_.velocimeter.doppler_sigma;
+    const double sigma = cfg_.doppler.doppler_sigma;
     const auto& imu = seq_.imu();
     const WindowRecorder& rec = recorder_;
     const std::size_t nodes = rec.nodes();
@@ -697,7 +679,7 @@ class JointPipeline final : public Pipeline {
     // of a hundred, which costs its returns and nothing else.
     constexpr double kSigmas = 4.0;
     constexpr int kMinCount = 4;
-    const double sigma = cfg_.velocimeter.doppler_sigma;
+    const double sigma = cfg_.doppler.doppler_sigma;
     // The returns in the rest cells: the accepted ones of the nodes still at rest.
     for (std::size_t k = 0; k < recorder_.nodes() && k < node_rest_.size(); ++k) {
       if (!node_rest_[k]) continue;
@@ -722,28 +704,28 @@ class JointPipeline final : public Pipeline {
       os << v;
       return os.str();
     };
-    const double sigma = cfg_.velocimeter.doppler_sigma;
+    const double sigma = cfg_.doppler.doppler_sigma;
     const bool noisy = d.points_used >= 100 && d.doppler_residual_rms > 1.5 * sigma;
     const std::size_t judged = d.points_used + d.points_rejected;
     const double agree = judged > 0 ? static_cast<double>(d.points_used) / judged : 1.0;
     // Physically implausible biases: the data were explained by a model they do not fit.
-    const double bound = cfg_.gravity.accel_bias_bound;
+    const double bound = cfg_.imu.accel_bias_bound;
     const double ba_max = s.b_a.cwiseAbs().maxCoeff();
     if (ba_max > bound) {
       failResult(r, InitStatus::InconsistentData,
                  "the accelerometer bias the data imply (" + fmt(ba_max) +
                      " m/s^2 on one axis) exceeds its plausible bound (" + fmt(bound) +
-                     " m/s^2, [gravity] accel_bias_bound): moving objects taken for the world, "
+                     " m/s^2, [imu] accel_bias_bound): moving objects taken for the world, "
                      "a wrong calibration or time offset, or an IMU model that does not hold");
       return;
     }
-    const Vec3 dbg = s.b_g - cfg_.velocimeter.gyro_bias_prior;
-    const double sg0 = cfg_.velocimeter.gyro_bias_sigma0;
+    const Vec3 dbg = s.b_g - cfg_.imu.gyro_bias_prior;
+    const double sg0 = cfg_.imu.gyro_bias_sigma0;
     if (dbg.cwiseAbs().maxCoeff() > 5.0 * sg0) {
       failResult(r, InitStatus::InconsistentData,
                  "the gyro bias the data imply is " + fmt(dbg.cwiseAbs().maxCoeff()) +
                      " rad/s from its prior, more than 5 prior sigmas (" + fmt(sg0) +
-                     " rad/s, [velocimeter] gyro_bias_sigma0): a wrong calibration or time "
+                     " rad/s, [imu] gyro_bias_sigma0): a wrong calibration or time "
                      "offset, or moving objects taken for the world");
       return;
     }
@@ -769,7 +751,7 @@ class JointPipeline final : public Pipeline {
           "allows (chi-square per degree of freedom " +
           fmt(d.node_residual_ratio) +
           "): an error common to them that the model leaves out (vibration, time-stamp jitter, "
-          "[velocimeter] gyro_sigma set too low for the lever arm); the covariance is scaled up "
+          "[imu] gyro_sigma set too low for the lever arm); the covariance is scaled up "
           "by that factor");
     if (noisy)
       s.warnings.push_back("the Doppler residuals (RMS " + fmt(d.doppler_residual_rms) +
@@ -787,7 +769,7 @@ class JointPipeline final : public Pipeline {
                            " m/s over " + std::to_string(d.points_used) +
                            " returns) exceed the configured Doppler noise (" + fmt(sigma) +
                            " m/s) by more than chance allows: moving objects may have been "
-                           "taken for the world, or [velocimeter] doppler_sigma is set too low "
+                           "taken for the world, or [doppler] doppler_sigma is set too low "
                            "(the covariance is then optimistic)");
     // Few returns: under ten per IMU sample (2,000 per second at 200 Hz, a fiftieth of what a
     // 64-line LiDAR gives at 120,000 points/s) the state rests on little Doppler.
@@ -815,7 +797,7 @@ class JointPipeline final : public Pipeline {
   /// The calibration test: do the data say the declared LiDAR-IMU calibration is off, and would
   /// an error in it go unnoticed by this window while moving the state by more than users notice?
   void testCalibration(InitResult& r) {
-    const EstimatorParams& e = cfg_.estimator;
+    const JointParams& e = cfg_.joint;
     const double rot = e.test_rotation_sigma_deg * kPi / 180.0, dt = e.test_time_offset_sigma;
     if (!(rot > 0 || dt > 0)) return;
     using F = DopplerInertialFilter;

@@ -766,7 +766,7 @@ StartSpan startSpan(const std::vector<ImuSample>& imu, double t_first, const Fre
   while (k < imu.size() && imu[k].t < t_first) ++k;
   if (k + 1 >= imu.size()) return out;
   const double t_ref = imu[k].t;
-  const double span = std::min(cfg.estimator.bootstrap_duration, cfg.window.duration);
+  const double span = std::min(cfg.start.duration, cfg.window.duration);
   std::size_t k_last = k;
   while (k_last + 1 < imu.size() && imu[k_last].t < t_ref + span &&
          imu[k_last + 1].t - t_ref < cfg.window.duration)
@@ -780,15 +780,14 @@ StartSpan startSpan(const std::vector<ImuSample>& imu, double t_first, const Fre
 }
 
 StartDetectorParams startDetectorParams(const FreeInitConfig& cfg) {
-  const VelocimeterParams& vp = cfg.velocimeter;
   StartDetectorParams sp;
-  sp.doppler_sigma = vp.doppler_sigma;
-  sp.gyro_sigma = vp.gyro_sigma;
-  sp.accel_sigma = cfg.gravity.accel_sigma;
-  sp.gyro_bias_sigma = vp.gyro_bias_sigma0;
-  sp.gate = vp.gate_min;
-  sp.max_speed = cfg.static_detector.max_speed;
-  sp.min_info_eigen = cfg.bootstrap.min_info_eigen;
+  sp.doppler_sigma = cfg.doppler.doppler_sigma;
+  sp.gyro_sigma = cfg.imu.gyro_sigma;
+  sp.accel_sigma = cfg.imu.accel_sigma;
+  sp.gyro_bias_sigma = cfg.imu.gyro_bias_sigma0;
+  sp.gate = cfg.doppler.gate_min;
+  sp.max_speed = cfg.start.rest_speed;
+  sp.min_info_eigen = cfg.start.min_info_eigen;
   return sp;
 }
 

@@ -7,7 +7,8 @@
 // part of it, the world the rest) and by the IMU: a platform at rest shows only sensor noise in the
 // gyro and the accelerometer, and a platform that moves can only have got there by accelerating.
 //
-// Model over the bootstrap span [0, T] (times from the window start, body frame b0 at t = 0):
+// Model over the start span [0, T] ([start] duration; times from the window start, body frame b0
+// at t = 0):
 //   v_b(t) = R_0t^T (v_b0 + C(t) + g_b0 t),   C(t) = int_0^t R_0s f(s) ds,
 // R_0t the body rotation since t = 0 from the gyro (prior bias removed), f the specific force.
 // b_a is not separated from gravity over so short a span (g_b0 carries g_b0 - b_a). A return of
@@ -54,7 +55,7 @@ struct StartDetectorParams {
   int max_hypotheses = 3;
 };
 
-/// One Doppler return of the bootstrap span.
+/// One Doppler return of the start span.
 struct StartPoint {
   double t = 0;             ///< [s] from the window start
   Vec3 d_l = Vec3::Zero();  ///< unit direction in the LiDAR frame
@@ -98,7 +99,7 @@ bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::siz
                   double gyro_sigma, double accel_sigma);
 
 /// The start decision's span of a window: its first IMU sample k_first (the first at or after
-/// t_first, the window's first LiDAR return) and its last k_last, bootstrap_duration later or the
+/// t_first, the window's first LiDAR return) and its last k_last, [start] duration later or the
 /// last one inside the window. valid: k_first has a sample after it; complete: the samples given
 /// cover the span (a later one exists, or k_last is the window's last).
 struct StartSpan {
@@ -108,8 +109,8 @@ struct StartSpan {
 };
 StartSpan startSpan(const std::vector<ImuSample>& imu, double t_first, const FreeInitConfig& cfg);
 
-/// The start decision's settings from the estimator's configuration (noises, gyro-bias prior,
-/// gate, rest speed, information floor).
+/// The start decision's settings from the estimator's configuration ([doppler] noise and gate,
+/// [imu] noises and gyro-bias prior, [start] rest speed and information floor).
 StartDetectorParams startDetectorParams(const FreeInitConfig& cfg);
 
 /// Decides the motion at the window start from the IMU samples `imu[k_first..k_last]` (times

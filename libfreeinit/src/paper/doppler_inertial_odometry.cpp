@@ -33,7 +33,7 @@ std::vector<OdometrySample> DopplerInertialOdometry::run(
 
   // Velocimeter restarted from the state: gyro bias and its uncertainty from the state, the LiDAR
   // velocity from the body velocity through the extrinsics (v_b = R_bl v_l + p_bl x omega_b).
-  VelocimeterParams vp = config_.velocimeter;
+  VelocimeterParams vp = velocimeterParams(config_);
   vp.gyro_bias_prior = s.b_g;
   vp.gyro_bias_sigma0 =
       std::max(1e-5, std::sqrt(s.cov.block<3, 3>(kBg, kBg).diagonal().maxCoeff()));
@@ -70,12 +70,13 @@ std::vector<OdometrySample> DopplerInertialOdometry::run(
   record(t_ref);
 
   // Point stride: as configured, or the one that brings the point rate closest to max_point_rate.
-  const int stride = vp.point_stride > 0 ? vp.point_stride
-                                         : detail::automaticPointStride(frames, vp.max_point_rate);
+  const DopplerParams& dp = config_.doppler;
+  const int stride = dp.point_stride > 0 ? dp.point_stride
+                                         : detail::automaticPointStride(frames, dp.max_point_rate);
 
   // Points and gyro samples in time order: a point is processed before the gyro sample after it.
   std::size_t f = 0, p = 0, counter = 0;
-  const detail::UsablePoints usable(vp);
+  const detail::UsablePoints usable(dp);
   auto nextPoint = [&]() -> const DopplerPoint* {
     while (f < frames.size() && p >= frames[f].points.size()) {
       ++f;

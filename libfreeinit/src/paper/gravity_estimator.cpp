@@ -316,6 +316,24 @@ void addWhitenedResiduals(const std::vector<Vec3>& a,
 
 }  // namespace
 
+GravityParams gravityParams(const FreeInitConfig& config) {
+  const PaperGravityParams& g = config.paper_gravity;
+  GravityParams p;
+  p.formulation = g.formulation;
+  p.use_body_equation = g.use_body_equation;
+  p.use_lidar_equation = g.use_lidar_equation;
+  p.accel_sigma = config.imu.accel_sigma;
+  p.accel_bias_bound = config.imu.accel_bias_bound;
+  p.accel_bias_prior_sigma = config.imu.accel_bias_prior_sigma;
+  p.lowpass_cutoff_hz = g.lowpass_cutoff_hz;
+  p.velocity_error_correlation_time = g.velocity_error_correlation_time;
+  p.equations_share_errors = g.equations_share_errors;
+  p.loss_scale = g.loss_scale;
+  p.max_iterations = g.max_iterations;
+  p.estimate_gyro_bias = g.estimate_gyro_bias;
+  return p;
+}
+
 GravityEstimate GravityEstimator::estimate(const std::vector<KinematicSample>& samples,
                                            const Extrinsics& extrinsics, const Mat3& gyro_bias_cov,
                                            const GravityEstimate* start) const {

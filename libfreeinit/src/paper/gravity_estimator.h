@@ -10,6 +10,32 @@
 
 namespace freeinit {
 
+/// Parameters of GravityEstimator: [paper_gravity] and the accelerometer's model of [imu] (see
+/// gravityParams()). Defaults: those of FreeInitConfig.
+struct GravityParams {
+  GravityFormulation formulation = GravityFormulation::Integrated;
+  bool use_body_equation = true;        ///< residuals of the body kinematics
+  bool use_lidar_equation = true;       ///< residuals of the LiDAR kinematics (lever arm terms)
+  double accel_sigma = 0.02;            ///< [m/s^2] accelerometer white noise per sample
+  double accel_bias_bound = 0.5;        ///< [m/s^2] |b_a| per axis is kept below this
+  double accel_bias_prior_sigma = 0.1;  ///< [m/s^2] zero-mean prior
+  double lowpass_cutoff_hz = 10.0;      ///< [Hz] for the differentiated formulation (<= 0: off)
+  /// [s] correlation time of the velocity error (PaperGravityParams); 0: white errors.
+  double velocity_error_correlation_time = 0.0;
+  /// Each of the body and LiDAR equations gets half the information (PaperGravityParams).
+  bool equations_share_errors = true;
+  double loss_scale = 3.0;  ///< Cauchy loss scale on whitened residuals [sigma]
+  int max_iterations = 50;
+  /// Estimate a correction of the gyro bias with the integrated formulation (needs the gyro
+  /// bias covariance, see estimate()).
+  bool estimate_gyro_bias = true;
+  /// Compute the covariance (`cov`, `cov_full`); off, they are left at their defaults.
+  bool compute_covariance = true;
+};
+
+/// The solve's settings from the configuration (with the covariance).
+GravityParams gravityParams(const FreeInitConfig& config);
+
 /// The velocimeter's and integrator's estimates at one IMU sample of the window.
 /// Frame w here is the first body frame of the window (not yet gravity-aligned).
 struct KinematicSample {

@@ -3,15 +3,13 @@
 //
 // Processing is incremental: every processBuffered() processes, in time order, all gyro samples and
 // points that the data received so far allow (a point needs the IMU sample after it; a gyro sample
-// needs the LiDAR stream to have passed it). A seed pass covers the first `seed_duration` seconds
-// of the window; its gravity solve starts the accelerometer-aided last pass, which catches up on
-// the buffered data and then follows the stream. When the last IMU sample of the window has been
-// processed the last solve makes the result final.
+// needs the LiDAR stream to have passed it). A seed pass covers the first [paper_passes]
+// seed_duration seconds of the window; its gravity solve starts the accelerometer-aided last pass,
+// which catches up on the buffered data and then follows the stream. When the last IMU sample of
+// the window has been processed the last solve makes the result final.
 #include <freeinit/rotation.h>
 
-#include <chrono>
 #include <cmath>
-#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -25,11 +23,6 @@
 
 namespace freeinit::detail {
 namespace {
-
-double wallSeconds() {
-  using Clock = std::chrono::steady_clock;
-  return std::chrono::duration<double>(Clock::now().time_since_epoch()).count();
-}
 
 class PaperPipeline final : public Pipeline {
  public:
@@ -49,15 +42,15 @@ class PaperPipeline final : public Pipeline {
   double pass_duration = 0;       ///< [s] length of the current pass (window rule, config.h)
   bool pass_closed = false;       ///< the last IMU sample of the current pass is processed
   std::size_t k_next = 0;         ///< next IMU sample to process
-  std::size_t next_frame = 0, next_point = 0;  ///< next point to process
-  int point_stride = 1;                        ///< the configured stride, or the automatic one
-  std::size_t stride_counter = 0;  ///< usable points since the last used one (mod the stride)
+  MeasurementSequencer::Cursor next;  ///< next point to process
+  int point_stride = 1;               ///< the configured stride, or the automatic one
+  std::size_t stride_counter = 0;     ///< usable points since the last used one (mod the stride)
 
   std::optional<Velocimeter> velocimeter;
   PoseIntegrator integrator;
   std::vector<KinematicSample> kinematics;
 
-  // Passes: the paper's, then accelerometer-aided refinements (see WindowParams).
+  // Passes: the paper's, then accelerometer-aided refinements (see PaperPassesParams).
   int pass = 0;
   Vec3 b_g_start = Vec3::Zero();  ///< gyro bias the velocimeter starts from in this pass
   VelocityFit boot_fit;
@@ -75,40 +68,13 @@ class PaperPipeline final : public Pipeline {
   PaperPipeline(const FreeInitConfig& c, const MeasurementSequencer& s)
       : cfg(c), seq(s), imu(s.imu()) {}
 
-  const std::vector<DopplerPoint>& pts(std::size_t f) const { return *seq.frames()[f].points; }
-  double stampOf(std::size_t f) const { return seq.frames()[f].stamp; }
-
-  /// Frames as the automatic stride wants them (anything with a `points` vector).
-  struct FramePoints {
-    const std::vector<DopplerPoint>& points;
-  };
-  std::vector<FramePoints> frameList() const {
-    std::vector<FramePoints> out;
-    for (const auto& f : seq.frames()) out.push_back({*f.points});
-    return out;
-  }
-
-  double pointTime(std::size_t f, std::size_t p) const {
-    return (stampOf(f) - t_ref) + pts(f)[p].time_offset;
-  }
-  /// Moves (f, p) to the next existing point; false when the buffered frames are exhausted.
-  bool normalizeCursor(std::size_t& f, std::size_t& p) const {
-    while (f < seq.frames().size() && p >= pts(f).size()) {
-      ++f;
-      p = 0;
-    }
-    return f < seq.frames().size();
-  }
-  /// Time of the last buffered point (relative), or -inf.
-  double lidarCoveredUntil() const {
-    for (std::size_t f = seq.frames().size(); f-- > 0;)
-      if (!pts(f).empty()) return (stampOf(f) - t_ref) + pts(f).back().time_offset;
-    return -std::numeric_limits<double>::infinity();
+  /// Time of the point at a normalized cursor, from the window start (t_ref) [s].
+  double pointTime(const MeasurementSequencer::Cursor& c) const {
+    return (seq.frames()[c.f].stamp - t_ref) + seq.point(c).time_offset;
   }
 
   void fail(InitStatus s, const std::string& msg) {
-    res->state.status = s;
-    res->state.message = msg;
+    failResult(*res, s, msg);
     phase = Phase::Done;
   }
 
@@ -131,16 +97,16 @@ class PaperPipeline final : public Pipeline {
   }
 
   void tryStart() {
-    if (cfg.velocimeter.doppler_ego_compensated) {
+    if (cfg.doppler.doppler_ego_compensated) {
       fail(InitStatus::NoDoppler,
            "the Doppler values are ego-compensated: they carry no ego velocity; Free-Init needs "
            "the raw (range-rate) Doppler");
       return;
     }
     // Window start: the first IMU sample at or after the first LiDAR point.
-    std::size_t f = 0, p = 0;
-    if (!normalizeCursor(f, p) || imu.empty()) return;
-    const double tp0 = stampOf(f) + pts(f)[p].time_offset;
+    MeasurementSequencer::Cursor c;
+    if (!seq.normalize(c) || imu.empty()) return;
+    const double tp0 = seq.time(c);
     std::size_t k = 0;
     while (k < imu.size() && imu[k].t < tp0) ++k;
     if (k + 1 >= imu.size()) return;  // need the sample and the next one (gyro slope)
@@ -148,35 +114,37 @@ class PaperPipeline final : public Pipeline {
     // Bootstrap points: the first ones at or after the window start.
     std::vector<Vec3> dirs;
     std::vector<double> dopplers;
-    const auto& vp = cfg.velocimeter;
-    dirs.reserve(cfg.bootstrap.points);
-    dopplers.reserve(cfg.bootstrap.points);
-    for (; normalizeCursor(f, p) && static_cast<int>(dirs.size()) < cfg.bootstrap.points; ++p) {
-      const DopplerPoint& pt = pts(f)[p];
-      if (pointTime(f, p) < 0 || !usablePoint(pt, vp)) continue;
+    const DopplerParams& dp = cfg.doppler;
+    const int boot_points = cfg.paper_bootstrap.points;
+    dirs.reserve(boot_points);
+    dopplers.reserve(boot_points);
+    for (; seq.normalize(c) && static_cast<int>(dirs.size()) < boot_points; ++c.p) {
+      const DopplerPoint& pt = seq.point(c);
+      if (pointTime(c) < 0 || !usablePoint(pt, dp)) continue;
       const double r = pt.p_l.norm();
       dirs.push_back(pt.p_l.cast<double>() / r);
       dopplers.push_back(pt.doppler);
     }
-    if (static_cast<int>(dirs.size()) < cfg.bootstrap.points && !seq.finished()) return;
+    if (static_cast<int>(dirs.size()) < boot_points && !seq.finished()) return;
     if (dirs.size() < 10) {
       fail(InitStatus::NoDoppler, "fewer than 10 usable LiDAR returns in the window");
       return;
     }
-    const VelocityFit fit = fitLidarVelocity(dirs, dopplers, cfg.bootstrap, vp.doppler_sigma);
+    const VelocityFit fit =
+        fitLidarVelocity(dirs, dopplers, velocityFitParams(cfg), dp.doppler_sigma);
     if (!fit.ok) {
       fail(InitStatus::DegenerateGeometry, "bootstrap: " + fit.message);
       return;
     }
     k_first = k;
-    point_stride = vp.point_stride > 0 ? vp.point_stride
-                                       : automaticPointStride(frameList(), vp.max_point_rate);
+    point_stride =
+        dp.point_stride > 0 ? dp.point_stride : automaticPointStride(seq, dp.max_point_rate);
     boot_fit = fit;
-    b_g_start = vp.gyro_bias_prior;
-    const auto& sp = cfg.static_detector;
-    boot_static = sp.enabled && fit.v_l.norm() < sp.max_speed &&
-                  (imu[k_first].gyro - vp.gyro_bias_prior).norm() <
-                      sp.max_gyro_dev + 3.0 * vp.gyro_bias_sigma0;
+    const ImuParams& ip = cfg.imu;
+    b_g_start = ip.gyro_bias_prior;
+    boot_static = cfg.start.detect_rest && fit.v_l.norm() < cfg.start.rest_speed &&
+                  (imu[k_first].gyro - ip.gyro_bias_prior).norm() <
+                      cfg.paper_rest.max_gyro_dev + 3.0 * ip.gyro_bias_sigma0;
     startPass();
     phase = Phase::Running;
   }
@@ -184,12 +152,11 @@ class PaperPipeline final : public Pipeline {
   /// (Re)starts the velocimeter at the window start; all window data are buffered for pass > 0.
   void startPass() {
     k_next = k_first + 1;
-    const double seed = cfg.window.seed_duration;
+    const double seed = cfg.paper_passes.seed_duration;
     pass_duration =
         finalPass() || seed <= 0 ? cfg.window.duration : std::min(seed, cfg.window.duration);
     pass_closed = false;
-    next_frame = 0;
-    next_point = 0;
+    next = {};
     stride_counter = 0;
     kinematics.clear();
     res->static_map.clear();
@@ -198,7 +165,7 @@ class PaperPipeline final : public Pipeline {
     res->trajectory.clear();
     auto& d = res->diag;
     d.points_seen = d.points_used = d.points_skipped = d.points_rejected = d.gyro_updates = 0;
-    VelocimeterParams vp = cfg.velocimeter;
+    VelocimeterParams vp = velocimeterParams(cfg);
     vp.gyro_bias_prior = b_g_start;
     velocimeter.emplace(vp, cfg.extrinsics);
     // The bootstrap points are processed again by the filter: its covariance is widened so that
@@ -227,8 +194,8 @@ class PaperPipeline final : public Pipeline {
 
   void run() {
     while (true) {
-      const bool have_point = normalizeCursor(next_frame, next_point);
-      const double tp = have_point ? pointTime(next_frame, next_point) : 0.0;
+      const bool have_point = seq.normalize(next);
+      const double tp = have_point ? pointTime(next) : 0.0;
       if (!pass_closed) {
         if (k_next >= imu.size()) return;  // wait for IMU
         const WindowSample w =
@@ -243,7 +210,7 @@ class PaperPipeline final : public Pipeline {
           continue;
         }
         // All points before tg are processed if the LiDAR stream has passed tg.
-        if (!have_point && !seq.finished() && lidarCoveredUntil() < tg) return;
+        if (!have_point && !seq.lidarPassed(imu[k_next].t)) return;
         const bool last = w == WindowSample::Last;
         if (!last && k_next + 1 >= imu.size() && !seq.finished()) return;  // need the slope
         processGyro(k_next);
@@ -265,7 +232,7 @@ class PaperPipeline final : public Pipeline {
   /// Solves b_a and gravity; starts the next pass and returns true if there is one.
   bool endOfPass() {
     const double t0 = wallSeconds();
-    GravityParams gp = cfg.gravity;
+    GravityParams gp = gravityParams(cfg);
     gp.compute_covariance = finalPass();  // earlier passes only need the estimate
     // Each solve starts from the previous pass's estimate (same window start, same frame w0).
     const GravityEstimate previous = gravity;
@@ -279,7 +246,7 @@ class PaperPipeline final : public Pipeline {
                                          " IMU samples): " + gravity.message);
       return false;
     }
-    if (pass < cfg.window.refinement_passes) {
+    if (pass < cfg.paper_passes.refinement_passes) {
       ++pass;
       // The next pass integrates with the corrected gyro bias (same prior width: the window's
       // data must not be counted twice).
@@ -292,22 +259,22 @@ class PaperPipeline final : public Pipeline {
   }
 
   void processPoint(double t) {
-    const DopplerPoint& pt = pts(next_frame)[next_point];
-    ++next_point;
+    const DopplerPoint& pt = seq.point(next);
+    ++next.p;
     auto& diag = res->diag;
     if (t < 0) return;  // before the window
     ++diag.points_seen;
     // One point in the stride (a counter, not a modulo: this runs for every point); the others
     // cost nothing more.
     const bool use = stride_counter == 0;
-    const int stride = point_stride * (finalPass() ? 1 : cfg.window.seed_pass_stride);
+    const int stride = point_stride * (finalPass() ? 1 : cfg.paper_passes.seed_pass_stride);
     if (++stride_counter == static_cast<std::size_t>(stride)) stride_counter = 0;
-    const auto& vp = cfg.velocimeter;
+    const DopplerParams& dp = cfg.doppler;
     if (!use) {
       ++diag.points_skipped;
       return;
     }
-    if (!usablePoint(pt, vp)) {
+    if (!usablePoint(pt, dp)) {
       ++diag.points_skipped;
       return;
     }
@@ -319,7 +286,7 @@ class PaperPipeline final : public Pipeline {
       // Zero-velocity mode: points only feed the motion check and the map.
       const Vec3 d = pt.p_l.cast<double>() / r;
       residual = pt.doppler + d.dot(velocimeter->v_l());
-      accepted = std::abs(residual) < vp.gate_min;
+      accepted = std::abs(residual) < dp.gate_min;
       // One point in kMotionCheckStride is plenty for a 3-D velocity every check period.
       if (++motion_check_counter % kMotionCheckStride == 0) {
         static_dirs.push_back(d);
@@ -347,14 +314,13 @@ class PaperPipeline final : public Pipeline {
   }
 
   /// The pass whose map and trajectory are the result (unless its gravity solve fails).
-  bool finalPass() const { return pass >= cfg.window.refinement_passes; }
+  bool finalPass() const { return pass >= cfg.paper_passes.refinement_passes; }
 
   void processGyro(std::size_t k) {
     const double t = imu[k].t - t_ref;
     velocimeter->propagate(t);
-    const auto& sp = cfg.static_detector;
     if (stationary) {
-      velocimeter->updateZeroVelocity(sp.zupt_sigma);
+      velocimeter->updateZeroVelocity(cfg.paper_rest.zupt_sigma);
       checkMotion(k, t);
     }
     updateGyroAt(*velocimeter, imu, k);
@@ -366,19 +332,19 @@ class PaperPipeline final : public Pipeline {
 
   /// Leaves zero-velocity mode as soon as the Doppler or the gyro shows motion.
   void checkMotion(std::size_t k, double t) {
-    const auto& sp = cfg.static_detector;
+    const PaperRestParams& rp = cfg.paper_rest;
     // The gyro deviates from the bias estimate by more than its own uncertainty allows.
     const double sigma_bg = std::sqrt(velocimeter->covBg().diagonal().maxCoeff());
-    bool moving = (imu[k].gyro - velocimeter->b_g()).norm() > sp.max_gyro_dev + 3.0 * sigma_bg;
+    bool moving = (imu[k].gyro - velocimeter->b_g()).norm() > rp.max_gyro_dev + 3.0 * sigma_bg;
     Vec3 v_ls = Vec3::Zero();
-    if (t - last_check >= sp.check_period) {
+    if (t - last_check >= rp.check_period) {
       // Robust (IRLS) velocity of the points since the last check: moving objects in view must
       // not look like ego motion.
-      const VelocityFit fit = fitLidarVelocity(static_dirs, static_dopplers, cfg.bootstrap,
-                                               cfg.velocimeter.doppler_sigma);
-      // Moving: faster than max_speed, and significantly non-zero (5 sigma) given how well the
-      // few points of a sparse scene constrain the velocity.
-      if (fit.ok && fit.v_l.norm() > sp.max_speed &&
+      const VelocityFit fit = fitLidarVelocity(static_dirs, static_dopplers, velocityFitParams(cfg),
+                                               cfg.doppler.doppler_sigma);
+      // Moving: faster than [start] rest_speed, and significantly non-zero (5 sigma) given how
+      // well the few points of a sparse scene constrain the velocity.
+      if (fit.ok && fit.v_l.norm() > cfg.start.rest_speed &&
           fit.v_l.dot(fit.cov.ldlt().solve(fit.v_l)) > 25.0) {
         v_ls = fit.v_l;
         moving = true;
@@ -488,7 +454,7 @@ void PaperPipeline::finalize() {
   A_th.block<3, 3>(0, 6) = skew(g_b) * R_w0b.transpose() * skew(ge.g_w) * M_end / g2 -
                            up_b * up_b.transpose() * R_w0b.transpose() * M_end;
   const double dt_imu = T / static_cast<double>(std::max<std::size_t>(1, k_window_last - k_first));
-  const double var_gyro_walk = cfg.velocimeter.gyro_sigma * cfg.velocimeter.gyro_sigma * dt_imu * T;
+  const double var_gyro_walk = cfg.imu.gyro_sigma * cfg.imu.gyro_sigma * dt_imu * T;
   // P = G S G^T over independent error sources, so it is a covariance by construction:
   //   [dg_w0, db_a, db_g] (solver, 9), dv_b (velocimeter, 3), gyro white noise integrated into
   //   the attitude (3), position and gravity floors (3 + 3).

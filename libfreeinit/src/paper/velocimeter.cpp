@@ -14,6 +14,28 @@ constexpr double kTransitionPeriod = 2e-3;
 
 }  // namespace
 
+VelocimeterParams velocimeterParams(const FreeInitConfig& config) {
+  const DopplerParams& d = config.doppler;
+  const ImuParams& imu = config.imu;
+  const PaperVelocimeterParams& v = config.paper_velocimeter;
+  VelocimeterParams p;
+  p.doppler_sigma = d.doppler_sigma;
+  p.gyro_sigma = imu.gyro_sigma;
+  p.vel_random_walk = v.vel_random_walk;
+  p.omega_random_walk = v.omega_random_walk;
+  p.aided_vel_random_walk = v.aided_vel_random_walk;
+  p.gyro_bias_random_walk = imu.gyro_bias_random_walk;
+  p.gyro_bias_tau = v.gyro_bias_tau;
+  p.gyro_bias_sigma0 = imu.gyro_bias_sigma0;
+  p.gyro_bias_prior = imu.gyro_bias_prior;
+  p.kinematic_propagation = v.kinematic_propagation;
+  p.doppler_updates_omega = v.doppler_updates_omega;
+  p.gate_sigma = d.gate_sigma;
+  p.gate_min = d.gate_min;
+  p.gate_rel = d.gate_rel;
+  return p;
+}
+
 Velocimeter::Velocimeter(const VelocimeterParams& params, const Extrinsics& extrinsics)
     : params_(params), R_bl_(extrinsics.R_bl), p_bl_(extrinsics.p_bl) {
   q_v_ = params.vel_random_walk * params.vel_random_walk;

@@ -29,6 +29,31 @@
 
 namespace freeinit {
 
+/// What the velocimeter reads of the configuration ([doppler], [imu], [paper_velocimeter]; see
+/// velocimeterParams()). Defaults: those of FreeInitConfig.
+struct VelocimeterParams {
+  double doppler_sigma = 0.03;     ///< [m/s] Doppler noise std
+  double gyro_sigma = 0.002;       ///< [rad/s] gyro white noise per sample
+  double vel_random_walk = 10.0;   ///< [m/s^2/sqrt(Hz)] v_l, v_b random walk density
+  double omega_random_walk = 1.0;  ///< [rad/s^2/sqrt(Hz)] omega_b random walk density
+  /// [m/s^2/sqrt(Hz)] v_l, v_b random walk density once accelerometer-aided (setAcceleration())
+  double aided_vel_random_walk = 0.03;
+  double gyro_bias_random_walk = 1e-4;  ///< [rad/s/sqrt(s)] Gauss-Markov driving noise
+  double gyro_bias_tau = 1000.0;        ///< [s] Gauss-Markov correlation time
+  double gyro_bias_sigma0 = 0.015;      ///< [rad/s] initial gyro bias std
+  Vec3 gyro_bias_prior = Vec3::Zero();  ///< [rad/s] initial gyro bias
+  bool kinematic_propagation = true;    ///< add -omega x v and the gyro slope to the propagation
+  /// Let the Doppler update omega_b and b_g through the lever arm (PaperVelocimeterParams).
+  bool doppler_updates_omega = false;
+  // Gating of dynamic points and gross outliers, on the Doppler residual.
+  double gate_sigma = 4.0;  ///< [-] reject |r| > gate_sigma * sqrt(S) ...
+  double gate_min = 0.15;   ///< [m/s] ... but never below this
+  double gate_rel = 0.01;   ///< [-] ... plus this fraction of the LiDAR speed
+};
+
+/// The velocimeter's settings from the configuration.
+VelocimeterParams velocimeterParams(const FreeInitConfig& config);
+
 class Velocimeter {
  public:
   using Mat9 = Eigen::Matrix<double, 9, 9>;

@@ -6,8 +6,17 @@
 
 namespace freeinit {
 
+VelocityFitParams velocityFitParams(const FreeInitConfig& config) {
+  VelocityFitParams p;
+  p.iterations = config.paper_bootstrap.iterations;
+  p.cauchy_scale = config.paper_bootstrap.cauchy_scale;
+  p.prior_sigma = config.paper_bootstrap.prior_sigma;
+  p.min_info_eigen = config.start.min_info_eigen;
+  return p;
+}
+
 VelocityFit fitLidarVelocity(const std::vector<Vec3>& d_l, const std::vector<double>& doppler,
-                             const BootstrapParams& params, double doppler_sigma) {
+                             const VelocityFitParams& params, double doppler_sigma) {
   VelocityFit fit;
   const std::size_t n = std::min(d_l.size(), doppler.size());
   if (n < 10) {

@@ -1,6 +1,7 @@
 // Robust LiDAR velocity from a set of Doppler returns, assuming one velocity for all of them:
 // iteratively reweighted least squares (Cauchy) on doppler = -d^T v_l, with a conditioning check.
-// Used to start the velocimeter and by the per-frame Doppler baseline.
+// Used to start the velocimeter, by its motion check at rest and by the per-frame Doppler
+// baseline.
 #pragma once
 
 #include <freeinit/config.h>
@@ -10,6 +11,18 @@
 #include <vector>
 
 namespace freeinit {
+
+/// Settings of the robust fit ([paper_bootstrap], [start] min_info_eigen; see
+/// velocityFitParams()). Defaults: those of FreeInitConfig.
+struct VelocityFitParams {
+  int iterations = 10;            ///< IRLS iterations
+  double cauchy_scale = 0.1;      ///< [m/s] IRLS Cauchy scale
+  double prior_sigma = 40.0;      ///< [m/s] weak prior on each velocity axis
+  double min_info_eigen = 100.0;  ///< [1/(m/s)^2] below: not ok (degenerate geometry)
+};
+
+/// The fit's settings from the configuration.
+VelocityFitParams velocityFitParams(const FreeInitConfig& config);
 
 struct VelocityFit {
   bool ok = false;
@@ -25,6 +38,6 @@ struct VelocityFit {
 /// Fails (ok = false) with fewer than 10 points or a weakest information direction below
 /// params.min_info_eigen.
 VelocityFit fitLidarVelocity(const std::vector<Vec3>& d_l, const std::vector<double>& doppler,
-                             const BootstrapParams& params, double doppler_sigma);
+                             const VelocityFitParams& params, double doppler_sigma);
 
 }  // namespace freeinit

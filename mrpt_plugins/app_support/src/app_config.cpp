@@ -141,9 +141,9 @@ const config::Section<LidarPoseParams>& extrinsicsPoseSection() {
 }
 
 std::vector<const config::SectionBase*> appSections() {
-  return {&estimatorSection(),      &velocimeterSection(), &bootstrapSection(),
-          &staticDetectorSection(), &windowSection(),      &gravitySection(),
-          &inputSection(),          &outputSection(),      &extrinsicsSection()};
+  std::vector<const config::SectionBase*> sections = FreeInitConfig::sections();
+  sections.insert(sections.end(), {&inputSection(), &outputSection(), &extrinsicsSection()});
+  return sections;
 }
 
 Extrinsics extrinsicsOf(const LidarPoseParams& pose, const Checker& keys) {
@@ -169,24 +169,25 @@ std::string firstPoseKey(const Checker& keys) {
   return "";
 }
 
-AppConfig loadAppConfig(const config::IniFile& ini) {
+AppConfig loadAppConfig(const config::IniFile& ini, std::vector<std::string>* notices) {
   std::vector<std::string> names;
   for (const auto* s : appSections()) names.push_back(s->name());
-  ini.requireKnownSections(names);
+  ini.requireKnownSections(names, FreeInitConfig::formerSectionNames());
   AppConfig c;
-  c.core.load(ini);
+  c.core.load(ini, notices);
   inputSection().load(ini, c.input);
   outputSection().load(ini, c.output);
   loadExtrinsics(ini, c);
   return c;
 }
 
-AppConfig loadAppConfig(const std::string& ini_file) {
-  return loadAppConfig(config::IniFile::load(ini_file));
+AppConfig loadAppConfig(const std::string& ini_file, std::vector<std::string>* notices) {
+  return loadAppConfig(config::IniFile::load(ini_file), notices);
 }
 
-AppConfig loadAppConfigFromText(const std::string& ini_text, const std::string& source) {
-  return loadAppConfig(config::IniFile::parse(ini_text, source));
+AppConfig loadAppConfigFromText(const std::string& ini_text, const std::string& source,
+                                std::vector<std::string>* notices) {
+  return loadAppConfig(config::IniFile::parse(ini_text, source), notices);
 }
 
 void dumpAppConfig(const AppConfig& c, std::ostream& out) {

@@ -14,7 +14,69 @@ namespace freeinit::app_support {
 // RecordChecker
 
 RecordChecker::RecordChecker(const AppConfig& config)
-    : input_(config.input), rest_(input::restParams(config.core)) {}
+    : input_(config.input),
+      from_sensor_pose_(config.extrinsics.from_sensor_pose),
+      rest_(input::restParams(config.core)) {}
+
+namespace {
+
+// Sensor poses are equal when they come from one calibration: stored as doubles they agree to
+// their last bits; 1e-6 rad and 1e-6 m leave room for a tool that recomputes them per record.
+constexpr double kPoseAngleTolerance = 1e-6, kPosePositionTolerance = 1e-6;
+
+double angleBetween(const Mat3& a, const Mat3& b) {
+  const double c = 0.5 * ((a.transpose() * b).trace() - 1.0);
+  return std::acos(std::clamp(c, -1.0, 1.0));
+}
+
+bool samePose(const Extrinsics& a, const Extrinsics& b) {
+  return angleBetween(a.R_bl, b.R_bl) <= kPoseAngleTolerance &&
+         (a.p_bl - b.p_bl).norm() <= kPosePositionTolerance;
+}
+
+bool isRotation(const Mat3& R) {
+  return R.allFinite() && (R.transpose() * R - Mat3::Identity()).norm() < 1e-6 &&
+         R.determinant() > 0;
+}
+
+std::string describePose(const Extrinsics& e) {
+  std::ostringstream os;
+  const Eigen::AngleAxisd aa(e.R_bl);
+  os << std::setprecision(6) << "p_bl = (" << e.p_bl.x() << ", " << e.p_bl.y() << ", " << e.p_bl.z()
+     << ") m, rotation " << aa.angle() * 180.0 / M_PI << " deg";
+  return os.str();
+}
+
+}  // namespace
+
+void RecordChecker::checkExtrinsics(CheckedItem& c) {
+  IngestItem& it = c.item;
+  if (!it.frame_extrinsics) {
+    if (!isRotation(it.sensor_pose->R_bl)) {
+      c.problem = "its sensorPose is not a rigid pose (its rotation is not a rotation matrix)";
+      return;
+    }
+    // The LiDAR in the body frame: the IMU's pose inverted, composed with the cloud's.
+    Extrinsics e;
+    const Extrinsics imu = imu_pose_.value_or(Extrinsics{});
+    e.R_bl = imu.R_bl.transpose() * it.sensor_pose->R_bl;
+    e.p_bl = imu.R_bl.transpose() * (it.sensor_pose->p_bl - imu.p_bl);
+    it.frame_extrinsics = e;
+  }
+  if (!isRotation(it.frame_extrinsics->R_bl)) {
+    c.problem = "its extrinsics are not a rigid pose (the rotation is not a rotation matrix)";
+    return;
+  }
+  if (!extrinsics_) {
+    extrinsics_ = it.frame_extrinsics;
+    extrinsics_record_ = it.record;
+  } else if (!samePose(*extrinsics_, *it.frame_extrinsics)) {
+    c.problem = "its sensorPose gives the LiDAR another pose in the IMU frame (" +
+                describePose(*it.frame_extrinsics) + ") than record " +
+                std::to_string(extrinsics_record_) + " does (" + describePose(*extrinsics_) +
+                "): one recording has one calibration";
+  }
+}
 
 void RecordChecker::push(IngestItem item, std::vector<CheckedItem>& out) {
   CheckedItem c;
@@ -27,6 +89,19 @@ void RecordChecker::push(IngestItem item, std::vector<CheckedItem>& out) {
     if (c.ok()) {
       if (auto p = input::imuSampleProblem(it.imu, last_imu_ ? &*last_imu_ : nullptr))
         c.problem = *p;
+    }
+    if (c.ok() && from_sensor_pose_ && it.sensor_pose) {
+      if (!isRotation(it.sensor_pose->R_bl)) {
+        c.problem = "its sensorPose is not a rigid pose (its rotation is not a rotation matrix)";
+      } else if (!imu_pose_) {
+        imu_pose_ = it.sensor_pose;
+        imu_pose_record_ = it.record;
+      } else if (!samePose(*imu_pose_, *it.sensor_pose)) {
+        c.problem = "its sensorPose (" + describePose(*it.sensor_pose) +
+                    ") differs from the first IMU sample's (record " +
+                    std::to_string(imu_pose_record_) + ": " + describePose(*imu_pose_) +
+                    "): the IMU does not move on the platform";
+      }
     }
     if (c.ok()) {
       last_imu_ = it.imu;
@@ -76,6 +151,11 @@ void RecordChecker::push(IngestItem item, std::vector<CheckedItem>& out) {
     const LidarFrame& f = *it.frame;
     if (auto p = input::frameOrderProblem(f, last_stamp_, last_end_)) c.problem = *p;
   }
+  // A rawlog cloud's extrinsics need the IMU's sensorPose: before the first IMU sample it waits.
+  const bool needs_imu_pose =
+      c.ok() && from_sensor_pose_ && !it.frame_extrinsics && it.sensor_pose && !imu_pose_;
+  if (c.ok() && from_sensor_pose_ && !needs_imu_pose && (it.frame_extrinsics || it.sensor_pose))
+    checkExtrinsics(c);
   if (c.ok()) {
     const input::FrameSpan span = input::frameSpan(*it.frame);
     c.begin = span.begin;
@@ -97,8 +177,8 @@ void RecordChecker::push(IngestItem item, std::vector<CheckedItem>& out) {
     c.begin = it.t + lo;
     c.end = it.t + hi;
   }
-  if (c.ok() && (zero_doppler || !held_.empty())) {
-    held_.push_back({std::move(c), zero_doppler});
+  if (c.ok() && (zero_doppler || needs_imu_pose || !held_.empty())) {
+    held_.push_back({std::move(c), zero_doppler, needs_imu_pose});
   } else {
     out.push_back(std::move(c));
   }
@@ -108,7 +188,12 @@ void RecordChecker::push(IngestItem item, std::vector<CheckedItem>& out) {
 void RecordChecker::resolve(bool force, std::vector<CheckedItem>& out) {
   while (!held_.empty()) {
     Held& h = held_.front();
-    if (h.zero_doppler) {
+    if (h.needs_imu_pose) {
+      if (!force && !imu_pose_) return;  // no IMU sample yet
+      checkExtrinsics(h.c);
+      h.needs_imu_pose = false;
+    }
+    if (h.zero_doppler && h.c.ok()) {
       const double from = h.c.begin - input::kRestMargin, until = h.c.end + input::kRestMargin;
       if (!force && !(last_imu_ && last_imu_->t > until)) return;  // the IMU is not there yet
       std::vector<ImuSample> around;

@@ -39,7 +39,7 @@ void ObservationDecoder::decode(std::size_t record,
       it.kind = IngestItem::Kind::Imu;
       try {
         it.imu = mrpt_plugins::imuFromObservation(*imu, input_.imu_accel_in_g ? kGravity : 1.0);
-        if (!imu_pose_) imu_pose_ = imu->sensorPose;
+        it.sensor_pose = mrpt_plugins::extrinsicsFromPose(imu->sensorPose);
       } catch (const std::exception& e) {
         it.problem = e.what();
       }
@@ -52,10 +52,7 @@ void ObservationDecoder::decode(std::size_t record,
       } catch (const std::exception& e) {
         it.problem = e.what();
       }
-      const mrpt::poses::CPose3D imu_p = imu_pose_ ? *imu_pose_ : mrpt::poses::CPose3D();
-      it.frame_extrinsics =
-          mrpt_plugins::extrinsicsFromPose(pc->sensorPose - imu_p);  // imu^-1 (+) lidar
-      if (!first_extrinsics_ && it.problem.empty()) first_extrinsics_ = it.frame_extrinsics;
+      it.sensor_pose = mrpt_plugins::extrinsicsFromPose(pc->sensorPose);
     } else {
       it.kind = IngestItem::Kind::Other;
       it.what = std::string(obs->GetRuntimeClass()->className) + " '" + obs->sensorLabel + "'";
@@ -106,24 +103,30 @@ std::optional<IngestItem> itemFromStream(net::StreamEvent&& e, std::size_t recor
   return std::nullopt;
 }
 
+void checkRecord(ObservationDecoder& decoder, RecordChecker& checker,
+                 mrpt_plugins::RawlogObject& rec, const std::function<void(CheckedItem&)>& take,
+                 const std::function<bool(const IngestItem&)>& admit) {
+  std::vector<IngestItem> items;
+  decoder.decode(rec.index, rec.object, items);
+  rec.object.reset();
+  std::vector<CheckedItem> checked;
+  for (auto& item : items) {
+    if (admit && !admit(item)) continue;
+    checked.clear();
+    checker.push(std::move(item), checked);
+    for (auto& c : checked) take(c);
+  }
+}
+
 void forEachCheckedItem(mrpt_plugins::RawlogReader& reader, ObservationDecoder& decoder,
                         RecordChecker& checker, const std::function<void(CheckedItem&)>& take,
                         const std::function<void(const mrpt_plugins::RawlogObject&)>& on_record) {
-  std::vector<IngestItem> items;
-  std::vector<CheckedItem> checked;
   mrpt_plugins::RawlogObject rec;
   while (reader.next(rec)) {
     if (on_record) on_record(rec);
-    items.clear();
-    decoder.decode(rec.index, rec.object, items);
-    rec.object.reset();
-    for (auto& item : items) {
-      checked.clear();
-      checker.push(std::move(item), checked);
-      for (auto& c : checked) take(c);
-    }
+    checkRecord(decoder, checker, rec, take);
   }
-  checked.clear();
+  std::vector<CheckedItem> checked;
   checker.finish(checked);
   for (auto& c : checked) take(c);
 }

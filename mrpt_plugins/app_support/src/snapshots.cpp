@@ -215,82 +215,31 @@ void swatch(mrpt::img::CImage& img, int x, int y, const TColor& c, const std::st
   img.textOut(x + 20, y, text, TColor(230, 230, 230));
 }
 
-TColor toColor(const plot::Rgb& c) { return TColor(c.r, c.g, c.b); }
-
 // The velocity plot's panels, in normalized coordinates of the image (at 1280 x 800: 80 px left
 // for the tick labels, 70 px of header, 30 px under the panels for the time labels).
 const plot::Box kVelocityPlotBox{80.0 / 1280, 70.0 / 800, 1260.0 / 1280, 770.0 / 800};
 
-// Draws `spec` laid out in `cell` (the stacked style) with CImage's lines, rectangles and the
-// 9x15 font; the time tick labels only under the bottom panel (`time_labels`).
-void drawPanel(mrpt::img::CImage& img, const plot::PanelSpec& spec, const plot::Box& cell,
-               bool time_labels) {
-  using Style = plot::Series::Style;
-  const double W = img.getWidth(), H = img.getHeight();
-  constexpr int kCharW = 9;  // the 9x15 font
-  const plot::PanelLayout l =
-      plot::layoutPanel(spec, cell, plot::stackedPanelStyle(), [&](const std::string& t) {
-        return static_cast<double>(kCharW * static_cast<int>(t.size())) / W;
-      });
-  auto px = [](double v) { return static_cast<int>(std::lround(v)); };
-  const int ax0 = px(l.area.x0 * W), ax1 = px(l.area.x1 * W);
-  const int ay0 = px(l.area.y0 * H), ay1 = px(l.area.y1 * H);
-  auto X = [&](double v) { return std::clamp(px(l.toX(v) * W), ax0, ax1); };
-  auto Y = [&](double v) { return std::clamp(px(l.toY(v) * H), ay0, ay1); };
-  const TColor black(0, 0, 0);
-  auto finite = [](double x, double y) { return std::isfinite(x) && std::isfinite(y); };
+// The panels' text in MRPT's 9x15 bitmap font, the font of the header above them and of the
+// app's other PNGs, drawn by a CImage over the panel image's pixels. Its box is the font's cell.
+class BitmapFont : public report::PanelFont {
+ public:
+  cv::Size size(const std::string& text, Role) const override {
+    // One cell per character: UTF-8 continuation bytes take none.
+    const auto chars = std::count_if(text.begin(), text.end(), [](char c) {
+      return (static_cast<unsigned char>(c) & 0xC0) != 0x80;
+    });
+    return {kCellWidth * static_cast<int>(chars), kCellHeight};
+  }
+  void draw(cv::Mat& img, const std::string& text, cv::Point top_left, Role,
+            const plot::Rgb& color) const override {
+    mrpt::img::CImage pixels(img, mrpt::img::SHALLOW_COPY);
+    pixels.selectTextFont("9x15");
+    pixels.textOut(top_left.x, top_left.y, text, TColor(color.r, color.g, color.b));
+  }
 
-  if (spec.shade)
-    img.filledRectangle(X(spec.shade->lo), ay0, X(spec.shade->hi), ay1, toColor(plot::kShade));
-  for (std::size_t i = 0; i < l.x.ticks.size(); ++i) {
-    const int x = X(l.x.ticks[i]);
-    img.line(x, ay0, x, ay1, toColor(plot::kGrid));
-    const std::string& t = l.x.labels[i];
-    if (time_labels) img.textOut(x - kCharW * static_cast<int>(t.size()) / 2, ay1 + 8, t, black);
-  }
-  for (std::size_t i = 0; i < l.y.ticks.size(); ++i) {
-    const int y = Y(l.y.ticks[i]);
-    img.line(ax0, y, ax1, y, toColor(plot::kGrid));
-    const std::string& t = l.y.labels[i];
-    img.textOut(ax0 - 6 - kCharW * static_cast<int>(t.size()), y - 7, t, black);
-  }
-  for (const auto& ser : spec.series) {  // the bands behind every line
-    const TColor band = toColor(plot::mix(ser.color, plot::kWhite, 0.9));
-    for (std::size_t i = 0; i < ser.x.size() && i < ser.y.size() && i < ser.sigma.size(); ++i)
-      if (finite(ser.x[i], ser.y[i]) && std::isfinite(ser.sigma[i]))
-        img.line(X(ser.x[i]), Y(ser.y[i] - ser.sigma[i]), X(ser.x[i]), Y(ser.y[i] + ser.sigma[i]),
-                 band, 2);
-  }
-  for (const auto& ser : spec.series) {
-    const TColor c = toColor(ser.color);
-    std::vector<std::pair<int, int>> pts;
-    for (std::size_t i = 0; i < ser.x.size() && i < ser.y.size(); ++i)
-      if (finite(ser.x[i], ser.y[i])) pts.emplace_back(X(ser.x[i]), Y(ser.y[i]));
-    if (ser.style == Style::Markers) {
-      for (const auto& [x, y] : pts)
-        for (int r = 1; r <= ser.thickness + 2; ++r) img.drawCircle(x, y, r, c, 1);
-      continue;
-    }
-    for (std::size_t i = 1; i < pts.size(); ++i)
-      if (ser.style == Style::Line || (i / 4) % 2 == 0)  // dashed: every other run of four
-        img.line(pts[i - 1].first, pts[i - 1].second, pts[i].first, pts[i].second, c,
-                 static_cast<unsigned>(ser.thickness));
-  }
-  for (double t : spec.x_lines) img.line(X(t), ay0, X(t), ay1, black, 1);
-  for (const auto& m : spec.marks) {
-    if (!finite(m.x, m.y)) continue;
-    const int x = X(m.x), y = Y(m.y);
-    img.filledRectangle(x - 5, y - 5, x + 5, y + 5, toColor(m.color));
-    img.rectangle(x - 5, y - 5, x + 5, y + 5, black);
-  }
-  img.rectangle(ax0, ay0, ax1, ay1, black);
-  if (!spec.title.empty()) {
-    const int tx = px(l.title_x * W), ty = px(l.title_y * H);
-    img.filledRectangle(tx - 6, ty - 2, tx + 4 + kCharW * static_cast<int>(spec.title.size()),
-                        ty + 16, TColor(255, 255, 255));
-    img.textOut(tx, ty, spec.title, toColor(spec.title_color.value_or(plot::kBlack)));
-  }
-}
+ private:
+  static constexpr int kCellWidth = 9, kCellHeight = 15;  // [px]
+};
 
 }  // namespace
 
@@ -502,9 +451,12 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
     if (s.ok()) d.state_value = s.b_g;
     panels.push_back(plot::componentPanel(d));
   }
+  // One time axis, labelled under the bottom panel.
+  for (std::size_t k = 0; k + 1 < panels.size(); ++k) panels[k].x.tick_labels = false;
   const auto cells = plot::stackCells(kVelocityPlotBox, static_cast<int>(panels.size()), 0.0);
   for (std::size_t k = 0; k < panels.size(); ++k)
-    drawPanel(img, panels[k], cells[k], k + 1 == panels.size());
+    report::drawPanel(img.asCvMatRef(), panels[k], cells[k], plot::stackedPanelStyle(),
+                      BitmapFont());
   saveAtomically(img, png);
 }
 

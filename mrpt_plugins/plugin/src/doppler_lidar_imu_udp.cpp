@@ -87,7 +87,7 @@ void CDopplerLidarImuUdp::loadConfig_sensorSpecific(const mrpt::config::CConfigF
     sec.name = section;
     std::vector<std::string> keys;
     cfg.getAllKeys(section, keys);
-    for (const auto& k : keys) sec.entries.push_back({k, cfg.read_string(section, k, ""), 0});
+    for (const auto& k : keys) sec.entries.push_back({k, cfg.read_string(section, k, ""), 0, ""});
     ini.add(std::move(sec));
   }
   UdpDriverParams p;

@@ -1,9 +1,9 @@
-// The layout of a 2-D plot over time, shared by the two renderers that draw it: the snapshot of
-// the MRPT app (mrpt::img::CImage) and the evaluation figures (OpenCV). What is drawn and where is
-// decided here, free of any drawing library: the axis limits and their "nice" ticks, the series
-// (their colours, labels and the legend) and the placement of the plot area, title, legend and
-// tick labels in normalized figure coordinates (x right, y down, both 0..1 across the figure). A
-// renderer scales these by its image size and keeps only its drawing primitives.
+// The layout of a 2-D plot over time, drawn by the one panel renderer (plot.h's drawPanel) for the
+// MRPT app's velocity snapshot and for the evaluation figures. What is drawn and where is decided
+// here, free of any drawing library: the axis limits and their "nice" ticks, the series (their
+// colours, labels and the legend) and the placement of the plot area, title, legend and tick
+// labels in normalized figure coordinates (x right, y down, both 0..1 across the figure). The
+// renderer scales these by its image size.
 #pragma once
 
 #include <freeinit/types.h>
@@ -82,6 +82,7 @@ struct AxisSpec {
   double min_pad = 0;       ///< auto linear limits: at least this much on each side [axis unit]
   int ticks = 5;            ///< about this many ticks (linear)
   std::string unit;         ///< appended to each tick label (" s")
+  bool tick_labels = true;  ///< false: ticks and grid only (a stacked panel over a shared axis)
 };
 
 /// What a panel shows.
@@ -126,7 +127,7 @@ struct Axis {
   Range range;
   bool log = false;
   std::vector<double> ticks;
-  std::vector<std::string> labels;  ///< one per tick
+  std::vector<std::string> labels;  ///< one per tick, or none (AxisSpec::tick_labels false)
   std::vector<double> minor;        ///< log axis: 2..9 times each decade, inside the range
   std::string label;
   /// The value's position along the axis, 0 at range.lo, 1 at range.hi (not clamped).
@@ -167,7 +168,7 @@ PanelLayout layoutPanel(const PanelSpec& spec, const Box& cell, const PanelStyle
 /// `n` cells stacked vertically in `box`, `gap` apart (normalized).
 std::vector<Box> stackCells(const Box& box, int n, double gap);
 
-// The velocity-over-time panels of both renderers.
+// The velocity-over-time panels of the app's snapshot and the evaluation figures.
 
 /// A vector quantity over time: components per instant, optionally their standard deviations.
 struct VectorTrack {

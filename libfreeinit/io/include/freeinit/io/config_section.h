@@ -20,6 +20,12 @@
 // once. A list of values is a family of numbered keys (items(): object_1, object_2, ...), its
 // length another key. A key that matters only for some values of others is dumped only then
 // (when()). Errors are ConfigError, one line naming the file, the line, the section and the key.
+//
+// A key may say what reads it (readers(), readBy(): "joint, paper"), shown at the end of its doc
+// line and, for the section, in a "; read by: ..." line under its header. A key that had another
+// section or name in an earlier layout declares it (formerly()): an INI written for the earlier
+// layout still loads, the old names moved to the current ones by renameFormerKeys() with one
+// notice per key; the dump writes only the current names.
 #pragma once
 
 #include <freeinit/io/ini_file.h>
@@ -55,13 +61,21 @@ Range above(double lo);                 ///< (lo, inf)
 Range between(double lo, double hi);    ///< [lo, hi]
 Range aboveUpTo(double lo, double hi);  ///< (lo, hi]
 
+/// A key's name in an earlier layout of the sections: [section] key.
+struct FormerName {
+  std::string section;
+  std::string key;
+};
+
 /// What the documentation knows of a key.
 struct KeyInfo {
   std::string name;
-  std::string unit;           ///< "m/s", "s", "-" (a pure number), "bool", "text", ...
-  std::string doc;            ///< one line
-  std::string default_value;  ///< the struct's own default, as an INI value
-  std::string accepted;       ///< "[0.0001, 1]", "true | false", "a | b", "" (any text)
+  std::string unit;                ///< "m/s", "s", "-" (a pure number), "bool", "text", ...
+  std::string doc;                 ///< one line
+  std::string default_value;       ///< the struct's own default, as an INI value
+  std::string accepted;            ///< "[0.0001, 1]", "true | false", "a | b", "" (any text)
+  std::string readers;             ///< what reads it, "joint, paper" ("": not said)
+  std::vector<FormerName> former;  ///< its names in earlier layouts, still read (formerly())
 };
 
 // Value parsing and formatting shared by the key types (exposed for other loaders and tests).
@@ -130,7 +144,7 @@ template <class S, class M>
 using MemberType = std::remove_cv_t<
     std::remove_reference_t<decltype(accessor<S>(std::declval<M>())(std::declval<S&>()))>>;
 
-/// One line of a dump: "key = value ; [unit] doc (accepted: ...)".
+/// One line of a dump: "key = value ; [unit] doc (accepted: ...) (readers)".
 /// `commented`: the line starts with ';' (a value shown, not set).
 void dumpLine(std::ostream& out, const KeyInfo& k, const std::string& value,
               bool commented = false);
@@ -160,7 +174,7 @@ class Section : public SectionBase {
     using T = detail::MemberType<S, M>;
     static_assert(std::is_arithmetic_v<T> && !std::is_same_v<T, bool>, "number(): a number");
     auto acc = detail::accessor<S>(member);
-    Key k{{std::move(key), std::move(unit), std::move(doc), "", range.text()}, {}, {}, {}};
+    Key k = newKey(std::move(key), std::move(unit), std::move(doc), range.text());
     k.set = [acc, per_unit, range, unit = k.info.unit](std::string_view text, S& s) {
       std::string err;
       if constexpr (std::is_integral_v<T>) {
@@ -192,15 +206,14 @@ class Section : public SectionBase {
       const double x = static_cast<double>(acc(s)) * per_unit;
       return range.contains(x) ? "" : detail::outOfRange(formatNumber(x), range, unit);
     };
-    keys_.push_back(std::move(k));
-    return *this;
+    return add(std::move(k));
   }
 
   /// A boolean (true/false).
   template <class M>
   Section& flag(std::string key, M member, std::string doc) {
     auto acc = detail::accessor<S>(member);
-    Key k{{std::move(key), "bool", std::move(doc), "", "true | false"}, {}, {}, {}};
+    Key k = newKey(std::move(key), "bool", std::move(doc), "true | false");
     k.set = [acc](std::string_view text, S& s) {
       bool x = false;
       std::string err = parseBool(text, x);
@@ -208,18 +221,14 @@ class Section : public SectionBase {
       return err;
     };
     k.get = [acc](const S& s) { return std::string(acc(s) ? "true" : "false"); };
-    keys_.push_back(std::move(k));
-    return *this;
+    return add(std::move(k));
   }
 
   /// A text value (the rest of the line; "" for empty). `non_empty`: an empty value is refused.
   template <class M>
   Section& text(std::string key, M member, std::string doc, bool non_empty = false) {
     auto acc = detail::accessor<S>(member);
-    Key k{{std::move(key), "text", std::move(doc), "", non_empty ? "non-empty text" : ""},
-          {},
-          {},
-          {}};
+    Key k = newKey(std::move(key), "text", std::move(doc), non_empty ? "non-empty text" : "");
     k.set = [acc, non_empty](std::string_view text, S& s) -> std::string {
       if (non_empty && text.empty()) return "must not be empty";
       acc(s) = std::string(text);
@@ -229,18 +238,14 @@ class Section : public SectionBase {
     k.check = [acc, non_empty](const S& s) -> std::string {
       return non_empty && acc(s).empty() ? "must not be empty" : "";
     };
-    keys_.push_back(std::move(k));
-    return *this;
+    return add(std::move(k));
   }
 
   /// Three numbers "x y z" (an Eigen::Vector3d), each within `range`.
   template <class M>
   Section& vector3(std::string key, M member, std::string unit, Range range, std::string doc) {
     auto acc = detail::accessor<S>(member);
-    Key k{{std::move(key), std::move(unit), std::move(doc), "", "x y z, each " + range.text()},
-          {},
-          {},
-          {}};
+    Key k = newKey(std::move(key), std::move(unit), std::move(doc), "x y z, each " + range.text());
     k.set = [acc, range, unit = k.info.unit](std::string_view text, S& s) {
       std::vector<double> v;
       std::string err = parseNumbers(text, 3, v);
@@ -259,8 +264,7 @@ class Section : public SectionBase {
         if (!range.contains(v[i])) return detail::outOfRange(formatNumber(v[i]), range, unit);
       return "";
     };
-    keys_.push_back(std::move(k));
-    return *this;
+    return add(std::move(k));
   }
 
   /// One of a list of names, each standing for a value of the member.
@@ -270,7 +274,7 @@ class Section : public SectionBase {
     auto acc = detail::accessor<S>(member);
     std::string accepted;
     for (const auto& c : choices) accepted += (accepted.empty() ? "" : " | ") + c.first;
-    Key k{{std::move(key), "-", std::move(doc), "", accepted}, {}, {}, {}};
+    Key k = newKey(std::move(key), "-", std::move(doc), accepted);
     k.set = [acc, choices](std::string_view text, S& s) -> std::string {
       for (const auto& [name, value] : choices)
         if (sameName(name, text)) {
@@ -291,8 +295,7 @@ class Section : public SectionBase {
         if (acc(s) == c.second) return "";
       return "is not one of the accepted values";
     };
-    keys_.push_back(std::move(k));
-    return *this;
+    return add(std::move(k));
   }
 
   /// A value of any other type, with its own parse (returns an error or "") and format.
@@ -301,7 +304,7 @@ class Section : public SectionBase {
                   std::function<std::string(std::string_view, T&)> parse,
                   std::function<std::string(const T&)> format, std::string doc) {
     auto acc = detail::accessor<S>(member);
-    Key k{{std::move(key), std::move(unit), std::move(doc), "", std::move(accepted)}, {}, {}, {}};
+    Key k = newKey(std::move(key), std::move(unit), std::move(doc), std::move(accepted));
     k.set = [acc, parse](std::string_view text, S& s) {
       T x = acc(s);
       std::string err = parse(text, x);
@@ -309,8 +312,7 @@ class Section : public SectionBase {
       return err;
     };
     k.get = [acc, format](const S& s) { return format(acc(s)); };
-    keys_.push_back(std::move(k));
-    return *this;
+    return add(std::move(k));
   }
 
   /// A family of numbered keys <prefix>1, <prefix>2, ... (documented as "<prefix><k>"): element
@@ -326,7 +328,7 @@ class Section : public SectionBase {
                  std::function<std::string(const T&)> format,
                  std::function<std::string(const T&)> check, std::string doc) {
     auto acc = detail::accessor<S>(member);
-    Key k{{prefix + "<k>", std::move(unit), std::move(doc), "", std::move(accepted)}, {}, {}, {}};
+    Key k = newKey(prefix + "<k>", std::move(unit), std::move(doc), std::move(accepted));
     Items it;
     it.prefix = std::move(prefix);
     it.count_key = std::move(count_key);
@@ -340,14 +342,32 @@ class Section : public SectionBase {
     it.get = [acc, format](const S& s, std::size_t i) { return format(acc(s)[i]); };
     it.check = [acc, check](const S& s, std::size_t i) { return check(acc(s)[i]); };
     k.items = std::make_shared<Items>(std::move(it));
-    keys_.push_back(std::move(k));
-    return *this;
+    return add(std::move(k));
   }
 
   /// The key declared last is dumped only when `applies` holds for the struct (it is still read
   /// and checked): a key that matters only for some values of others.
   Section& when(std::function<bool(const S&)> applies) {
     keys_.back().applies = std::move(applies);
+    return *this;
+  }
+
+  /// What reads the keys declared after this call ("joint, paper"; "": not said), unless
+  /// readBy() says otherwise for one of them.
+  Section& readers(std::string readers) {
+    readers_ = std::move(readers);
+    return *this;
+  }
+  /// What reads the key declared last ("joint, paper").
+  Section& readBy(std::string readers) {
+    keys_.back().info.readers = std::move(readers);
+    return *this;
+  }
+  /// A name the key declared last had in an earlier layout: [section] key (`key` empty: the
+  /// same name). It is still read (renameFormerKeys()), with a notice.
+  Section& formerly(std::string section, std::string key = "") {
+    KeyInfo& k = keys_.back().info;
+    k.former.push_back({std::move(section), key.empty() ? k.name : std::move(key)});
     return *this;
   }
 
@@ -450,6 +470,7 @@ class Section : public SectionBase {
                bool commented = false) const {
     if (const Key* k = find(key)) dumpKey(*k, s, out, commented);
   }
+  /// "[name]", its doc and what reads its keys (the readers of all its keys, in order).
   void dumpHeader(std::ostream& out) const;
 
   std::vector<KeyInfo> keys() const override {
@@ -495,6 +516,20 @@ class Section : public SectionBase {
     std::shared_ptr<const Items> items = nullptr;          ///< a list (then set/get are unset)
     std::function<bool(const S&)> applies = nullptr;       ///< dumped only when it holds
   };
+  /// A key without its functions (set, get, ...), readers or former names.
+  static Key newKey(std::string name, std::string unit, std::string doc, std::string accepted) {
+    Key k;
+    k.info.name = std::move(name);
+    k.info.unit = std::move(unit);
+    k.info.doc = std::move(doc);
+    k.info.accepted = std::move(accepted);
+    return k;
+  }
+  Section& add(Key k) {
+    k.info.readers = readers_;
+    keys_.push_back(std::move(k));
+    return *this;
+  }
   const Key* find(std::string_view key) const {
     for (const Key& k : keys_)
       if (!k.items && sameName(k.info.name, key)) return &k;
@@ -536,13 +571,28 @@ class Section : public SectionBase {
   }
   std::vector<Key> keys_;
   std::vector<std::function<void(const S&, const Checker&)>> checks_;
+  std::string readers_;  ///< of the keys declared next (readers())
 };
 
-void dumpSectionHeader(std::ostream& out, const std::string& name, const std::string& doc);
+/// "[name]", "; doc" and "; read by: ..." (the readers of `keys`, each once, in order; none
+/// when no key says what reads it).
+void dumpSectionHeader(std::ostream& out, const std::string& name, const std::string& doc,
+                       const std::vector<KeyInfo>& keys = {});
 
 template <class S>
 void Section<S>::dumpHeader(std::ostream& out) const {
-  dumpSectionHeader(out, name_, doc_);
+  dumpSectionHeader(out, name_, doc_, keys());
 }
+
+/// The moves from the earlier layouts that the declarations of `sections` hold (their keys'
+/// former names).
+std::vector<KeyRename> formerNames(const std::vector<const SectionBase*>& sections);
+/// The sections that only former names have: no section of `sections` has their name.
+std::vector<std::string> formerSectionNames(const std::vector<const SectionBase*>& sections);
+/// `ini` with every key of `sections` given under a former name moved to its current section
+/// and name (IniFile::withRenames, formerSectionNames() retired): one notice per such key in
+/// `notices`. Throws ConfigError as withRenames does.
+IniFile renameFormerKeys(const IniFile& ini, const std::vector<const SectionBase*>& sections,
+                         std::vector<std::string>& notices);
 
 }  // namespace freeinit::config

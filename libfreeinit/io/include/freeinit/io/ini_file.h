@@ -34,6 +34,9 @@ struct IniEntry {
   std::string key;    ///< as written
   std::string value;  ///< without the comment and surrounding blanks; one pair of "" removed
   int line = 0;       ///< 1-based; 0 when the entry does not come from a file
+  /// "[section] key" as the file gives it, when withRenames() moved it from a former name ("":
+  /// where it stands); messages about the entry name both.
+  std::string given_as;
 };
 
 struct IniSection {
@@ -43,6 +46,12 @@ struct IniSection {
   bool checked = true;
   std::vector<IniEntry> entries;
   const IniEntry* find(std::string_view key) const;
+};
+
+/// A key's move from an earlier layout: [from_section] from_key is now [to_section] to_key.
+struct KeyRename {
+  std::string from_section, from_key;
+  std::string to_section, to_key;
 };
 
 struct ParseOptions {
@@ -73,9 +82,22 @@ class IniFile {
   /// values are cleaned and checked as parse() does. Throws ConfigError if it exists already.
   void add(IniSection section);
 
-  /// Throws ConfigError naming the first section whose name is not in `known` (a misspelt
-  /// section must not silently leave its keys at their defaults).
-  void requireKnownSections(const std::vector<std::string>& known) const;
+  /// This file with the keys given under a former name moved to their current section and name
+  /// (`renames`), keeping their values and lines; one notice per moved key appended to
+  /// `notices`: "file:line: [velocimeter] doppler_sigma is now [doppler] doppler_sigma (the old
+  /// name is read for now)". A section named in `retired` (one that only former names use) must
+  /// hold only keys that move: another key there is an unknown key; retired sections are not in
+  /// the result. Throws ConfigError for a key given under two of its names (e.g. the former and
+  /// the current one), naming both.
+  IniFile withRenames(const std::vector<KeyRename>& renames,
+                      const std::vector<std::string>& retired,
+                      std::vector<std::string>& notices) const;
+
+  /// Throws ConfigError naming the first section whose name is not in `known` nor in `former`
+  /// (a misspelt section must not silently leave its keys at their defaults). `former`: names
+  /// of an earlier layout, still accepted (see withRenames()), not listed as expected.
+  void requireKnownSections(const std::vector<std::string>& known,
+                            const std::vector<std::string>& former = {}) const;
 
   /// "file:line" (or "file" when line is 0): the prefix of every message about this file.
   std::string where(int line) const;

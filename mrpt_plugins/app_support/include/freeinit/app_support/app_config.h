@@ -1,5 +1,5 @@
-// The whole configuration of the Free-Init MRPT application, loaded from an INI file: one
-// [section] per core parameter struct plus [input], [extrinsics] and [output] (result_files.h).
+// The whole configuration of the Free-Init MRPT application, loaded from an INI file: the core's
+// sections (FreeInitConfig) plus [input], [extrinsics] and [output] (result_files.h).
 // Every section is declared once (freeinit/io/config_section.h); the file is read by the project's
 // strict parser (freeinit/io/ini_file.h), not by MRPT's.
 #pragma once
@@ -76,11 +76,14 @@ std::string firstPoseKey(const config::Checker& keys);
 
 /// Loads and validates an INI file. Missing keys keep their defaults; unknown sections, unknown
 /// and duplicated keys, malformed or out-of-range values throw config::ConfigError (a
-/// std::invalid_argument) naming the file, the line, the section and the key.
-AppConfig loadAppConfig(const std::string& ini_file);
-AppConfig loadAppConfig(const config::IniFile& ini);
+/// std::invalid_argument) naming the file, the line, the section and the key. Keys given under
+/// their former names are read, with one notice line each in `notices` (on std::cerr when it is
+/// null; see FreeInitConfig::load).
+AppConfig loadAppConfig(const std::string& ini_file, std::vector<std::string>* notices = nullptr);
+AppConfig loadAppConfig(const config::IniFile& ini, std::vector<std::string>* notices = nullptr);
 /// Same from INI text (tests); `source` names it in messages.
-AppConfig loadAppConfigFromText(const std::string& ini_text, const std::string& source);
+AppConfig loadAppConfigFromText(const std::string& ini_text, const std::string& source,
+                                std::vector<std::string>* notices = nullptr);
 /// Writes the effective configuration as a documented INI (units in comments) that loads back.
 void dumpAppConfig(const AppConfig& config, std::ostream& out);
 

@@ -29,12 +29,17 @@ namespace freeinit::app_support {
 struct IngestItem {
   enum class Kind { Imu, Frame, Other };
   Kind kind = Kind::Other;
-  std::size_t record = 0;                      ///< rawlog record (live: observation number)
-  double t = 0;                                ///< [UNIX s] the IMU sample time or the frame stamp
-  std::optional<std::int64_t> stamp_ns;        ///< [ns] the exact stamp, when in the wire's range
-  ImuSample imu;                               ///< Kind::Imu
-  std::shared_ptr<const LidarFrame> frame;     ///< Kind::Frame, points sorted by time
-  std::optional<Extrinsics> frame_extrinsics;  ///< the LiDAR pose in the body frame it declares
+  std::size_t record = 0;                   ///< rawlog record (live: observation number)
+  double t = 0;                             ///< [UNIX s] the IMU sample time or the frame stamp
+  std::optional<std::int64_t> stamp_ns;     ///< [ns] the exact stamp, when in the wire's range
+  ImuSample imu;                            ///< Kind::Imu
+  std::shared_ptr<const LidarFrame> frame;  ///< Kind::Frame, points sorted by time
+  /// Kind::Frame: the LiDAR pose in the body frame it declares (a live stream's frames carry it;
+  /// for a rawlog's clouds the RecordChecker sets it from the sensor poses).
+  std::optional<Extrinsics> frame_extrinsics;
+  /// The observation's sensorPose in the recording (a rawlog's IMU samples and clouds): the
+  /// LiDAR's pose in the body frame is the cloud's relative to the IMU's.
+  std::optional<Extrinsics> sensor_pose;
   std::string what;     ///< Kind::Other: "<class> '<label>'", counted and reported as ignored
   std::string problem;  ///< why the record cannot be used (from its conversion), or ""
 };
@@ -54,6 +59,12 @@ struct CheckedItem {
 /// in time order and not overlapping; a cloud with Doppler zero on every point is held until
 /// the IMU around it is known and passes only if the IMU shows rest. Items come out in input
 /// order except that clouds held for that wait (IMU samples pass them).
+///
+/// The extrinsics of a rawlog (with [extrinsics] from_sensor_pose): every cloud's sensorPose
+/// relative to the IMU's, whatever the order of the records (a cloud before the first IMU sample
+/// waits for it). The first cloud's sets them; every later cloud must give the same (a record
+/// that gives another, or a sensorPose whose rotation is not a rotation, is a bad record), and
+/// every IMU sample the same sensorPose as the first.
 class RecordChecker {
  public:
   explicit RecordChecker(const AppConfig& config);
@@ -61,17 +72,28 @@ class RecordChecker {
   /// End of the input: decides the held clouds with the IMU there is.
   void finish(std::vector<CheckedItem>& out);
   std::size_t invalidPointsDropped() const { return dropped_; }
+  /// The LiDAR pose in the body frame the clouds declare, once the first good cloud set it.
+  const std::optional<Extrinsics>& declaredExtrinsics() const { return extrinsics_; }
 
  private:
   void resolve(bool force, std::vector<CheckedItem>& out);
+  /// The cloud's extrinsics from its sensorPose and the IMU's (identity when no IMU sample came),
+  /// checked against the rule (see above).
+  void checkExtrinsics(CheckedItem& c);
 
   InputParams input_;
+  bool from_sensor_pose_ = true;
+  std::optional<Extrinsics> imu_pose_;  ///< the first IMU sample's sensorPose
+  std::size_t imu_pose_record_ = 0;
+  std::optional<Extrinsics> extrinsics_;  ///< the rule: the first good cloud's
+  std::size_t extrinsics_record_ = 0;
   input::RestParams rest_;
   std::optional<ImuSample> last_imu_;
   std::optional<double> last_stamp_, last_end_;
   struct Held {
     CheckedItem c;
-    bool zero_doppler = false;  ///< waits for the IMU around it
+    bool zero_doppler = false;    ///< waits for the IMU around it
+    bool needs_imu_pose = false;  ///< its extrinsics wait for the first IMU sample's sensorPose
   };
   std::deque<ImuSample> recent_imu_;  ///< for the rest test of held clouds
   std::deque<Held> held_;             ///< clouds waiting, in order (the first for the IMU)

@@ -6,7 +6,6 @@
 #include <freeinit/app_support/ingest.h>
 #include <freeinit/mrpt_plugins/rawlog_reader.h>
 #include <freeinit/net/stream_receiver.h>
-#include <mrpt/poses/CPose3D.h>
 #include <mrpt/serialization/CSerializable.h>
 
 #include <functional>
@@ -17,23 +16,27 @@ namespace freeinit::app_support {
 
 /// Turns the top-level records of a rawlog into items: sensory frames are flattened, actions
 /// skipped, IMU samples and clouds with the configured labels converted (accelerations scaled by
-/// [input] imu_accel_in_g), any other observation an Other item. A cloud's declared extrinsics
-/// are its sensorPose relative to the first IMU sample's sensorPose the decoder saw.
+/// [input] imu_accel_in_g), any other observation an Other item. Each item carries its
+/// observation's sensorPose (the RecordChecker makes the extrinsics of them).
 class ObservationDecoder {
  public:
   explicit ObservationDecoder(const InputParams& input);
   void decode(std::size_t record, const mrpt::serialization::CSerializable::Ptr& object,
               std::vector<IngestItem>& out);
-  /// The sensorPose of the first cloud relative to the first IMU's, once a cloud was decoded.
-  const std::optional<Extrinsics>& firstCloudExtrinsics() const { return first_extrinsics_; }
 
  private:
   InputParams input_;
-  std::optional<mrpt::poses::CPose3D> imu_pose_;
-  std::optional<Extrinsics> first_extrinsics_;
 };
 
-/// The whole offline path over a rawlog: every record `reader` gives, decoded and checked, in
+/// One record of a rawlog through the offline path: decoded, its items checked in order, each
+/// checked item to `take` (a cloud the checker holds for the IMU around it comes out with a later
+/// record, or at checker.finish()). `admit` (if given) sees each item before its checks and
+/// refuses the items not needed: they pass by unchecked. The record's object is released.
+void checkRecord(ObservationDecoder& decoder, RecordChecker& checker,
+                 mrpt_plugins::RawlogObject& rec, const std::function<void(CheckedItem&)>& take,
+                 const std::function<bool(const IngestItem&)>& admit = {});
+
+/// The whole offline path over a rawlog: every record `reader` gives through checkRecord, in
 /// order; `take` gets each checked item, the clouds held for the IMU around them at the end
 /// included; `on_record` (if given) sees each record before it is decoded. Errors of the reader
 /// propagate.

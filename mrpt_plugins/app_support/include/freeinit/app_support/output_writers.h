@@ -31,7 +31,7 @@ struct StateVerdict {
   /// Diagnostics::node_residual_ratio).
   double node_residual_ratio = 0;
 };
-/// The verdict of an ok result (doppler_sigma: the configured [velocimeter] doppler_sigma).
+/// The verdict of an ok result (doppler_sigma: the configured [doppler] doppler_sigma).
 StateVerdict verdictOf(const InitResult& r, double doppler_sigma);
 /// The verdict as console lines ("  sigma ...", "  window ...").
 void printVerdict(std::ostream& log, const StateVerdict& v);
