@@ -1,6 +1,7 @@
-// The Cramer-Rao bound: the aggregated computation against a dense per-point batch, the exact
-// sqrt(2) of twice the data, a closed form at rest, unobservable quantities, and the simulator's
-// side (which points of a recording it uses).
+// The Cramer-Rao bound: the aggregated computation against a dense per-point batch (isotropic and
+// per-axis IMU noise), the exact sqrt(2) of twice the data, a closed form at rest, unobservable
+// quantities, the zero-rate gyro-bias bound, and the simulator's side (which points of a recording
+// it uses, its true noise).
 #include <freeinit/eval/cramer_rao_bound.h>
 #include <freeinit/rotation.h>
 #include <freeinit/sim/analytic_trajectory.h>
@@ -93,7 +94,8 @@ TEST(CramerRaoBound, TwiceEveryPointShrinksEverySigmaBySqrt2) {
   EXPECT_LT(covarianceError(2 * b.cov, a.cov), 1e-9);
 }
 
-TEST(CramerRaoBound, EqualsADensePerPointBatch) {
+/// The aggregated bound against a dense per-point batch, for IMU noise of these per-axis scales.
+void expectEqualToADenseBatch(const Vec3& gyro_axis_scale, const Vec3& accel_axis_scale) {
   // Every unknown explicit: the first state, each interval's IMU noise and bias random walks; one
   // row per point; the yaw fixed at the window start; solved densely. IMU noise, bias priors and
   // random walks on, with a lever arm and rotated extrinsics.
@@ -102,6 +104,8 @@ TEST(CramerRaoBound, EqualsADensePerPointBatch) {
   model.accel_bias_prior_sigma = 0.1;
   model.gyro_bias_random_walk = 1e-3;
   model.accel_bias_random_walk = 2e-2;
+  model.gyro_axis_scale = gyro_axis_scale;
+  model.accel_axis_scale = accel_axis_scale;
   const auto traj = movingTrajectory();
   const int K = 20;
   const auto nodes = nodesOf(traj, 0.5, K, 200.0);
@@ -137,13 +141,15 @@ TEST(CramerRaoBound, EqualsADensePerPointBatch) {
   info.block<3, 3>(kDBa, kDBa) += Mat3::Identity() / std::pow(model.accel_bias_prior_sigma, 2);
   for (int k = 0; k < K; ++k) {
     const double h = nodes[k + 1].t - nodes[k].t;
-    const double var[4] = {model.gyro_sigma * model.gyro_sigma,
-                           model.accel_sigma * model.accel_sigma,
-                           model.gyro_bias_random_walk * model.gyro_bias_random_walk * h,
-                           model.accel_bias_random_walk * model.accel_bias_random_walk * h};
+    // Per axis: sample noise sigma_i = sigma * scale_i, random walks isotropic.
+    const Vec3 var[4] = {
+        (model.gyro_sigma * gyro_axis_scale).cwiseAbs2(),
+        (model.accel_sigma * accel_axis_scale).cwiseAbs2(),
+        Vec3::Constant(model.gyro_bias_random_walk * model.gyro_bias_random_walk * h),
+        Vec3::Constant(model.accel_bias_random_walk * model.accel_bias_random_walk * h)};
     for (int i = 0; i < 4; ++i)
-      info.block(noiseCol(k) + 3 * i, noiseCol(k) + 3 * i, 3, 3) +=
-          Eigen::MatrixXd::Identity(3, 3) / var[i];
+      for (int a = 0; a < 3; ++a)
+        info(noiseCol(k) + 3 * i + a, noiseCol(k) + 3 * i + a) += 1.0 / var[i](a);
   }
   // The yaw of the first attitude about the vertical: any weight fixes the gauge.
   Eigen::RowVectorXd yaw0 = Eigen::RowVectorXd::Zero(n);
@@ -154,6 +160,45 @@ TEST(CramerRaoBound, EqualsADensePerPointBatch) {
   EXPECT_LT(covarianceError(agg.cov, dense), 1e-10) << "aggregated\n"
                                                     << agg.cov << "\ndense\n"
                                                     << dense;
+}
+
+TEST(CramerRaoBound, EqualsADensePerPointBatch) {
+  expectEqualToADenseBatch(Vec3::Ones(), Vec3::Ones());
+}
+
+// A unit whose axes differ in noise (the simulator draws each axis at 0.8-1.2 of the datasheet):
+// the bound weights each axis' noise by its own variance.
+TEST(CramerRaoBound, EqualsADensePerPointBatchWithPerAxisNoise) {
+  expectEqualToADenseBatch(Vec3(0.8, 1.15, 1.2), Vec3(1.2, 0.85, 0.9));
+}
+
+TEST(CramerRaoBound, PerAxisNoiseIsWhatTheModelSaysItIs) {
+  // Scales all equal to k are the isotropic noise k sigma; different scales give another bound.
+  const auto traj = movingTrajectory();
+  const auto nodes = nodesOf(traj, 0.2, 40, 200.0);
+  const auto pts = randomPoints(2000, nodes.front().t, nodes.back().t, 5);
+  auto boundOf = [&](const BoundModel& m) {
+    CramerRaoBound b(m, nodes);
+    for (const Point& p : pts) b.addDoppler(p.t, p.d_l);
+    return b.compute();
+  };
+  BoundModel scaled = rigModel(), plain = rigModel(), uneven = rigModel();
+  scaled.gyro_axis_scale = Vec3::Constant(1.3);
+  scaled.accel_axis_scale = Vec3::Constant(0.7);
+  plain.gyro_sigma *= 1.3;
+  plain.accel_sigma *= 0.7;
+  uneven.gyro_axis_scale = Vec3(0.8, 1.0, 1.2);
+  EXPECT_EQ(scaled.gyroSigmaPerAxis(), Vec3::Constant(1.3 * scaled.gyro_sigma));
+  const Bound a = boundOf(scaled), b = boundOf(plain), c = boundOf(rigModel()), d = boundOf(uneven);
+  ASSERT_TRUE(a.ok && b.ok && c.ok && d.ok);
+  EXPECT_LT(covarianceError(a.cov, b.cov), 1e-12);
+  EXPECT_GT(covarianceError(d.cov, c.cov), 1e-4);
+  BoundModel bad = rigModel();
+  bad.gyro_axis_scale = Vec3(1, 0, 1);
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
+  bad = rigModel();
+  bad.accel_axis_scale = Vec3(1, 1, std::nan(""));
+  EXPECT_THROW(bad.validate(), std::invalid_argument);
 }
 
 /// Static, level body; LiDAR frame = body frame (no lever arm); exact IMU; points along the axes.
@@ -262,6 +307,64 @@ TEST(CramerRaoBound, UnobservableQuantitiesAreInfinite) {
   EXPECT_NEAR(none.accel_bias, std::sqrt(3.0) * 0.1, 1e-9);
 }
 
+TEST(ZeroRateBound, MatchesTheClosedForm) {
+  // No prior, equal axes: sigma sqrt(3 / N).
+  EXPECT_NEAR(zeroRateGyroBiasBound(Vec3::Constant(0.002), 100), 0.002 * std::sqrt(3.0 / 100),
+              1e-15);
+  EXPECT_NEAR(zeroRateGyroBiasBound(Vec3::Constant(0.004), 12), 0.004 * std::sqrt(3.0 / 12), 1e-15);
+  // Per axis with a prior, against the least squares of N samples y_k = b_g + n_k written out:
+  // information H^T W H + I / sigma_0^2, H the stacked identities.
+  const Vec3 sigma(0.001, 0.002, 0.004);
+  const double sigma0 = 0.003;
+  const int n = 40;
+  Eigen::MatrixXd H = Eigen::MatrixXd::Zero(3 * n, 3);
+  Eigen::VectorXd w(3 * n);
+  for (int k = 0; k < n; ++k) {
+    H.block<3, 3>(3 * k, 0).setIdentity();
+    w.segment<3>(3 * k) = sigma.cwiseAbs2().cwiseInverse();
+  }
+  const Eigen::Matrix3d info =
+      H.transpose() * w.asDiagonal() * H + Eigen::Matrix3d::Identity() / (sigma0 * sigma0);
+  const double expected = std::sqrt(info.inverse().trace());
+  EXPECT_NEAR(zeroRateGyroBiasBound(sigma, n, sigma0), expected, 1e-12 * expected);
+  // Without rest nothing; an exact gyro at rest knows its bias.
+  EXPECT_TRUE(std::isnan(zeroRateGyroBiasBound(sigma, 0, sigma0)));
+  EXPECT_EQ(zeroRateGyroBiasBound(Vec3::Zero(), 10, sigma0), 0.0);
+}
+
+TEST(ZeroRateBound, CountsTheWindowsNodesAtRest) {
+  // At rest throughout: every node, the closed form with the model's per-axis noise and prior,
+  // and below the bound that does not know of the rest (the yaw-rate bias keeps its prior there).
+  BoundModel m;
+  m.gyro_axis_scale = Vec3(0.9, 1.0, 1.1);
+  m.gyro_bias_prior_sigma = 0.015;
+  const StaticCase rest(0.015, 0.1);
+  CramerRaoBound at_rest(m, rest.nodes);
+  for (const Point& p : rest.pts) at_rest.addDoppler(p.t, p.d_l);
+  const Bound b = at_rest.compute();
+  ASSERT_TRUE(b.ok);
+  EXPECT_EQ(b.rest_nodes, rest.nodes.size());
+  EXPECT_DOUBLE_EQ(b.gyro_bias_zero_rate,
+                   zeroRateGyroBiasBound(m.gyroSigmaPerAxis(), rest.nodes.size(), 0.015));
+  EXPECT_LT(b.gyro_bias_zero_rate, 0.2 * b.gyro_bias);
+  // Moving throughout: none.
+  const auto traj = movingTrajectory();
+  const Bound moving = CramerRaoBound(m, nodesOf(traj, 0.2, 20, 200.0)).compute();
+  EXPECT_EQ(moving.rest_nodes, 0u);
+  EXPECT_TRUE(std::isnan(moving.gyro_bias_zero_rate));
+  // Starting: the nodes before the motion only.
+  std::vector<KinematicTruth> starting(rest.nodes.begin(), rest.nodes.begin() + 30);
+  for (const KinematicTruth& s : nodesOf(traj, 0.2, 20, 200.0)) {
+    KinematicTruth later = s;
+    later.t = starting.back().t + 0.005;
+    starting.push_back(later);
+  }
+  const Bound start = CramerRaoBound(m, starting).compute();
+  EXPECT_EQ(start.rest_nodes, 30u);
+  EXPECT_DOUBLE_EQ(start.gyro_bias_zero_rate,
+                   zeroRateGyroBiasBound(m.gyroSigmaPerAxis(), 30, 0.015));
+}
+
 TEST(CramerRaoBound, RejectsBadInput) {
   const auto traj = movingTrajectory();
   const auto nodes = nodesOf(traj, 0, 4, 200.0);
@@ -308,6 +411,41 @@ TEST(SimulatorBound, UsesEveryStaticPointOfTheWindowAndNothingElse) {
   // A result without a state has no window and no bound.
   InitResult none;
   EXPECT_FALSE(sim::cramerRaoBound(rec, cfg, none).ok);
+}
+
+// The bound is the physical limit of the simulated unit: its true per-axis IMU noise and Doppler
+// noise, whatever noise the estimator was handed in its configuration.
+TEST(SimulatorBound, UsesTheTrueNoiseNeverTheDeclared) {
+  auto sc = sim::preset("dyna_01", 2);
+  sc.duration = 0.4;
+  sc.points_per_frame = 2000;
+  sc.gyro_sigma = 0.003;
+  sc.gyro_sigma_scale = Vec3(0.8, 1.0, 1.2);
+  sc.accel_sigma = 0.03;
+  sc.accel_sigma_scale = Vec3(1.1, 0.9, 1.15);
+  sc.doppler_sigma = 0.04;
+  const sim::Recording rec = sim::simulate(sc);
+  FreeInitConfig declared;  // the defaults: 0.002 rad/s, 0.02 m/s^2, 0.03 m/s
+  FreeInitConfig told_more = declared;
+  told_more.imu.gyro_sigma = 0.012;
+  told_more.imu.accel_sigma = 0.12;
+  told_more.doppler.doppler_sigma = 0.12;
+  for (const FreeInitConfig* cfg : {&declared, &told_more}) {
+    const BoundModel m = sim::boundModel(rec, *cfg);
+    EXPECT_LT((m.gyroSigmaPerAxis() - Vec3(0.0024, 0.003, 0.0036)).norm(), 1e-15);
+    EXPECT_EQ(m.accelSigmaPerAxis(), sc.accelSigmaPerAxis());
+    EXPECT_EQ(m.doppler_sigma, 0.04);
+  }
+  const double t0 = rec.imu[5].t, t1 = rec.imu[60].t;
+  const Bound a = sim::cramerRaoBound(rec, sim::boundModel(rec, declared), t0, t1);
+  const Bound b = sim::cramerRaoBound(rec, sim::boundModel(rec, told_more), t0, t1);
+  ASSERT_TRUE(a.ok && b.ok);
+  EXPECT_EQ(a.cov, b.cov);
+  // One figure per sensor: the RMS over the axes.
+  const sim::NoiseFigures truth = sim::trueNoise(rec);
+  EXPECT_NEAR(truth.gyro, 0.003 * std::sqrt((0.64 + 1.0 + 1.44) / 3), 1e-15);
+  EXPECT_NEAR(truth.accel, 0.03 * std::sqrt((1.21 + 0.81 + 1.3225) / 3), 1e-15);
+  EXPECT_EQ(truth.doppler, 0.04);
 }
 
 }  // namespace

@@ -1,19 +1,23 @@
 // The evaluation report: CSV written and read back, failure marking, the paper-layout summary,
-// the displacement error, the job pool, the PNG writer, the methods run on equal terms and
-// freeinit-eval's app class (its command line, a tiny run).
+// the summaries per block of misdeclaration, the displacement error, the job pool, the PNG
+// writer, the methods run on equal terms and freeinit-eval's app class (its command line, runs
+// paired across noise factors, a tiny run).
 #include <freeinit/eval/state_errors.h>
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/methods.h>
 #include <freeinit/report/plot.h>
 #include <freeinit/rotation.h>
+#include <freeinit/sim/presets.h>
 #include <freeinit/sim/simulator.h>
 #include <gtest/gtest.h>
 #include <pthread.h>
 #include <sys/resource.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <atomic>
 #include <cmath>
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -25,6 +29,7 @@
 #include <vector>
 
 #include "eval_app.h"
+#include "test_sim_recording_hash.h"
 
 namespace freeinit::report {
 namespace {
@@ -59,6 +64,18 @@ std::vector<EvalRow> sampleRows() {
   ok.sigma_gyro_bias = 0.0101;
   ok.sigma_accel_bias = 0.05;  // against an infinite bound: not compared
   ok.rest_duration = 0.25;
+  ok.block = "imu×4 doppler≈×0.5";
+  ok.imu_noise_factor = 4;
+  ok.doppler_noise_factor = 0.61;
+  ok.noise_gyro = {0.0005, 0.0021, kNoValue, kNoValue};
+  ok.noise_accel = {0.005, 0.019, 0.0195, 0.06};  // as an estimator will report it
+  ok.noise_doppler = {0.049, 0.03, kNoValue, kNoValue};
+  ok.time_offset_true = -0.0081;
+  ok.time_offset_reported = -0.0079;
+  ok.time_offset_reported_sigma = 0.0004;
+  ok.crb_gyro_bias_zero_rate = 0.00031;
+  ok.window_samples = 101;
+  ok.rest_samples = 40;
   EvalRow fast = ok;
   fast.method = "fast-lio2";
   fast.velocity_err = 1.22;  // over the 0.2 m/s threshold
@@ -113,6 +130,17 @@ TEST(EvalTable, CsvReadsBackWhatWasWritten) {
     EXPECT_EQ(back[i].warnings, rows[i].warnings);
     EXPECT_EQ(back[i].wrong_calibration, rows[i].wrong_calibration);
     EXPECT_TRUE(same(back[i].rest_duration, rows[i].rest_duration));
+    EXPECT_EQ(back[i].block, rows[i].block);
+    EXPECT_EQ(back[i].window_samples, rows[i].window_samples);
+    EXPECT_EQ(back[i].rest_samples, rows[i].rest_samples);
+    for (auto f : {&SensorNoise::declared, &SensorNoise::truth, &SensorNoise::reported,
+                   &SensorNoise::reported_rel_sigma})
+      for (auto n : {&EvalRow::noise_gyro, &EvalRow::noise_accel, &EvalRow::noise_doppler})
+        EXPECT_TRUE(same(back[i].*n.*f, rows[i].*n.*f));
+    for (auto f : {&EvalRow::imu_noise_factor, &EvalRow::doppler_noise_factor,
+                   &EvalRow::time_offset_true, &EvalRow::time_offset_reported,
+                   &EvalRow::time_offset_reported_sigma, &EvalRow::crb_gyro_bias_zero_rate})
+      EXPECT_TRUE(same(back[i].*f, rows[i].*f)) << back[i].*f << " vs " << rows[i].*f;
     for (auto f : {&EvalRow::speed,           &EvalRow::velocity_err,
                    &EvalRow::gravity_err_deg, &EvalRow::gravity_bound_deg,
                    &EvalRow::gyro_bias_err,   &EvalRow::accel_bias_err,
@@ -142,20 +170,26 @@ TEST(EvalTable, BadCsvNamesFileAndLine) {
           << e.what();
     }
   };
-  // A row of the 34 columns: source, seed, method, status, 24 numbers, confident_wrong, failed,
-  // failure, warnings, wrong_calibration, rest_s.
+  // A row of the 56 columns: source, seed, method, status, 24 numbers, confident_wrong, failed,
+  // failure, warnings, wrong_calibration, rest_s, block, 18 numbers, window_samples, rest_samples
+  // and the zero-rate ratio.
   auto line = [](const std::string& seed, const std::string& first_number,
-                 const std::string& tail = "0,0,0") {
+                 const std::string& tail = "0,0,0", const std::string& samples = "100,50,") {
     std::string l = "dyna_02," + seed + ",free-init,ok," + first_number;
     for (int i = 0; i < 23; ++i) l += ",";
-    return l + ",,0,," + tail;
+    l += ",,0,," + tail + ",imu×2";
+    for (int i = 0; i < 18; ++i) l += ",";
+    return l + "," + samples;
   };
   expectError(line("1", "abc"), "not a number");
   expectError(line("2.7", ""), "seed");  // was truncated to 2
   expectError(line("3", "", "1.5,0,0"), "warnings is not a whole number");
   expectError(line("4", "", "0,yes,0"), "wrong_calibration must be 0 or 1");
   expectError(line("5", "", "0,0,x"), "not a number");
-  expectError("dyna_02,1,free-init,ok,,,,,,,,,0,", "14 fields, expected 34");
+  expectError(line("6", "", "0,0,0", "100,-1,"), "rest_samples is not a whole number");
+  expectError(line("7", "", "0,0,0", "100.5,50,"), "window_samples is not a whole number");
+  expectError(line("8", "", "0,0,0", "100,50,abc"), "not a number");
+  expectError("dyna_02,1,free-init,ok,,,,,,,,,0,", "14 fields, expected 56");
   std::filesystem::remove(path);
   EXPECT_THROW(readEvalCsv(path), std::runtime_error);  // missing file
 }
@@ -279,9 +313,73 @@ TEST(EvalSummary, CountsStatusesRatiosNeesAndConfidentWrongAnswers) {
   std::string header, line;
   std::getline(f, header);
   std::getline(f, line);
-  EXPECT_EQ(header.rfind("method,runs,ok,not_enough_data,", 0), 0u) << header;
-  EXPECT_EQ(line.rfind("m,22,20,0,0,0,0,1,0,1,20,10.5,19.05,", 0), 0u) << line;
+  EXPECT_EQ(header.rfind("method,block,runs,ok,not_enough_data,", 0), 0u) << header;
+  EXPECT_EQ(line.rfind("m,,22,20,0,0,0,0,1,0,1,20,10.5,19.05,", 0), 0u) << line;
   std::filesystem::remove(path);
+}
+
+// Runs handed different misdeclarations are summarized apart, one row per method and block, the
+// blocks in the order of their numbers; within each: the static starts against the zero-rate
+// bound and the noise the method reports against the truth.
+TEST(EvalSummary, BlocksOfFactorsStaticStartsAndReportedNoise) {
+  std::vector<EvalRow> rows;
+  for (const char* block : {"imu×4", "imu×0.25", "imu×1", "imu×16"})
+    for (EvalRow r : ratioRows(4)) {
+      r.block = block;
+      rows.push_back(r);
+    }
+  // In block imu×4: three static starts (whole window at rest), b_g 1, 2 and 4 times the
+  // zero-rate bound; one run only partly at rest (not a static start).
+  for (int i = 0; i < 4; ++i) {
+    EvalRow& r = rows[static_cast<std::size_t>(i)];
+    r.window_samples = 100;
+    r.rest_samples = i < 3 ? 100 : 60;
+    r.crb_gyro_bias_zero_rate = r.gyro_bias_err / (i == 0 ? 1 : 2 * i);
+  }
+  // Reported noise in block imu×1: the gyro within 20 % (resolved), 30 % off (resolved), within
+  // 20 % but not resolved (relative sigma 10 %), and one without a report.
+  const double reported[4] = {0.0023, 0.0026, 0.0021, kNoValue};
+  const double rel_sigma[4] = {0.05, 0.05, 0.10, kNoValue};
+  for (int i = 0; i < 4; ++i) {
+    EvalRow& r = rows[static_cast<std::size_t>(8 + i)];
+    r.noise_gyro = {0.002, 0.002, reported[i], rel_sigma[i]};
+    r.time_offset_true = 0.008;
+    r.time_offset_reported = 0.008 + 0.001 * i;
+    r.time_offset_reported_sigma = 0.001;  // within 3 sigma: i = 0..3
+  }
+  const auto s = summarize(rows);
+  ASSERT_EQ(s.size(), 4u);
+  EXPECT_EQ(s[0].block, "imu×0.25");
+  EXPECT_EQ(s[1].block, "imu×1");
+  EXPECT_EQ(s[2].block, "imu×4");
+  EXPECT_EQ(s[3].block, "imu×16");
+  EXPECT_EQ(s[2].label(), "m · imu×4");
+  for (const MethodSummary& m : s) {
+    EXPECT_EQ(m.runs, 4);
+    EXPECT_NEAR(m.ratio_median[0], 2.5, 1e-12);
+  }
+  EXPECT_EQ(s[2].static_starts, 3);
+  EXPECT_EQ(s[2].static_gyro_bias_above_zero_rate, 1);
+  EXPECT_NEAR(s[2].zero_rate_ratio_median, 2.0, 1e-12);
+  EXPECT_EQ(s[0].static_starts, 0);
+  EXPECT_TRUE(std::isnan(s[0].zero_rate_ratio_median));
+  EXPECT_EQ(s[1].noise_resolved[0], 2);
+  EXPECT_EQ(s[1].noise_within[0], 1);
+  EXPECT_EQ(s[1].noise_resolved[1], 0);
+  EXPECT_EQ(s[1].time_offset_reported, 4);
+  EXPECT_EQ(s[1].time_offset_within, 4);
+  const std::string md = boundsMarkdown(rows);
+  EXPECT_NE(md.find("| m · imu×0.25 | 4 / 4 |"), std::string::npos) << md;
+  EXPECT_LT(md.find("| m · imu×1 | 4 / 4 |"), md.find("| m · imu×16 | 4 / 4 |")) << md;
+  EXPECT_NE(md.find("| m · imu×4 | 1/3 | 2.00 | 3.80 |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| m · imu×0.25 | – | – | – |"), std::string::npos) << md;
+  EXPECT_NE(md.find("| m · imu×1 | 1/2 (50.0 %) | – | – | 4/4 (100.0 %) |"), std::string::npos)
+      << md;
+  // Without any report: one sentence instead of the table.
+  const std::string plain = boundsMarkdown(ratioRows(3));
+  EXPECT_NE(plain.find("No method reports the noise or the clock offset it used"),
+            std::string::npos);
+  EXPECT_NE(plain.find("| m | – | – | – |"), std::string::npos) << plain;
 }
 
 // A run handed a wrong calibration is a test of the verdict, not of the estimator against its
@@ -622,6 +720,75 @@ TEST(EvalApp, ParsesTheCommandLine) {
   EXPECT_EQ(parseLine(app, {}), EvalApp::Action::Run);  // the defaults again
   EXPECT_EQ(app.params.seeds, 3);
   EXPECT_TRUE(app.params.presets.empty());  // every preset
+  EXPECT_FALSE(app.params.imu_noise_factor || app.params.doppler_noise_factor ||
+               app.params.time_offset);
+  // What the estimator is handed: a value or a range.
+  ASSERT_EQ(parseLine(app, {"--imu-noise-factor", "0.25:4", "--doppler-noise-factor", "2",
+                            "--time-offset", "0.008"}),
+            EvalApp::Action::Run);
+  ASSERT_TRUE(app.params.imu_noise_factor && app.params.doppler_noise_factor &&
+              app.params.time_offset);
+  EXPECT_EQ(app.params.imu_noise_factor->lo, 0.25);
+  EXPECT_EQ(app.params.imu_noise_factor->hi, 4.0);
+  EXPECT_EQ(app.params.doppler_noise_factor->lo, 2.0);
+  EXPECT_EQ(app.params.doppler_noise_factor->hi, 2.0);
+  EXPECT_EQ(app.params.time_offset->lo, 0.008);
+  EXPECT_EQ(app.params.time_offset->hi, 0.008);
+}
+
+/// recordingDigest of a case's scenario, shortened to keep the simulation small.
+std::uint64_t digestOf(const apps::EvalCase& c) {
+  sim::ScenarioConfig sc = c.scenario;
+  sc.duration = 0.25;
+  sc.points_per_frame = std::min(sc.points_per_frame, 1500);
+  return sim::test::recordingDigest(sim::simulate(sc));
+}
+
+// A seed's recording is the same whatever the noise factors (they only change what the estimator
+// is handed), so runs at different factors are paired; the injected offset changes the LiDAR
+// stamps alone, and the runs that carry it are measured against their bound.
+TEST(EvalApp, RunsArePairedAcrossFactors) {
+  auto casesOf = [](std::vector<const char*> args) {
+    EvalApp app;
+    for (const char* a : {"--random", "3", "--seed-base", "44100001", "--no-baselines"})
+      args.push_back(a);
+    parseLine(app, args);
+    return app.cases();
+  };
+  const auto plain = casesOf({});
+  const auto quarter = casesOf({"--imu-noise-factor", "0.25", "--doppler-noise-factor", "4"});
+  const auto drawn = casesOf({"--imu-noise-factor", "0.25:4", "--doppler-noise-factor", "0.25:4"});
+  const auto offset = casesOf({"--time-offset", "0.008"});
+  ASSERT_EQ(plain.size(), 3u);
+  for (std::size_t i = 0; i < plain.size(); ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(plain[i].block, "");
+    EXPECT_EQ(plain[i].misdeclared.imu_noise_factor, 1.0);
+    EXPECT_EQ(quarter[i].block, "imu×0.25 doppler×4");
+    EXPECT_EQ(quarter[i].misdeclared.imu_noise_factor, 0.25);
+    EXPECT_EQ(quarter[i].misdeclared.doppler_noise_factor, 4.0);
+    EXPECT_GE(drawn[i].misdeclared.imu_noise_factor, 0.25);
+    EXPECT_LE(drawn[i].misdeclared.imu_noise_factor, 4.0);
+    EXPECT_EQ(drawn[i].block.rfind("imu≈×", 0), 0u) << drawn[i].block;
+    EXPECT_EQ(std::abs(offset[i].scenario.lidar_time_offset), 0.008);
+    EXPECT_EQ(offset[i].scenario.lidar_time_offset, offset[i].misdeclared.time_offset);
+    EXPECT_EQ(offset[i].block, "offset±8ms");
+    EXPECT_EQ(quarter[i].seed, plain[i].seed);
+    const std::uint64_t digest = digestOf(plain[i]);
+    EXPECT_EQ(digestOf(quarter[i]), digest);
+    EXPECT_EQ(digestOf(drawn[i]), digest);
+    apps::EvalCase back = offset[i];
+    EXPECT_NE(digestOf(back), digest);
+    back.scenario.lidar_time_offset = plain[i].scenario.lidar_time_offset;
+    EXPECT_EQ(digestOf(back), digest);  // the offset is all it changes
+    // An injected offset is measured against the bound; a drawn extrinsics error stays apart.
+    const bool extrinsics_wrong = plain[i].scenario.declared_rotation_error_deg.norm() > 0 ||
+                                  plain[i].scenario.declared_position_error.norm() > 0;
+    EXPECT_EQ(offset[i].wrong_calibration, extrinsics_wrong);
+    EXPECT_EQ(quarter[i].wrong_calibration, plain[i].wrong_calibration);
+  }
+  // Drawn per run: not all the same.
+  EXPECT_NE(drawn[0].misdeclared.imu_noise_factor, drawn[1].misdeclared.imu_noise_factor);
 }
 
 TEST(EvalApp, HelpAndVersionWinWhateverElseIsOnTheLine) {
@@ -663,6 +830,18 @@ TEST(EvalApp, BadArgumentsGiveOneLineNamingTheFlag) {
                                 {"--gyro-prior", {"--gyro-prior", "-0.1"}},
                                 {"--tau", {"--tau", "inf"}},
                                 {"--time-offset-sigma", {"--time-offset-sigma", "0.2"}},
+                                {"--imu-noise-factor", {"--imu-noise-factor", "0"}},
+                                {"--imu-noise-factor", {"--imu-noise-factor", "x"}},
+                                {"--imu-noise-factor", {"--imu-noise-factor", "4:0.25"}},
+                                {"--imu-noise-factor", {"--imu-noise-factor", "0.25:"}},
+                                {"--imu-noise-factor", {"--imu-noise-factor", "1:200"}},
+                                {"--doppler-noise-factor", {"--doppler-noise-factor", "nan"}},
+                                {"--doppler-noise-factor", {"--doppler-noise-factor", "-2"}},
+                                {"--doppler-noise-factor", {"--doppler-noise-factor"}},
+                                {"--time-offset", {"--time-offset", "-0.001"}},
+                                {"--time-offset", {"--time-offset", "0.2"}},
+                                {"--time-offset", {"--time-offset", "0.01:0.001"}},
+                                {"--time-offset", {"--time-offset", "1:2:3"}},
                                 {"--md", {"--md"}},
                                 {"--csv", {"--csv", "--md", "x"}},
                                 {"--bogus", {"dyna_04", "--bogus"}},
@@ -709,6 +888,54 @@ TEST(EvalApp, ATinyRunGivesARowPerMethodAndTheFiles) {
   ASSERT_EQ(back.size(), 4u);
   EXPECT_EQ(back[3].method, "doppler-ls");
   std::filesystem::remove_all(dir);
+}
+
+// A run handed wrong noise: the estimator gets the datasheet noise over the factor, the row says
+// what it was handed and what the truth is, and the bound stays the true noise's.
+TEST(EvalApp, TheRowSaysWhatTheEstimatorWasHandedAndTheTruth) {
+  const std::string csv = tempPath("eval_factors.csv");
+  std::vector<EvalRow> by_factor[2];
+  const char* const factors[2] = {"1", "4"};
+  for (int k = 0; k < 2; ++k) {
+    EvalApp app;
+    ASSERT_EQ(parseLine(app, {"-q", "--seeds", "1", "--jobs", "1", "--no-baselines", "--points",
+                              "2000", "--duration", "0.6", "stat_01", "--imu-noise-factor",
+                              factors[k], "--csv", csv.c_str()}),
+              EvalApp::Action::Run);
+    std::ostringstream out, progress;
+    app.run(out, progress);
+    ASSERT_EQ(app.rows.size(), 1u);
+    by_factor[k] = readEvalCsv(csv);
+    EXPECT_NE(out.str().find("| free-init · imu×" + std::string(factors[k]) + " | 1 / 1 |"),
+              std::string::npos)
+        << out.str();
+  }
+  std::filesystem::remove(csv);
+  const sim::ScenarioConfig sc = sim::preset("stat_01", 1);
+  for (int k = 0; k < 2; ++k) {
+    const EvalRow& r = by_factor[k][0];
+    const double f = k == 0 ? 1 : 4;
+    EXPECT_EQ(r.status, "ok");
+    EXPECT_EQ(r.imu_noise_factor, f);
+    EXPECT_EQ(r.doppler_noise_factor, 1.0);
+    EXPECT_NEAR(r.noise_gyro.declared, sc.gyro_sigma / f, 1e-12);
+    EXPECT_NEAR(r.noise_accel.declared, sc.accel_sigma / f, 1e-12);
+    EXPECT_NEAR(r.noise_doppler.declared, sc.doppler_sigma, 1e-12);
+    EXPECT_NEAR(r.noise_gyro.truth, sc.gyroSigmaPerAxis().norm() / std::sqrt(3.0), 1e-12);
+    EXPECT_NEAR(r.noise_doppler.truth, sc.doppler_sigma, 1e-12);
+    EXPECT_TRUE(std::isnan(r.noise_gyro.reported));  // the estimator reports none yet
+    EXPECT_EQ(r.time_offset_true, 0.0);
+    // A static preset: at rest over the whole window, with its zero-rate bound.
+    EXPECT_TRUE(r.staticWindow()) << r.rest_samples << " of " << r.window_samples;
+    EXPECT_NEAR(
+        r.crb_gyro_bias_zero_rate,
+        eval::zeroRateGyroBiasBound(sc.gyroSigmaPerAxis(), static_cast<std::size_t>(r.rest_samples),
+                                    FreeInitConfig{}.imu.gyro_bias_sigma0),
+        1e-12);
+  }
+  // The bound is the truth's: the same whatever the estimator was told.
+  EXPECT_EQ(by_factor[0][0].crb_velocity, by_factor[1][0].crb_velocity);
+  EXPECT_EQ(by_factor[0][0].crb_gyro_bias, by_factor[1][0].crb_gyro_bias);
 }
 
 // An output folder that cannot be created fails before any run, naming its option.

@@ -1,6 +1,7 @@
 // Randomized scenarios: deterministic per seed, drawn as documented in random_scenario.h, and as
 // exactly consistent with their ground truth as the presets (IMU at every rate, Doppler of static
-// and moving points, labels, clock offset, declared calibration).
+// and moving points, labels, clock offset, declared calibration); the misdeclaration an
+// evaluation draws per run, apart from the scenario.
 #include <freeinit/sim/random_scenario.h>
 #include <freeinit/sim/scenario_ini.h>
 #include <freeinit/sim/scene.h>
@@ -69,6 +70,68 @@ TEST(SimRandom, DeterministicPerSeed) {
   EXPECT_NE(c5.b_g, c6.b_g);
   EXPECT_EQ(c5.name, "random");
   EXPECT_EQ(c5.seed, 5u);
+}
+
+// What an evaluation hands the estimator instead of the truth: deterministic per seed, exactly a
+// fixed value, log-uniform factors and uniform offsets of either sign over their ranges, each
+// quantity's draw independent of the other ranges, and the scenario (so the recording) untouched.
+TEST(SimRandom, MisdeclarationIsDrawnApartFromTheScenario) {
+  MisdeclarationRanges ranges;
+  ranges.imu_noise_factor = {0.25, 4};
+  ranges.doppler_noise_factor = {0.5, 2};
+  ranges.time_offset = {0.001, 0.01};
+  const Misdeclaration a = drawMisdeclaration(7, ranges), b = drawMisdeclaration(7, ranges);
+  EXPECT_EQ(a.imu_noise_factor, b.imu_noise_factor);
+  EXPECT_EQ(a.doppler_noise_factor, b.doppler_noise_factor);
+  EXPECT_EQ(a.time_offset, b.time_offset);
+  // The defaults: the truth.
+  const Misdeclaration none = drawMisdeclaration(7, {});
+  EXPECT_EQ(none.imu_noise_factor, 1.0);
+  EXPECT_EQ(none.doppler_noise_factor, 1.0);
+  EXPECT_EQ(none.time_offset, 0.0);
+  Stats log_imu, log_doppler;
+  long positive = 0, n = 0;
+  for (std::uint64_t seed = 1; seed <= 2000; ++seed, ++n) {
+    const Misdeclaration m = drawMisdeclaration(seed, ranges);
+    ASSERT_GE(m.imu_noise_factor, 0.25);
+    ASSERT_LE(m.imu_noise_factor, 4.0);
+    ASSERT_GE(m.doppler_noise_factor, 0.5);
+    ASSERT_LE(m.doppler_noise_factor, 2.0);
+    ASSERT_GE(std::abs(m.time_offset), 0.001);
+    ASSERT_LE(std::abs(m.time_offset), 0.01);
+    log_imu.add(std::log(m.imu_noise_factor));
+    log_doppler.add(std::log(m.doppler_noise_factor));
+    if (m.time_offset > 0) ++positive;
+    // Another Doppler range or a fixed offset leaves the IMU factor of the seed as it was.
+    MisdeclarationRanges other = ranges;
+    other.doppler_noise_factor = {3, 3};
+    other.time_offset = {0.008, 0.008};
+    const Misdeclaration o = drawMisdeclaration(seed, other);
+    ASSERT_EQ(o.imu_noise_factor, m.imu_noise_factor);
+    ASSERT_EQ(o.doppler_noise_factor, 3.0);
+    ASSERT_EQ(std::abs(o.time_offset), 0.008);
+    ASSERT_EQ(o.time_offset > 0, m.time_offset > 0);
+  }
+  // log f uniform over [log lo, log hi]: mean at the log of the geometric mean, sd range/sqrt(12).
+  const double sd_imu = std::log(16.0) / std::sqrt(12.0),
+               sd_doppler = std::log(4.0) / std::sqrt(12.0);
+  EXPECT_NEAR(log_imu.mean(), 0.0, 4 * sd_imu / std::sqrt(2000.0));
+  EXPECT_NEAR(log_imu.std(), sd_imu, 0.05 * sd_imu);
+  EXPECT_NEAR(log_doppler.mean(), 0.0, 4 * sd_doppler / std::sqrt(2000.0));
+  expectShare(positive, n, 0.5, "positive offsets");
+  // Bad ranges.
+  for (const DrawRange bad : {DrawRange{2, 1}, DrawRange{0, 1}, DrawRange{std::nan(""), 1}}) {
+    MisdeclarationRanges r;
+    r.imu_noise_factor = bad;
+    EXPECT_THROW(drawMisdeclaration(1, r), std::invalid_argument);
+  }
+  MisdeclarationRanges r;
+  r.time_offset = {-0.001, 0.001};
+  EXPECT_THROW(drawMisdeclaration(1, r), std::invalid_argument);
+  // The scenario of a seed is not drawn from this stream: the same before and after.
+  const std::string before = scenarioIni(randomScenario(7));
+  drawMisdeclaration(7, ranges);
+  EXPECT_EQ(scenarioIni(randomScenario(7)), before);
 }
 
 // 300 draws (no simulation): shares within 4 binomial sigmas of the documented probabilities,

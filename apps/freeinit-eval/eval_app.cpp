@@ -42,6 +42,18 @@ const char* const kUsage =
     "  --seed-base S        first seed of --random (1)\n"
     "  --calibration-sigma DEG, --time-offset-sigma S: the declared calibration's accuracy\n"
     "                       ([joint] calibration_rotation_sigma_deg, time_offset_sigma)\n"
+    "  --imu-noise-factor F | LO:HI\n"
+    "  --doppler-noise-factor F | LO:HI\n"
+    "                       the true noise over the one the estimator is handed (it gets the\n"
+    "                       datasheet noise / F; gyro and accelerometer alike), F in [0.01, 100];\n"
+    "                       LO:HI: drawn per run, log-uniform, from a stream of its own (a seed's\n"
+    "                       recording is the same whatever the factors: runs are paired). The\n"
+    "                       bound always uses the true noise. Summaries per factor block\n"
+    "  --time-offset S | LO:HI\n"
+    "                       an undeclared LiDAR-IMU clock offset of this size [s] in [0, 0.1]\n"
+    "                       (LO:HI: uniform per run), either sign, injected into the recording\n"
+    "                       (it replaces a randomized scenario's own; these runs are measured\n"
+    "                       against their bound, not counted apart as a wrong calibration)\n"
     "  --jobs N             parallel jobs (0: hardware concurrency, the default)\n"
     "  --md FILE            Markdown report (paper Table I/II layout, errors against the\n"
     "                       Cramer-Rao bound, statuses, every run)\n"
@@ -93,6 +105,24 @@ EvalAppParams parseParams(int argc, const char* const* argv) {
       throw UsageError(flag + ": must be in [" + text(lo) + ", " + text(hi) + "], not '" + v + "'");
     return *x;
   };
+  // "F" or "LO:HI", finite, in [lo, hi], LO <= HI.
+  auto range = [&](int& i, double lo, double hi) {
+    const std::string flag = argv[i], v = value(i);
+    const std::size_t colon = v.find(':');
+    const std::string parts[2] = {v.substr(0, colon),
+                                  colon == std::string::npos ? v : v.substr(colon + 1)};
+    double x[2];
+    for (int k = 0; k < 2; ++k) {
+      const auto p = report::parseDouble(parts[k]);
+      if (!p || !std::isfinite(*p)) throw UsageError(flag + ": not a number or LO:HI: '" + v + "'");
+      if (!(*p >= lo && *p <= hi))
+        throw UsageError(flag + ": must be in [" + text(lo) + ", " + text(hi) + "], not '" + v +
+                         "'");
+      x[k] = *p;
+    }
+    if (x[0] > x[1]) throw UsageError(flag + ": LO must not exceed HI in LO:HI, not '" + v + "'");
+    return sim::DrawRange{x[0], x[1]};
+  };
   // A positive finite number.
   auto positive = [&](int& i) {
     const std::string flag = argv[i];
@@ -116,6 +146,9 @@ EvalAppParams parseParams(int argc, const char* const* argv) {
       {"--seed-base", [&](int& i) { o.seed_base = integer(i, 0, 2000000000); }},
       {"--calibration-sigma", [&](int& i) { o.calibration_sigma = number(i, 0, 10); }},
       {"--time-offset-sigma", [&](int& i) { o.time_offset_sigma = number(i, 0, 0.1); }},
+      {"--imu-noise-factor", [&](int& i) { o.imu_noise_factor = range(i, 0.01, 100); }},
+      {"--doppler-noise-factor", [&](int& i) { o.doppler_noise_factor = range(i, 0.01, 100); }},
+      {"--time-offset", [&](int& i) { o.time_offset = range(i, 0, 0.1); }},
       {"--jobs", [&](int& i) { o.jobs = static_cast<unsigned>(integer(i, 0, 1024)); }},
       {"--md", [&](int& i) { o.md = value(i); }},
       {"--csv", [&](int& i) { o.csv = value(i); }},
@@ -160,16 +193,43 @@ EvalAppParams parseParams(int argc, const char* const* argv) {
   return o;
 }
 
-/// One run of the evaluation: a scenario of the simulator and its name in the tables.
-struct EvalCase {
-  std::string source;  ///< the tables' input column
-  int seed = 0;        ///< the tables' seed column
-  sim::ScenarioConfig scenario;
-  bool wrong_calibration = false;  ///< the declared calibration is wrong on purpose
-};
+/// The parameters run() works with: the duration and the presets filled in.
+EvalAppParams resolved(EvalAppParams o) {
+  if (o.duration < 0) o.duration = o.methods.baselines ? o.methods.dlio_duration + 0.2 : 1.2;
+  if (o.presets.empty()) o.presets = sim::presetNames();
+  return o;
+}
 
-/// The command line's changes to a scenario (duration, points, the zero-gyro-bias variant).
-void applyOverrides(const EvalAppParams& o, sim::ScenarioConfig& sc) {
+/// The summary block of a run: each misdeclaration the command line asks for, a fixed value as
+/// it is, a drawn factor binned to the nearest power of two ("imu≈×2"), a drawn offset by its
+/// range.
+std::string blockOf(const EvalAppParams& o, const sim::Misdeclaration& m) {
+  auto format = [](const char* fmt, double x) {
+    char buf[48];
+    std::snprintf(buf, sizeof(buf), fmt, x);
+    return std::string(buf);
+  };
+  auto factor = [&](const char* name, const std::optional<sim::DrawRange>& r, double f) {
+    if (!r) return std::string();
+    if (r->lo == r->hi) return std::string(name) + "×" + format("%g", f);
+    return std::string(name) + "≈×" + format("%g", std::exp2(std::round(std::log2(f))));
+  };
+  std::string block;
+  for (std::string part : {factor("imu", o.imu_noise_factor, m.imu_noise_factor),
+                           factor("doppler", o.doppler_noise_factor, m.doppler_noise_factor)})
+    if (!part.empty()) block += (block.empty() ? "" : " ") + part;
+  if (o.time_offset) {
+    const sim::DrawRange& t = *o.time_offset;
+    block += std::string(block.empty() ? "" : " ") + "offset±" + format("%g", 1e3 * t.lo) +
+             (t.lo == t.hi ? "" : "-" + format("%g", 1e3 * t.hi)) + "ms";
+  }
+  return block;
+}
+
+/// The command line's changes to a case (duration, points, the zero-gyro-bias variant, what the
+/// estimator is handed and the injected clock offset).
+void applyOverrides(const EvalAppParams& o, EvalCase& c) {
+  sim::ScenarioConfig& sc = c.scenario;
   sc.duration = o.duration;
   if (o.points > 0) sc.points_per_frame = o.points;
   if (o.zero_bg) {
@@ -177,6 +237,17 @@ void applyOverrides(const EvalAppParams& o, sim::ScenarioConfig& sc) {
     sc.b_g.setZero();
     sc.b_a = Vec3(0.1, -0.08, 0.05);
   }
+  sim::MisdeclarationRanges ranges;
+  if (o.imu_noise_factor) ranges.imu_noise_factor = *o.imu_noise_factor;
+  if (o.doppler_noise_factor) ranges.doppler_noise_factor = *o.doppler_noise_factor;
+  if (o.time_offset) ranges.time_offset = *o.time_offset;
+  c.misdeclared = sim::drawMisdeclaration(static_cast<std::uint64_t>(c.seed), ranges);
+  if (o.time_offset) {
+    sc.lidar_time_offset = c.misdeclared.time_offset;
+    c.wrong_calibration =
+        sc.declared_rotation_error_deg.norm() > 0 || sc.declared_position_error.norm() > 0;
+  }
+  c.block = blockOf(o, c.misdeclared);
 }
 
 /// Every preset of the command line x seeds 1..N. (Randomized scenarios are one more function of
@@ -185,8 +256,11 @@ std::vector<EvalCase> presetCases(const EvalAppParams& o) {
   std::vector<EvalCase> cases;
   for (const auto& name : o.presets)
     for (int seed = 1; seed <= o.seeds; ++seed) {
-      EvalCase c{name, seed, sim::preset(name, static_cast<std::uint64_t>(seed))};
-      applyOverrides(o, c.scenario);
+      EvalCase c;
+      c.source = name;
+      c.seed = seed;
+      c.scenario = sim::preset(name, static_cast<std::uint64_t>(seed));
+      applyOverrides(o, c);
       cases.push_back(std::move(c));
     }
   return cases;
@@ -198,9 +272,12 @@ std::vector<EvalCase> randomCases(const EvalAppParams& o) {
   std::vector<EvalCase> cases;
   for (long long seed = o.seed_base; seed < o.seed_base + o.random; ++seed) {
     const sim::RandomScenario r = sim::drawRandomScenario(static_cast<std::uint64_t>(seed));
-    EvalCase c{std::string(sim::platformName(r.info.platform)) + "/" + r.info.start,
-               static_cast<int>(seed), r.config, r.info.calibration_wrong};
-    applyOverrides(o, c.scenario);
+    EvalCase c;
+    c.source = std::string(sim::platformName(r.info.platform)) + "/" + r.info.start;
+    c.seed = static_cast<int>(seed);
+    c.scenario = r.config;
+    c.wrong_calibration = r.info.calibration_wrong;
+    applyOverrides(o, c);
     cases.push_back(std::move(c));
   }
   return cases;
@@ -219,16 +296,23 @@ void appendf(std::string& s, const char* fmt, Args... args) {
   s += buf;
 }
 
-FreeInitConfig configFor(const EvalAppParams& o, const sim::Recording& rec, int seed) {
+/// Whether the estimator is handed the scenario's datasheet noise (over the factors) rather than
+/// the configuration's default.
+bool declaresDatasheetNoise(const EvalAppParams& o) {
+  return o.random > 0 || o.imu_noise_factor || o.doppler_noise_factor;
+}
+
+FreeInitConfig configFor(const EvalAppParams& o, const EvalCase& c, const sim::Recording& rec) {
   FreeInitConfig cfg;
   if (o.calibration_sigma >= 0) cfg.joint.calibration_rotation_sigma_deg = o.calibration_sigma;
   if (o.time_offset_sigma >= 0) cfg.joint.time_offset_sigma = o.time_offset_sigma;
-  if (o.random > 0) {
+  if (declaresDatasheetNoise(o)) {
     // What a user of this rig would configure: the datasheet noise (the unit's own per-axis
-    // values scatter about it) and the calibration as declared (runMethods takes the extrinsics).
-    cfg.doppler.doppler_sigma = rec.config.doppler_sigma;
-    cfg.imu.gyro_sigma = rec.config.gyro_sigma;
-    cfg.imu.accel_sigma = rec.config.accel_sigma;
+    // values scatter about it), wrong by the run's factors, and the calibration as declared
+    // (runMethods takes the extrinsics).
+    cfg.doppler.doppler_sigma = rec.config.doppler_sigma / c.misdeclared.doppler_noise_factor;
+    cfg.imu.gyro_sigma = rec.config.gyro_sigma / c.misdeclared.imu_noise_factor;
+    cfg.imu.accel_sigma = rec.config.accel_sigma / c.misdeclared.imu_noise_factor;
   }
   if (o.stride > 0) cfg.doppler.point_stride = o.stride;
   if (o.window > 0) cfg.window.duration = o.window;
@@ -238,7 +322,7 @@ FreeInitConfig configFor(const EvalAppParams& o, const sim::Recording& rec, int 
   if (o.no_db) cfg.paper_gravity.estimate_gyro_bias = false;
   if (o.gyro_prior > 0) {
     // A gyro-bias prior as from a static calibration: the truth plus noise of that std.
-    std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(seed));
+    std::mt19937_64 rng(1000 + static_cast<std::uint64_t>(c.seed));
     std::normal_distribution<double> n01;
     cfg.imu.gyro_bias_prior = rec.b_g + o.gyro_prior * Vec3(n01(rng), n01(rng), n01(rng));
     cfg.imu.gyro_bias_sigma0 = o.gyro_prior;
@@ -248,7 +332,8 @@ FreeInitConfig configFor(const EvalAppParams& o, const sim::Recording& rec, int 
 
 JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
   const auto rec = sim::simulate(c.scenario);
-  const FreeInitConfig cfg = configFor(o, rec, c.seed);
+  const FreeInitConfig cfg = configFor(o, c, rec);
+  const sim::NoiseFigures truth_noise = sim::trueNoise(rec);
   const auto runs =
       report::runMethods(cfg, rec.imu, rec.frames, rec.declared_extrinsics, o.methods);
 
@@ -271,6 +356,19 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
   for (const auto& m : runs) {
     report::EvalRow row = report::makeEvalRow(c.source, c.seed, m, truth, boundOf(m.result));
     row.wrong_calibration = c.wrong_calibration;
+    row.block = c.block;
+    const bool datasheet = declaresDatasheetNoise(o);
+    row.imu_noise_factor = datasheet ? c.misdeclared.imu_noise_factor
+                                     : rec.config.gyro_sigma / cfg.imu.gyro_sigma;
+    row.doppler_noise_factor = datasheet ? c.misdeclared.doppler_noise_factor
+                                         : rec.config.doppler_sigma / cfg.doppler.doppler_sigma;
+    row.noise_gyro.declared = cfg.imu.gyro_sigma;
+    row.noise_accel.declared = cfg.imu.accel_sigma;
+    row.noise_doppler.declared = cfg.doppler.doppler_sigma;
+    row.noise_gyro.truth = truth_noise.gyro;
+    row.noise_accel.truth = truth_noise.accel;
+    row.noise_doppler.truth = truth_noise.doppler;
+    row.time_offset_true = rec.lidar_time_offset;
     out.rows.push_back(row);
     char head[96];
     std::snprintf(head, sizeof(head), "%-10s %-16s %2d  ", m.method.c_str(), c.source.c_str(),
@@ -287,6 +385,12 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
             row.ratioGravity(), row.ratioGyroBias(), row.ratioAccelBias());
     appendf(out.log, "  nees v=%6.2f tilt=%6.2f bg=%6.2f ba=%6.2f  %7.2f ms", row.nees_velocity,
             row.nees_tilt, row.nees_gyro_bias, row.nees_accel_bias, m.time_ms);
+    if (row.rest_samples > 0)
+      appendf(out.log, "  bg/zero-rate=%.2f (rest %d of %d)", row.ratioGyroBiasZeroRate(),
+              row.rest_samples, row.window_samples);
+    if (!c.block.empty())
+      appendf(out.log, "  factors imu=%.3g doppler=%.3g offset=%.2f ms", row.imu_noise_factor,
+              row.doppler_noise_factor, 1e3 * row.time_offset_true);
     const std::string wrong = row.confidentlyWrong();
     if (m.method == "free-init")
       appendf(
@@ -368,12 +472,15 @@ EvalApp::Action EvalApp::parse(int argc, const char* const* argv) {
   return Action::Run;
 }
 
+std::vector<EvalCase> EvalApp::cases() const {
+  const EvalAppParams o = resolved(params);
+  return o.random > 0 ? randomCases(o) : presetCases(o);
+}
+
 void EvalApp::run(std::ostream& out, std::ostream& progress) {
-  EvalAppParams o = params;
-  if (o.duration < 0) o.duration = o.methods.baselines ? o.methods.dlio_duration + 0.2 : 1.2;
-  if (o.presets.empty()) o.presets = sim::presetNames();
+  const EvalAppParams o = resolved(params);
   prepareOutputFolders(o);
-  const std::vector<EvalCase> cases = o.random > 0 ? randomCases(o) : presetCases(o);
+  const std::vector<EvalCase> cases = this->cases();
   std::vector<JobResult> results(cases.size());
   std::mutex progress_mutex;
   report::parallelFor(cases.size(), o.jobs, [&](std::size_t i) {

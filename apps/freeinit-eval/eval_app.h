@@ -8,8 +8,11 @@
 
 #include <freeinit/report/eval_table.h>
 #include <freeinit/report/methods.h>
+#include <freeinit/sim/random_scenario.h>
+#include <freeinit/sim/scenario.h>
 
 #include <iosfwd>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -44,6 +47,25 @@ struct EvalAppParams {
   report::MethodOptions methods;
   std::vector<std::string> presets;       ///< empty: every preset
   std::string command = "freeinit-eval";  ///< the command line, for the Markdown report
+  /// What the estimator is handed instead of the truth, drawn per run (sim::drawMisdeclaration,
+  /// seeded by the run's seed): [-] the true noise over the declared one, IMU and Doppler (the
+  /// estimator gets the datasheet noise / factor), and [s] |an undeclared LiDAR-IMU clock offset|
+  /// injected into the recording. Unset: the datasheet noise (--random) or the configuration's
+  /// (presets), and the scenario's own offset.
+  std::optional<sim::DrawRange> imu_noise_factor, doppler_noise_factor, time_offset;
+};
+
+/// One run of the evaluation: a scenario of the simulator, its name in the tables and what the
+/// estimator is handed instead of the truth.
+struct EvalCase {
+  std::string source;  ///< the tables' input column
+  int seed = 0;        ///< the tables' seed column
+  sim::ScenarioConfig scenario;
+  /// The declared extrinsics or clock are wrong on purpose (the randomized scenario's draw; an
+  /// offset injected with --time-offset is not: those runs are measured against their bound).
+  bool wrong_calibration = false;
+  sim::Misdeclaration misdeclared;  ///< the noise factors and the offset (in `scenario` already)
+  std::string block;                ///< the summary block (report::EvalRow::block)
 };
 
 class EvalApp {
@@ -70,6 +92,9 @@ class EvalApp {
   /// for. The folders of the outputs are created first: one that cannot be throws, naming its
   /// option, before any run. Throws on any error.
   void run(std::ostream& out, std::ostream& progress);
+
+  /// The runs `params` asks for, in table order: run() simulates each scenario as given here.
+  std::vector<EvalCase> cases() const;
 
   /// After run(): one row per case and method, failures marked, in the order of the tables.
   std::vector<report::EvalRow> rows;

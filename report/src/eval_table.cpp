@@ -4,8 +4,10 @@
 #include <freeinit/report/eval_table.h>
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <map>
 #include <ostream>
@@ -17,18 +19,33 @@ namespace {
 
 // Column order of the CSV; readEvalCsv requires exactly this header. The ratio columns and
 // confident_wrong are derived from the others.
-const char* const kHeader =
+constexpr char kHeader[] =
     "source,seed,method,status,speed_mps,velocity_err_mps,gravity_err_deg,gravity_bound_deg,"
     "gyro_bias_err_radps,accel_bias_err_mps2,position_err_m,time_ms,crb_velocity_mps,"
     "crb_gravity_deg,crb_gyro_bias_radps,crb_accel_bias_mps2,nees_velocity,nees_tilt,"
     "nees_gyro_bias,nees_accel_bias,sigma_velocity_mps,sigma_gravity_deg,sigma_gyro_bias_radps,"
     "sigma_accel_bias_mps2,ratio_velocity,ratio_gravity,ratio_gyro_bias,ratio_accel_bias,"
-    "confident_wrong,failed,failure,warnings,wrong_calibration,rest_s";
-constexpr std::size_t kColumns = 34;
+    "confident_wrong,failed,failure,warnings,wrong_calibration,rest_s,block,imu_noise_factor,"
+    "doppler_noise_factor,noise_gyro_declared_radps,noise_gyro_true_radps,"
+    "noise_gyro_reported_radps,noise_gyro_reported_rel_sigma,noise_accel_declared_mps2,"
+    "noise_accel_true_mps2,noise_accel_reported_mps2,noise_accel_reported_rel_sigma,"
+    "noise_doppler_declared_mps,noise_doppler_true_mps,noise_doppler_reported_mps,"
+    "noise_doppler_reported_rel_sigma,time_offset_true_s,time_offset_reported_s,"
+    "time_offset_reported_sigma_s,crb_gyro_bias_zero_rate_radps,window_samples,rest_samples,"
+    "ratio_gyro_bias_zero_rate";
+constexpr std::size_t columnsOf(const char* header) {
+  std::size_t n = 1;
+  for (const char* c = header; *c != '\0'; ++c) n += *c == ',' ? 1 : 0;
+  return n;
+}
+constexpr std::size_t kColumns = 56;
+static_assert(columnsOf(kHeader) == kColumns, "kHeader and kColumns disagree");
 constexpr std::size_t kFirstRatioColumn = 24;
 constexpr std::size_t kConfidentWrongColumn = 28;
 constexpr std::size_t kFailedColumn = 29, kFailureColumn = 30, kWarningsColumn = 31,
-                      kWrongCalibrationColumn = 32, kRestColumn = 33;
+                      kWrongCalibrationColumn = 32, kRestColumn = 33, kBlockColumn = 34,
+                      kFirstMisdeclarationColumn = 35, kWindowSamplesColumn = 53,
+                      kRestSamplesColumn = 54, kZeroRateRatioColumn = 55;
 
 /// The stored numeric fields of a row, in CSV order after "status".
 std::vector<double*> numbers(EvalRow& r) {
@@ -38,6 +55,21 @@ std::vector<double*> numbers(EvalRow& r) {
           &r.nees_velocity,  &r.nees_tilt,         &r.nees_gyro_bias,  &r.nees_accel_bias,
           &r.sigma_velocity, &r.sigma_gravity_deg, &r.sigma_gyro_bias, &r.sigma_accel_bias};
 }
+
+/// The stored numeric fields of a row after "block", in CSV order (up to window_samples).
+std::vector<double*> misdeclarationNumbers(EvalRow& r) {
+  std::vector<double*> out = {&r.imu_noise_factor, &r.doppler_noise_factor};
+  for (SensorNoise* n : {&r.noise_gyro, &r.noise_accel, &r.noise_doppler})
+    for (double* x : {&n->declared, &n->truth, &n->reported, &n->reported_rel_sigma})
+      out.push_back(x);
+  for (double* x : {&r.time_offset_true, &r.time_offset_reported, &r.time_offset_reported_sigma,
+                    &r.crb_gyro_bias_zero_rate})
+    out.push_back(x);
+  return out;
+}
+
+/// A count that may be unknown (-1: empty).
+std::string count(int n) { return n < 0 ? std::string() : std::to_string(n); }
 
 /// The derived ratios of a row, in CSV order.
 std::vector<double> ratios(const EvalRow& r) {
@@ -163,7 +195,10 @@ void writeEvalCsv(const std::string& path, const std::vector<EvalRow>& rows) {
       for (const double x : ratios(r)) o << "," << number(x);
       o << "," << quoted(r.confidentlyWrong()) << "," << (r.failed ? 1 : 0) << ","
         << quoted(r.failure) << "," << r.warnings << "," << (r.wrong_calibration ? 1 : 0) << ","
-        << number(r.rest_duration) << "\n";
+        << number(r.rest_duration) << "," << quoted(r.block);
+      for (const double* x : misdeclarationNumbers(r)) o << "," << number(*x);
+      o << "," << count(r.window_samples) << "," << count(r.rest_samples) << ","
+        << number(r.ratioGyroBiasZeroRate()) << "\n";
     }
   });
 }
@@ -207,6 +242,20 @@ std::vector<EvalRow> readEvalCsv(const std::string& path) {
       throw std::runtime_error(where + ": wrong_calibration must be 0 or 1");
     r.wrong_calibration = wrong == "1";
     r.rest_duration = parseNumber(c[kRestColumn], where);
+    r.block = c[kBlockColumn];
+    i = kFirstMisdeclarationColumn;
+    for (double* x : misdeclarationNumbers(r)) *x = parseNumber(c[i++], where);
+    auto samples = [&](std::size_t column, const char* name) {
+      if (c[column].empty()) return -1;
+      const auto v = parseDouble(c[column]);
+      if (!v || !(*v >= 0 && *v <= 1e9) || *v != std::floor(*v))
+        throw std::runtime_error(where + ": " + name + " is not a whole number >= 0: '" +
+                                 c[column] + "'");
+      return static_cast<int>(*v);
+    };
+    r.window_samples = samples(kWindowSamplesColumn, "window_samples");
+    r.rest_samples = samples(kRestSamplesColumn, "rest_samples");
+    parseNumber(c[kZeroRateRatioColumn], where);
     rows.push_back(r);
   }
   return rows;
@@ -302,11 +351,16 @@ void writeEvalMarkdown(const std::string& path, const std::vector<EvalRow>& rows
          "atan(|b_a,h| / g) + "
       << kGravityBoundMarginDeg
       << "°. err/CRB and NEES in the order "
-         "velocity, gravity (tilt), b_g, b_a.\n\n"
+         "velocity, gravity (tilt), b_g, b_a. Noise factors: the true noise over the one the "
+         "method was handed (IMU, Doppler); noise declared / true: gyro [rad/s], accelerometer "
+         "[m/s²], Doppler [m/s]; offset: the LiDAR-IMU clock offset in the recording, undeclared; "
+         "b_g / zero-rate: the gyro-bias error over the bound of an estimator that knows of the "
+         "window's rest (the share of the window at rest in brackets).\n\n"
       << "| input | seed | method | status | speed [m/s] | velocity err [m/s] | gravity err "
          "[deg] [b_a limit] | b_g err [rad/s] | b_a err [m/s²] | position err [m] | err/CRB | "
-         "NEES | time [ms] | failure "
-         "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+         "NEES | noise factors | noise declared / true | offset [ms] | b_g / zero-rate [rest] | "
+         "time [ms] | failure "
+         "|\n|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
     auto list = [](const std::vector<double>& xs) {
       std::string out;
       for (const double x : xs) out += (out.empty() ? "" : ", ") + shortNumber(x);
@@ -323,7 +377,22 @@ void writeEvalMarkdown(const std::string& path, const std::vector<EvalRow>& rows
         << (std::isnan(r.nees_velocity)
                 ? std::string()
                 : list({r.nees_velocity, r.nees_tilt, r.nees_gyro_bias, r.nees_accel_bias}))
-        << " | " << shortNumber(r.time_ms) << " | " << (r.failed ? r.failure : std::string())
+        << " | ";
+      if (!std::isnan(r.imu_noise_factor) || !std::isnan(r.doppler_noise_factor))
+        o << list({r.imu_noise_factor, r.doppler_noise_factor});
+      o << " | ";
+      std::string noise;
+      for (const SensorNoise* n : {&r.noise_gyro, &r.noise_accel, &r.noise_doppler})
+        if (!std::isnan(n->declared) || !std::isnan(n->truth))
+          noise += (noise.empty() ? "" : ", ") + shortNumber(n->declared) + " / " +
+                   shortNumber(n->truth);
+      o << noise << " | "
+        << (std::isnan(r.time_offset_true) ? std::string() : shortNumber(1e3 * r.time_offset_true))
+        << " | ";
+      if (r.rest_samples > 0)
+        o << shortNumber(r.ratioGyroBiasZeroRate()) << " ["
+          << shortNumber(static_cast<double>(r.rest_samples) / r.window_samples) << "]";
+      o << " | " << shortNumber(r.time_ms) << " | " << (r.failed ? r.failure : std::string())
         << " |\n";
     }
   });
@@ -366,62 +435,124 @@ double quantile(std::vector<double> values, double p) {
   return (1 - u) * values[lo] + u * values[hi];
 }
 
-std::vector<MethodSummary> summarize(const std::vector<EvalRow>& rows,
-                                     const eval::NoticeFloors& floors) {
-  std::vector<MethodSummary> out;
+namespace {
+
+/// a < b with the numbers in them compared by value ("imu×0.5" < "imu×2" < "imu×16").
+bool naturalLess(const std::string& a, const std::string& b) {
+  auto isNumber = [](const std::string& s, std::size_t i) {
+    return std::isdigit(static_cast<unsigned char>(s[i])) != 0;
+  };
+  std::size_t i = 0, j = 0;
+  while (i < a.size() && j < b.size()) {
+    if (isNumber(a, i) && isNumber(b, j)) {
+      char* end_a = nullptr;
+      char* end_b = nullptr;
+      const double x = std::strtod(a.c_str() + i, &end_a);
+      const double y = std::strtod(b.c_str() + j, &end_b);
+      if (x != y) return x < y;
+      i = static_cast<std::size_t>(end_a - a.c_str());
+      j = static_cast<std::size_t>(end_b - b.c_str());
+      continue;
+    }
+    if (a[i] != b[j]) return a[i] < b[j];
+    ++i;
+    ++j;
+  }
+  return a.size() - i < b.size() - j;
+}
+
+/// The summary of one method's runs of one block.
+MethodSummary summarizeBlock(const std::vector<EvalRow>& rows, const std::string& method,
+                             const std::string& block, const eval::NoticeFloors& floors) {
   const auto& names = statusNames();
   const double chi2[4] = {eval::kChi2Quantile999Dof3, eval::kChi2Quantile999Dof2,
                           eval::kChi2Quantile999Dof3, eval::kChi2Quantile999Dof3};
-  for (const auto& method : ordered(rows, [](const EvalRow& r) { return r.method; })) {
-    MethodSummary m;
-    m.method = method;
-    m.status_counts.assign(names.size() + 1, 0);
-    std::vector<double> ratio[4];
-    for (const EvalRow& r : rows) {
-      if (r.method != method) continue;
-      ++m.runs;
-      const auto it = std::find(names.begin(), names.end(), r.status);
-      ++m.status_counts[static_cast<std::size_t>(it - names.begin())];
-      if (r.wrong_calibration) {
-        ++m.wrong_calibration_runs;
-        if (r.status != "ok") continue;
-        ++m.wrong_calibration_ok;
-        if (r.confidentlyWrong(floors).empty()) continue;
-        ++(r.warnings > 0 ? m.wrong_calibration_flagged : m.wrong_calibration_plain_wrong);
-        continue;
-      }
+  MethodSummary m;
+  m.method = method;
+  m.block = block;
+  m.status_counts.assign(names.size() + 1, 0);
+  std::vector<double> ratio[4], zero_rate_ratio;
+  for (const EvalRow& r : rows) {
+    if (r.method != method || r.block != block) continue;
+    ++m.runs;
+    const auto it = std::find(names.begin(), names.end(), r.status);
+    ++m.status_counts[static_cast<std::size_t>(it - names.begin())];
+    if (r.wrong_calibration) {
+      ++m.wrong_calibration_runs;
       if (r.status != "ok") continue;
-      const std::vector<double> rr = ratios(r);
-      if (!std::isnan(rr[0])) {
-        ++m.with_bound;
-        for (int q = 0; q < 4; ++q)
-          if (!std::isnan(rr[static_cast<std::size_t>(q)]))
-            ratio[q].push_back(rr[static_cast<std::size_t>(q)]);
-      }
-      const double nees[4] = {r.nees_velocity, r.nees_tilt, r.nees_gyro_bias, r.nees_accel_bias};
-      if (!std::isnan(nees[0])) {
-        ++m.with_nees;
-        for (int q = 0; q < 4; ++q)
-          if (nees[q] > chi2[q]) ++m.nees_above[q];
-      }
-      const double own[4] = {r.sigma_velocity, r.sigma_gravity_deg, r.sigma_gyro_bias,
-                             r.sigma_accel_bias};
-      const double bound[4] = {r.crb_velocity, r.crb_gravity_deg, r.crb_gyro_bias,
-                               r.crb_accel_bias};
-      bool compared = false;
-      for (int q = 0; q < 4 && !(r.rest_duration > 0); ++q) {
-        if (!std::isfinite(own[q]) || !std::isfinite(bound[q])) continue;
-        compared = true;
-        if (own[q] < kOwnSigmaBelowBound * bound[q]) ++m.sigma_below_bound[q];
-      }
-      if (compared) ++m.with_sigma;
-      if (!r.confidentlyWrong(floors).empty()) ++m.confident_wrong;
+      ++m.wrong_calibration_ok;
+      if (r.confidentlyWrong(floors).empty()) continue;
+      ++(r.warnings > 0 ? m.wrong_calibration_flagged : m.wrong_calibration_plain_wrong);
+      continue;
     }
-    for (int q = 0; q < 4; ++q) {
-      m.ratio_median[q] = quantile(ratio[q], 0.5);
-      m.ratio_p95[q] = quantile(ratio[q], 0.95);
+    if (r.status != "ok") continue;
+    const std::vector<double> rr = ratios(r);
+    if (!std::isnan(rr[0])) {
+      ++m.with_bound;
+      for (int q = 0; q < 4; ++q)
+        if (!std::isnan(rr[static_cast<std::size_t>(q)]))
+          ratio[q].push_back(rr[static_cast<std::size_t>(q)]);
     }
-    out.push_back(m);
+    const double nees[4] = {r.nees_velocity, r.nees_tilt, r.nees_gyro_bias, r.nees_accel_bias};
+    if (!std::isnan(nees[0])) {
+      ++m.with_nees;
+      for (int q = 0; q < 4; ++q)
+        if (nees[q] > chi2[q]) ++m.nees_above[q];
+    }
+    const double own[4] = {r.sigma_velocity, r.sigma_gravity_deg, r.sigma_gyro_bias,
+                           r.sigma_accel_bias};
+    const double bound[4] = {r.crb_velocity, r.crb_gravity_deg, r.crb_gyro_bias, r.crb_accel_bias};
+    bool compared = false;
+    for (int q = 0; q < 4 && !(r.rest_duration > 0); ++q) {
+      if (!std::isfinite(own[q]) || !std::isfinite(bound[q])) continue;
+      compared = true;
+      if (own[q] < kOwnSigmaBelowBound * bound[q]) ++m.sigma_below_bound[q];
+    }
+    if (compared) ++m.with_sigma;
+    if (!r.confidentlyWrong(floors).empty()) ++m.confident_wrong;
+    const double zr = r.ratioGyroBiasZeroRate();
+    if (r.staticWindow() && !std::isnan(zr)) {
+      ++m.static_starts;
+      zero_rate_ratio.push_back(zr);
+      if (zr > eval::kConfidentWrongRatio) ++m.static_gyro_bias_above_zero_rate;
+    }
+    const SensorNoise* noise[3] = {&r.noise_gyro, &r.noise_accel, &r.noise_doppler};
+    for (int q = 0; q < 3; ++q) {
+      const SensorNoise& n = *noise[q];
+      if (!(n.reported_rel_sigma <= kReportedNoiseResolved) || !(n.truth > 0) ||
+          std::isnan(n.reported))
+        continue;
+      ++m.noise_resolved[q];
+      if (std::abs(n.reported / n.truth - 1) <= kReportedNoiseTolerance) ++m.noise_within[q];
+    }
+    if (std::isfinite(r.time_offset_reported) && r.time_offset_reported_sigma > 0 &&
+        std::isfinite(r.time_offset_true)) {
+      ++m.time_offset_reported;
+      if (std::abs(r.time_offset_reported - r.time_offset_true) <= 3 * r.time_offset_reported_sigma)
+        ++m.time_offset_within;
+    }
+  }
+  for (int q = 0; q < 4; ++q) {
+    m.ratio_median[q] = quantile(ratio[q], 0.5);
+    m.ratio_p95[q] = quantile(ratio[q], 0.95);
+  }
+  m.zero_rate_ratio_median = quantile(zero_rate_ratio, 0.5);
+  m.zero_rate_ratio_p95 = quantile(zero_rate_ratio, 0.95);
+  return m;
+}
+
+}  // namespace
+
+std::vector<MethodSummary> summarize(const std::vector<EvalRow>& rows,
+                                     const eval::NoticeFloors& floors) {
+  std::vector<MethodSummary> out;
+  for (const auto& method : ordered(rows, [](const EvalRow& r) { return r.method; })) {
+    std::vector<std::string> blocks;
+    for (const EvalRow& r : rows)
+      if (r.method == method && std::find(blocks.begin(), blocks.end(), r.block) == blocks.end())
+        blocks.push_back(r.block);
+    std::sort(blocks.begin(), blocks.end(), naturalLess);
+    for (const auto& block : blocks) out.push_back(summarizeBlock(rows, method, block, floors));
   }
   return out;
 }
@@ -433,7 +564,7 @@ namespace {
 void shareRows(std::ostream& o, const std::vector<MethodSummary>& summaries,
                int (MethodSummary::*counts)[4], int MethodSummary::*of) {
   for (const auto& m : summaries) {
-    o << "| " << m.method << " |";
+    o << "| " << m.label() << " |";
     for (int q = 0; q < 4; ++q) {
       char buf[64];
       const int n = (m.*counts)[q], total = m.*of;
@@ -465,7 +596,7 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
   o << "| method | ok / runs | velocity median | p95 | gravity median | p95 | b_g median | p95 | "
        "b_a median | p95 | confident wrong |\n|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& m : summaries) {
-    o << "| " << m.method << " | " << m.status_counts[0] << " / " << m.runs << " |";
+    o << "| " << m.label() << " | " << m.status_counts[0] << " / " << m.runs << " |";
     for (int q = 0; q < 4; ++q)
       o << " " << shortNumber(m.ratio_median[q]) << " | " << shortNumber(m.ratio_p95[q]) << " |";
     o << " " << m.confident_wrong << " |\n";
@@ -476,6 +607,53 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
     << "; a consistent estimator: 0.1 %).\n\n"
     << "| method | velocity | tilt | b_g | b_a |\n|---|---|---|---|---|\n";
   shareRows(o, summaries, &MethodSummary::nees_above, &MethodSummary::with_nees);
+  o << "\nStatic starts: the ok runs whose window is at rest throughout (by the truth). Their "
+       "gyro-bias error against the zero-rate bound, the bound of an estimator that knows of the "
+       "rest (sqrt(sum_i 1 / (N / sigma_i² + 1 / sigma_0²)) over the N samples at rest, "
+       "sigma_i the true gyro noise per axis, sigma_0 the prior; sigma sqrt(3 / N) without a "
+       "prior): above "
+    << eval::kConfidentWrongRatio
+    << "× it, the rest was not used as it could be.\n\n| method | static starts with b_g error "
+       "> "
+    << eval::kConfidentWrongRatio
+    << "× the zero-rate bound | b_g error / zero-rate bound median | p95 |\n|---|---|---|---|\n";
+  for (const auto& m : summaries) {
+    o << "| " << m.label() << " | ";
+    if (m.static_starts == 0)
+      o << "– |";
+    else
+      o << m.static_gyro_bias_above_zero_rate << "/" << m.static_starts << " |";
+    o << " " << shortNumber(m.zero_rate_ratio_median) << " | " << shortNumber(m.zero_rate_ratio_p95)
+      << " |\n";
+  }
+  const bool reported = std::any_of(summaries.begin(), summaries.end(), [](const MethodSummary& m) {
+    return m.noise_resolved[0] + m.noise_resolved[1] + m.noise_resolved[2] +
+               m.time_offset_reported >
+           0;
+  });
+  if (!reported) {
+    o << "\nNo method reports the noise or the clock offset it used (the CSV's "
+         "noise_*_reported and time_offset_reported columns are empty).\n";
+  } else {
+    o << "\nThe noise each method reports against the truth (the RMS over the axes of the "
+         "simulated per-axis sigmas): the runs whose reported noise is within "
+      << 100 * kReportedNoiseTolerance
+      << " % of the truth, of the ok runs whose report claims a relative sigma of at most "
+      << 100 * kReportedNoiseResolved
+      << " % (enough samples to tell); the clock offset: within 3 of its sigmas.\n\n"
+      << "| method | gyro | accel | Doppler | time offset |\n|---|---|---|---|---|\n";
+    auto share = [](int n, int of) {
+      if (of == 0) return std::string("–");
+      char buf[64];
+      std::snprintf(buf, sizeof(buf), "%d/%d (%.1f %%)", n, of, 100.0 * n / of);
+      return std::string(buf);
+    };
+    for (const auto& m : summaries) {
+      o << "| " << m.label() << " |";
+      for (int q = 0; q < 3; ++q) o << " " << share(m.noise_within[q], m.noise_resolved[q]) << " |";
+      o << " " << share(m.time_offset_within, m.time_offset_reported) << " |\n";
+    }
+  }
   o << "\nShare of the ok runs whose own sigma (the square root of the trace of each block of "
        "the state's covariance) is below "
     << kOwnSigmaBelowBound
@@ -495,7 +673,7 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
   for (std::size_t i = 0; i < names.size() + (other ? 1 : 0); ++i) o << "---|";
   o << "\n";
   for (const auto& m : summaries) {
-    o << "| " << m.method << " |";
+    o << "| " << m.label() << " |";
     for (std::size_t i = 0; i < names.size() + (other ? 1 : 0); ++i)
       o << " " << m.status_counts[i] << " |";
     o << "\n";
@@ -508,7 +686,7 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
          "plain ok.\n\n| method | runs | ok | wrong, flagged | wrong, plain ok |\n"
          "|---|---|---|---|---|\n";
     for (const auto& m : summaries)
-      o << "| " << m.method << " | " << m.wrong_calibration_runs << " | " << m.wrong_calibration_ok
+      o << "| " << m.label() << " | " << m.wrong_calibration_runs << " | " << m.wrong_calibration_ok
         << " | " << m.wrong_calibration_flagged << " | " << m.wrong_calibration_plain_wrong
         << " |\n";
   }
@@ -556,7 +734,8 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
       o << "\n\n| input | seed | method | quantities | err/CRB (v, g, b_g, b_a) |\n"
            "|---|---|---|---|---|\n";
     any = true;
-    o << "| " << r.source << " | " << r.seed << " | " << r.method << " | " << wrong << " | ";
+    o << "| " << r.source << " | " << r.seed << " | "
+      << (r.block.empty() ? r.method : r.method + " · " + r.block) << " | " << wrong << " | ";
     const auto rr = ratios(r);
     for (std::size_t i = 0; i < rr.size(); ++i) o << (i ? ", " : "") << shortNumber(rr[i]);
     o << " |\n";
@@ -570,7 +749,7 @@ void writeSummaryCsv(const std::string& path, const std::vector<EvalRow>& rows,
                      const eval::NoticeFloors& floors) {
   const auto summaries = summarize(rows, floors);
   writeFileAtomically(path, [&](std::ostream& o) {
-    o << "method,runs";
+    o << "method,block,runs";
     for (const auto& n : statusNames()) o << "," << n;
     o << ",other_status,runs_with_bound";
     for (const char* q : {"velocity", "gravity", "gyro_bias", "accel_bias"})
@@ -579,9 +758,14 @@ void writeSummaryCsv(const std::string& path, const std::vector<EvalRow>& rows,
     for (const char* q : {"velocity", "tilt", "gyro_bias", "accel_bias"})
       o << ",nees_" << q << "_above_chi2_999";
     o << ",confident_wrong,wrong_calibration_runs,wrong_calibration_ok,"
-         "wrong_calibration_flagged,wrong_calibration_plain_wrong\n";
+         "wrong_calibration_flagged,wrong_calibration_plain_wrong,static_starts,"
+         "static_gyro_bias_above_3x_zero_rate,ratio_gyro_bias_zero_rate_median,"
+         "ratio_gyro_bias_zero_rate_p95";
+    for (const char* q : {"gyro", "accel", "doppler"})
+      o << ",noise_" << q << "_resolved,noise_" << q << "_within_20pct";
+    o << ",time_offset_reported,time_offset_within_3sigma\n";
     for (const auto& m : summaries) {
-      o << quoted(m.method) << "," << m.runs;
+      o << quoted(m.method) << "," << quoted(m.block) << "," << m.runs;
       for (const int c : m.status_counts) o << "," << c;
       o << "," << m.with_bound;
       for (int q = 0; q < 4; ++q)
@@ -590,7 +774,11 @@ void writeSummaryCsv(const std::string& path, const std::vector<EvalRow>& rows,
       for (const int c : m.nees_above) o << "," << c;
       o << "," << m.confident_wrong << "," << m.wrong_calibration_runs << ","
         << m.wrong_calibration_ok << "," << m.wrong_calibration_flagged << ","
-        << m.wrong_calibration_plain_wrong << "\n";
+        << m.wrong_calibration_plain_wrong << "," << m.static_starts << ","
+        << m.static_gyro_bias_above_zero_rate << "," << number(m.zero_rate_ratio_median) << ","
+        << number(m.zero_rate_ratio_p95);
+      for (int q = 0; q < 3; ++q) o << "," << m.noise_resolved[q] << "," << m.noise_within[q];
+      o << "," << m.time_offset_reported << "," << m.time_offset_within << "\n";
     }
   });
 }

@@ -145,11 +145,17 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, c
   row.sigma_gravity_deg = own.gravity_deg;
   row.sigma_gyro_bias = own.gyro_bias;
   row.sigma_accel_bias = own.accel_bias;
+  // The noise and clock offset the method used (EvalRow::noise_*.reported, reported_rel_sigma,
+  // time_offset_reported, _sigma) are read here once InitResult reports them; until then they
+  // stay NaN.
   if (bound && bound->ok) {
     row.crb_velocity = bound->velocity;
     row.crb_gravity_deg = bound->gravity_deg;
     row.crb_gyro_bias = bound->gyro_bias;
     row.crb_accel_bias = bound->accel_bias;
+    row.crb_gyro_bias_zero_rate = bound->gyro_bias_zero_rate;
+    row.window_samples = static_cast<int>(bound->nodes);
+    row.rest_samples = static_cast<int>(bound->rest_nodes);
   }
   return row;
 }

@@ -13,6 +13,9 @@ namespace freeinit::eval {
 namespace {
 
 constexpr double kRadToDeg = 180.0 / M_PI;
+/// [(m/s)^2, (rad/s)^2] A node whose true |v|^2 and |omega|^2 are at most this is at rest (the
+/// simulator's standstill is exactly zero; this only absorbs rounding).
+constexpr double kRestSquared = 1e-24;
 
 /// Coefficients of the cubic Hermite basis in s (powers 0..3): H00, H10, H01, H11, so that
 /// G(s) = H00 G(0) + H10 h G'(0) + H01 G(h) + H11 h G'(h).
@@ -28,6 +31,10 @@ void BoundModel::validate() const {
   require(std::isfinite(doppler_sigma) && doppler_sigma > 0, "doppler_sigma must be > 0");
   require(std::isfinite(gyro_sigma) && gyro_sigma >= 0, "gyro_sigma must be >= 0");
   require(std::isfinite(accel_sigma) && accel_sigma >= 0, "accel_sigma must be >= 0");
+  require(gyro_axis_scale.allFinite() && gyro_axis_scale.minCoeff() > 0,
+          "gyro_axis_scale must be > 0");
+  require(accel_axis_scale.allFinite() && accel_axis_scale.minCoeff() > 0,
+          "accel_axis_scale must be > 0");
   require(std::isfinite(gyro_bias_random_walk) && gyro_bias_random_walk >= 0,
           "gyro_bias_random_walk must be >= 0");
   require(std::isfinite(accel_bias_random_walk) && accel_bias_random_walk >= 0,
@@ -185,14 +192,13 @@ Bound CramerRaoBound::compute() const {
   // The process noise of an interval: [n_g, n_a] (in the rows, constant over the interval) and the
   // bias random walks [w_g, w_a] (added at the next node). Only those with a non-zero variance.
   struct Noise {
-    int z_col;   ///< column in z_k (n_g, n_a) or -1 (random walk)
-    int x_row;   ///< for a random walk: the bias it drives
-    double var;  ///< per component
+    int z_col;  ///< column in z_k (n_g, n_a) or -1 (random walk)
+    int x_row;  ///< for a random walk: the bias it drives
+    Vec3 var;   ///< per component
   };
   std::vector<Noise> noises;
-  const double sg = model_.gyro_sigma, sa = model_.accel_sigma;
-  if (sg > 0) noises.push_back({kNg, 0, sg * sg});
-  if (sa > 0) noises.push_back({kNa, 0, sa * sa});
+  if (model_.gyro_sigma > 0) noises.push_back({kNg, 0, model_.gyroSigmaPerAxis().cwiseAbs2()});
+  if (model_.accel_sigma > 0) noises.push_back({kNa, 0, model_.accelSigmaPerAxis().cwiseAbs2()});
   const bool rw_g = model_.gyro_bias_random_walk > 0, rw_a = model_.accel_bias_random_walk > 0;
   const auto m = static_cast<Eigen::Index>(3 * (noises.size() + (rw_g ? 1 : 0) + (rw_a ? 1 : 0)));
 
@@ -207,17 +213,20 @@ Bound CramerRaoBound::compute() const {
     } else {
       std::vector<Noise> all = noises;
       if (rw_g)
-        all.push_back({-1, kDBg, model_.gyro_bias_random_walk * model_.gyro_bias_random_walk * h});
+        all.push_back(
+            {-1, kDBg,
+             Vec3::Constant(model_.gyro_bias_random_walk * model_.gyro_bias_random_walk * h)});
       if (rw_a)
         all.push_back(
-            {-1, kDBa, model_.accel_bias_random_walk * model_.accel_bias_random_walk * h});
+            {-1, kDBa,
+             Vec3::Constant(model_.accel_bias_random_walk * model_.accel_bias_random_walk * h)});
       // Information J on [x_k; noise] and x_k+1 = Phi x_k + Gamma noise.
       Eigen::MatrixXd J = Eigen::MatrixXd::Zero(12 + m, 12 + m);
       Eigen::MatrixXd Gamma = Eigen::MatrixXd::Zero(12, m);
       J.topLeftCorner<12, 12>() = L + Z.topLeftCorner<12, 12>();
       for (std::size_t i = 0; i < all.size(); ++i) {
         const Eigen::Index oi = 12 + 3 * static_cast<Eigen::Index>(i);
-        J.block<3, 3>(oi, oi) += Mat3::Identity() / all[i].var;
+        J.block<3, 3>(oi, oi) += all[i].var.cwiseInverse().asDiagonal();
         if (all[i].z_col < 0) {
           Gamma.block<3, 3>(all[i].x_row, oi - 12) = Mat3::Identity();
           continue;
@@ -292,8 +301,26 @@ Bound CramerRaoBound::compute() const {
   }
   out.gravity_deg *= kRadToDeg;
   out.tilt_basis = A.block<2, 3>(3, kDTheta).transpose();
+  for (const KinematicTruth& s : nodes_)
+    if (s.v_w.squaredNorm() <= kRestSquared && s.omega_b.squaredNorm() <= kRestSquared)
+      ++out.rest_nodes;
+  out.gyro_bias_zero_rate = zeroRateGyroBiasBound(model_.gyroSigmaPerAxis(), out.rest_nodes,
+                                                  model_.gyro_bias_prior_sigma);
   out.ok = true;
   return out;
+}
+
+double zeroRateGyroBiasBound(const Vec3& gyro_sigma, std::size_t rest_samples, double prior_sigma) {
+  if (rest_samples == 0) return std::numeric_limits<double>::quiet_NaN();
+  const double n = static_cast<double>(rest_samples);
+  const double prior_information =
+      std::isfinite(prior_sigma) ? 1.0 / (prior_sigma * prior_sigma) : 0;
+  double variance = 0;
+  for (int i = 0; i < 3; ++i) {
+    if (gyro_sigma(i) == 0) continue;  // an exact axis: known exactly from one sample
+    variance += 1.0 / (n / (gyro_sigma(i) * gyro_sigma(i)) + prior_information);
+  }
+  return std::sqrt(variance);
 }
 
 }  // namespace freeinit::eval

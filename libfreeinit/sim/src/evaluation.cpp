@@ -1,6 +1,7 @@
 #include <freeinit/sim/evaluation.h>
 
 #include <algorithm>
+#include <cmath>
 
 namespace freeinit::sim {
 
@@ -48,12 +49,22 @@ eval::BoundModel boundModel(const Recording& rec, const FreeInitConfig& config) 
   eval::BoundModel m;
   m.extrinsics = rec.extrinsics;
   m.g_w = rec.g_w;
+  // The noise the simulator drew (simulateImu: per axis; every point's Doppler the same), never
+  // the figures the estimator was handed in `config`.
   m.doppler_sigma = rec.config.doppler_sigma;
   m.gyro_sigma = rec.config.gyro_sigma;
   m.accel_sigma = rec.config.accel_sigma;
+  m.gyro_axis_scale = rec.config.gyro_sigma_scale;
+  m.accel_axis_scale = rec.config.accel_sigma_scale;
   m.gyro_bias_prior_sigma = config.imu.gyro_bias_sigma0;
   m.accel_bias_prior_sigma = config.imu.accel_bias_prior_sigma;
   return m;
+}
+
+NoiseFigures trueNoise(const Recording& rec) {
+  const double root3 = std::sqrt(3.0);
+  return {rec.config.gyroSigmaPerAxis().norm() / root3,
+          rec.config.accelSigmaPerAxis().norm() / root3, rec.config.doppler_sigma};
 }
 
 eval::Bound cramerRaoBound(const Recording& rec, const eval::BoundModel& model, double t_begin,

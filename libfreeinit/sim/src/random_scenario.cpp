@@ -7,6 +7,8 @@
 #include <cstdio>
 #include <initializer_list>
 #include <random>
+#include <stdexcept>
+#include <string>
 
 #include "random_stream.h"
 
@@ -772,6 +774,32 @@ double movingPointShare(const Recording& rec, double t_begin, double t_end) {
 void measureMovingPoints(RandomScenarioInfo& info, const Recording& rec) {
   info.moving_point_share = movingPointShare(rec);
   info.moving_point_share_first_0_6s = movingPointShare(rec, rec.config.t0, rec.config.t0 + 0.6);
+}
+
+Misdeclaration drawMisdeclaration(std::uint64_t seed, const MisdeclarationRanges& ranges) {
+  auto check = [](const DrawRange& r, bool factor, const char* name) {
+    const bool ok = std::isfinite(r.lo) && std::isfinite(r.hi) && r.lo <= r.hi &&
+                    (factor ? r.lo > 0 : r.lo >= 0);
+    if (!ok)
+      throw std::invalid_argument(std::string("freeinit::sim::drawMisdeclaration: ") + name +
+                                  (factor ? ": needs 0 < lo <= hi" : ": needs 0 <= lo <= hi"));
+  };
+  check(ranges.imu_noise_factor, true, "imu_noise_factor");
+  check(ranges.doppler_noise_factor, true, "doppler_noise_factor");
+  check(ranges.time_offset, false, "time_offset");
+  Draw d(seed, detail::Stream::DrawMisdeclaration);
+  const double u_imu = d.u(0, 1), u_doppler = d.u(0, 1), u_offset = d.u(0, 1);
+  const double sign = d.sign();
+  auto logUniform = [](const DrawRange& r, double u) {
+    return r.lo == r.hi ? r.lo : std::exp(std::log(r.lo) + u * (std::log(r.hi) - std::log(r.lo)));
+  };
+  Misdeclaration m;
+  m.imu_noise_factor = logUniform(ranges.imu_noise_factor, u_imu);
+  m.doppler_noise_factor = logUniform(ranges.doppler_noise_factor, u_doppler);
+  const DrawRange& t = ranges.time_offset;
+  const double size = t.lo == t.hi ? t.lo : t.lo + u_offset * (t.hi - t.lo);
+  m.time_offset = size == 0 ? 0.0 : sign * size;
+  return m;
 }
 
 }  // namespace freeinit::sim

@@ -22,6 +22,9 @@ enum class Stream : std::uint32_t {
   DrawMovers = 19,
   DrawSensors = 20,
   DrawCalibration = 21,
+  // drawMisdeclaration(seed, ...): what an evaluation hands the estimator instead of the truth;
+  // apart from every stream above, so that a seed's recording does not depend on it.
+  DrawMisdeclaration = 22,
 };
 
 inline std::mt19937_64 randomStream(std::uint64_t seed, Stream purpose) {

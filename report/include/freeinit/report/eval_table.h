@@ -21,6 +21,19 @@ inline constexpr double kNoValue = std::numeric_limits<double>::quiet_NaN();
 /// tests/test_free_init_accuracy.cpp (the horizontal bias is not observable at rest or cruising).
 inline constexpr double kGravityBoundMarginDeg = 0.1;
 
+/// One sensor's white noise in a run: what the estimator was handed, the truth, and what the
+/// estimator reports it to be. NaN where unknown.
+struct SensorNoise {
+  double declared = kNoValue;  ///< handed to the estimator (its configuration)
+  /// The simulated unit's noise: for the IMU the RMS over its axes' sigmas (what one isotropic
+  /// sigma estimated from the data converges to).
+  double truth = kNoValue;
+  /// What the estimator reports it used, and that figure's relative 1-sigma (InitResult does not
+  /// report a noise yet: NaN until it does; makeEvalRow is where it will be read).
+  double reported = kNoValue;
+  double reported_rel_sigma = kNoValue;
+};
+
 /// One initialization of one method on one input, with its errors against ground truth.
 /// Errors are NaN when the method gave no state (status not "ok") or the truth lacks them.
 struct EvalRow {
@@ -66,11 +79,36 @@ struct EvalRow {
   /// rest: an own sigma below it is then no contradiction.
   double rest_duration = kNoValue;
 
+  // What the estimator was handed against the truth (freeinit-eval: --imu-noise-factor,
+  // --doppler-noise-factor, --time-offset); NaN where unknown (a rawlog).
+  /// The group of runs this row is summarized in (summarize()): the misdeclaration it was handed,
+  /// e.g. "imu×0.25 doppler×1"; empty: one group per method.
+  std::string block;
+  double imu_noise_factor = kNoValue;      ///< [-] the IMU's datasheet noise / declared
+  double doppler_noise_factor = kNoValue;  ///< [-] the Doppler's datasheet noise / declared
+  SensorNoise noise_gyro;                  ///< [rad/s] per sample
+  SensorNoise noise_accel;                 ///< [m/s^2] per sample
+  SensorNoise noise_doppler;               ///< [m/s] per point
+  double time_offset_true = kNoValue;      ///< [s] LiDAR clock minus IMU clock in the recording
+  /// [s] The clock offset the estimator reports and its sigma (not reported yet: NaN).
+  double time_offset_reported = kNoValue;
+  double time_offset_reported_sigma = kNoValue;
+  /// [rad/s] The gyro-bias bound of an estimator that knows of the window's rest
+  /// (eval::Bound::gyro_bias_zero_rate); NaN without a bound or without rest in the window.
+  double crb_gyro_bias_zero_rate = kNoValue;
+  int window_samples = -1;  ///< IMU samples of the bound's window; -1 without a bound
+  int rest_samples = -1;    ///< of which at rest by the truth; -1 without a bound
+
   // error / bound (eval::boundRatio): NaN without a state or a bound.
   double ratioVelocity() const { return eval::boundRatio(velocity_err, crb_velocity); }
   double ratioGravity() const { return eval::boundRatio(gravity_err_deg, crb_gravity_deg); }
   double ratioGyroBias() const { return eval::boundRatio(gyro_bias_err, crb_gyro_bias); }
   double ratioAccelBias() const { return eval::boundRatio(accel_bias_err, crb_accel_bias); }
+  double ratioGyroBiasZeroRate() const {
+    return eval::boundRatio(gyro_bias_err, crb_gyro_bias_zero_rate);
+  }
+  /// The truth is at rest over the whole window of the bound (a static start).
+  bool staticWindow() const { return window_samples > 0 && rest_samples == window_samples; }
   /// The quantities of an ok state more than 3x their bound and above `floors` ("velocity",
   /// "gravity", "b_g", "b_a", comma-separated); empty when none.
   std::string confidentlyWrong(const eval::NoticeFloors& floors = {}) const;
@@ -105,9 +143,16 @@ std::vector<EvalRow> readEvalCsv(const std::string& path);
 /// An own sigma below this share of the Cramer-Rao bound is counted as claiming more than the
 /// data hold (the share leaves room for the bound's own linearization, a few per cent).
 inline constexpr double kOwnSigmaBelowBound = 0.95;
+/// A reported noise is compared with the truth when its own relative sigma is at most this (the
+/// window held enough samples to tell), and counted right within kReportedNoiseTolerance of it.
+inline constexpr double kReportedNoiseResolved = 0.07;
+inline constexpr double kReportedNoiseTolerance = 0.20;
 
 struct MethodSummary {
   std::string method;
+  std::string block;  ///< EvalRow::block of its runs
+  /// "method" or "method · block".
+  std::string label() const { return block.empty() ? method : method + " · " + block; }
   int runs = 0;
   std::vector<int> status_counts;  ///< per statusNames(), then one for any other status
   int with_bound = 0;              ///< ok runs with a bound
@@ -124,6 +169,21 @@ struct MethodSummary {
   int sigma_below_bound[4] = {0, 0, 0, 0};
   int with_sigma = 0;
   int confident_wrong = 0;  ///< ok runs with a correct calibration and a confident wrong quantity
+  /// Ok runs whose window is at rest throughout (EvalRow::staticWindow) with a zero-rate bound, of
+  /// which those with a b_g error above eval::kConfidentWrongRatio times it, and the median and
+  /// 95th percentile of b_g error / zero-rate bound over them.
+  int static_starts = 0;
+  int static_gyro_bias_above_zero_rate = 0;
+  double zero_rate_ratio_median = kNoValue;
+  double zero_rate_ratio_p95 = kNoValue;
+  /// Per sensor (gyro, accel, Doppler): ok runs with a reported noise whose relative sigma is at
+  /// most kReportedNoiseResolved and a truth, and of those the ones within
+  /// kReportedNoiseTolerance of the truth.
+  int noise_resolved[3] = {0, 0, 0};
+  int noise_within[3] = {0, 0, 0};
+  /// Ok runs with a reported clock offset and sigma, and of those within 3 sigma of the truth.
+  int time_offset_reported = 0;
+  int time_offset_within = 0;
   // The runs handed a wrong calibration (not in the ratios, NEES shares or confident_wrong above):
   int wrong_calibration_runs = 0;
   int wrong_calibration_ok = 0;           ///< of which status ok
@@ -131,7 +191,8 @@ struct MethodSummary {
   int wrong_calibration_plain_wrong = 0;  ///< ok without a warning and confidently wrong
 };
 
-/// One summary per method, in order of first appearance.
+/// One summary per method and block (EvalRow::block): the methods in order of first appearance,
+/// each method's blocks in natural order (numbers in the labels compared by value).
 std::vector<MethodSummary> summarize(const std::vector<EvalRow>& rows,
                                      const eval::NoticeFloors& floors = {});
 

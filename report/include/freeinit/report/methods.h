@@ -54,7 +54,8 @@ using TruthFn = std::function<eval::StateTruth(double)>;
 /// velocity, gravity direction and biases in the body frame; the gravity bound of the true
 /// horizontal accelerometer bias plus kGravityBoundMarginDeg), the NEES of its covariance
 /// (eval::stateNees), its displacement error over the window and, when `bound` is given and ok,
-/// the Cramer-Rao bound of its window.
+/// the Cramer-Rao bound of its window (with its zero-rate gyro-bias bound and the window's samples
+/// at rest). What the method was handed (noise, factors, offset) is the caller's to fill.
 EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, const TruthFn& truth,
                     const eval::Bound* bound = nullptr);
 

@@ -34,21 +34,30 @@ namespace freeinit::eval {
 /// A prior standard deviation meaning "no prior".
 inline constexpr double kNoPrior = std::numeric_limits<double>::infinity();
 
-/// Noise, priors and calibration of the bound.
+/// Noise, priors and calibration of the bound. The noise is the sensors' TRUE noise (a bound with
+/// the figures an estimator was handed would move with them): per axis, the IMU's white noise is
+/// gyro_sigma * gyro_axis_scale(i) and accel_sigma * accel_axis_scale(i) per sample.
 struct BoundModel {
   Extrinsics extrinsics;                     ///< the TRUE LiDAR pose in the body frame
   Vec3 g_w = Vec3(0, 0, -kGravity);          ///< [m/s^2] gravity in the truth's world frame
   double doppler_sigma = 0.03;               ///< [m/s] Doppler noise std (default per point)
   double gyro_sigma = 0.002;                 ///< [rad/s] gyro white noise per sample (0: exact)
   double accel_sigma = 0.02;                 ///< [m/s^2] accelerometer noise per sample (0: exact)
+  Vec3 gyro_axis_scale = Vec3::Ones();       ///< [-] > 0: each gyro axis' sigma / gyro_sigma
+  Vec3 accel_axis_scale = Vec3::Ones();      ///< [-] > 0: each accelerometer axis' / accel_sigma
   double gyro_bias_random_walk = 0;          ///< [rad/s/sqrt(s)] (0: constant bias)
   double accel_bias_random_walk = 0;         ///< [m/s^2/sqrt(s)] (0: constant bias)
   double gyro_bias_prior_sigma = kNoPrior;   ///< [rad/s] prior std of b_g at the window start
   double accel_bias_prior_sigma = kNoPrior;  ///< [m/s^2] prior std of b_a at the window start
 
   /// Throws std::invalid_argument naming the field if a value is out of range (sigmas >= 0,
-  /// doppler_sigma > 0, prior sigmas > 0 or kNoPrior).
+  /// doppler_sigma > 0, axis scales > 0, prior sigmas > 0 or kNoPrior).
   void validate() const;
+
+  /// [rad/s] The gyro's white noise per sample, per axis.
+  Vec3 gyroSigmaPerAxis() const { return gyro_sigma * gyro_axis_scale; }
+  /// [m/s^2] The accelerometer's white noise per sample, per axis.
+  Vec3 accelSigmaPerAxis() const { return accel_sigma * accel_axis_scale; }
 };
 
 /// The bound at the state time. A block that the data and priors cannot determine has an
@@ -69,7 +78,27 @@ struct Bound {
   double gravity_deg = std::numeric_limits<double>::quiet_NaN();  ///< [deg]
   double gyro_bias = std::numeric_limits<double>::quiet_NaN();    ///< [rad/s]
   double accel_bias = std::numeric_limits<double>::quiet_NaN();   ///< [m/s^2]
+  /// Nodes (IMU samples) of the window at which the truth is at rest (zero velocity and rate).
+  std::size_t rest_nodes = 0;
+  /// [rad/s] The gyro-bias bound of an estimator that knows of that rest: zeroRateGyroBiasBound
+  /// over the rest nodes, with the model's gyro noise and prior; NaN without rest. Only for a
+  /// window at rest throughout is it the bound of the whole window (otherwise the moving part's
+  /// information is left out of it; `gyro_bias` leaves out the knowledge of rest).
+  double gyro_bias_zero_rate = std::numeric_limits<double>::quiet_NaN();
 };
+
+/// [rad/s] The gyro-bias bound given rest: sqrt of the trace of the b_g covariance when the body is
+/// known not to rotate over `rest_samples` gyro samples of per-axis white noise `gyro_sigma`
+/// [rad/s], with a prior of std `prior_sigma` [rad/s] (kNoPrior: none) on each axis.
+///
+/// Derivation. At rest omega = 0, so each sample is y_k = b_g + n_k, n_k ~ N(0, diag(sigma_i^2))
+/// independent over k (imu_error_model.h); the Doppler adds nothing on b_g beyond that knowledge
+/// (it sees v_b + omega x p_bl, both known to be zero). The Fisher information of axis i is
+/// N / sigma_i^2 + 1 / sigma_0^2, the axes are independent, so
+///   bound^2 = sum_i 1 / (N / sigma_i^2 + 1 / sigma_0^2)  ->  sigma sqrt(3 / N)
+/// for equal sigmas and no prior. NaN when rest_samples is 0; 0 for an exact gyro.
+double zeroRateGyroBiasBound(const Vec3& gyro_sigma, std::size_t rest_samples,
+                             double prior_sigma = kNoPrior);
 
 /// Builds the bound of one window: construct with the truth at the IMU samples of the window,
 /// add the Doppler measurements (any order), compute().

@@ -42,10 +42,23 @@ InitErrors evaluate(const InitialState& state, const Recording& rec);
 /// eval::gravityErrorFromBiasDeg).
 double gravityErrorFromBiasDeg(const Vec3& b_a_true, const Vec3& g_b_true);
 
-/// The bound model of `rec` for an estimator configured with `config`: the simulated Doppler, gyro
-/// and accelerometer noise, the true extrinsics and gravity, constant biases (no random walk), and
-/// the estimator's bias priors (gyro_bias_sigma0, accel_bias_prior_sigma).
+/// The bound model of `rec` for an estimator configured with `config`: the TRUE noise of the
+/// simulated sensors (the Doppler sigma, the IMU's per-axis sigmas: gyroSigmaPerAxis(),
+/// accelSigmaPerAxis()), the true extrinsics and gravity, constant biases (no random walk), and
+/// the estimator's bias priors (gyro_bias_sigma0, accel_bias_prior_sigma). The noise `config`
+/// declares does not enter: the bound is the physical limit whatever the estimator was told.
 eval::BoundModel boundModel(const Recording& rec, const FreeInitConfig& config);
+
+/// One figure per sensor's white noise.
+struct NoiseFigures {
+  double gyro = 0;     ///< [rad/s] per sample
+  double accel = 0;    ///< [m/s^2] per sample
+  double doppler = 0;  ///< [m/s] per point
+};
+
+/// The true noise of `rec` as one figure per sensor: the RMS over the axes of the IMU's per-axis
+/// sigmas (what an estimator of one isotropic sigma converges to) and the Doppler sigma.
+NoiseFigures trueNoise(const Recording& rec);
 
 /// The bound at t_end over the IMU samples of `rec` in [t_begin, t_end], with the Doppler of every
 /// point labelled Static in that span. ok = false (with a message) when fewer than 2 IMU samples

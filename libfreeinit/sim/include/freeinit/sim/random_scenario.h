@@ -118,4 +118,35 @@ double movingPointShare(const Recording& rec, double t_begin = -1e300, double t_
 /// Fills info's moving-point shares from a simulation of its scenario.
 void measureMovingPoints(RandomScenarioInfo& info, const Recording& rec);
 
+/// A closed range [lo, hi] to draw a value from; lo == hi: exactly that value.
+struct DrawRange {
+  double lo = 0;
+  double hi = 0;
+};
+
+/// What an evaluation hands the estimator instead of the truth, on purpose.
+struct MisdeclarationRanges {
+  /// [-] true / declared IMU noise (gyro and accelerometer alike), log-uniform; > 0.
+  DrawRange imu_noise_factor{1, 1};
+  /// [-] true / declared Doppler noise, log-uniform; > 0.
+  DrawRange doppler_noise_factor{1, 1};
+  /// [s] |undeclared LiDAR-IMU clock offset|, uniform, >= 0; its sign is drawn (+ or - alike).
+  DrawRange time_offset{0, 0};
+};
+
+/// One run's draw from MisdeclarationRanges.
+struct Misdeclaration {
+  double imu_noise_factor = 1;      ///< [-] the estimator is handed the IMU noise / this
+  double doppler_noise_factor = 1;  ///< [-] the estimator is handed the Doppler noise / this
+  double time_offset = 0;           ///< [s] LiDAR clock minus IMU clock, not declared
+};
+
+/// The misdeclaration of run `seed`, from its own seeded stream (apart from every stream of the
+/// scenario: the recording of a seed is the same whatever is drawn here, so runs with different
+/// ranges are paired). Four uniform numbers are drawn in a fixed order whatever the ranges (IMU
+/// factor, Doppler factor, offset size, offset sign), so each quantity's draw depends on its own
+/// range only. A range of one value gives exactly that value (the offset's sign is still drawn).
+/// Throws std::invalid_argument on a range out of order, a factor <= 0 or an offset < 0.
+Misdeclaration drawMisdeclaration(std::uint64_t seed, const MisdeclarationRanges& ranges);
+
 }  // namespace freeinit::sim
