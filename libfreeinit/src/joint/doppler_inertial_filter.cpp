@@ -1228,7 +1228,13 @@ void DopplerInertialFilter::prepareSmoothing(std::size_t n) {
 void DopplerInertialFilter::linearize(std::size_t k, Linearization& L) const {
   const Node& n = nodes_[k];
   L.x = n.xs;
-  if (n.rows.W.rows() > 0) L.Q = velocityPolynomial(n, n.xs, &L.G);
+  if (n.rows.W.rows() > 0) {
+    L.Q = velocityPolynomial(n, n.xs, &L.G);
+    // At rest the returns are the same whatever the clock offset: the offset's column is the
+    // LiDAR velocity's rate from the IMU, there its noise only (differentiated, for the lever
+    // arm's share), which would read as knowledge of the offset.
+    if (n.rest_velocity_sigma > 0) L.G.col(kTime).setZero();
+  }
   if (k + 1 < nodes_.size()) L.x_next = propagate(n, n.xs, &L.F);
 }
 
