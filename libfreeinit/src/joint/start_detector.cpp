@@ -760,62 +760,84 @@ StartHypothesis refineOffset(const Rows& rows, const OffsetColumns& oc, const Co
   Vec10 x;
   x << start.v_b0, start.g_b0, Vec3::Zero(), start.time_offset;
   const RowArrays all(rows);
-  const Eigen::Index n = rows.size();
+  const std::size_t n = static_cast<std::size_t>(rows.size());
   const double inv_r = 1.0 / (p.doppler_sigma * p.doppler_sigma);
   const double g_var = g_sigma * g_sigma, bg_var = p.gyro_bias_sigma * p.gyro_bias_sigma;
   const double dt_var = p.time_offset_sigma * p.time_offset_sigma;
   const double inv_scale = 1.0 / std::max(0.1, 3.0 * p.doppler_sigma);
-  // The equation of row i at x: its residual and its Jacobian J (de/dx).
-  auto equation = [&](Eigen::Index i, Vec10& J) {
-    const Vec3 w = rows.w(i), m(oc.mx[i], oc.my[i], oc.mz[i]);
-    const double t = rows(i, Rows::T), delta = x(9);
-    const Vec3 v = x.head<3>(), g = x.segment<3>(3);
-    const double col = m.dot(v) + (t * m + w).dot(g) + oc.k0[i];
-    J << -w + delta * m, -t * w + delta * (t * m + w), wk.cx[i], wk.cy[i], wk.cz[i], col;
+  const double *T = rows.column(Rows::T), *WX = rows.column(Rows::WX), *WY = rows.column(Rows::WY),
+               *WZ = rows.column(Rows::WZ);
+  // The equation of row i at x: its residual, and its Jacobian J (de/dx) in j.
+  auto equation = [&](std::size_t i, double* j) {
+    const double w[3] = {WX[i], WY[i], WZ[i]}, m[3] = {oc.mx[i], oc.my[i], oc.mz[i]};
+    const double t = T[i], delta = x(9);
+    double col = oc.k0[i];
+    for (int a = 0; a < 3; ++a) col += m[a] * x(a) + (t * m[a] + w[a]) * x(3 + a);
+    for (int a = 0; a < 3; ++a) {
+      j[a] = -w[a] + delta * m[a];
+      j[3 + a] = -t * w[a] + delta * (t * m[a] + w[a]);
+    }
+    j[6] = wk.cx[i];
+    j[7] = wk.cy[i];
+    j[8] = wk.cz[i];
+    j[9] = col;
     return wk.res[i] - delta * col;
   };
-  auto addPriors = [&](Mat10& A, Vec10& b) {
+  // Sums of weight j j^T (lower triangle) and weight r j, as plain arrays (a loop the compiler
+  // unrolls: this runs over every row of the span).
+  struct Normal {
+    double A[10][10] = {};
+    double b[10] = {};
+    void add(const double* j, double wgt, double r) {
+      for (int a = 0; a < 10; ++a) {
+        const double wj = wgt * j[a];
+        for (int c = 0; c <= a; ++c) A[a][c] += wj * j[c];
+        b[a] += wj * r;
+      }
+    }
+    Mat10 matrix() const {
+      Mat10 M;
+      for (int a = 0; a < 10; ++a)
+        for (int c = 0; c <= a; ++c) M(a, c) = M(c, a) = A[a][c];
+      return M;
+    }
+  };
+  double j[10];
+  for (int it = 0; it < iterations; ++it) {
+    finalResiduals(all, n, x.data(), wk.res.data(), wk.cx.data(), wk.cy.data(), wk.cz.data());
+    Normal ne;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double r = equation(i, j);
+      const double u = r * inv_scale;
+      ne.add(j, inv_r / ((1.0 + u * u) * (1.0 + u * u)), r);
+    }
+    Mat10 A = ne.matrix();
+    Vec10 b = Eigen::Map<const Vec10>(ne.b);
     A.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_var;
     b.segment<3>(3) += (g_prior - x.segment<3>(3)) / g_var;
     A.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_var;
     b.segment<3>(6) -= x.segment<3>(6) / bg_var;
     A(9, 9) += 1.0 / dt_var;
     b(9) -= x(9) / dt_var;
-  };
-  Vec10 J;
-  for (int it = 0; it < iterations; ++it) {
-    finalResiduals(all, static_cast<std::size_t>(n), x.data(), wk.res.data(), wk.cx.data(),
-                   wk.cy.data(), wk.cz.data());
-    Mat10 A = Mat10::Zero();
-    Vec10 b = Vec10::Zero();
-    for (Eigen::Index i = 0; i < n; ++i) {
-      const double r = equation(i, J);
-      const double u = r * inv_scale;
-      const double wgt = inv_r / ((1.0 + u * u) * (1.0 + u * u));
-      A.selfadjointView<Eigen::Lower>().rankUpdate(J, wgt);
-      b += (wgt * r) * J;
-    }
-    addPriors(A, b);
-    const Vec10 step = A.selfadjointView<Eigen::Lower>().ldlt().solve(b);
+    const Vec10 step = A.ldlt().solve(b);
     if (!step.allFinite()) break;
     x += step;
   }
   // The inliers' information (weight 1/sigma^2 each), as refine() has it.
-  finalResiduals(all, static_cast<std::size_t>(n), x.data(), wk.res.data(), wk.cx.data(),
-                 wk.cy.data(), wk.cz.data());
-  Mat10 info = Mat10::Zero();
+  finalResiduals(all, n, x.data(), wk.res.data(), wk.cx.data(), wk.cy.data(), wk.cz.data());
+  Normal ni;
   double ss = 0;
-  mask.assign(static_cast<std::size_t>(n), 0);
+  mask.assign(n, 0);
   std::size_t inliers = 0;
-  for (Eigen::Index i = 0; i < n; ++i) {
-    const double r = equation(i, J);
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = equation(i, j);
     if (std::abs(r) > p.gate) continue;
-    mask[static_cast<std::size_t>(i)] = 1;
+    mask[i] = 1;
     ++inliers;
     ss += r * r;
-    info.selfadjointView<Eigen::Lower>().rankUpdate(J, inv_r);
+    ni.add(j, inv_r, 0.0);
   }
-  info = info.selfadjointView<Eigen::Lower>();
+  Mat10 info = ni.matrix();
   info.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_var;
   info.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_var;
   info(9, 9) += 1.0 / dt_var;
@@ -1254,10 +1276,13 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
     return out;
   }
   if (with_offset && !out.hypotheses[b].rest && out.hypotheses[b].time_offset_sigma == 0) {
-    // The chosen motion with the clock offset: a few Gauss-Newton steps from its fit.
+    // The chosen motion with the clock offset: two Gauss-Newton steps from its fit (the equations
+    // are linear in the offset but for its product with the motion's change: the first step
+    // takes the offset, the second the few per cent left; with one, the filter's smoothing
+    // needed more iterations than the second step costs).
     std::vector<std::uint8_t> mask;
     const StartHypothesis h =
-        refineOffset(rows, columns(), grid, work, out.hypotheses[b], g_mean, 4.0, 3, p, mask);
+        refineOffset(rows, columns(), grid, work, out.hypotheses[b], g_mean, 4.0, 2, p, mask);
     if (h.plausible_gravity && h.inliers >= 10 && h.v_b0.allFinite()) {
       out.hypotheses[b] = h;
       masks[b] = std::move(mask);
