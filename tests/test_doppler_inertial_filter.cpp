@@ -233,11 +233,13 @@ struct WindowRun {
 /// Runs the filter and smoother over [kT0, kT0 + 0.5 s] as the pipeline does, from a start that is
 /// 2 deg and 0.15 m/s off the truth; with `smooth_at` > 0, smoothing also once after that node
 /// (the pipeline's early smoothing; `ahead` as the pipeline gives it) and going on from there.
-/// `after_update`, if given, is called with each node's index after its update.
+/// `after_update`, if given, is called with each node's index after its update. `time_sigma` [s],
+/// `rotation_sigma` [rad]: the calibration's prior (0: exact).
 WindowRun runWindow(const test::AnalyticMotion& m, const std::vector<ImuSample>& imu,
                     const Returns& ret, const Noise& noise, std::size_t smooth_at = 0,
                     bool ahead = true,
-                    const std::function<void(Filter&, std::size_t)>& after_update = {}) {
+                    const std::function<void(Filter&, std::size_t)>& after_update = {},
+                    double time_sigma = 0, double rotation_sigma = 0) {
   DopplerInertialFilterParams params;
   params.doppler_sigma = noise.doppler;
   params.gyro_sigma = noise.gyro;
@@ -257,6 +259,8 @@ WindowRun runWindow(const test::AnalyticMotion& m, const std::vector<ImuSample>&
   x0.b_a.setZero();
   Filter::StartPrior prior;
   prior.cov_v_b = Mat3::Identity() * 0.3 * 0.3;
+  prior.time_sigma = time_sigma;
+  prior.rotation_sigma = rotation_sigma;
   f.start(x0, prior);
   std::size_t cursor = 0;
   NodeArrays node;
@@ -498,6 +502,28 @@ TEST(DopplerInertialFilter, CalibrationTestFlagsAnUndeclaredTimeOffset) {
       EXPECT_NEAR(dt, offset, 4 * std::sqrt(c.covariance(Filter::kTime, Filter::kTime)) + 2e-4);
     }
   }
+}
+
+TEST(DopplerInertialFilter, EstimatesTheTimeOffsetInItsState) {
+  // The window of the test above, the LiDAR clock 4 ms ahead, with the offset in the state (prior
+  // std 10 ms): the filter and smoother on the first 16 components (the rotation exact) recover
+  // it, as they do on all 19 with the rotation free but held by a tiny prior.
+  const test::AnalyticMotion m;
+  const Noise noise{0.002, 0.02, 0.03};
+  std::mt19937 rng(21);
+  const auto imu = imuOf(m, 0.6, noise, rng);
+  const Returns ret = returnsOf(m, 0.5, 20000, noise.doppler, 0.004, rng);
+  const WindowRun time_only = runWindow(m, imu, ret, noise, 0, true, {}, 0.01, 0.0);
+  const WindowRun all = runWindow(m, imu, ret, noise, 0, true, {}, 0.01, 1e-9);
+  const Filter& f = time_only.filter;
+  const double dt = f.state(f.nodes() - 1).dt_l;
+  const double sigma = std::sqrt(f.covariance()(Filter::kTime, Filter::kTime));
+  EXPECT_LT(sigma, 0.002);
+  EXPECT_NEAR(dt, 0.004, 4 * sigma + 2e-4);
+  const Filter& g = all.filter;
+  EXPECT_NEAR(g.state(g.nodes() - 1).dt_l, dt, 0.05 * sigma);
+  EXPECT_NEAR(std::sqrt(g.covariance()(Filter::kTime, Filter::kTime)), sigma, 0.01 * sigma);
+  EXPECT_LT((g.state(g.nodes() - 1).v_w - f.state(f.nodes() - 1).v_w).norm(), 1e-4);
 }
 
 }  // namespace

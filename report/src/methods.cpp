@@ -145,9 +145,12 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, c
   row.sigma_gravity_deg = own.gravity_deg;
   row.sigma_gyro_bias = own.gyro_bias;
   row.sigma_accel_bias = own.accel_bias;
-  // The noise and clock offset the method used (EvalRow::noise_*.reported, reported_rel_sigma,
-  // time_offset_reported, _sigma) are read here once InitResult reports them; until then they
-  // stay NaN.
+  // The noise the method used (EvalRow::noise_*.reported, reported_rel_sigma) is read here once
+  // InitResult reports it; until then it stays NaN.
+  if (r.state.ok()) {
+    row.time_offset_reported = r.state.time_offset;
+    row.time_offset_reported_sigma = r.state.time_offset_sigma;
+  }
   if (bound && bound->ok) {
     row.crb_velocity = bound->velocity;
     row.crb_gravity_deg = bound->gravity_deg;

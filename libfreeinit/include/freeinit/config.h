@@ -121,8 +121,11 @@ struct JointParams {
   /// as exact, the default: estimating it costs accuracy wherever the motion barely observes it;
   /// the calibration test below still checks it).
   double calibration_rotation_sigma_deg = 0.0;
-  /// [s] std of an undeclared LiDAR-IMU clock offset, estimated jointly (0: taken as exact).
-  double time_offset_sigma = 0.0;
+  /// [s] std of the LiDAR-IMU clock offset (LiDAR clock minus IMU clock) about zero, estimated
+  /// jointly from the start decision on (0: taken as exact). Where the motion observes it (a
+  /// changing acceleration or rotation) the data give it, elsewhere it keeps this prior and the
+  /// covariance carries it. 10 ms: clocks synchronized by software (driver or bag stamps).
+  double time_offset_sigma = 0.01;
   /// The calibration test after the solve: the data's own estimate of a rotation error (this std
   /// per axis, [deg]) and a clock offset (this std, [s]). A significant one (99.9 %) is a
   /// warning; so is a body velocity whose uncertainty such errors would dominate (the window's

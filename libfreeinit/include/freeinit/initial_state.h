@@ -44,6 +44,14 @@ struct InitialState {
   Vec3 b_a = Vec3::Zero();           ///< [m/s^2]
   Vec3 g_w = Vec3(0, 0, -kGravity);  ///< [m/s^2]
   Cov18 cov = Cov18::Identity();
+  /// [s] the LiDAR-IMU clock offset (LiDAR clock minus IMU clock: a return stamped t by the LiDAR
+  /// was taken at IMU time t - time_offset) the state was estimated with, and its std
+  /// (0: taken as exact, [joint] time_offset_sigma = 0 or the paper's estimator).
+  double time_offset = 0;
+  double time_offset_sigma = 0;
+  /// The window's data determined the offset (its std below half the prior's); false: it is at
+  /// its prior (mean and std within a fraction of them), and the covariance carries its share.
+  bool time_offset_estimated = false;
   /// What a user must know about an Ok state (e.g. a bias at its bound, residuals larger than the
   /// configured noise): one sentence each. Empty when nothing is suspicious.
   std::vector<std::string> warnings;

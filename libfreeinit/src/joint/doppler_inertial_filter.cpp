@@ -89,7 +89,7 @@ void solveInPlace(Eigen::Matrix<double, 9, 9> Y, Eigen::Matrix<double, 9, C>& X)
 double stepInTolerances(const DopplerInertialFilter::VecS& dx) {
   DopplerInertialFilter::VecS tol;
   tol << Vec3::Constant(1e-4), Vec3::Constant(1e-3), Vec3::Constant(1e-4), Vec3::Constant(1e-5),
-      Vec3::Constant(1e-3), Vec3::Constant(1e-4), 1e-4;
+      Vec3::Constant(1e-3), 1e-4, Vec3::Constant(1e-4);
   return dx.cwiseAbs().cwiseQuotient(tol).maxCoeff();
 }
 
@@ -584,10 +584,16 @@ DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const Int
       params_.gyro_bias_random_walk * params_.gyro_bias_random_walk * dt,
       params_.accel_bias_random_walk * params_.accel_bias_random_walk * dt};
   MatS out;
-  if (full || active_ == kStateDim)
-    detail::propagateCovarianceKernel<kStateDim>(blocks, Q, P.data(), out.data());
-  else
-    detail::propagateCovarianceKernel<kCoreDim>(blocks, Q, P.data(), out.data());
+  switch (full ? kStateDim : active_) {
+    case kStateDim:
+      detail::propagateCovarianceKernel<kStateDim>(blocks, Q, P.data(), out.data());
+      break;
+    case kTimeDim:
+      detail::propagateCovarianceKernel<kTimeDim>(blocks, Q, P.data(), out.data());
+      break;
+    default:
+      detail::propagateCovarianceKernel<kCoreDim>(blocks, Q, P.data(), out.data());
+  }
   return out;
 }
 
@@ -749,8 +755,9 @@ void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior
   if (imu_.empty()) throw std::logic_error("DopplerInertialFilter::start before addImu");
   prior_ = prior;
   // A calibration declared exact stays at its prior, uncorrelated with the rest: the filter and
-  // the smoother then work on the first 15 components only (the calibration test on all 19).
-  active_ = prior.rotation_sigma > 0 || prior.time_sigma > 0 ? kStateDim : kCoreDim;
+  // the smoother then work on the first 15 components only, or 16 when the clock offset alone is
+  // estimated (the calibration test on all 19).
+  active_ = prior.rotation_sigma > 0 ? kStateDim : prior.time_sigma > 0 ? kTimeDim : kCoreDim;
   nodes_.clear();
   smoothed_ = 0;
   linearized_ = 0;
@@ -1024,10 +1031,16 @@ DopplerInertialFilter::VecS DopplerInertialFilter::dopplerUpdate(const Node& n, 
   if (!G.middleCols<3>(kPos).isZero(0.0))
     throw std::logic_error("DopplerInertialFilter::dopplerUpdate: G depends on the position");
   VecS dx = dx_prior;
-  if (active_ == kStateDim || full)
-    detail::dopplerUpdateKernel<kStateDim>(P.data(), W.data(), G.data(), r0.data(), dx.data());
-  else
-    detail::dopplerUpdateKernel<kCoreDim>(P.data(), W.data(), G.data(), r0.data(), dx.data());
+  switch (full ? kStateDim : active_) {
+    case kStateDim:
+      detail::dopplerUpdateKernel<kStateDim>(P.data(), W.data(), G.data(), r0.data(), dx.data());
+      break;
+    case kTimeDim:
+      detail::dopplerUpdateKernel<kTimeDim>(P.data(), W.data(), G.data(), r0.data(), dx.data());
+      break;
+    default:
+      detail::dopplerUpdateKernel<kCoreDim>(P.data(), W.data(), G.data(), r0.data(), dx.data());
+  }
   return dx;
 }
 
@@ -1168,11 +1181,15 @@ DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, con
   }
   // The step is relative to x_lin + dx: its own prior mean is zero, then it is added to dx.
   using HCore = Eigen::Matrix<double, 6, kCoreDim>;
-  const VecS step =
-      active_ == kStateDim || full
-          ? kalmanUpdate<kStateDim, 6>(H, r, VecS::Zero(), P)
-          : kalmanUpdate<kCoreDim, 6>(HCore(H.leftCols<kCoreDim>()), r, VecS::Zero(), P);
-  return dx + step;
+  using HTime = Eigen::Matrix<double, 6, kTimeDim>;
+  switch (full ? kStateDim : active_) {
+    case kStateDim:
+      return dx + kalmanUpdate<kStateDim, 6>(H, r, VecS::Zero(), P);
+    case kTimeDim:
+      return dx + kalmanUpdate<kTimeDim, 6>(HTime(H.leftCols<kTimeDim>()), r, VecS::Zero(), P);
+    default:
+      return dx + kalmanUpdate<kCoreDim, 6>(HCore(H.leftCols<kCoreDim>()), r, VecS::Zero(), P);
+  }
 }
 
 void DopplerInertialFilter::updateRest(double velocity_sigma, double rate_sigma) {
@@ -1211,7 +1228,13 @@ void DopplerInertialFilter::prepareSmoothing(std::size_t n) {
 void DopplerInertialFilter::linearize(std::size_t k, Linearization& L) const {
   const Node& n = nodes_[k];
   L.x = n.xs;
-  if (n.rows.W.rows() > 0) L.Q = velocityPolynomial(n, n.xs, &L.G);
+  if (n.rows.W.rows() > 0) {
+    L.Q = velocityPolynomial(n, n.xs, &L.G);
+    // At rest the returns are the same whatever the clock offset: the offset's column is the
+    // LiDAR velocity's rate from the IMU, there its noise only (differentiated, for the lever
+    // arm's share), which would read as knowledge of the offset.
+    if (n.rest_velocity_sigma > 0) L.G.col(kTime).setZero();
+  }
   if (k + 1 < nodes_.size()) L.x_next = propagate(n, n.xs, &L.F);
 }
 
@@ -1303,19 +1326,32 @@ int DopplerInertialFilter::smooth(double looseness, bool ahead) {
       // y = P_p^-1 (dxs - dx_p), by Cholesky: with the calibration constant, its part of y is
       // zero and its step dx_f's.
       VecS y = dxs[k + 1] - dx_p[k + 1];
-      if (active_ == kStateDim) {
-        detail::choleskySolveKernel<kStateDim>(P_p[k + 1].data(), y.data());
-      } else {
-        detail::choleskySolveKernel<kCoreDim>(P_p[k + 1].data(), y.data());
-        y.tail<kStateDim - kCoreDim>().setZero();
+      switch (active_) {
+        case kStateDim:
+          detail::choleskySolveKernel<kStateDim>(P_p[k + 1].data(), y.data());
+          break;
+        case kTimeDim:
+          detail::choleskySolveKernel<kTimeDim>(P_p[k + 1].data(), y.data());
+          y.tail<kStateDim - kTimeDim>().setZero();
+          break;
+        default:
+          detail::choleskySolveKernel<kCoreDim>(P_p[k + 1].data(), y.data());
+          y.tail<kStateDim - kCoreDim>().setZero();
       }
       const VecS Fty = lin[k].F.transposeTimes(y);
       dxs[k] = dx_f[k];
-      if (active_ == kStateDim)
-        dxs[k] += P_f[k] * Fty;
-      else
-        dxs[k].head<kCoreDim>() +=
-            P_f[k].topLeftCorner<kCoreDim, kCoreDim>() * Fty.head<kCoreDim>();
+      switch (active_) {
+        case kStateDim:
+          dxs[k] += P_f[k] * Fty;
+          break;
+        case kTimeDim:
+          dxs[k].head<kTimeDim>() +=
+              P_f[k].topLeftCorner<kTimeDim, kTimeDim>() * Fty.head<kTimeDim>();
+          break;
+        default:
+          dxs[k].head<kCoreDim>() +=
+              P_f[k].topLeftCorner<kCoreDim, kCoreDim>() * Fty.head<kCoreDim>();
+      }
       nodes_[k].P = P_f[k];
     }
     // Converged when no node moves by more than the tolerance of its block (scaled), or when the

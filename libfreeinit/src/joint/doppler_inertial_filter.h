@@ -11,7 +11,9 @@
 // dt_l (a point's true time is its LiDAR time minus dt_l), both constant with a prior from the
 // declared accuracy (zero: the calibration is taken as exact). Error state (19); its first 15
 // are the order of the output covariance:
-//   [dtheta (right perturbation, R = R^ Exp(dtheta)), dp_w, dv_w, db_g, db_a, dphi_bl, ddt_l].
+//   [dtheta (right perturbation, R = R^ Exp(dtheta)), dp_w, dv_w, db_g, db_a, ddt_l, dphi_bl].
+// The clock offset comes first of the calibration: with the rotation declared exact, the filter
+// works on the first 16 components only.
 // Propagation between nodes: strapdown integration of the gyro and the accelerometer (midpoint
 // rotation with coning correction, trapezoidal velocity, exact position for a linear
 // acceleration); the IMU white noises are the process noise (sigma^2 dt^2 per step for the
@@ -108,8 +110,10 @@ class DopplerInertialFilter {
   static constexpr int kStateDim = 19;
   /// The components before the calibration's (attitude, position, velocity, biases).
   static constexpr int kCoreDim = 15;
+  /// Those and the clock offset (the components updated when only the offset is estimated).
+  static constexpr int kTimeDim = 16;
   /// Index of each block in the error state.
-  enum Block : int { kTheta = 0, kPos = 3, kVel = 6, kBg = 9, kBa = 12, kRot = 15, kTime = 18 };
+  enum Block : int { kTheta = 0, kPos = 3, kVel = 6, kBg = 9, kBa = 12, kTime = 15, kRot = 16 };
   using MatS = Eigen::Matrix<double, kStateDim, kStateDim>;
   using VecS = Eigen::Matrix<double, kStateDim, 1>;
   using Vec9 = Eigen::Matrix<double, 9, 1>;
@@ -506,7 +510,9 @@ class DopplerInertialFilter {
   Mat3 M_open_ = Mat3::Zero();  ///< covariance of q0 (v_l at the node) from the prediction
   double gate_speed_open_ = 0;  ///< [m/s] the gate's share of the LiDAR speed
   bool node_open_ = false;      ///< between beginNode() and update()
-  int active_ = kStateDim;      ///< components the filter and smoother update (15 or 19)
+  /// Components the filter and smoother update: 15 (calibration exact), 16 (the clock offset
+  /// estimated) or 19 (the rotation too).
+  int active_ = kStateDim;
   double before_ = 0, after_ = 0;
   double gate_min2_ = 0, gate_k2_ = 0, r_doppler_ = 0;
   Mat3 lever_noise_ = Mat3::Zero();  ///< d v_l / d n_g: the gyro noise through the lever arm

@@ -370,6 +370,12 @@ FREEINIT_VECTOR_CLONES
 void kalmanUpdate15x6(double* P, const double* H, const double* innovation, double* dx) {
   updateFromH<15, 6>(P, H, innovation, dx);
 }
+
+FREEINIT_VECTOR_CLONES
+void kalmanUpdate16x6(double* P, const double* H, const double* innovation, double* dx) {
+  updateFromH<16, 6>(P, H, innovation, dx);
+}
+
 FREEINIT_VECTOR_CLONES
 void kalmanUpdate19x6(double* P, const double* H, const double* innovation, double* dx) {
   updateFromH<19, 6>(P, H, innovation, dx);
@@ -378,6 +384,10 @@ void kalmanUpdate19x6(double* P, const double* H, const double* innovation, doub
 template <>
 void kalmanUpdateKernel<15, 6>(double* P, const double* H, const double* innovation, double* dx) {
   kalmanUpdate15x6(P, H, innovation, dx);
+}
+template <>
+void kalmanUpdateKernel<16, 6>(double* P, const double* H, const double* innovation, double* dx) {
+  kalmanUpdate16x6(P, H, innovation, dx);
 }
 template <>
 void kalmanUpdateKernel<19, 6>(double* P, const double* H, const double* innovation, double* dx) {
@@ -393,6 +403,10 @@ void dopplerUpdate15(double* P, const double* W, const double* G, const double* 
   updateFromRows<15>(P, W, G, r0, dx);
 }
 FREEINIT_VECTOR_CLONES
+void dopplerUpdate16(double* P, const double* W, const double* G, const double* r0, double* dx) {
+  updateFromRows<16>(P, W, G, r0, dx);
+}
+FREEINIT_VECTOR_CLONES
 void dopplerUpdate19(double* P, const double* W, const double* G, const double* r0, double* dx) {
   updateFromRows<19>(P, W, G, r0, dx);
 }
@@ -400,6 +414,11 @@ template <>
 void dopplerUpdateKernel<15>(double* P, const double* W, const double* G, const double* r0,
                              double* dx) {
   dopplerUpdate15(P, W, G, r0, dx);
+}
+template <>
+void dopplerUpdateKernel<16>(double* P, const double* W, const double* G, const double* r0,
+                             double* dx) {
+  dopplerUpdate16(P, W, G, r0, dx);
 }
 template <>
 void dopplerUpdateKernel<19>(double* P, const double* W, const double* G, const double* r0,
@@ -413,12 +432,19 @@ void propagateCovariance15(const TransitionBlocks& F, const ProcessNoiseBlocks& 
   propagate<15>(F, Q, P, out);
 }
 FREEINIT_VECTOR_CLONES
+void propagateCovariance16(const TransitionBlocks& F, const ProcessNoiseBlocks& Q, const double* P,
+                           double* out) {
+  propagate<16>(F, Q, P, out);
+}
+FREEINIT_VECTOR_CLONES
 void propagateCovariance19(const TransitionBlocks& F, const ProcessNoiseBlocks& Q, const double* P,
                            double* out) {
   propagate<19>(F, Q, P, out);
 }
 FREEINIT_VECTOR_CLONES
 void choleskySolve15(const double* A, double* b) { choleskySolve<15>(A, b); }
+FREEINIT_VECTOR_CLONES
+void choleskySolve16(const double* A, double* b) { choleskySolve<16>(A, b); }
 FREEINIT_VECTOR_CLONES
 void choleskySolve19(const double* A, double* b) { choleskySolve<19>(A, b); }
 
@@ -428,6 +454,11 @@ void propagateCovarianceKernel<15>(const TransitionBlocks& F, const ProcessNoise
   propagateCovariance15(F, Q, P, out);
 }
 template <>
+void propagateCovarianceKernel<16>(const TransitionBlocks& F, const ProcessNoiseBlocks& Q,
+                                   const double* P, double* out) {
+  propagateCovariance16(F, Q, P, out);
+}
+template <>
 void propagateCovarianceKernel<19>(const TransitionBlocks& F, const ProcessNoiseBlocks& Q,
                                    const double* P, double* out) {
   propagateCovariance19(F, Q, P, out);
@@ -435,6 +466,10 @@ void propagateCovarianceKernel<19>(const TransitionBlocks& F, const ProcessNoise
 template <>
 void choleskySolveKernel<15>(const double* A, double* b) {
   choleskySolve15(A, b);
+}
+template <>
+void choleskySolveKernel<16>(const double* A, double* b) {
+  choleskySolve16(A, b);
 }
 template <>
 void choleskySolveKernel<19>(const double* A, double* b) {

@@ -253,6 +253,7 @@ class JointPipeline final : public Pipeline {
     x0.v_w = R0 * d.chosen.v_b0;
     x0.b_g = cfg_.imu.gyro_bias_prior;
     x0.b_a = Vec3::Zero();
+    x0.dt_l = d.chosen.time_offset;
     DopplerInertialFilter::StartPrior prior;
     prior.tilt_sigma = cfg_.joint.initial_tilt_sigma;
     constexpr double kInflation = 9.0;  // variance factor: the filter counts those returns again
@@ -262,6 +263,11 @@ class JointPipeline final : public Pipeline {
     prior.accel_bias_sigma = cfg_.imu.accel_bias_prior_sigma;
     prior.rotation_sigma = cfg_.joint.calibration_rotation_sigma_deg * kPi / 180.0;
     prior.time_sigma = cfg_.joint.time_offset_sigma;
+    // The clock offset the start decision fitted with its motion: the filter's prior about it,
+    // its std inflated as the velocity's (the filter sees those returns again), within the
+    // configured one.
+    if (d.chosen.time_offset_sigma > 0)
+      prior.time_sigma = std::min(prior.time_sigma, 3.0 * d.chosen.time_offset_sigma);
     filter_.emplace(filterParams(), cfg_.extrinsics);
     // The window's nodes at the IMU rate of the start span (a few more if the rate varies: the
     // nodes then grow as needed).
@@ -482,6 +488,17 @@ class JointPipeline final : public Pipeline {
     s.cov.topLeftCorner<15, 15>() *= inflation;
     s.cov.block<3, 3>(kGrav, kGrav).diagonal().setConstant(1e-6);  // fixed by the world frame
     s.cov = 0.5 * (s.cov + s.cov.transpose()).eval();
+    // The clock offset: determined by the data where its std fell below half the configured
+    // prior's; otherwise it stays near the prior's mean, and the covariance above already carries
+    // its share (the offset is in the filter's state).
+    const double tos = cfg_.joint.time_offset_sigma;
+    s.time_offset = x.dt_l;
+    s.time_offset_sigma =
+        tos > 0 ? std::sqrt(std::max(
+                      0.0, inflation * filter_->covariance()(DopplerInertialFilter::kTime,
+                                                             DopplerInertialFilter::kTime)))
+                : 0.0;
+    s.time_offset_estimated = tos > 0 && s.time_offset_sigma < 0.5 * tos;
 
     // Trajectory and velocities at every node; the map with the final node poses.
     r.trajectory.clear();
@@ -798,7 +815,11 @@ class JointPipeline final : public Pipeline {
   /// an error in it go unnoticed by this window while moving the state by more than users notice?
   void testCalibration(InitResult& r) {
     const JointParams& e = cfg_.joint;
-    const double rot = e.test_rotation_sigma_deg * kPi / 180.0, dt = e.test_time_offset_sigma;
+    // A clock offset the state estimates is tested about the estimate with the state's own prior:
+    // what the warnings below name is the calibration taken as exact.
+    const bool time_estimated = e.time_offset_sigma > 0;
+    const double rot = e.test_rotation_sigma_deg * kPi / 180.0,
+                 dt = time_estimated ? e.time_offset_sigma : e.test_time_offset_sigma;
     if (!(rot > 0 || dt > 0)) return;
     using F = DopplerInertialFilter;
     const F::CalibrationTest t = filter_->testCalibration(std::max(rot, 1e-7), std::max(dt, 1e-7));
@@ -813,12 +834,12 @@ class JointPipeline final : public Pipeline {
     const double dt_ms = t.correction(F::kTime) * 1e3;
     constexpr double kChi2Quantile999Dof4 = 18.47;
     if (t.mahalanobis2 > kChi2Quantile999Dof4) {
-      r.state.warnings.push_back("the data say the declared LiDAR-IMU calibration is off: by " +
-                                 fmt(phi_deg) + " deg of rotation and " + fmt(dt_ms) +
-                                 " ms of clock offset (significance " +
-                                 fmt(std::sqrt(t.mahalanobis2), 3) +
-                                 " sigma over 4 dof); the state assumes the "
-                                 "declared one: check the extrinsics and the time stamps");
+      r.state.warnings.push_back(
+          "the data say the declared LiDAR-IMU calibration is off: by " + fmt(phi_deg) +
+          " deg of rotation and " + fmt(dt_ms) + " ms of clock offset (significance " +
+          fmt(std::sqrt(t.mahalanobis2), 3) + " sigma over 4 dof); the state assumes the " +
+          (time_estimated ? "declared rotation: check the extrinsics"
+                          : "declared one: check the extrinsics and the time stamps"));
       return;
     }
     // Sensitivity: the body velocity's uncertainty with such calibration errors, against its own.
@@ -830,10 +851,10 @@ class JointPipeline final : public Pipeline {
     if (sigma_free > std::max(3.0 * sigma_fixed, kVelocityFloor))
       r.state.warnings.push_back(
           "this window's motion does not check the LiDAR-IMU calibration: errors of " +
-          fmt(e.test_rotation_sigma_deg) + " deg and " + fmt(dt * 1e3) +
-          " ms in it would "
-          "leave the body velocity uncertain by " +
-          fmt(sigma_free, 3) + " m/s (" + fmt(sigma_fixed, 2) + " m/s with the calibration exact)");
+          fmt(e.test_rotation_sigma_deg) + " deg" +
+          (time_estimated ? " in its rotation" : " and " + fmt(dt * 1e3) + " ms in it") +
+          " would leave the body velocity uncertain by " + fmt(sigma_free, 3) + " m/s (" +
+          fmt(sigma_fixed, 2) + " m/s with the calibration exact)");
   }
 
   const FreeInitConfig& cfg_;

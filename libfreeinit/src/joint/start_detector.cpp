@@ -726,6 +726,177 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   return h;
 }
 
+/// The clock offset's column of the returns' equations. With the LiDAR clock ahead of the IMU's by
+/// delta, a return stamped t was taken at t - delta and measures z(t) - delta dz/dt, z the model's
+/// Doppler (Rows). In b0, with Omega = R_0t omega, F = R_0t f, A = R_0t alpha (alpha the gyro's
+/// rate), P = R_0t p_bl and m = Omega x w,
+///   -dz/dt = u^T (-omega x v_b + f + R_0t^T g_b0 + alpha x p_bl)
+///          = m^T (v_b0 + t g_b0) + w^T g_b0 + m^T C + w^T (F + A x P),
+/// linear in (v_b0, g_b0) (the gyro bias' share neglected): the equation e = a^T theta gains
+/// delta (m^T v_b0 + (t m + w)^T g_b0 + k0), k0 = m^T C + w^T (F + A x P). Omega, C and
+/// F + A x P are interpolated linearly between the IMU samples: the column multiplies a few
+/// milliseconds, its error of a few per cent is far below the Doppler noise.
+struct OffsetColumns {
+  Eigen::ArrayXd mx, my, mz, k0;
+};
+
+/// What refineOffset() fits.
+struct OffsetFit {
+  Eigen::Matrix<double, 9, 1> theta;  ///< (v_b0, g_b0, db_g)
+  double delta = 0;                   ///< [s]
+};
+
+/// IRLS (Cauchy, as refine()'s last iterations) of theta = (v_b0, g_b0, db_g) and the clock offset
+/// delta (prior: zero, p.time_offset_sigma) by Gauss-Newton on the bilinear equations
+/// (OffsetColumns), from `start` (a refined hypothesis), gravity about g_prior with std g_sigma.
+/// The hypothesis' quantities as refine() gives them, with the offset's std in time_offset_sigma
+/// and marginalized out of cov.
+StartHypothesis refineOffset(const Rows& rows, const OffsetColumns& oc, const CoverageGrid& grid,
+                             RefineWork& wk, const StartHypothesis& start, const Vec3& g_prior,
+                             double g_sigma, int iterations, const StartDetectorParams& p,
+                             std::vector<std::uint8_t>& mask) {
+  using Vec10 = Eigen::Matrix<double, 10, 1>;
+  using Mat10 = Eigen::Matrix<double, 10, 10>;
+  Vec10 x;
+  x << start.v_b0, start.g_b0, Vec3::Zero(), start.time_offset;
+  const RowArrays all(rows);
+  const std::size_t n = static_cast<std::size_t>(rows.size());
+  const double inv_r = 1.0 / (p.doppler_sigma * p.doppler_sigma);
+  const double g_var = g_sigma * g_sigma, bg_var = p.gyro_bias_sigma * p.gyro_bias_sigma;
+  const double dt_var = p.time_offset_sigma * p.time_offset_sigma;
+  const double inv_scale = 1.0 / std::max(0.1, 3.0 * p.doppler_sigma);
+  const double *T = rows.column(Rows::T), *WX = rows.column(Rows::WX), *WY = rows.column(Rows::WY),
+               *WZ = rows.column(Rows::WZ);
+  // The equation of row i at x: its residual, and its Jacobian J (de/dx) in j.
+  auto equation = [&](std::size_t i, double* j) {
+    const double w[3] = {WX[i], WY[i], WZ[i]}, m[3] = {oc.mx[i], oc.my[i], oc.mz[i]};
+    const double t = T[i], delta = x(9);
+    double col = oc.k0[i];
+    for (int a = 0; a < 3; ++a) col += m[a] * x(a) + (t * m[a] + w[a]) * x(3 + a);
+    for (int a = 0; a < 3; ++a) {
+      j[a] = -w[a] + delta * m[a];
+      j[3 + a] = -t * w[a] + delta * (t * m[a] + w[a]);
+    }
+    j[6] = wk.cx[i];
+    j[7] = wk.cy[i];
+    j[8] = wk.cz[i];
+    j[9] = col;
+    return wk.res[i] - delta * col;
+  };
+  // Sums of weight j j^T (lower triangle) and weight r j, as plain arrays (a loop the compiler
+  // unrolls: this runs over every row of the span).
+  struct Normal {
+    double A[10][10] = {};
+    double b[10] = {};
+    void add(const double* j, double wgt, double r) {
+      for (int a = 0; a < 10; ++a) {
+        const double wj = wgt * j[a];
+        for (int c = 0; c <= a; ++c) A[a][c] += wj * j[c];
+        b[a] += wj * r;
+      }
+    }
+    Mat10 matrix() const {
+      Mat10 M;
+      for (int a = 0; a < 10; ++a)
+        for (int c = 0; c <= a; ++c) M(a, c) = M(c, a) = A[a][c];
+      return M;
+    }
+  };
+  double j[10];
+  for (int it = 0; it < iterations; ++it) {
+    finalResiduals(all, n, x.data(), wk.res.data(), wk.cx.data(), wk.cy.data(), wk.cz.data());
+    Normal ne;
+    for (std::size_t i = 0; i < n; ++i) {
+      const double r = equation(i, j);
+      const double u = r * inv_scale;
+      ne.add(j, inv_r / ((1.0 + u * u) * (1.0 + u * u)), r);
+    }
+    Mat10 A = ne.matrix();
+    Vec10 b = Eigen::Map<const Vec10>(ne.b);
+    A.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_var;
+    b.segment<3>(3) += (g_prior - x.segment<3>(3)) / g_var;
+    A.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_var;
+    b.segment<3>(6) -= x.segment<3>(6) / bg_var;
+    A(9, 9) += 1.0 / dt_var;
+    b(9) -= x(9) / dt_var;
+    const Vec10 step = A.ldlt().solve(b);
+    if (!step.allFinite()) break;
+    x += step;
+  }
+  // The inliers' information (weight 1/sigma^2 each), as refine() has it.
+  finalResiduals(all, n, x.data(), wk.res.data(), wk.cx.data(), wk.cy.data(), wk.cz.data());
+  Normal ni;
+  double ss = 0;
+  mask.assign(n, 0);
+  std::size_t inliers = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const double r = equation(i, j);
+    if (std::abs(r) > p.gate) continue;
+    mask[i] = 1;
+    ++inliers;
+    ss += r * r;
+    ni.add(j, inv_r, 0.0);
+  }
+  Mat10 info = ni.matrix();
+  info.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_var;
+  info.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_var;
+  info(9, 9) += 1.0 / dt_var;
+  StartHypothesis h = start;
+  h.v_b0 = x.head<3>();
+  h.g_b0 = x.segment<3>(3);
+  h.time_offset = x(9);
+  h.inliers = inliers;
+  h.residual_rms = inliers > 0 ? std::sqrt(ss / static_cast<double>(inliers)) : 0.0;
+  const double k = std::max(1.0, h.residual_rms / p.doppler_sigma);
+  const Mat10 cov = info.ldlt().solve(Mat10::Identity()) * k * k;
+  h.cov = cov.topLeftCorner<6, 6>();
+  h.time_offset_sigma = std::sqrt(std::max(cov(9, 9), 0.0));
+  h.coverage = grid.coverage(mask);
+  h.rest = h.v_b0.norm() < p.max_speed;
+  h.min_info_eigen =
+      Eigen::SelfAdjointEigenSolver<Mat3>(info.topLeftCorner<3, 3>()).eigenvalues()(0);
+  h.plausible_gravity = std::abs(h.g_b0.norm() - kGravity) <= p.max_gravity_error;
+  return h;
+}
+
+/// OffsetColumns of the rows of decideStart(): `at` the integrator's state at each sample of the
+/// span from `span[j0]` on (times from t_ref), `interval` and `tau` each row's sample and time
+/// after it.
+OffsetColumns offsetColumns(const Rows& rows, const std::vector<ImuSample>& span, std::size_t j0,
+                            const std::vector<FilterState>& at,
+                            const std::vector<std::size_t>& interval,
+                            const std::vector<double>& tau, const Extrinsics& ex, double t_ref) {
+  // Omega, C and G = F + A x P at each sample.
+  const std::size_t ns = at.size();
+  std::vector<Vec3> Om(ns), C(ns), G(ns);
+  std::vector<double> t(ns);
+  const Vec3 g_w(0, 0, -kGravity);
+  for (std::size_t k = 0; k < ns; ++k) {
+    Vec3 gyro, accel, rate;
+    t[k] = span[j0 + k].t;
+    DopplerInertialFilter::interpolateImu(span, t[k], gyro, accel, j0 + k, &rate);
+    const Mat3& R = at[k].R_wb;
+    Om[k] = R * (gyro - at[k].b_g);
+    C[k] = at[k].v_w - g_w * (t[k] - t_ref);
+    G[k] = R * (accel - at[k].b_a) + (R * rate).cross(R * ex.p_bl);
+  }
+  OffsetColumns oc;
+  const Eigen::Index n = rows.size();
+  for (Eigen::ArrayXd* a : {&oc.mx, &oc.my, &oc.mz, &oc.k0}) a->resize(n);
+  for (Eigen::Index i = 0; i < n; ++i) {
+    const std::size_t k = interval[static_cast<std::size_t>(i)];
+    const double f = k + 1 < ns ? tau[static_cast<std::size_t>(i)] / (t[k + 1] - t[k]) : 0.0;
+    const std::size_t k1 = k + 1 < ns ? k + 1 : k;
+    const Vec3 w = rows.w(i);
+    const Vec3 m = ((1 - f) * Om[k] + f * Om[k1]).cross(w);
+    oc.mx[i] = m.x();
+    oc.my[i] = m.y();
+    oc.mz[i] = m.z();
+    oc.k0[i] = m.dot((1 - f) * C[k] + f * C[k1]) + w.dot((1 - f) * G[k] + f * G[k1]);
+  }
+  return oc;
+}
+
 /// The chosen motion's returns must constrain the velocity in every direction.
 StartDecision& checkConditioning(StartDecision& d, const StartDetectorParams& p) {
   if (d.chosen.min_info_eigen >= p.min_info_eigen) return d;
@@ -788,6 +959,7 @@ StartDetectorParams startDetectorParams(const FreeInitConfig& cfg) {
   sp.gate = cfg.doppler.gate_min;
   sp.max_speed = cfg.start.rest_speed;
   sp.min_info_eigen = cfg.start.min_info_eigen;
+  sp.time_offset_sigma = cfg.joint.time_offset_sigma;
   return sp;
 }
 
@@ -1070,15 +1242,51 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
     out.message = "no motion is consistent with the LiDAR returns at the start of the window";
     return out;
   }
+  // The clock offset's columns, made when a motion is fitted with the offset (only then).
+  std::optional<OffsetColumns> offset_columns;
+  auto columns = [&]() -> const OffsetColumns& {
+    if (!offset_columns)
+      offset_columns = offsetColumns(rows, span, j0, at, interval, r_tau, extrinsics, t_ref);
+    return *offset_columns;
+  };
+  const bool with_offset = p.time_offset_sigma > 0;
   // The best plausible motion, and the strongest other one counted on the returns the best does
   // not explain (two fits of one motion that differ a little share their returns: no contender).
   std::size_t b = 0;
   while (b < out.hypotheses.size() && !out.hypotheses[b].plausible_gravity) ++b;
+  if (b == out.hypotheses.size() && with_offset) {
+    // An undeclared clock offset bends the velocity's change over the span by the acceleration's
+    // change times the offset, which a gravity far from 9.81 m/s^2 may absorb: each motion again,
+    // with the offset free.
+    for (std::size_t j = 0; j < out.hypotheses.size(); ++j) {
+      std::vector<std::uint8_t> mask;
+      const StartHypothesis h =
+          refineOffset(rows, columns(), grid, work, out.hypotheses[j], g_mean, 4.0, 6, p, mask);
+      if (!h.plausible_gravity || h.inliers < 10 || !h.v_b0.allFinite()) continue;
+      out.hypotheses[j] = h;
+      masks[j] = std::move(mask);
+    }
+    b = 0;
+    while (b < out.hypotheses.size() && !out.hypotheses[b].plausible_gravity) ++b;
+  }
   if (b == out.hypotheses.size()) {
     out.message =
         "no motion with a plausible gravity is consistent with the LiDAR returns at "
         "the start of the window";
     return out;
+  }
+  if (with_offset && !out.hypotheses[b].rest && out.hypotheses[b].time_offset_sigma == 0) {
+    // The chosen motion with the clock offset: two Gauss-Newton steps from its fit (the equations
+    // are linear in the offset but for its product with the motion's change: the first step
+    // takes the offset, the second the few per cent left; with one, the filter's smoothing
+    // needed more iterations than the second step costs).
+    std::vector<std::uint8_t> mask;
+    const StartHypothesis h =
+        refineOffset(rows, columns(), grid, work, out.hypotheses[b], g_mean, 4.0, 2, p, mask);
+    if (h.plausible_gravity && h.inliers >= 10 && h.v_b0.allFinite()) {
+      out.hypotheses[b] = h;
+      masks[b] = std::move(mask);
+    }
   }
   const StartHypothesis& best = out.hypotheses[b];
   double contender = 0;

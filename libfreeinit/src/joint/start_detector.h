@@ -53,6 +53,10 @@ struct StartDetectorParams {
   double min_info_eigen = 100.0;
   int ransac_iterations = 64;
   int max_hypotheses = 3;
+  /// [s] prior std of the LiDAR-IMU clock offset (LiDAR clock minus IMU clock) about zero: a
+  /// moving start estimates it with the motion ([joint] time_offset_sigma; 0: the clocks are
+  /// taken as synchronized).
+  double time_offset_sigma = 0;
 };
 
 /// One Doppler return of the start span.
@@ -76,6 +80,11 @@ struct StartHypothesis {
   bool rest = false;  ///< |v_b0| below max_speed
   /// |g_b0| within max_gravity_error of 9.81 m/s^2: only such a motion can be the platform's.
   bool plausible_gravity = true;
+  /// [s] the LiDAR-IMU clock offset the motion was fitted with (LiDAR clock minus IMU clock) and
+  /// its std (0: not estimated, the clocks taken as synchronized). v_b0 and g_b0 are at the IMU's
+  /// time 0, cov has the offset's uncertainty marginalized.
+  double time_offset = 0;
+  double time_offset_sigma = 0;
 };
 
 struct StartDecision {
@@ -116,7 +125,9 @@ StartDetectorParams startDetectorParams(const FreeInitConfig& cfg);
 /// Decides the motion at the window start from the IMU samples `imu[k_first..k_last]` (times
 /// absolute; imu[k_first].t is the window start) and the returns of [imu[k_first].t, imu[k_last].t]
 /// (times relative to the window start, in time order: std::invalid_argument otherwise).
-/// `b_g_prior` is removed from the gyro. Deterministic.
+/// `b_g_prior` is removed from the gyro. A moving start with params.time_offset_sigma > 0 has the
+/// clock offset fitted with its motion (StartHypothesis::time_offset); a motion whose gravity is
+/// implausible with the clocks synchronized is tried again with the offset free. Deterministic.
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first,
                           std::size_t k_last, const std::vector<StartPoint>& points,
                           const Extrinsics& extrinsics, const Vec3& b_g_prior,

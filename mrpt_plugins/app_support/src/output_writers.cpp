@@ -32,6 +32,9 @@ StateVerdict verdictOf(const InitResult& r, double doppler_sigma) {
   v.residual_rms = r.diag.doppler_residual_rms;
   v.doppler_sigma = doppler_sigma;
   v.node_residual_ratio = r.diag.node_residual_ratio;
+  v.time_offset = s.time_offset;
+  v.time_offset_sigma = s.time_offset_sigma;
+  v.time_offset_estimated = s.time_offset_estimated;
   return v;
 }
 
@@ -45,7 +48,11 @@ void printVerdict(std::ostream& log, const StateVerdict& v) {
       << v.sigma_tilt_deg << " deg\n"
       << std::setprecision(3) << "  window: " << v.window_s << " s, " << v.window_frames
       << " frames; Doppler residual RMS " << std::setprecision(4) << v.residual_rms
-      << " m/s (configured noise " << v.doppler_sigma << " m/s)\n";
+      << " m/s (configured noise " << v.doppler_sigma << " m/s)\n"
+      << std::setprecision(2) << "  LiDAR-IMU clock offset " << 1e3 * v.time_offset << " ms, sigma "
+      << 1e3 * v.time_offset_sigma << " ms ("
+      << (v.time_offset_estimated ? "estimated from the motion" : "its prior: not observed")
+      << ")\n";
   log.flags(flags);
   log.precision(precision);
 }
@@ -76,6 +83,9 @@ void writeInitialStateIni(const std::string& path, const InitialState& s,
     for (int i = 0; i < 18; ++i)
       for (int j = 0; j < 18; ++j) o << " " << s.cov(i, j);
     o << "\n";
+    if (s.ok())
+      o << "time_offset = " << s.time_offset << " " << s.time_offset_sigma << " "
+        << (s.time_offset_estimated ? "estimated" : "prior") << "\n";
     if (verdict != nullptr && s.ok()) {
       const StateVerdict& v = *verdict;
       o << std::setprecision(6) << "sigma_v_b            = ";

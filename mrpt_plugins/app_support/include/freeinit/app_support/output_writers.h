@@ -30,6 +30,10 @@ struct StateVerdict {
   /// Chi-square per dof of the returns per IMU sample against the noise model (0: not tested;
   /// Diagnostics::node_residual_ratio).
   double node_residual_ratio = 0;
+  /// [s] InitialState::time_offset, its std and whether the data determined it.
+  double time_offset = 0;
+  double time_offset_sigma = 0;
+  bool time_offset_estimated = false;
 };
 /// The verdict of an ok result (doppler_sigma: the configured [doppler] doppler_sigma).
 StateVerdict verdictOf(const InitResult& r, double doppler_sigma);
@@ -38,7 +42,8 @@ void printVerdict(std::ostream& log, const StateVerdict& v);
 
 /// The initial-state contract (docs/architecture.md, "Frames, signs and the output contract"):
 /// [initial_state] status, timestamp, q_wb, p_w, v_w, b_g, b_a, g_w, cov (18x18 row-major, order
-/// [dtheta p v b_g b_a g]); with a verdict (ok states) also sigma_v_b, sigma_tilt_deg,
+/// [dtheta p v b_g b_a g]); for ok states time_offset (value [s], std [s], "estimated" or "prior":
+/// InitialState::time_offset_estimated); with a verdict (ok states) also sigma_v_b, sigma_tilt_deg,
 /// sigma_b_g, sigma_b_a, window_s, window_frames, points_used, doppler_residual_rms,
 /// doppler_sigma and node_chi2_per_dof; then warnings.
 void writeInitialStateIni(const std::string& path, const InitialState& s,
