@@ -201,6 +201,13 @@ class DopplerInertialFilter {
   /// was detected): the smoother does not use it. The filtered states keep it.
   void cancelRestFrom(double t);
 
+  /// The white noises from here on ([m/s] per return, [rad/s] and [m/s^2] per sample; <= 0:
+  /// unchanged), e.g. as the window's data tell them: the next nodes' gates and updates use
+  /// them, and the next smooth() re-solves the whole window with them (every node's rows are
+  /// rebuilt; the zero-rate measurements at rest take the new gyro noise).
+  void setNoise(double doppler_sigma, double gyro_sigma, double accel_sigma);
+  const DopplerInertialFilterParams& params() const { return params_; }
+
   /// Iterated smoothing over the nodes so far, after the last one was updated. Returns the number
   /// of iterations run. The filter may go on afterwards (predict()), from the smoothed last node:
   /// smoothing once while the window is received leaves the final smoothing little to do.
@@ -492,6 +499,8 @@ class DopplerInertialFilter {
   /// only. Every change of a node's data calls it (beginNode, update, updateRest,
   /// cancelRestFrom, removePoint).
   void nodeChanged(std::size_t k) { forward_kept_ = std::min(forward_kept_, k); }
+  /// r_doppler_ and lever_ratio_ from params_.
+  void noiseChanged();
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;

@@ -208,7 +208,6 @@ class JointPipeline final : public Pipeline {
     t_ref_ = t_ref;
     stride_ = dp.point_stride > 0 ? dp.point_stride : automaticPointStride(seq_, dp.max_point_rate);
     reserveRecorder();
-    startFilter(d);
     Vec3 gm = Vec3::Zero(), am = Vec3::Zero();
     for (std::size_t i = k; i <= k_last; ++i) {
       gm += imu[i].gyro;
@@ -216,7 +215,10 @@ class JointPipeline final : public Pipeline {
     }
     const double cnt = static_cast<double>(k_last - k + 1);
     const bool rest = d.kind == StartDecision::Kind::Rest && d.imu_still && cfg_.start.detect_rest;
-    rest_.start(rest, gm / cnt, am / cnt, cfg_.imu.gyro_sigma, cfg_.imu.accel_sigma);
+    rest_.start(rest, gm / cnt, am / cnt, d.imu_rest.gyro, d.imu_rest.accel, cfg_.imu.gyro_sigma,
+                cfg_.imu.accel_sigma);
+    imu_noise_from_rest_ = rest;
+    startFilter(d);
     r.diag.static_start = d.kind == StartDecision::Kind::Rest && cfg_.start.detect_rest;
     cursor_ = c;
     node_open_ = false;
@@ -262,7 +264,12 @@ class JointPipeline final : public Pipeline {
     prior.accel_bias_sigma = cfg_.imu.accel_bias_prior_sigma;
     prior.rotation_sigma = cfg_.joint.calibration_rotation_sigma_deg * kPi / 180.0;
     prior.time_sigma = cfg_.joint.time_offset_sigma;
-    filter_.emplace(filterParams(), cfg_.extrinsics);
+    DopplerInertialFilterParams fp = filterParams();
+    if (imu_noise_from_rest_) {  // the start span's noise at rest
+      fp.gyro_sigma = rest_.gyroNoise().sigma;
+      fp.accel_sigma = rest_.accelNoise().sigma;
+    }
+    filter_.emplace(fp, cfg_.extrinsics);
     // The window's nodes at the IMU rate of the start span (a few more if the rate varies: the
     // nodes then grow as needed).
     const auto& imu = seq_.imu();
@@ -390,7 +397,7 @@ class JointPipeline final : public Pipeline {
       }
       if (rest)
         filter_->updateRest(cfg_.joint.rest_velocity_sigma,
-                            cfg_.joint.zero_rate_at_rest ? cfg_.imu.gyro_sigma : 0.0);
+                            cfg_.joint.zero_rate_at_rest ? filter_->params().gyro_sigma : 0.0);
       if (rest) r.diag.static_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
       // A rest node's accepted returns are in the rest cells as long as it stays one.
@@ -410,6 +417,7 @@ class JointPipeline final : public Pipeline {
       // smoothing (what an online user waits for) starts from a good linearization, and make its
       // first forward pass over these nodes now (ahead): the final one computes the rest.
       if (!early_smoothed_ && t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration) {
+        updateNoise();
         const double t0 = wallSeconds();
         filter_->smooth(kEarlyLooseness, true);
         r.diag.time_solver += wallSeconds() - t0;
@@ -439,6 +447,8 @@ class JointPipeline final : public Pipeline {
       fail(r, InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
       return;
     }
+    updateNoise();
+    reportNoise(diag);
     diag.iterations = filter_->smooth();
     if (restContradicted()) {
       // The IMU showed rest to the end, but the returns say the sensor moves: a start too gentle
@@ -517,6 +527,32 @@ class JointPipeline final : public Pipeline {
     if (!map_pending_) return;
     map_pending_ = false;
     recorder_.finish(*filter_, seq_.imu(), k_first_, cfg_.extrinsics, r);
+  }
+
+  /// The noise the data show so far, for the next smoothing: the IMU's from its rest samples (a
+  /// static start). A change of less than a tenth (within the estimate's own uncertainty, and
+  /// cheaper than the re-solve every node's rows would need) is not made.
+  void updateNoise() {
+    if (!imu_noise_from_rest_) return;
+    const DopplerInertialFilterParams& p = filter_->params();
+    const double g = rest_.gyroNoise().sigma, a = rest_.accelNoise().sigma;
+    constexpr double kChange = 0.1;
+    auto moved = [](double x, double y) { return std::abs(x / y - 1.0) > kChange; };
+    if (moved(g, p.gyro_sigma) || moved(a, p.accel_sigma)) filter_->setNoise(0, g, a);
+  }
+
+  /// The noises the final smoothing uses, with their source, in diag.noise.
+  void reportNoise(Diagnostics& diag) const {
+    const DopplerInertialFilterParams& p = filter_->params();
+    NoiseReport& n = diag.noise;
+    n.gyro = {p.gyro_sigma, 0.0, cfg_.imu.gyro_sigma, NoiseUsed::Source::Declared};
+    n.accel = {p.accel_sigma, 0.0, cfg_.imu.accel_sigma, NoiseUsed::Source::Declared};
+    n.doppler = {p.doppler_sigma, 0.0, cfg_.doppler.doppler_sigma, NoiseUsed::Source::Declared};
+    if (imu_noise_from_rest_) {
+      n.gyro.rel_sigma = rest_.gyroNoise().rel_sigma;
+      n.accel.rel_sigma = rest_.accelNoise().rel_sigma;
+      n.gyro.source = n.accel.source = NoiseUsed::Source::DataRest;
+    }
   }
 
   /// The nodes' Doppler residuals against the noise model (DopplerInertialFilter::nodeResiduals,
@@ -849,6 +885,7 @@ class JointPipeline final : public Pipeline {
   bool last_ = false;  ///< the open node is the window's last
   bool early_smoothed_ = false;
   bool rest_withdrawn_ = false;  ///< the returns contradicted the IMU's rest (restContradicted)
+  bool imu_noise_from_rest_ = false;      ///< the IMU's noise is read from its rest samples (rest_)
   bool node_residuals_inflated_ = false;  ///< the covariance was scaled (testNodeResiduals)
   bool map_pending_ = false;              ///< a state is out, its map not yet (completeMap)
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)

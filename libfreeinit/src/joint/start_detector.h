@@ -26,14 +26,17 @@
 #include <string>
 #include <vector>
 
+#include "joint/noise_estimate.h"
+
 namespace freeinit {
 
 /// Settings of the start decision.
 struct StartDetectorParams {
   double doppler_sigma = 0.03;     ///< [m/s]
-  double gyro_sigma = 0.002;       ///< [rad/s] per sample
-  double accel_sigma = 0.02;       ///< [m/s^2] per sample
+  double gyro_sigma = 0.002;       ///< [rad/s] per sample (bounds the plausible rest levels)
+  double accel_sigma = 0.02;       ///< [m/s^2] per sample (likewise)
   double gyro_bias_sigma = 0.015;  ///< [rad/s] prior std of the gyro bias (about b_g_prior)
+  double accel_bias_bound = 0.5;   ///< [m/s^2] per axis (a standing IMU reads g within it)
   double gate = 0.15;              ///< [m/s] inlier threshold on the Doppler residual
   double max_speed = 0.05;         ///< [m/s] a refined speed below this is rest
   /// A rest hypothesis supported by at least this fraction of the best hypothesis' coverage wins
@@ -90,13 +93,11 @@ struct StartDecision {
   std::string message;
   StartHypothesis chosen;
   std::vector<StartHypothesis> hypotheses;  ///< every refined hypothesis, best coverage first
-  bool imu_still = false;                   ///< the IMU shows only noise over the span
+  bool imu_still = false;  ///< the IMU shows only white noise over the span (imu_rest.still)
+  /// What the span's IMU samples say about rest, whatever their noise level
+  /// (detail::imuRestEvidence), and their first differences (the noise at rest).
+  detail::ImuRestEvidence imu_rest;
 };
-
-/// True when the IMU samples show only noise: the spread of each of the gyro and the accelerometer
-/// about its mean is consistent (99.9 % chi-square, with margin) with the configured white noise.
-bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
-                  double gyro_sigma, double accel_sigma);
 
 /// The start decision's span of a window: its first IMU sample k_first (the first at or after
 /// t_first, the window's first LiDAR return) and its last k_last, [start] duration later or the
