@@ -10,6 +10,7 @@
 #include <exception>
 #include <mutex>
 #include <thread>
+#include <utility>
 
 namespace freeinit::report {
 namespace {
@@ -145,9 +146,18 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, c
   row.sigma_gravity_deg = own.gravity_deg;
   row.sigma_gyro_bias = own.gyro_bias;
   row.sigma_accel_bias = own.accel_bias;
-  // The noise and clock offset the method used (EvalRow::noise_*.reported, reported_rel_sigma,
-  // time_offset_reported, _sigma) are read here once InitResult reports them; until then they
-  // stay NaN.
+  // The noise the method read from the data (a configured value passed on is no report of the
+  // sensor's noise: NaN). The clock offset (time_offset_reported, _sigma) is read here once
+  // InitResult reports it; until then it stays NaN.
+  const std::pair<SensorNoise*, const NoiseUsed*> noises[] = {
+      {&row.noise_gyro, &r.diag.noise.gyro},
+      {&row.noise_accel, &r.diag.noise.accel},
+      {&row.noise_doppler, &r.diag.noise.doppler}};
+  for (const auto& [to, from] : noises) {
+    if (from->source == NoiseUsed::Source::Declared) continue;
+    to->reported = from->value;
+    to->reported_rel_sigma = from->rel_sigma;
+  }
   if (bound && bound->ok) {
     row.crb_velocity = bound->velocity;
     row.crb_gravity_deg = bound->gravity_deg;

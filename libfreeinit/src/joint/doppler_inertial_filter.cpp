@@ -1159,6 +1159,18 @@ void DopplerInertialFilter::update() {
       const FilterState x_first = x;
       solve(x, P, x_first, q, G);
     }
+    // The kept returns' squared residuals against the update, from the sums (no pass over the
+    // returns): what the Doppler noise is estimated from (forwardResiduals()).
+    if (n.sums.n > 0) {
+      double quad = 0, lin = 0;
+      for (int j = 0; j < 3; ++j) {
+        lin += n.sums.bz.col(j).dot(q.segment<3>(3 * j));
+        for (int k = 0; k < 3; ++k)
+          quad += q.segment<3>(3 * j).dot(n.sums.moment(j + k) * q.segment<3>(3 * k));
+      }
+      forward_rss_ += std::max(0.0, n.sums.c + 2.0 * lin + quad);
+      forward_returns_ += n.sums.n;
+    }
   }
   n.x = n.xs = x;
   n.P = P;

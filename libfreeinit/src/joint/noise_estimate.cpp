@@ -24,6 +24,23 @@ NoisePosterior combineNoise(double declared, double estimate, double dof) {
   return out;
 }
 
+double untruncatedSigma(double mean_square, double cut) {
+  if (!(mean_square > 0)) return 0.0;
+  if (!(cut > 0)) return std::sqrt(mean_square);
+  constexpr double kInvSqrt2Pi = 0.3989422804014327;
+  double sigma = std::sqrt(mean_square);
+  for (int i = 0; i < 30; ++i) {
+    const double a = cut / sigma;
+    const double phi = kInvSqrt2Pi * std::exp(-0.5 * a * a);
+    const double inside = std::erf(a / std::sqrt(2.0));  // 2 Phi(a) - 1
+    const double t = std::max(0.3, 1.0 - 2.0 * a * phi / inside);
+    const double next = std::sqrt(mean_square / t);
+    if (std::abs(next - sigma) < 1e-9 * sigma) return next;
+    sigma = next;
+  }
+  return sigma;
+}
+
 double DifferenceSums::sigma() const {
   return count > 0 ? std::sqrt(squares / (6.0 * static_cast<double>(count))) : 0.0;
 }

@@ -37,6 +37,12 @@ struct NoisePosterior {
 /// effective degrees of freedom (dof <= 0 or estimate <= 0: the prior alone).
 NoisePosterior combineNoise(double declared, double estimate, double dof);
 
+/// The std of a zero-mean normal whose values within +-cut have the mean square `mean_square`
+/// (a gate at cut keeps only those): sigma^2 = mean_square / t(cut / sigma), t(a) = 1 - 2 a
+/// phi(a) / (2 Phi(a) - 1) the truncated normal's second moment (t(3) = 0.9733). The correction
+/// is capped at t = 0.3 (a cut below ~1 sigma says little of what it cut).
+double untruncatedSigma(double mean_square, double cut);
+
 /// First differences of a 3-axis signal: their sum of squares and count, the white noise per
 /// sample they give (sigma^2 = sum / (2 * 3 * count)) and its effective degrees of freedom
 /// (2 count: neighbouring differences share a sample).

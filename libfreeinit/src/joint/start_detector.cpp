@@ -606,6 +606,29 @@ struct EarlyStates {
   }
 };
 
+/// StartHypothesis::residual_scale of the residuals `res`, from `gate` [m/s] on.
+void robustScale(const Eigen::Ref<const Eigen::ArrayXd>& res, double gate, StartHypothesis& h) {
+  std::vector<double> a;
+  a.reserve(static_cast<std::size_t>(res.size()));
+  double scale = 0, limit = gate;
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    a.clear();
+    for (Eigen::Index i = 0; i < res.size(); ++i)
+      if (std::abs(res(i)) <= limit) a.push_back(std::abs(res(i)));
+    if (a.size() < 10) return;
+    auto mid = a.begin() + static_cast<std::ptrdiff_t>(a.size() / 2);
+    std::nth_element(a.begin(), mid, a.end());
+    const double m = *mid;
+    constexpr double kMadToSigma = 1.4826;
+    scale = kMadToSigma * m;
+    const double next = std::max(gate, 5.0 * scale);
+    if (next == limit) break;
+    limit = next;
+  }
+  h.residual_scale = scale;
+  h.residual_scale_returns = a.size();
+}
+
 /// IRLS (Cauchy) refinement of theta = (v_b0, g_b0, db_g) from a start, with a weak gravity
 /// prior and the gyro-bias prior. A gyro-bias error db turns the body-frame velocity by
 /// -t db x v_b(t) over the span and the lever-arm velocity by -db x p_bl, so that the Doppler of a
@@ -706,6 +729,7 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   info.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_prior_var;
   info.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_prior_var;
   h.residual_rms = h.inliers > 0 ? std::sqrt(ss / static_cast<double>(h.inliers)) : 0.0;
+  robustScale(res, p.gate, h);
   const double k = std::max(1.0, h.residual_rms / p.doppler_sigma);
   const Mat9 cov = info.ldlt().solve(Mat9::Identity()) * k * k;
   h.cov = cov.topLeftCorner<6, 6>();

@@ -74,6 +74,11 @@ struct StartHypothesis {
   std::size_t inliers = 0;
   double coverage = 0;      ///< [0, 1] share of the occupied direction cells that support it
   double residual_rms = 0;  ///< [m/s] of the inliers
+  /// [m/s] the Doppler noise the residuals show, robustly (1.4826 times their median absolute
+  /// value among those within max(gate, 5 times that scale), iterated: a few tens of percent of
+  /// returns on moving objects leave it), and the returns it rests on.
+  double residual_scale = 0;
+  std::size_t residual_scale_returns = 0;
   double min_info_eigen =
       0;              ///< [1/(m/s)^2] weakest direction of the inliers' velocity information
   bool rest = false;  ///< |v_b0| below max_speed
