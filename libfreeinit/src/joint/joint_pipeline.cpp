@@ -610,6 +610,8 @@ class JointPipeline final : public Pipeline {
         dopplerNoise(untruncatedSigma(ms, filter_->params().regate_sigma * used_sigma),
                      static_cast<double>(used), dopplerBelowConfigured());
     doppler_noise_.rel_sigma = n.rel_sigma;
+    // The data's value is the one used unless the configured one was kept as a floor.
+    doppler_from_data_ = n.rel_sigma > 0;
     constexpr double kChange = 0.05;
     if (!(std::abs(n.sigma / used_sigma - 1.0) > kChange)) return false;
     doppler_noise_ = n;
@@ -631,7 +633,7 @@ class JointPipeline final : public Pipeline {
       n.accel.rel_sigma = rest_.accelNoise().rel_sigma;
       n.gyro.source = n.accel.source = NoiseUsed::Source::DataRest;
     }
-    if (doppler_noise_.sigma > 0 && doppler_noise_.sigma != cfg_.doppler.doppler_sigma) {
+    if (doppler_from_data_) {
       n.doppler.rel_sigma = doppler_noise_.rel_sigma;
       n.doppler.source = NoiseUsed::Source::Data;
     }
@@ -984,6 +986,7 @@ class JointPipeline final : public Pipeline {
   bool imu_noise_from_rest_ = false;  ///< the IMU's noise is read from its rest samples (rest_)
   /// The Doppler noise from the data (sigma 0: the configured one is used).
   NoisePosterior doppler_noise_;
+  bool doppler_from_data_ = false;  ///< the Doppler noise used is the data's (finalDopplerNoise)
   bool node_residuals_inflated_ = false;  ///< the covariance was scaled (testNodeResiduals)
   bool map_pending_ = false;              ///< a state is out, its map not yet (completeMap)
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
