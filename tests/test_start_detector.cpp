@@ -41,7 +41,7 @@ StartPoint randomReturn(int j, std::mt19937& rng, double* azimuth = nullptr) {
 /// 0.03 m/s. A platform in motion vibrates (`vibration` [m/s^2] at 12 Hz along x): one cruising
 /// without any vibration would look to its IMU exactly like one standing.
 Scene scene(const Vec3& v_world, const Vec3& v_object, double object_azimuth, unsigned seed,
-            double vibration = 0.3) {
+            double vibration = 0.3, double imu_noise = 1.0) {
   constexpr double kOmega = 2 * 3.14159265358979323846 * 12;  // [rad/s]
   auto shake = [&](double t) -> Vec3 {                        // velocity change since t = 0
     return Vec3(vibration / kOmega * (1 - std::cos(kOmega * t)), 0, 0);
@@ -52,9 +52,9 @@ Scene scene(const Vec3& v_world, const Vec3& v_object, double object_azimuth, un
   for (int i = 0; i <= 20; ++i) {
     ImuSample m;
     m.t = 50.0 + i / 200.0;
-    m.gyro = 0.002 * Vec3(n01(rng), n01(rng), n01(rng));
+    m.gyro = imu_noise * 0.002 * Vec3(n01(rng), n01(rng), n01(rng));
     m.accel = Vec3(vibration * std::sin(kOmega * i / 200.0), 0, kGravity) +
-              0.02 * Vec3(n01(rng), n01(rng), n01(rng));
+              imu_noise * 0.02 * Vec3(n01(rng), n01(rng), n01(rng));
     s.imu.push_back(m);
   }
   for (int j = 0; j < 3000; ++j) {
@@ -116,6 +116,36 @@ TEST(StartDetector, RestWinsWhenTheImuShowsRestDespiteAWalker) {
   ASSERT_EQ(d.kind, StartDecision::Kind::Rest) << d.message;
   EXPECT_TRUE(d.imu_still);
   EXPECT_LT(d.chosen.v_b0.norm(), 1e-6);
+}
+
+TEST(StartDetector, RestWhateverTheImuNoiseLevel) {
+  // The IMU 4x noisier or 4x quieter than configured (0.002 rad/s, 0.02 m/s^2): its samples are
+  // still white, and rest is decided by that shape, not by the level. Standing with a walker
+  // (seeds 3-12): rest every time.
+  for (const double scale : {0.25, 4.0}) {
+    for (unsigned seed = 3; seed < 13; ++seed) {
+      const StartDecision d =
+          decide(scene(Vec3::Zero(), Vec3(1.2, 0.4, 0), -kPi + 0.4 * kPi, seed, 0.0, scale));
+      ASSERT_EQ(d.kind, StartDecision::Kind::Rest)
+          << "x" << scale << " seed " << seed << ": " << d.message;
+      EXPECT_TRUE(d.imu_still);
+      // The span's 20 differences per axis give the level to ~16 % (1 sigma).
+      EXPECT_NEAR(d.imu_rest.gyro.sigma() / (0.002 * scale), 1.0, 0.5) << seed;
+      EXPECT_NEAR(d.imu_rest.accel.sigma() / (0.02 * scale), 1.0, 0.5) << seed;
+    }
+  }
+}
+
+TEST(StartDetector, AVibratingPlatformIsNotAtRestWhateverItsNoise) {
+  // Cruising at 4 m/s with a 12 Hz vibration of 0.3 m/s^2 and an IMU 4x noisier than
+  // configured (0.08 m/s^2, still a quarter of the vibration): the samples are not white, the
+  // IMU does not show rest, and the world's motion is chosen.
+  const Vec3 v(4.0, 0.0, 0.0);
+  const StartDecision d = decide(scene(v, v - Vec3(0, 8, 0), -kPi + 0.2 * kPi, 1, 0.3, 4.0));
+  EXPECT_FALSE(d.imu_rest.accel_white);
+  EXPECT_FALSE(d.imu_still);
+  ASSERT_EQ(d.kind, StartDecision::Kind::Moving) << d.message;
+  EXPECT_LT((d.chosen.v_b0 - v).norm(), 0.02);
 }
 
 TEST(StartDetector, TurningWithAGyroBiasAndALeverArm) {

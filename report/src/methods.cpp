@@ -10,6 +10,7 @@
 #include <exception>
 #include <mutex>
 #include <thread>
+#include <utility>
 
 namespace freeinit::report {
 namespace {
@@ -145,11 +146,20 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, c
   row.sigma_gravity_deg = own.gravity_deg;
   row.sigma_gyro_bias = own.gyro_bias;
   row.sigma_accel_bias = own.accel_bias;
-  // The noise the method used (EvalRow::noise_*.reported, reported_rel_sigma) is read here once
-  // InitResult reports it; until then it stays NaN.
+  // The clock offset the method reported, and the noise it read from the data (a configured
+  // value passed on is no report of the sensor's noise: NaN).
   if (r.state.ok()) {
     row.time_offset_reported = r.state.time_offset;
     row.time_offset_reported_sigma = r.state.time_offset_sigma;
+  }
+  const std::pair<SensorNoise*, const NoiseUsed*> noises[] = {
+      {&row.noise_gyro, &r.diag.noise.gyro},
+      {&row.noise_accel, &r.diag.noise.accel},
+      {&row.noise_doppler, &r.diag.noise.doppler}};
+  for (const auto& [to, from] : noises) {
+    if (from->source == NoiseUsed::Source::Declared) continue;
+    to->reported = from->value;
+    to->reported_rel_sigma = from->rel_sigma;
   }
   if (bound && bound->ok) {
     row.crb_velocity = bound->velocity;

@@ -90,6 +90,30 @@ struct MapPoint {
   float time = 0;      ///< [s] the return's time minus the state's timestamp (<= 0 in the window)
 };
 
+/// One white noise the estimator used, and where it came from. The configured values are a prior
+/// that the window's data outweigh (joint estimator; the paper's pipeline uses them as given).
+struct NoiseUsed {
+  enum class Source {
+    Declared,    ///< the configured value (the data could not tell, or were not asked)
+    DataRest,    ///< the IMU's samples while at rest
+    DataMoving,  ///< the IMU's samples while moving (their high-order differences)
+    UpperBound,  ///< the motion hides the noise: an upper bound from the data
+    Data,        ///< the Doppler residuals of the window's returns
+  };
+  /// The value used: gyro [rad/s] and accelerometer [m/s^2] per sample, Doppler [m/s] per return.
+  double value = 0;
+  double rel_sigma = 0;  ///< [-] relative 1-sigma of `value` (0: taken as given)
+  double declared = 0;   ///< the configured value, same unit
+  Source source = Source::Declared;
+};
+/// "declared", "data_rest", "data_moving", "upper_bound", "data".
+const char* toString(NoiseUsed::Source s);
+
+/// The white noises the estimator used.
+struct NoiseReport {
+  NoiseUsed gyro, accel, doppler;
+};
+
 /// Counters and timings, for users and for tests.
 struct Diagnostics {
   std::size_t points_seen = 0;      ///< points inside the window
@@ -111,6 +135,7 @@ struct Diagnostics {
   std::size_t frames_in_window = 0;   ///< LiDAR frames with points in the window
   bool imu_at_rest_at_start = false;  ///< the IMU showed only noise over the start decision's span
   int iterations = 0;                 ///< smoother iterations (joint estimator)
+  NoiseReport noise;                  ///< the sensors' noise used, with its source
   /// [s] from the window start to the end of the data the early smoothing took (joint
   /// estimator: it runs once, at three quarters of the window, so that the final smoothing
   /// starts near its solution; 0 if it did not run)

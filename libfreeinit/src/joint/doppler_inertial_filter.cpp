@@ -302,14 +302,36 @@ DopplerInertialFilter::DopplerInertialFilter(const DopplerInertialFilterParams& 
     : params_(params), R_bl_(extrinsics.R_bl), p_bl_(extrinsics.p_bl) {
   gate_min2_ = params.gate_min * params.gate_min;
   gate_k2_ = params.gate_sigma * params.gate_sigma;
-  r_doppler_ = params.doppler_sigma * params.doppler_sigma;
   // The gyro's white noise n_g moves the LiDAR velocity of a node by R_bl^T (n_g x p_bl), alike
   // for all the node's returns (marginalizeLeverNoise()).
   lever_noise_ = R_bl_.transpose() * skew(p_bl_);
-  const double var_lever = params.gyro_sigma * params.gyro_sigma * p_bl_.squaredNorm();
-  lever_ratio_ = params.lever_arm_gyro_noise && var_lever > 0
-                     ? r_doppler_ / (params.gyro_sigma * params.gyro_sigma)
+  noiseChanged();
+}
+
+void DopplerInertialFilter::noiseChanged() {
+  r_doppler_ = params_.doppler_sigma * params_.doppler_sigma;
+  const double var_lever = params_.gyro_sigma * params_.gyro_sigma * p_bl_.squaredNorm();
+  lever_ratio_ = params_.lever_arm_gyro_noise && var_lever > 0
+                     ? r_doppler_ / (params_.gyro_sigma * params_.gyro_sigma)
                      : 0.0;
+}
+
+void DopplerInertialFilter::setNoise(double doppler_sigma, double gyro_sigma, double accel_sigma) {
+  const DopplerInertialFilterParams before = params_;
+  if (doppler_sigma > 0) params_.doppler_sigma = doppler_sigma;
+  if (gyro_sigma > 0) params_.gyro_sigma = gyro_sigma;
+  if (accel_sigma > 0) params_.accel_sigma = accel_sigma;
+  if (params_.doppler_sigma == before.doppler_sigma && params_.gyro_sigma == before.gyro_sigma &&
+      params_.accel_sigma == before.accel_sigma)
+    return;
+  noiseChanged();
+  const bool rows = params_.doppler_sigma != before.doppler_sigma ||
+                    (lever_ratio_ > 0 && params_.gyro_sigma != before.gyro_sigma);
+  for (Node& n : nodes_) {
+    if (rows) n.rows_stale = true;
+    if (n.rest_rate_sigma > 0) n.rest_rate_sigma = params_.gyro_sigma;
+  }
+  nodeChanged(0);
 }
 
 FilterState DopplerInertialFilter::boxplus(const FilterState& x, const VecS& dx) {
@@ -1149,6 +1171,18 @@ void DopplerInertialFilter::update() {
     if (dropped > 0) {
       const FilterState x_first = x;
       solve(x, P, x_first, q, G);
+    }
+    // The kept returns' squared residuals against the update, from the sums (no pass over the
+    // returns): what the Doppler noise is estimated from (forwardResiduals()).
+    if (n.sums.n > 0) {
+      double quad = 0, lin = 0;
+      for (int j = 0; j < 3; ++j) {
+        lin += n.sums.bz.col(j).dot(q.segment<3>(3 * j));
+        for (int k = 0; k < 3; ++k)
+          quad += q.segment<3>(3 * j).dot(n.sums.moment(j + k) * q.segment<3>(3 * k));
+      }
+      forward_rss_ += std::max(0.0, n.sums.c + 2.0 * lin + quad);
+      forward_returns_ += n.sums.n;
     }
   }
   n.x = n.xs = x;

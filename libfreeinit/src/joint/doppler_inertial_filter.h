@@ -205,6 +205,21 @@ class DopplerInertialFilter {
   /// was detected): the smoother does not use it. The filtered states keep it.
   void cancelRestFrom(double t);
 
+  /// The white noises from here on ([m/s] per return, [rad/s] and [m/s^2] per sample; <= 0:
+  /// unchanged), e.g. as the window's data tell them: the next nodes' gates and updates use
+  /// them, and the next smooth() re-solves the whole window with them (every node's rows are
+  /// rebuilt; the zero-rate measurements at rest take the new gyro noise).
+  void setNoise(double doppler_sigma, double gyro_sigma, double accel_sigma);
+  const DopplerInertialFilterParams& params() const { return params_; }
+  /// The sum of squared Doppler residuals of every updated node's kept returns against that
+  /// node's update (before the second solve; the second gate cut them at regate_sigma of their
+  /// std), and their count.
+  struct ForwardResiduals {
+    double rss = 0;
+    std::size_t returns = 0;
+  };
+  ForwardResiduals forwardResiduals() const { return {forward_rss_, forward_returns_}; }
+
   /// Iterated smoothing over the nodes so far, after the last one was updated. Returns the number
   /// of iterations run. The filter may go on afterwards (predict()), from the smoothed last node:
   /// smoothing once while the window is received leaves the final smoothing little to do.
@@ -500,6 +515,8 @@ class DopplerInertialFilter {
   /// only. Every change of a node's data calls it (beginNode, update, updateRest,
   /// cancelRestFrom, removePoint).
   void nodeChanged(std::size_t k) { forward_kept_ = std::min(forward_kept_, k); }
+  /// r_doppler_ and lever_ratio_ from params_.
+  void noiseChanged();
   FilterState x0_prior_;
   StartPrior prior_;
   OpenReturns open_;
@@ -517,6 +534,8 @@ class DopplerInertialFilter {
   double gate_min2_ = 0, gate_k2_ = 0, r_doppler_ = 0;
   Mat3 lever_noise_ = Mat3::Zero();  ///< d v_l / d n_g: the gyro noise through the lever arm
   double lever_ratio_ = 0;           ///< doppler_sigma^2 / gyro_sigma^2 (0: no such noise)
+  double forward_rss_ = 0;           ///< forwardResiduals()
+  std::size_t forward_returns_ = 0;
 };
 
 }  // namespace freeinit

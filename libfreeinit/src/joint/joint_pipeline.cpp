@@ -15,9 +15,11 @@
 #include <limits>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #include "joint/chi_square.h"
 #include "joint/doppler_inertial_filter.h"
+#include "joint/noise_estimate.h"
 #include "joint/start_detector.h"
 #include "joint/window_parts.h"
 #include "pipeline.h"
@@ -43,6 +45,9 @@ constexpr double kEarlySmoothing = 0.75;
 /// final ones, no status change; 90 % of the states the same to 1e-4 of their bound, all within
 /// 0.04 of it but in the runs confidently wrong either way (their answers depend on the path).
 constexpr double kEarlyLooseness = 100.0;
+/// Returns below which the Doppler noise is not read from their residuals (the configured one is
+/// used).
+constexpr std::size_t kMinNoiseReturns = 100;
 
 using BodyVelocityJacobian = Eigen::Matrix<double, 3, DopplerInertialFilter::kStateDim>;
 
@@ -208,7 +213,6 @@ class JointPipeline final : public Pipeline {
     t_ref_ = t_ref;
     stride_ = dp.point_stride > 0 ? dp.point_stride : automaticPointStride(seq_, dp.max_point_rate);
     reserveRecorder();
-    startFilter(d);
     Vec3 gm = Vec3::Zero(), am = Vec3::Zero();
     for (std::size_t i = k; i <= k_last; ++i) {
       gm += imu[i].gyro;
@@ -216,7 +220,11 @@ class JointPipeline final : public Pipeline {
     }
     const double cnt = static_cast<double>(k_last - k + 1);
     const bool rest = d.kind == StartDecision::Kind::Rest && d.imu_still && cfg_.start.detect_rest;
-    rest_.start(rest, gm / cnt, am / cnt, cfg_.imu.gyro_sigma, cfg_.imu.accel_sigma);
+    rest_.start(rest, gm / cnt, am / cnt, d.imu_rest.gyro, d.imu_rest.accel, cfg_.imu.gyro_sigma,
+                cfg_.imu.accel_sigma);
+    imu_noise_from_rest_ = rest;
+    startDopplerNoise(d.chosen);
+    startFilter(d);
     r.diag.static_start = d.kind == StartDecision::Kind::Rest && cfg_.start.detect_rest;
     cursor_ = c;
     node_open_ = false;
@@ -268,7 +276,13 @@ class JointPipeline final : public Pipeline {
     // configured one.
     if (d.chosen.time_offset_sigma > 0)
       prior.time_sigma = std::min(prior.time_sigma, 3.0 * d.chosen.time_offset_sigma);
-    filter_.emplace(filterParams(), cfg_.extrinsics);
+    DopplerInertialFilterParams fp = filterParams();
+    if (imu_noise_from_rest_) {  // the start span's noise at rest
+      fp.gyro_sigma = rest_.gyroNoise().sigma;
+      fp.accel_sigma = rest_.accelNoise().sigma;
+    }
+    if (doppler_noise_.sigma > 0) fp.doppler_sigma = doppler_noise_.sigma;
+    filter_.emplace(fp, cfg_.extrinsics);
     // The window's nodes at the IMU rate of the start span (a few more if the rate varies: the
     // nodes then grow as needed).
     const auto& imu = seq_.imu();
@@ -396,7 +410,7 @@ class JointPipeline final : public Pipeline {
       }
       if (rest)
         filter_->updateRest(cfg_.joint.rest_velocity_sigma,
-                            cfg_.joint.zero_rate_at_rest ? cfg_.imu.gyro_sigma : 0.0);
+                            cfg_.joint.zero_rate_at_rest ? filter_->params().gyro_sigma : 0.0);
       if (rest) r.diag.static_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
       // A rest node's accepted returns are in the rest cells as long as it stays one.
@@ -416,6 +430,7 @@ class JointPipeline final : public Pipeline {
       // smoothing (what an online user waits for) starts from a good linearization, and make its
       // first forward pass over these nodes now (ahead): the final one computes the rest.
       if (!early_smoothed_ && t_k - t_ref_ >= kEarlySmoothing * cfg_.window.duration) {
+        updateNoise();
         const double t0 = wallSeconds();
         filter_->smooth(kEarlyLooseness, true);
         r.diag.time_solver += wallSeconds() - t0;
@@ -445,6 +460,7 @@ class JointPipeline final : public Pipeline {
       fail(r, InitStatus::NoDoppler, "no Doppler return passed the gate in the window");
       return;
     }
+    updateNoise();
     diag.iterations = filter_->smooth();
     if (restContradicted()) {
       // The IMU showed rest to the end, but the returns say the sensor moves: a start too gentle
@@ -461,6 +477,8 @@ class JointPipeline final : public Pipeline {
       diag.iterations += filter_->smooth();
       Q = filter_->lidarVelocityPolynomials();
     }
+    finalDopplerNoise(diag, Q);
+    reportNoise(diag);
     diag.time_solver += wallSeconds() - t_solve;
     const std::size_t N = filter_->nodes();
     const FilterState& x = filter_->state(N - 1);
@@ -536,6 +554,108 @@ class JointPipeline final : public Pipeline {
     recorder_.finish(*filter_, seq_.imu(), k_first_, cfg_.extrinsics, r);
   }
 
+  /// The noise the data show so far, for the next smoothing: the IMU's from its rest samples (a
+  /// static start). A change of less than a tenth (within the estimate's own uncertainty, and
+  /// cheaper than the re-solve every node's rows would need) is not made.
+  void updateNoise() {
+    const DopplerInertialFilterParams& p = filter_->params();
+    constexpr double kChange = 0.1;
+    auto moved = [](double x, double y) { return std::abs(x / y - 1.0) > kChange; };
+    double g = 0, a = 0, d = 0;
+    if (imu_noise_from_rest_) {
+      g = rest_.gyroNoise().sigma;
+      a = rest_.accelNoise().sigma;
+      if (!moved(g, p.gyro_sigma) && !moved(a, p.accel_sigma)) g = a = 0;
+    }
+    // The Doppler: the kept returns' residuals against each node's update, cut by the second
+    // gate at regate_sigma of their std.
+    const DopplerInertialFilter::ForwardResiduals f = filter_->forwardResiduals();
+    if (f.returns >= kMinNoiseReturns) {
+      const double ms = f.rss / static_cast<double>(f.returns);
+      const NoisePosterior n =
+          dopplerNoise(untruncatedSigma(ms, p.regate_sigma * p.doppler_sigma),
+                       static_cast<double>(f.returns), dopplerBelowConfigured());
+      if (moved(n.sigma, p.doppler_sigma)) {
+        doppler_noise_ = n;
+        d = n.sigma;
+      }
+    }
+    if (g > 0 || a > 0 || d > 0) filter_->setNoise(d, g, a);
+  }
+
+  /// The Doppler noise at the start: the start decision's robust scale of its residuals (its
+  /// median absolute residual has the information of ~37 % as many normal samples).
+  void startDopplerNoise(const StartHypothesis& h) {
+    doppler_noise_ = NoisePosterior{};
+    if (h.residual_scale_returns < kMinNoiseReturns || !(h.residual_scale > 0)) return;
+    constexpr double kMedianEfficiency = 0.37;
+    doppler_noise_ = dopplerNoise(
+        h.residual_scale, kMedianEfficiency * static_cast<double>(h.residual_scale_returns), false);
+  }
+
+  /// The Doppler noise an estimate with `dof` degrees of freedom gives, within the prior's range
+  /// of the configured one (a quantized Doppler at rest reads exact zeros: its residuals say
+  /// nothing of its noise).
+  NoisePosterior dopplerNoise(double estimate, double dof, bool below_configured) const {
+    const double declared = cfg_.doppler.doppler_sigma;
+    if (!below_configured && !(estimate > declared)) return {declared, 0.0, declared};
+    const double e =
+        std::clamp(estimate, declared / kNoisePriorSpread, declared * kNoisePriorSpread);
+    return combineNoise(declared, e, dof);
+  }
+
+  /// Whether the Doppler noise may be taken below the configured one: the residuals of single
+  /// returns do not show an error that a node's returns share (vibration, a radar scan's common
+  /// error, which a configured value may hold on purpose); the test of the nodes' residuals
+  /// (testNodeResiduals) does, and scales the covariance up by it, but only with at least its
+  /// kMinReturns returns per node. Sparser returns keep the configured value as a floor.
+  bool dopplerBelowConfigured() const {
+    const std::size_t nodes = filter_ ? filter_->nodes() : 0;
+    constexpr std::size_t kReturnsPerNode = 30;
+    return nodes > 0 && filter_->forwardResiduals().returns >= kReturnsPerNode * nodes;
+  }
+
+  /// After the final smoothing: the Doppler noise from the smoothed residuals (Q: the nodes'
+  /// polynomials); when it moved by more than 5 % from the one used, the window is solved again
+  /// with it. Returns whether it was.
+  bool finalDopplerNoise(Diagnostics& diag, std::vector<DopplerInertialFilter::Vec9>& Q) {
+    const std::size_t used = filter_->acceptedPointsTotal();
+    if (used < kMinNoiseReturns) return false;
+    const double used_sigma = filter_->params().doppler_sigma;
+    const double ms = filter_->residualSumOfSquares(Q) / static_cast<double>(used);
+    const NoisePosterior n =
+        dopplerNoise(untruncatedSigma(ms, filter_->params().regate_sigma * used_sigma),
+                     static_cast<double>(used), dopplerBelowConfigured());
+    doppler_noise_.rel_sigma = n.rel_sigma;
+    // The data's value is the one used unless the configured one was kept as a floor.
+    doppler_from_data_ = n.rel_sigma > 0;
+    constexpr double kChange = 0.05;
+    if (!(std::abs(n.sigma / used_sigma - 1.0) > kChange)) return false;
+    doppler_noise_ = n;
+    filter_->setNoise(n.sigma, 0, 0);
+    diag.iterations += filter_->smooth();
+    Q = filter_->lidarVelocityPolynomials();
+    return true;
+  }
+
+  /// The noises the final smoothing uses, with their source, in diag.noise.
+  void reportNoise(Diagnostics& diag) const {
+    const DopplerInertialFilterParams& p = filter_->params();
+    NoiseReport& n = diag.noise;
+    n.gyro = {p.gyro_sigma, 0.0, cfg_.imu.gyro_sigma, NoiseUsed::Source::Declared};
+    n.accel = {p.accel_sigma, 0.0, cfg_.imu.accel_sigma, NoiseUsed::Source::Declared};
+    n.doppler = {p.doppler_sigma, 0.0, cfg_.doppler.doppler_sigma, NoiseUsed::Source::Declared};
+    if (imu_noise_from_rest_) {
+      n.gyro.rel_sigma = rest_.gyroNoise().rel_sigma;
+      n.accel.rel_sigma = rest_.accelNoise().rel_sigma;
+      n.gyro.source = n.accel.source = NoiseUsed::Source::DataRest;
+    }
+    if (doppler_from_data_) {
+      n.doppler.rel_sigma = doppler_noise_.rel_sigma;
+      n.doppler.source = NoiseUsed::Source::Data;
+    }
+  }
+
   /// The nodes' Doppler residuals against the noise model (DopplerInertialFilter::nodeResiduals,
   /// nodes of at least kMinReturns returns, so that their sums are near Gaussian): their
   /// chi-square per degree of freedom in diag.node_residual_ratio. Above the 99.9 % quantile the
@@ -596,7 +716,7 @@ class JointPipeline final : public Pipeline {
     constexpr double kSigmas = 4.0;
     constexpr std::uint32_t kMinCount = 8;
     constexpr std::size_t kMinReturns = 200;
-    const double sigma = cfg_.doppler.doppler_sigma;
+    const double sigma = filter_->params().doppler_sigma;
     const auto& imu = seq_.imu();
     const WindowRecorder& rec = recorder_;
     const std::size_t nodes = rec.nodes();
@@ -696,7 +816,7 @@ class JointPipeline final : public Pipeline {
     // of a hundred, which costs its returns and nothing else.
     constexpr double kSigmas = 4.0;
     constexpr int kMinCount = 4;
-    const double sigma = cfg_.doppler.doppler_sigma;
+    const double sigma = filter_->params().doppler_sigma;
     // The returns in the rest cells: the accepted ones of the nodes still at rest.
     for (std::size_t k = 0; k < recorder_.nodes() && k < node_rest_.size(); ++k) {
       if (!node_rest_[k]) continue;
@@ -721,7 +841,7 @@ class JointPipeline final : public Pipeline {
       os << v;
       return os.str();
     };
-    const double sigma = cfg_.doppler.doppler_sigma;
+    const double sigma = filter_->params().doppler_sigma;
     const bool noisy = d.points_used >= 100 && d.doppler_residual_rms > 1.5 * sigma;
     const std::size_t judged = d.points_used + d.points_rejected;
     const double agree = judged > 0 ? static_cast<double>(d.points_used) / judged : 1.0;
@@ -772,9 +892,9 @@ class JointPipeline final : public Pipeline {
           "by that factor");
     if (noisy)
       s.warnings.push_back("the Doppler residuals (RMS " + fmt(d.doppler_residual_rms) +
-                           " m/s) exceed the configured Doppler noise (" + fmt(sigma) +
-                           " m/s): the noise setting, the extrinsics or the LiDAR-IMU time "
-                           "offset may be wrong");
+                           " m/s) exceed the Doppler noise used (" + fmt(sigma) +
+                           " m/s, at most ten times the configured one): the extrinsics or the "
+                           "LiDAR-IMU time offset may be wrong");
     // Many returns know their RMS to a few per mille (1/sqrt(2n) of it): against a correct noise
     // setting it comes out at 0.985 sigma (the gates cut the tails; development seeds: 0.97-1.015
     // with the calibration right). Beyond 4 % more, the covariance is optimistic by as much, or
@@ -784,7 +904,7 @@ class JointPipeline final : public Pipeline {
     if (!noisy && d.points_used >= kManyReturns && d.doppler_residual_rms > kExcessRms * sigma)
       s.warnings.push_back("the Doppler residuals (RMS " + fmt(d.doppler_residual_rms) +
                            " m/s over " + std::to_string(d.points_used) +
-                           " returns) exceed the configured Doppler noise (" + fmt(sigma) +
+                           " returns) exceed the Doppler noise used (" + fmt(sigma) +
                            " m/s) by more than chance allows: moving objects may have been "
                            "taken for the world, or [doppler] doppler_sigma is set too low "
                            "(the covariance is then optimistic)");
@@ -808,6 +928,20 @@ class JointPipeline final : public Pipeline {
       s.warnings.push_back("the gyro bias moved " + fmt(dbg.cwiseAbs().maxCoeff()) +
                            " rad/s from its prior, more than 3 prior sigmas (" + fmt(sg0) +
                            " rad/s)");
+    // The configured noise off by more than 2x either way: the user's INI is wrong for this
+    // sensor (the state used the data's value).
+    const std::pair<const NoiseUsed*, const char*> noises[] = {
+        {&d.noise.gyro, "gyro noise ([imu] gyro_sigma"},
+        {&d.noise.accel, "accelerometer noise ([imu] accel_sigma"},
+        {&d.noise.doppler, "Doppler noise ([doppler] doppler_sigma"}};
+    for (const auto& [n, name] : noises) {
+      if (n->source == NoiseUsed::Source::Declared || !(n->declared > 0)) continue;
+      const double ratio = n->value / n->declared;
+      if (ratio > 2.0 || ratio < 0.5)
+        s.warnings.push_back(std::string("the data show a ") + name + " " + fmt(n->value) +
+                             " against the configured " + fmt(n->declared) +
+                             "): the state used the data's value; set it in the configuration");
+    }
     testCalibration(r);
   }
 
@@ -870,6 +1004,10 @@ class JointPipeline final : public Pipeline {
   bool last_ = false;  ///< the open node is the window's last
   bool early_smoothed_ = false;
   bool rest_withdrawn_ = false;  ///< the returns contradicted the IMU's rest (restContradicted)
+  bool imu_noise_from_rest_ = false;  ///< the IMU's noise is read from its rest samples (rest_)
+  /// The Doppler noise from the data (sigma 0: the configured one is used).
+  NoisePosterior doppler_noise_;
+  bool doppler_from_data_ = false;  ///< the Doppler noise used is the data's (finalDopplerNoise)
   bool node_residuals_inflated_ = false;  ///< the covariance was scaled (testNodeResiduals)
   bool map_pending_ = false;              ///< a state is out, its map not yet (completeMap)
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)

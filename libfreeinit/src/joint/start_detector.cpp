@@ -23,13 +23,6 @@
 namespace freeinit {
 namespace {
 
-/// Chi-square quantile (Wilson-Hilferty) for `dof` degrees of freedom at the standard-normal
-/// quantile z.
-double chi2Quantile(double dof, double z) {
-  const double a = 2.0 / (9.0 * dof);
-  return dof * std::pow(1.0 - a + z * std::sqrt(a), 3);
-}
-
 /// The returns as linear equations in theta = (v_b0, g_b0, db_g), one array per quantity: the
 /// refinement sweeps them seven times per hypothesis, four returns per vector operation.
 /// With s = v_b0 + t g_b0 a return of direction w = R_0t u in b0 reads
@@ -613,6 +606,29 @@ struct EarlyStates {
   }
 };
 
+/// StartHypothesis::residual_scale of the residuals `res`, from `gate` [m/s] on.
+void robustScale(const Eigen::Ref<const Eigen::ArrayXd>& res, double gate, StartHypothesis& h) {
+  std::vector<double> a;
+  a.reserve(static_cast<std::size_t>(res.size()));
+  double scale = 0, limit = gate;
+  for (int iteration = 0; iteration < 3; ++iteration) {
+    a.clear();
+    for (Eigen::Index i = 0; i < res.size(); ++i)
+      if (std::abs(res(i)) <= limit) a.push_back(std::abs(res(i)));
+    if (a.size() < 10) return;
+    auto mid = a.begin() + static_cast<std::ptrdiff_t>(a.size() / 2);
+    std::nth_element(a.begin(), mid, a.end());
+    const double m = *mid;
+    constexpr double kMadToSigma = 1.4826;
+    scale = kMadToSigma * m;
+    const double next = std::max(gate, 5.0 * scale);
+    if (next == limit) break;
+    limit = next;
+  }
+  h.residual_scale = scale;
+  h.residual_scale_returns = a.size();
+}
+
 /// IRLS (Cauchy) refinement of theta = (v_b0, g_b0, db_g) from a start, with a weak gravity
 /// prior and the gyro-bias prior. A gyro-bias error db turns the body-frame velocity by
 /// -t db x v_b(t) over the span and the lever-arm velocity by -db x p_bl, so that the Doppler of a
@@ -713,6 +729,7 @@ std::optional<StartHypothesis> refine(const Rows& rows, const Rows& sub, const C
   info.block<3, 3>(3, 3).diagonal().array() += 1.0 / g_prior_var;
   info.block<3, 3>(6, 6).diagonal().array() += 1.0 / bg_prior_var;
   h.residual_rms = h.inliers > 0 ? std::sqrt(ss / static_cast<double>(h.inliers)) : 0.0;
+  robustScale(res, p.gate, h);
   const double k = std::max(1.0, h.residual_rms / p.doppler_sigma);
   const Mat9 cov = info.ldlt().solve(Mat9::Identity()) * k * k;
   h.cov = cov.topLeftCorner<6, 6>();
@@ -909,28 +926,6 @@ StartDecision& checkConditioning(StartDecision& d, const StartDetectorParams& p)
 
 }  // namespace
 
-bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
-                  double gyro_sigma, double accel_sigma) {
-  if (end <= begin + 2 || end > imu.size()) return false;
-  const double n = static_cast<double>(end - begin);
-  Vec3 mg = Vec3::Zero(), ma = Vec3::Zero();
-  for (std::size_t i = begin; i < end; ++i) {
-    mg += imu[i].gyro;
-    ma += imu[i].accel;
-  }
-  mg /= n;
-  ma /= n;
-  double sg = 0, sa = 0;
-  for (std::size_t i = begin; i < end; ++i) {
-    sg += (imu[i].gyro - mg).squaredNorm();
-    sa += (imu[i].accel - ma).squaredNorm();
-  }
-  // Spread about the mean: chi-square with 3 (n - 1) dof for white noise; a factor 1.5 on the
-  // variance leaves room for a datasheet that is a little optimistic.
-  const double limit = 1.5 * chi2Quantile(3.0 * (n - 1.0), 3.09);
-  return sg / (gyro_sigma * gyro_sigma) < limit && sa / (accel_sigma * accel_sigma) < limit;
-}
-
 StartSpan startSpan(const std::vector<ImuSample>& imu, double t_first, const FreeInitConfig& cfg) {
   StartSpan out;
   std::size_t k = 0;
@@ -956,6 +951,7 @@ StartDetectorParams startDetectorParams(const FreeInitConfig& cfg) {
   sp.gyro_sigma = cfg.imu.gyro_sigma;
   sp.accel_sigma = cfg.imu.accel_sigma;
   sp.gyro_bias_sigma = cfg.imu.gyro_bias_sigma0;
+  sp.accel_bias_bound = cfg.imu.accel_bias_bound;
   sp.gate = cfg.doppler.gate_min;
   sp.max_speed = cfg.start.rest_speed;
   sp.min_info_eigen = cfg.start.min_info_eigen;
@@ -1141,7 +1137,14 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
     at.push_back(DopplerInertialFilter::propagate(at.back(), span, j0 + i - 1));
   const Vec3 g_mean = -(at.back().v_w - g_w * T) / T;  // exact at rest, off by the mean
                                                        // acceleration otherwise
-  out.imu_still = imuShowsRest(imu, k_first, k_last + 1, p.gyro_sigma, p.accel_sigma);
+  detail::RestEvidenceParams rp;
+  rp.gyro_sigma = p.gyro_sigma;
+  rp.accel_sigma = p.accel_sigma;
+  rp.gyro_bias_prior = b_g_prior;
+  rp.gyro_bias_sigma = p.gyro_bias_sigma;
+  rp.accel_bias_bound = p.accel_bias_bound;
+  out.imu_rest = detail::imuRestEvidence(imu, k_first, k_last + 1, rp);
+  out.imu_still = out.imu_rest.still;
 
   // Every return as a linear equation: the returns of the span with their interval, then the
   // returns of each interval at once, from its motion's polynomials (in time order, the returns

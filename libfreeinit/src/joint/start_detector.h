@@ -26,14 +26,17 @@
 #include <string>
 #include <vector>
 
+#include "joint/noise_estimate.h"
+
 namespace freeinit {
 
 /// Settings of the start decision.
 struct StartDetectorParams {
   double doppler_sigma = 0.03;     ///< [m/s]
-  double gyro_sigma = 0.002;       ///< [rad/s] per sample
-  double accel_sigma = 0.02;       ///< [m/s^2] per sample
+  double gyro_sigma = 0.002;       ///< [rad/s] per sample (bounds the plausible rest levels)
+  double accel_sigma = 0.02;       ///< [m/s^2] per sample (likewise)
   double gyro_bias_sigma = 0.015;  ///< [rad/s] prior std of the gyro bias (about b_g_prior)
+  double accel_bias_bound = 0.5;   ///< [m/s^2] per axis (a standing IMU reads g within it)
   double gate = 0.15;              ///< [m/s] inlier threshold on the Doppler residual
   double max_speed = 0.05;         ///< [m/s] a refined speed below this is rest
   /// A rest hypothesis supported by at least this fraction of the best hypothesis' coverage wins
@@ -75,6 +78,11 @@ struct StartHypothesis {
   std::size_t inliers = 0;
   double coverage = 0;      ///< [0, 1] share of the occupied direction cells that support it
   double residual_rms = 0;  ///< [m/s] of the inliers
+  /// [m/s] the Doppler noise the residuals show, robustly (1.4826 times their median absolute
+  /// value among those within max(gate, 5 times that scale), iterated: a few tens of percent of
+  /// returns on moving objects leave it), and the returns it rests on.
+  double residual_scale = 0;
+  std::size_t residual_scale_returns = 0;
   double min_info_eigen =
       0;              ///< [1/(m/s)^2] weakest direction of the inliers' velocity information
   bool rest = false;  ///< |v_b0| below max_speed
@@ -99,13 +107,11 @@ struct StartDecision {
   std::string message;
   StartHypothesis chosen;
   std::vector<StartHypothesis> hypotheses;  ///< every refined hypothesis, best coverage first
-  bool imu_still = false;                   ///< the IMU shows only noise over the span
+  bool imu_still = false;  ///< the IMU shows only white noise over the span (imu_rest.still)
+  /// What the span's IMU samples say about rest, whatever their noise level
+  /// (detail::imuRestEvidence), and their first differences (the noise at rest).
+  detail::ImuRestEvidence imu_rest;
 };
-
-/// True when the IMU samples show only noise: the spread of each of the gyro and the accelerometer
-/// about its mean is consistent (99.9 % chi-square, with margin) with the configured white noise.
-bool imuShowsRest(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
-                  double gyro_sigma, double accel_sigma);
 
 /// The start decision's span of a window: its first IMU sample k_first (the first at or after
 /// t_first, the window's first LiDAR return) and its last k_last, [start] duration later or the

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "joint/doppler_inertial_filter.h"
+#include "joint/noise_estimate.h"
 #include "usable_points.h"
 
 namespace freeinit::detail {
@@ -23,41 +24,88 @@ namespace freeinit::detail {
 /// Whether the IMU still shows rest: each new sample is compared with the rest means of the
 /// start span. One sample beyond 7 sigma, or the mean of the last four beyond 3 sigma (6 of the
 /// mean's sigmas), in the gyro or the accelerometer, ends the rest for the rest of the window.
-/// (A datasheet noise 20 % below the unit's makes a false end at most ~1e-5 likely per sample.)
+/// Sigma is not the configured noise but the 99 % upper bound of the noise the rest samples show
+/// (their first differences, the configured value a prior: combineNoise), so that a false end
+/// stays below ~1e-5 per sample whatever the IMU's true level. While at rest, every sample adds
+/// to that estimate: noise(), the IMU's white noise at rest.
 class RestTracker {
  public:
-  void start(bool at_rest, const Vec3& gyro_mean, const Vec3& accel_mean, double gyro_sigma,
+  /// `span_gyro`, `span_accel`: the start span's first differences (its estimate until the
+  /// tracker has seen as many); `gyro_sigma`, `accel_sigma`: the configured noises (the prior).
+  void start(bool at_rest, const Vec3& gyro_mean, const Vec3& accel_mean,
+             const DifferenceSums& span_gyro, const DifferenceSums& span_accel, double gyro_sigma,
              double accel_sigma) {
     at_rest_ = at_rest;
     gyro_mean_ = gyro_mean;
     accel_mean_ = accel_mean;
-    gyro_sigma_ = gyro_sigma;
-    accel_sigma_ = accel_sigma;
+    span_gyro_ = span_gyro;
+    span_accel_ = span_accel;
+    declared_gyro_ = gyro_sigma;
+    declared_accel_ = accel_sigma;
+    gyro_ = DifferenceSums{};
+    accel_ = DifferenceSums{};
+    recent_g_ = {};
+    recent_a_ = {};
     n_ = 0;
+    updateLimits();
   }
   bool atRest() const { return at_rest_; }
-  /// Feeds the next sample; returns atRest().
+  /// Feeds the next sample (from the start span's first one on); returns atRest().
   bool update(const ImuSample& s) {
     if (!at_rest_) return false;
     const Vec3 dg = s.gyro - gyro_mean_, da = s.accel - accel_mean_;
+    bool moving = dg.norm() > 7.0 * gyro_limit_ || da.norm() > 7.0 * accel_limit_;
+    if (n_ >= 3) {  // the mean of this sample and the three before it
+      const Vec3 mg =
+          (recent_g_[0] + recent_g_[1] + recent_g_[2] + recent_g_[3] - recent_g_[n_ % 4] + dg) /
+          4.0;
+      const Vec3 ma =
+          (recent_a_[0] + recent_a_[1] + recent_a_[2] + recent_a_[3] - recent_a_[n_ % 4] + da) /
+          4.0;
+      moving = moving || mg.norm() > 3.0 * gyro_limit_ || ma.norm() > 3.0 * accel_limit_;
+    }
+    if (moving) {
+      at_rest_ = false;
+      return false;
+    }
+    if (n_ > 0) {
+      gyro_.add(s.gyro - last_.gyro);
+      accel_.add(s.accel - last_.accel);
+      if (gyro_.count > span_gyro_.count) updateLimits();
+    }
     recent_g_[n_ % 4] = dg;
     recent_a_[n_ % 4] = da;
+    last_ = s;
     ++n_;
-    bool moving = dg.norm() > 7.0 * gyro_sigma_ || da.norm() > 7.0 * accel_sigma_;
-    if (n_ >= 4) {
-      const Vec3 mg = (recent_g_[0] + recent_g_[1] + recent_g_[2] + recent_g_[3]) / 4.0;
-      const Vec3 ma = (recent_a_[0] + recent_a_[1] + recent_a_[2] + recent_a_[3]) / 4.0;
-      moving = moving || mg.norm() > 3.0 * gyro_sigma_ || ma.norm() > 3.0 * accel_sigma_;
-    }
-    if (moving) at_rest_ = false;
     return at_rest_;
+  }
+  /// The gyro's and the accelerometer's white noise from the rest samples so far (the start
+  /// span's until the tracker has seen more), combined with the configured values.
+  NoisePosterior gyroNoise() const {
+    const DifferenceSums& d = sums(gyro_, span_gyro_);
+    return combineNoise(declared_gyro_, d.sigma(), d.dof());
+  }
+  NoisePosterior accelNoise() const {
+    const DifferenceSums& d = sums(accel_, span_accel_);
+    return combineNoise(declared_accel_, d.sigma(), d.dof());
   }
 
  private:
+  static const DifferenceSums& sums(const DifferenceSums& own, const DifferenceSums& span) {
+    return own.count > span.count ? own : span;
+  }
+  void updateLimits() {
+    gyro_limit_ = gyroNoise().upper99;
+    accel_limit_ = accelNoise().upper99;
+  }
+
   bool at_rest_ = false;
   Vec3 gyro_mean_ = Vec3::Zero(), accel_mean_ = Vec3::Zero();
-  double gyro_sigma_ = 1, accel_sigma_ = 1;
+  DifferenceSums span_gyro_, span_accel_, gyro_, accel_;
+  double declared_gyro_ = 1, declared_accel_ = 1;
+  double gyro_limit_ = 1, accel_limit_ = 1;
   std::array<Vec3, 4> recent_g_{}, recent_a_{};
+  ImuSample last_;
   std::size_t n_ = 0;
 };
 

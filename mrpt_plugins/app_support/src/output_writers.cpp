@@ -3,6 +3,7 @@
 
 #include <cmath>
 #include <iomanip>
+#include <tuple>
 
 namespace freeinit::app_support {
 
@@ -35,6 +36,7 @@ StateVerdict verdictOf(const InitResult& r, double doppler_sigma) {
   v.time_offset = s.time_offset;
   v.time_offset_sigma = s.time_offset_sigma;
   v.time_offset_estimated = s.time_offset_estimated;
+  v.noise = r.diag.noise;
   return v;
 }
 
@@ -53,6 +55,22 @@ void printVerdict(std::ostream& log, const StateVerdict& v) {
       << 1e3 * v.time_offset_sigma << " ms ("
       << (v.time_offset_estimated ? "estimated from the motion" : "its prior: not observed")
       << ")\n";
+  const std::tuple<const NoiseUsed*, const char*, const char*> noises[] = {
+      {&v.noise.gyro, "gyro", "rad/s"},
+      {&v.noise.accel, "accel", "m/s^2"},
+      {&v.noise.doppler, "Doppler", "m/s"}};
+  if (v.noise.gyro.value > 0) {
+    log << "  noise used:";
+    const char* sep = " ";
+    for (const auto& [n, name, unit] : noises) {
+      log << sep << name << " " << std::setprecision(3) << std::defaultfloat << n->value;
+      if (n->rel_sigma > 0) log << " +- " << std::setprecision(2) << 100.0 * n->rel_sigma << " %";
+      log << " " << unit << " (" << toString(n->source) << ", configured " << std::setprecision(3)
+          << n->declared << ")";
+      sep = "; ";
+    }
+    log << "\n";
+  }
   log.flags(flags);
   log.precision(precision);
 }
@@ -99,8 +117,17 @@ void writeInitialStateIni(const std::string& path, const InitialState& s,
         << "\npoints_used          = " << v.points_used
         << "\ndoppler_residual_rms = " << v.residual_rms
         << "\ndoppler_sigma        = " << v.doppler_sigma
-        << "\nnode_chi2_per_dof    = " << v.node_residual_ratio << "\n"
-        << std::setprecision(17);
+        << "\nnode_chi2_per_dof    = " << v.node_residual_ratio << "\n";
+      // The white noise used: value, relative 1-sigma, source; the configured one beside.
+      const std::tuple<const NoiseUsed*, const char*, const char*> noises[] = {
+          {&v.noise.gyro, "noise_gyro           = ", "[rad/s] per sample"},
+          {&v.noise.accel, "noise_accel          = ", "[m/s^2] per sample"},
+          {&v.noise.doppler, "noise_doppler        = ", "[m/s] per return"}};
+      for (const auto& [n, key, unit] : noises)
+        if (n->value > 0)
+          o << key << n->value << " " << n->rel_sigma << " " << toString(n->source) << " ; " << unit
+            << " used, relative sigma, source (configured " << n->declared << ")\n";
+      o << std::setprecision(17);
     }
     o << "warnings  = " << s.warnings.size() << "\n";
     for (std::size_t i = 0; i < s.warnings.size(); ++i)

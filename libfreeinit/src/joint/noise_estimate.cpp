@@ -1,0 +1,111 @@
+#include "joint/noise_estimate.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace freeinit::detail {
+
+NoisePosterior combineNoise(double declared, double estimate, double dof) {
+  // Prior on log sigma^2: the declared value, kNoisePriorSpread either way at 95 %.
+  const double s0 = 2.0 * std::log(kNoisePriorSpread) / 1.96;
+  const double prior_precision = 1.0 / (s0 * s0);
+  const double m0 = std::log(declared * declared);
+  double w = prior_precision, m = m0;
+  if (estimate > 0 && dof > 0) {
+    const double data_precision = 0.5 * dof;
+    w = prior_precision + data_precision;
+    m = (m0 * prior_precision + std::log(estimate * estimate) * data_precision) / w;
+  }
+  NoisePosterior out;
+  out.sigma = std::exp(0.5 * (m + 0.5 / w));
+  out.rel_sigma = 0.5 / std::sqrt(w);
+  constexpr double kZ99 = 2.326;
+  out.upper99 = std::exp(0.5 * (m + kZ99 / std::sqrt(w)));
+  return out;
+}
+
+double untruncatedSigma(double mean_square, double cut) {
+  if (!(mean_square > 0)) return 0.0;
+  if (!(cut > 0)) return std::sqrt(mean_square);
+  constexpr double kInvSqrt2Pi = 0.3989422804014327;
+  double sigma = std::sqrt(mean_square);
+  for (int i = 0; i < 30; ++i) {
+    const double a = cut / sigma;
+    const double phi = kInvSqrt2Pi * std::exp(-0.5 * a * a);
+    const double inside = std::erf(a / std::sqrt(2.0));  // 2 Phi(a) - 1
+    const double t = std::max(0.3, 1.0 - 2.0 * a * phi / inside);
+    const double next = std::sqrt(mean_square / t);
+    if (std::abs(next - sigma) < 1e-9 * sigma) return next;
+    sigma = next;
+  }
+  return sigma;
+}
+
+double DifferenceSums::sigma() const {
+  return count > 0 ? std::sqrt(squares / (6.0 * static_cast<double>(count))) : 0.0;
+}
+
+ImuRestEvidence imuRestEvidence(const std::vector<ImuSample>& imu, std::size_t begin,
+                                std::size_t end, const RestEvidenceParams& p) {
+  ImuRestEvidence out;
+  if (end > imu.size() || end < begin + 5) return out;
+  const double n = static_cast<double>(end - begin);
+  Vec3 mg = Vec3::Zero(), ma = Vec3::Zero();
+  for (std::size_t i = begin; i < end; ++i) {
+    mg += imu[i].gyro;
+    ma += imu[i].accel;
+  }
+  mg /= n;
+  ma /= n;
+  double sg = 0, sa = 0;
+  for (std::size_t i = begin; i < end; ++i) {
+    sg += (imu[i].gyro - mg).squaredNorm();
+    sa += (imu[i].accel - ma).squaredNorm();
+    if (i > begin) {
+      out.gyro.add(imu[i].gyro - imu[i - 1].gyro);
+      out.accel.add(imu[i].accel - imu[i - 1].accel);
+    }
+  }
+  // Von Neumann's ratio of white noise: mean 2n/(n-1), variance 4(n-2)/((n+1)(n-1)) per axis,
+  // a third of it pooled over three. A motion slower than the sample rate adds to the spread,
+  // hardly to the differences. Exact zeros (a quantized, still signal): white as well.
+  const double sd = std::sqrt(4.0 * (n - 2.0) / ((n + 1.0) * (n - 1.0)) / 3.0);
+  constexpr double kZ999 = 3.09;
+  out.eta_limit = 2.0 - kZ999 * sd;
+  out.eta_gyro = sg > 0 ? out.gyro.squares / sg : 2.0;
+  out.eta_accel = sa > 0 ? out.accel.squares / sa : 2.0;
+  out.gyro_white = out.eta_gyro >= out.eta_limit;
+  out.accel_white = out.eta_accel >= out.eta_limit;
+  // Levels: within the prior's range of the configured ones (a vibrating vehicle can look white
+  // at a level no standing IMU has); a gyro reading far from its bias prior turns (steadily).
+  const double sig_g = out.gyro.sigma(), sig_a = out.accel.sigma();
+  const bool levels =
+      sig_g <= kNoisePriorSpread * p.gyro_sigma && sig_a <= kNoisePriorSpread * p.accel_sigma;
+  const bool rate = (mg - p.gyro_bias_prior).cwiseAbs().maxCoeff() <= 5.0 * p.gyro_bias_sigma;
+  const bool gravity = std::abs(ma.norm() - kGravity) <= std::sqrt(3.0) * p.accel_bias_bound;
+  out.plausible = levels && rate && gravity;
+  out.still = out.gyro_white && out.accel_white && out.plausible;
+  return out;
+}
+
+}  // namespace freeinit::detail
+
+namespace freeinit {
+
+const char* toString(NoiseUsed::Source s) {
+  switch (s) {
+    case NoiseUsed::Source::Declared:
+      return "declared";
+    case NoiseUsed::Source::DataRest:
+      return "data_rest";
+    case NoiseUsed::Source::DataMoving:
+      return "data_moving";
+    case NoiseUsed::Source::UpperBound:
+      return "upper_bound";
+    case NoiseUsed::Source::Data:
+      return "data";
+  }
+  return "unknown";
+}
+
+}  // namespace freeinit
