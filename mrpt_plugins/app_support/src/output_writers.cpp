@@ -32,6 +32,8 @@ StateVerdict verdictOf(const InitResult& r, double doppler_sigma) {
   v.residual_rms = r.diag.doppler_residual_rms;
   v.doppler_sigma = doppler_sigma;
   v.node_residual_ratio = r.diag.node_residual_ratio;
+  v.imu_faults = r.diag.imu_faults;
+  v.imu_gap_s = r.diag.imu_gap_s;
   return v;
 }
 
@@ -89,7 +91,9 @@ void writeInitialStateIni(const std::string& path, const InitialState& s,
         << "\npoints_used          = " << v.points_used
         << "\ndoppler_residual_rms = " << v.residual_rms
         << "\ndoppler_sigma        = " << v.doppler_sigma
-        << "\nnode_chi2_per_dof    = " << v.node_residual_ratio << "\n"
+        << "\nnode_chi2_per_dof    = " << v.node_residual_ratio
+        << "\nimu_faults           = " << v.imu_faults << "\nimu_gap_s            = " << v.imu_gap_s
+        << "\n"
         << std::setprecision(17);
     }
     o << "warnings  = " << s.warnings.size() << "\n";

@@ -30,6 +30,9 @@ struct StateVerdict {
   /// Chi-square per dof of the returns per IMU sample against the noise model (0: not tested;
   /// Diagnostics::node_residual_ratio).
   double node_residual_ratio = 0;
+  /// IMU samples of the window rejected as faults (Diagnostics::imu_faults).
+  std::size_t imu_faults = 0;
+  double imu_gap_s = 0;  ///< [s] IMU gaps of the window bridged (Diagnostics::imu_gap_s)
 };
 /// The verdict of an ok result (doppler_sigma: the configured [doppler] doppler_sigma).
 StateVerdict verdictOf(const InitResult& r, double doppler_sigma);
@@ -40,7 +43,7 @@ void printVerdict(std::ostream& log, const StateVerdict& v);
 /// [initial_state] status, timestamp, q_wb, p_w, v_w, b_g, b_a, g_w, cov (18x18 row-major, order
 /// [dtheta p v b_g b_a g]); with a verdict (ok states) also sigma_v_b, sigma_tilt_deg,
 /// sigma_b_g, sigma_b_a, window_s, window_frames, points_used, doppler_residual_rms,
-/// doppler_sigma and node_chi2_per_dof; then warnings.
+/// doppler_sigma, node_chi2_per_dof, imu_faults and imu_gap_s; then warnings.
 void writeInitialStateIni(const std::string& path, const InitialState& s,
                           const StateVerdict* verdict = nullptr);
 /// TUM: "t x y z qx qy qz qw" per line.
