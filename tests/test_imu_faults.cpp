@@ -198,6 +198,28 @@ TEST(ImuFaults, SpikesOf30And300AndAGyroSpikeLikewise) {
   }
 }
 
+// What the screen lets through (here: switched off) is not integrated into an ok state: the
+// returns after it are refused node after node, and the window declines naming the time.
+TEST(ImuFaults, AFaultTheScreenMissesIsNeverAnOkState) {
+  for (const char* name : {"stat_01", "dyna_01"}) {
+    auto sc = sim::preset(name, 1);
+    sc.duration = 0.8;
+    sim::Recording rec = sim::simulate(sc);
+    const double t0 = rec.frames.front().stamp + rec.frames.front().points.front().time_offset;
+    std::size_t k = 0;
+    while (rec.imu[k].t < t0 + 0.2) ++k;
+    rec.imu[k].accel.x() += 1000.0;
+    FreeInitConfig cfg;
+    cfg.extrinsics = rec.extrinsics;
+    cfg.imu.accel_range = 1e5;
+    cfg.imu.fault_sigmas = 1e6;
+    const InitResult r = FreeInit::run(cfg, rec.imu, rec.frames);
+    EXPECT_EQ(r.state.status, InitStatus::InconsistentData) << name << ": " << r.state.message;
+    EXPECT_NE(r.state.message.find("contradict the IMU propagation"), std::string::npos)
+        << r.state.message;
+  }
+}
+
 TEST(ImuFaults, TooManyFaultsDeclineTheWindowNamingThem) {
   // One sample in ten: 10 % of the window against max_fault_share = 5 %.
   const FaultRun r = runWith("dyna_01", [](sim::Recording& rec, std::size_t k) {

@@ -104,7 +104,7 @@ const config::Section<ImuParams>& imuSection() {
           .number("accel_range", &P::accel_range, "m/s^2", aboveUpTo(0, 1e5),
                   "an accelerometer reading at or beyond this on an axis is a fault")
           .readBy("joint")
-          .number("fault_sigmas", &P::fault_sigmas, "sigma", between(3, 1000),
+          .number("fault_sigmas", &P::fault_sigmas, "sigma", between(3, 1e6),
                   "a reading this many robust sigmas from the cubic through its neighbours, on "
                   "both sides, is a fault: replaced by that cubic with its noise, never integrated")
           .readBy("joint")

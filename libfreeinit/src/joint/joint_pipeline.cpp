@@ -401,7 +401,21 @@ class JointPipeline final : public Pipeline {
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
       filter_->setReturns(recorder_.closeNode(usable_, r.diag.points_skipped));
       filter_->update();
+      const std::size_t used_before = r.diag.points_used, rejected_before = r.diag.points_rejected;
       recorder_.judgeNode(*filter_, r.diag.points_used, r.diag.points_rejected);
+      if (acceptanceCollapsed(r.diag.points_used - used_before,
+                              r.diag.points_rejected - rejected_before)) {
+        fail(r, InitStatus::InconsistentData,
+             "the LiDAR returns from " + input::formatStamp(collapse_t_) + " (" +
+                 formatNumber(collapse_t_ - t_ref_) +
+                 " s into the window) on contradict the IMU propagation (their acceptance fell "
+                 "from " +
+                 formatNumber(100.0 * collapse_from_, 2) + " % to " +
+                 formatNumber(100.0 * collapse_to_, 2) +
+                 " %): an IMU fault the screen did not catch ([imu] fault_sigmas, accel_range, "
+                 "gyro_range), or a sudden change of the scene");
+        return;
+      }
       const std::size_t node = recorder_.nodes() - 1;
       const bool was_rest = rest_.atRest();
       const bool rest = rest_.update(imu[k]);
@@ -550,6 +564,34 @@ class JointPipeline final : public Pipeline {
     }
     addWarnings(r);
     map_pending_ = true;  // completeMap(): the state does not wait for the map
+  }
+
+  /// The backstop for an IMU fault the screen missed: integrated, it moves the prediction by
+  /// more than the gate, and the returns of every later node are refused. Fed with each node's
+  /// accepted and refused returns (nodes of at least kMinReturns); true once kNodes nodes in a
+  /// row accept under a quarter of the median share of the kHistory nodes before them (at least
+  /// half). A moving object entering the view lowers the share over many nodes, not at once.
+  bool acceptanceCollapsed(std::size_t accepted, std::size_t refused) {
+    constexpr std::size_t kMinReturns = 50, kHistory = 10, kNodes = 3;
+    const std::size_t n = accepted + refused;
+    if (n < kMinReturns) return false;
+    const double share = static_cast<double>(accepted) / static_cast<double>(n);
+    if (recent_acceptance_.size() >= kHistory) {
+      std::vector<double> v(recent_acceptance_.end() - kHistory, recent_acceptance_.end());
+      std::nth_element(v.begin(), v.begin() + kHistory / 2, v.end());
+      const double median = v[kHistory / 2];
+      if (median >= 0.5 && share < 0.25 * median) {
+        if (collapsed_nodes_ == 0) {
+          collapse_t_ = screen_.samples()[k_first_ + filter_->nodes() - 1].t;
+          collapse_from_ = median;
+        }
+        collapse_to_ = share;
+        return ++collapsed_nodes_ >= kNodes;
+      }
+    }
+    collapsed_nodes_ = 0;
+    recent_acceptance_.push_back(share);
+    return false;
   }
 
   /// The IMU screen's findings inside the window (ImuScreen): counted in the diagnostics and
@@ -949,6 +991,9 @@ class JointPipeline final : public Pipeline {
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
   std::optional<DopplerInertialFilter> filter_;
   ImuScreen screen_;
+  std::vector<double> recent_acceptance_;  ///< acceptanceCollapsed: the nodes' shares
+  std::size_t collapsed_nodes_ = 0;        ///< ... nodes in a row under a quarter of the median
+  double collapse_t_ = 0, collapse_from_ = 0, collapse_to_ = 0;  ///< ... the first of them
   RestTracker rest_;
   std::vector<bool> node_rest_;
   WindowRecorder recorder_;
