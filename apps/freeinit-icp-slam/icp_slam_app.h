@@ -48,8 +48,9 @@ class IcpSlamApp {
 
   /// The outputs in out_dir (and export_dir) are one set each (output_set.h): installed when the
   /// run is complete, replacing an earlier run's; a run that throws (bad input or configuration,
-  /// a stop request) leaves none of ours there. Returns 0, or 3 when Free-Init did not
-  /// initialize and a seeded mode was asked for (the plain run is still done).
+  /// a stop request) leaves nothing of its own there and the earlier run's outputs as they were.
+  /// Returns 0, or 3 when Free-Init did not initialize and a seeded mode was asked for (the plain
+  /// run is still done).
   int run(std::ostream& log);
   /// The command line (`main` of freeinit-icp-slam): parses it, runs, returns the exit code.
   static int main(int argc, char** argv);

@@ -13,8 +13,10 @@
 #include <freeinit/mrpt_plugins/register.h>
 #include <freeinit/mrpt_plugins/stream_conversions.h>
 
+#include <array>
 #include <chrono>
 #include <condition_variable>
+#include <csignal>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
@@ -50,31 +52,42 @@ struct Recorded {
 // Converts the received items to MRPT observations and serializes and compresses them (a
 // RawlogWriter) in its own thread, off the estimator's path. The queue is bounded: when the disk
 // cannot keep up, push() waits, and the source's bounded queue then drops (and counts) instead.
-// Destroyed without commit() (an error on the way), it keeps what was written.
+// A write that fails (a full disk) stops the recording: the file keeps every whole record up to
+// there and is closed properly (RawlogWriter::keepPartial()), and so is one destroyed without
+// close() (an error on the way).
 class RecordWriter {
  public:
   RecordWriter(const std::string& path, std::size_t max_queued)
       : writer_(path), max_queued_(max_queued) {
-    writer_.keepPartial();  // a recording is never lost, even when closing it fails
+    writer_.keepPartial();  // a recording is never lost, even when writing or closing it fails
     thread_ = std::thread([this] { loop(); });
   }
   ~RecordWriter() { stop(); }
 
-  void push(Recorded r) {
+  /// Queues `r`; false when the recording has stopped (a write failed).
+  bool push(Recorded r) {
     std::unique_lock<std::mutex> lock(mutex_);
     room_.wait(lock, [&] { return queue_.size() < max_queued_ || !error_.empty(); });
-    if (!error_.empty()) throw std::runtime_error(error_);
+    if (!error_.empty()) return false;
     queue_.push_back(std::move(r));
     ready_.notify_one();
+    return true;
   }
-  /// Writes what is queued, closes the file and renames it onto its path; throws if writing
-  /// failed (then no file is left).
-  void commit() {
+  /// Writes what is queued (unless writing failed), closes the file and renames it onto its
+  /// path. Returns why the recording stopped early, the system's reason ("" if it did not).
+  std::string close() {
     stop();
-    if (!error_.empty()) throw std::runtime_error(error_);
-    writer_.commit();
+    try {
+      writer_.commit();
+    } catch (const std::exception& e) {
+      if (error_.empty()) error_ = writer_.error().empty() ? e.what() : writer_.error();
+    }
+    return error_;
   }
-  const std::string& path() const { return writer_.path(); }
+  /// Whole records in the file, and the stamps of the first and the last of them [ns].
+  std::size_t records() const { return writer_.records(); }
+  std::int64_t firstStampNs() const { return first_ns_; }
+  std::int64_t lastStampNs() const { return last_ns_; }
 
  private:
   void stop() {
@@ -111,9 +124,12 @@ class RecordWriter {
       room_.notify_one();
       try {
         writer_.write(*toObservation(r));
+        if (writer_.records() == 1) first_ns_ = *r.item.stamp_ns;
+        last_ns_ = *r.item.stamp_ns;
       } catch (const std::exception& e) {
         std::lock_guard<std::mutex> lock(mutex_);
-        error_ = std::string("recording: ") + e.what();
+        error_ = writer_.error().empty() ? e.what() : writer_.error();
+        queue_.clear();  // not written: the recording ends at its last whole record
         room_.notify_all();
         return;
       }
@@ -127,10 +143,15 @@ class RecordWriter {
   std::deque<Recorded> queue_;
   bool closing_ = false;
   std::string error_;
+  std::int64_t first_ns_ = 0, last_ns_ = 0;
   std::thread thread_;
 };
 
 const char* const kSourceName = "live stream";
+
+/// Room held on the disk for ending the run when the recording fills it: the recording's end,
+/// stream_stats.ini and the install journal, a few file-system blocks each [bytes].
+constexpr std::size_t kFullDiskReserve = 64 * 1024;
 
 /// The output set's options: the recording (a file name in the output folder) and its
 /// statistics are kept, never deleted.
@@ -139,17 +160,26 @@ app_support::OutputSetOptions onlineSetOptions(const FreeInitOnlineAppParams& p)
     throw std::invalid_argument("--record " + p.record +
                                 ": a file name in the output folder, without '/'");
   app_support::OutputSetOptions options = app_support::folderSetOptions();
-  options.recording = p.record;
-  options.recording_companion = p.record.empty() ? "" : kStatsFile;
+  if (!p.record.empty()) {
+    options.recording = p.record;
+    options.reserve_bytes = kFullDiskReserve;
+  }
+  options.recording_companion = kStatsFile;
   return options;
+}
+
+/// "no space left on the device (out/x is full)", or the system's reason as it is.
+std::string reasonText(const app_support::OutputSet& set, const std::string& why) {
+  return set.noSpace(why) ? "no space left on the device (" + set.dir() + " is full)" : why;
 }
 
 /// One run of freeinit-online, step by step (FreeInitOnlineApp::run() calls them in order); what
 /// it finds goes to the app's members.
 ///
-/// The outputs are one set (output_set.h): the earlier run's go when this run's first data
-/// arrive (its recording renamed, never deleted); the state is installed the moment the window
-/// closes, the rest when the stream ends.
+/// The outputs are one set (output_set.h): the state (with effective_config.ini) is installed the
+/// moment the window closes, replacing the earlier run's outputs (its recording renamed, never
+/// deleted); the rest when the stream ends. A run that ends before the window closed leaves the
+/// earlier outputs as they were (its recording kept beside them).
 class OnlineRun {
  public:
   OnlineRun(FreeInitOnlineApp& app, std::ostream& log)
@@ -216,7 +246,6 @@ class OnlineRun {
       const auto now = Clock::now();
       if (!events.empty()) {
         last_data = now;
-        if (!data_seen_) set_.install({kConfigFile});  // the earlier run's outputs go now
         data_seen_ = true;
       } else if (data_seen_ && p_.idle_timeout > 0 &&
                  secondsBetween(last_data, now) > p_.idle_timeout) {
@@ -241,30 +270,35 @@ class OnlineRun {
     app_.stats = src_->stats();
   }
 
-  /// Closes the recording (removed when nothing was recorded); then, without any data, the run
-  /// fails with nothing written.
+  /// Closes the recording (removed when nothing was recorded; kept up to its last whole record
+  /// when writing it failed); then, without any data, the run fails with nothing written.
   void closeRecording() {
     if (rec_) {
-      try {
-        rec_->commit();
-      } catch (const std::exception& e) {
-        throw app_support::OutputError(set_.describe(p_.record, e.what()));
-      }
+      // The recording's end must fit even on a full disk: the reserve is given back for it, and
+      // taken again, if there is room, for what follows.
+      set_.releaseReserve();
+      recording_error_ = rec_->close();
+      set_.holdReserve();
+      recording_.records = rec_->records();
+      recording_.first_ns = rec_->firstStampNs();
+      recording_.last_ns = rec_->lastStampNs();
       rec_.reset();
-      if (app_.recorded == 0) {
+      if (recording_.records == 0) {
         std::filesystem::remove(set_.path(p_.record));  // nothing was recorded
       } else {
-        log_ << "Recorded " << app_.recorded << " observations to " << app_.record_path << "\n";
+        log_ << "Recorded " << recording_.records << " observations to " << app_.record_path
+             << "\n";
       }
     }
     if (!data_seen_) {
-      std::ostringstream within;
-      if (p_.wait_first > 0) within << " within " << p_.wait_first << " s";
+      std::ostringstream within;  // a signal before --wait ran out: "before SIGINT" only
+      if (p_.wait_first > 0 && stopped_by_signal_ == 0)
+        within << " within " << p_.wait_first << " s";
       throw mrpt_plugins::InputError(
           std::string(kSourceName) + ": no data received" + within.str() +
           (stopped_by_signal_ != 0 ? " before " + app_support::signalName(stopped_by_signal_)
                                    : "") +
-          "; nothing written");
+          "; " + set_.leftBehind());
     }
   }
 
@@ -280,7 +314,20 @@ class OnlineRun {
     log_ << "Stream statistics:\n" << st.str();
     set_.write(kStatsFile, [&](const std::string& path) {
       writeFileAtomically(path, [&](std::ostream& o) {
-        o << "[stream]\n" << st.str() << "recorded            = " << app_.recorded << "\n";
+        o << "[stream]\n"
+          << st.str()
+          << "recorded            = " << (p_.record.empty() ? app_.recorded : recording_.records)
+          << "\n";
+        if (!recording_error_.empty())
+          o << std::fixed << std::setprecision(3)
+            << "; the recording stopped early: it holds every whole record up to the failure\n"
+            << "recording_stopped   = " << reasonText(set_, recording_error_) << "\n"
+            << "recording_stopped_after_s = "
+            << 1e-9 * static_cast<double>(recording_.last_ns - recording_.first_ns)
+            << "  ; of the stream, at its last whole record\n"
+            << std::setprecision(6) << "recording_last_stamp = " << 1e-9 * recording_.last_ns
+            << "  ; UNIX s\n"
+            << std::defaultfloat;
         if (stopped_by_signal_ != 0)
           o << "stopped_by          = " << app_support::signalName(stopped_by_signal_) << "\n";
         if (app_.ready_live)
@@ -299,6 +346,17 @@ class OnlineRun {
       log_ << "Warning: " << stats.anomalies()
            << " datagrams or items lost, dropped or rejected (see stream_stats.ini)\n";
     if (!input_error_.empty()) throw mrpt_plugins::InputError(input_error_);
+    if (!recording_error_.empty()) {
+      // The other outputs are not written (the disk is full, or the recording's own error); the
+      // state, if the window closed, stays with the recording and its statistics.
+      std::ostringstream m;
+      m << app_.record_path << ": the recording stopped after " << recording_.records
+        << " whole records (" << std::fixed << std::setprecision(3)
+        << 1e-9 * static_cast<double>(recording_.last_ns - recording_.first_ns)
+        << " s of the stream" << (app_.ready_live ? "" : ", before the window closed")
+        << "): " << reasonText(set_, recording_error_) << "; " << set_.leftBehind();
+      throw app_support::OutputError(m.str());
+    }
   }
 
   /// A session the stream ended before: given the end of the data, it initializes or says why
@@ -366,7 +424,7 @@ class OnlineRun {
     const Extrinsics declared = e.frame.extrinsics;
     auto item = app_support::itemFromStream(std::move(e), app_.recorded, accel_scale_);
     if (!item) return;
-    if (rec_) {
+    if (rec_ && !recording_stopped_) {
       const bool imu = item->kind == app_support::IngestItem::Kind::Imu;
       Recorded r;
       r.item.kind = item->kind;
@@ -376,7 +434,14 @@ class OnlineRun {
       r.item.frame = item->frame;
       r.label = imu ? labels_.imu : labels_.lidar;
       r.extrinsics = declared;
-      rec_->push(std::move(r));
+      if (!rec_->push(std::move(r))) {
+        // Writing the recording failed (a full disk): the run ends here, with what it recorded.
+        log_ << "The recording stopped (writing " << app_.record_path
+             << " failed): end of the stream\n";
+        recording_stopped_ = true;
+        end_ = true;
+        return;
+      }
     }
     ++app_.recorded;
     app_support::InitSession& session = *session_;
@@ -400,9 +465,10 @@ class OnlineRun {
       return;
     }
     const auto t_processed = Clock::now();
-    // The state goes out before the map is built (the map is for the outputs at the end).
+    // The state goes out before the map is built (the map is for the outputs at the end); with
+    // it, this run's set replaces the earlier one.
     writeState(session.resultBeforeMap());
-    set_.install({kStateFile});
+    set_.install({kConfigFile, kStateFile});
     const auto t_written = Clock::now();
     OnlineLatency& latency = app_.latency;
     latency.queue = secondsBetween(e.received, t_fed);
@@ -440,11 +506,48 @@ class OnlineRun {
   double accel_scale_ = 1.0;
   std::vector<app_support::CheckedItem> checked_;
   std::string input_error_;
+  std::string recording_error_;  ///< why the recording stopped early ("" if it did not)
+  struct {
+    std::size_t records = 0;                 ///< whole records in the recording
+    std::int64_t first_ns = 0, last_ns = 0;  ///< their first and last stamps
+  } recording_;
+  bool recording_stopped_ = false;  ///< writing the recording failed: the stream ends
   bool data_seen_ = false;
   bool end_ = false;      ///< the stream ended (or the state is ready with stop_when_ready)
   bool stopped_ = false;  ///< an input error: nothing more is fed
   int stopped_by_signal_ = 0;
   int sessions_ = 0;  ///< sender sessions seen
+};
+
+// From the end of the stream on, a stop signal asks for what is already under way (the end of
+// the stream, then the outputs, a few seconds): SIGINT, SIGTERM and SIGHUP are ignored until the
+// run returns, and one that came since the stream ended is acknowledged, so that a late Ctrl-C
+// does not cost the outputs (nor say that none was written while the state is there). SIGKILL
+// still stops the process.
+class StopSignalsIgnored {
+ public:
+  explicit StopSignalsIgnored(std::ostream& log) {
+    struct sigaction ignore = {};
+    ignore.sa_handler = SIG_IGN;
+    sigemptyset(&ignore.sa_mask);
+    for (std::size_t i = 0; i < kSignals.size(); ++i)
+      sigaction(kSignals[i], &ignore, &previous_[i]);
+    if (const int sig = app_support::stopSignal()) {
+      log << app_support::signalName(sig) << " after the end of the stream: the outputs are "
+          << "written first\n";
+      app_support::clearStopRequest();
+    }
+  }
+  ~StopSignalsIgnored() {
+    for (std::size_t i = 0; i < kSignals.size(); ++i)
+      sigaction(kSignals[i], &previous_[i], nullptr);
+  }
+  StopSignalsIgnored(const StopSignalsIgnored&) = delete;
+  StopSignalsIgnored& operator=(const StopSignalsIgnored&) = delete;
+
+ private:
+  static constexpr std::array<int, 3> kSignals = {SIGINT, SIGTERM, SIGHUP};
+  std::array<struct sigaction, 3> previous_{};
 };
 
 }  // namespace
@@ -455,6 +558,7 @@ int FreeInitOnlineApp::run(std::ostream& log) {
   r.prepare();
   r.startSource();
   r.receive();
+  const StopSignalsIgnored finishing(log);
   r.closeRecording();
   r.writeStreamStats();
   r.finishSession();

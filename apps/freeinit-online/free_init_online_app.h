@@ -1,9 +1,9 @@
 // Free-Init on a live stream: `freeinit-online <config.ini> [--port N] [--out DIR]`. Receives the
 // Doppler LiDAR + IMU wire format (docs/wire_format.md), feeds the same observation handler as the
 // offline app, in arrival order, writes initial_state.ini (atomically) the moment the window
-// closes, and records everything it fed to a rawlog, so that `freeinit` on that rawlog gives the
-// same result. When the stream ends it writes the other outputs (static map, trajectory, ...) as
-// the offline app does.
+// closes (replacing the earlier run's outputs then, not before), and records everything it fed to
+// a rawlog, so that `freeinit` on that rawlog gives the same result. When the stream ends it
+// writes the other outputs (static map, trajectory, ...) as the offline app does.
 #pragma once
 
 #include <freeinit/app_support/app_config.h>
@@ -46,7 +46,9 @@ class FreeInitOnlineApp {
   std::unique_ptr<net::StreamSource> source;
 
   /// Runs until the end of the stream (see params). Bad configuration throws before listening;
-  /// observations the estimator rejects throw InputError after the recording is closed.
+  /// observations the estimator rejects throw InputError after the recording is closed; a
+  /// recording whose write fails (a full disk) ends the stream and throws OutputError once it is
+  /// closed at its last whole record with its statistics (the message says what is left).
   /// Returns 0 initialized, 3 not initialized (reason in initial_state.ini).
   int run(std::ostream& log);
   /// The command line (`main` of freeinit-online): parses it, runs, returns the exit code.

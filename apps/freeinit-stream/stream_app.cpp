@@ -171,10 +171,12 @@ void StreamApp::run(std::ostream& log) {
   log << "Sent " << imu_sent << " IMU samples and " << frames_sent << " frames in "
       << stats.datagrams << " datagrams (" << stats.bytes / 1e6 << " MB) in "
       << std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count() << " s\n";
-  if (stats.dropped + stats.duplicated + stats.reordered + stats.corrupted + stats.garbage > 0)
+  if (stats.dropped + stats.duplicated + stats.reordered + stats.corrupted + stats.truncated +
+          stats.garbage >
+      0)
     log << "Injected faults: " << stats.dropped << " dropped, " << stats.duplicated
         << " duplicated, " << stats.reordered << " reordered, " << stats.corrupted << " corrupted, "
-        << stats.garbage << " garbage datagrams\n";
+        << stats.truncated << " truncated, " << stats.garbage << " garbage datagrams\n";
   if (stats.refused > 0)
     log << "Warning: " << stats.refused << " datagrams refused by the system (no listener?)\n";
 }
@@ -213,6 +215,8 @@ int StreamApp::main(int argc, char** argv) {
       cli.number("", "reorder", "probability a datagram is sent late", 0, between(0, 1), "P");
   const auto& corrupt =
       cli.number("", "corrupt", "probability a byte is flipped", 0, between(0, 1), "P");
+  const auto& truncate =
+      cli.number("", "truncate", "probability a datagram is cut short", 0, between(0, 1), "P");
   const auto& fault_seed =
       cli.integer("", "fault-seed", "seed of the fault draws", 1, 0, 4294967295LL, "N");
   const auto& restart = cli.number("", "restart-at", "restart the sender S s into the stream", -1,
@@ -240,6 +244,7 @@ int StreamApp::main(int argc, char** argv) {
     p.faults.duplicate = dup.value;
     p.faults.reorder = reorder.value;
     p.faults.corrupt = corrupt.value;
+    p.faults.truncate = truncate.value;
     p.faults.seed = static_cast<std::uint64_t>(fault_seed.value);
     p.restart_at = restart.value;
     p.garbage = static_cast<int>(garbage.value);

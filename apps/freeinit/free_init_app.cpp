@@ -403,7 +403,7 @@ int FreeInitApp::run(std::ostream& log) {
   out_dir = params.out_dir;
   if (out_dir.empty()) out_dir = newOutputFolder(params, sweep);
   // The outputs' set: locked now, installed as a whole at the end; on any failure (an exception
-  // through here) the earlier run's outputs are removed with the staging folder.
+  // through here) the staging folder goes and the earlier run's outputs stay as they were.
   app_support::OutputSet set(out_dir, "", app_support::folderSetOptions(), log);
 
   Job job(t_start, set, loadConfiguration(log));

@@ -17,6 +17,7 @@ void printStats(std::ostream& o, const SenderStats& s) {
     << "reordered   = " << s.reordered << "\n"
     << "corrupted   = " << s.corrupted << "\n"
     << "garbage     = " << s.garbage << "\n"
+    << "truncated   = " << s.truncated << "\n"
     << "refused     = " << s.refused << "\n";
 }
 
@@ -24,7 +25,7 @@ StreamSender::StreamSender(const std::string& address, std::uint16_t port, std::
                            const FaultParams& faults)
     : max_datagram_(max_datagram), faults_(faults), rng_(faults.seed) {
   pointsPerChunk(max_datagram_);  // validates the size
-  for (double p : {faults.drop, faults.duplicate, faults.reorder, faults.corrupt})
+  for (double p : {faults.drop, faults.duplicate, faults.reorder, faults.corrupt, faults.truncate})
     if (!(p >= 0 && p <= 1)) throw std::invalid_argument("fault probabilities must be in [0, 1]");
   socket_.connect(address, port);
   restart();
@@ -98,6 +99,10 @@ void StreamSender::emit(std::vector<std::uint8_t> d) {
     const std::size_t i = std::uniform_int_distribution<std::size_t>(0, d.size() - 1)(rng_);
     d[i] ^= static_cast<std::uint8_t>(1 + std::uniform_int_distribution<int>(0, 254)(rng_));
     ++stats_.corrupted;
+  }
+  if (d.size() > 1 && chance(faults_.truncate)) {
+    d.resize(std::uniform_int_distribution<std::size_t>(1, d.size() - 1)(rng_));
+    ++stats_.truncated;
   }
   if (!held_ && chance(faults_.reorder)) {
     held_ = std::move(d);  // goes out after the next datagram

@@ -324,8 +324,9 @@ TEST(IcpSlamInputs, BadIniIsAClearError) {
   EXPECT_FALSE(fs::exists(dir / "out"));
 }
 
-TEST(IcpSlamInputs, FailedRunLeavesNoEarlierOutput) {
-  // The files of an earlier run (results of every mode, the export) and one the app does not own.
+TEST(IcpSlamInputs, FailedRunLeavesTheEarlierOutputAsItWas) {
+  // The files of an earlier run (results of every mode, the export) and one the app does not own:
+  // a run that fails replaces nothing (earlier results go only for a complete new set).
   const fs::path dir = testDir("stale");
   const fs::path out = dir / "out", ex = dir / "export";
   const std::vector<fs::path> stale = {out / "results.txt",
@@ -351,7 +352,12 @@ TEST(IcpSlamInputs, FailedRunLeavesNoEarlierOutput) {
   app.params.export_dir = ex.string();
   std::ostringstream log;
   EXPECT_ANY_THROW(app.run(log));
-  for (const auto& f : stale) EXPECT_FALSE(fs::exists(f)) << f;
+  for (const auto& f : stale) {
+    std::ifstream in(f);
+    std::string line;
+    EXPECT_TRUE(std::getline(in, line)) << f;
+    EXPECT_EQ(line, "earlier run") << f;
+  }
   EXPECT_TRUE(fs::exists(foreign));
 }
 

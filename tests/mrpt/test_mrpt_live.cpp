@@ -17,6 +17,7 @@
 #include <functional>
 #include <limits>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <thread>
 
@@ -318,7 +319,9 @@ TEST(LiveStream, AnyStreamSourceFeedsTheOnlineApp) {
 }
 
 // The offline validator's checks hold online too: bad input stops the run before any state is
-// written (each of these inputs gives a state from the estimator if it reaches it).
+// written (each of these inputs gives a state from the estimator if it reaches it). The earlier
+// run's outputs stay as they were (only a complete new set replaces them); this run's recording
+// and its statistics are kept beside them under a name with their time.
 TEST(LiveStream, BadInputIsRefusedAsOffline) {
   struct Case {
     const char* what;
@@ -349,9 +352,10 @@ TEST(LiveStream, BadInputIsRefusedAsOffline) {
   for (const auto& c : cases) {
     SCOPED_TRACE(c.what);
     const std::string out = outDir("bad_input");
-    // Outputs of an earlier run in the same directory: none may survive next to this run's.
+    // Outputs of an earlier run in the same directory.
     const std::vector<std::string> stale = {"initial_state.ini", "static_map.ply",
                                             "trajectory_tum.txt", "stream_stats.ini"};
+    fs::remove_all(out);
     fs::create_directories(out);
     for (const auto& f : stale) std::ofstream(out + "/" + f) << "earlier run\n";
     FreeInitOnlineApp app;
@@ -368,9 +372,18 @@ TEST(LiveStream, BadInputIsRefusedAsOffline) {
       EXPECT_NE(std::string(e.what()).find(c.error), std::string::npos) << e.what();
     }
     EXPECT_FALSE(app.ready_live);
-    EXPECT_FALSE(fs::exists(out + "/initial_state.ini"));
     for (const auto& f : stale)
-      EXPECT_NE(readText(out + "/" + f), "earlier run\n") << f << " of an earlier run is left";
+      EXPECT_EQ(readText(out + "/" + f), "earlier run\n") << f << " of the earlier run changed";
+    std::size_t kept = 0;
+    for (const auto& e : fs::directory_iterator(out)) {
+      const std::string n = e.path().filename().string();
+      if (n.rfind("live.", 0) != 0) continue;
+      ++kept;
+      EXPECT_TRUE(
+          std::regex_match(n, std::regex("live\\.[0-9]{8}-[0-9]{6}\\.(rawlog|stream_stats\\.ini)")))
+          << n;
+    }
+    EXPECT_EQ(kept, 2u);
   }
 }
 

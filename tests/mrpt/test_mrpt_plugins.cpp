@@ -16,10 +16,14 @@
 #include <mrpt/io/CMemoryStream.h>
 #include <mrpt/maps/CSimplePointsMap.h>
 #include <mrpt/serialization/CArchive.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 
+#include <cerrno>
 #include <chrono>
 #include <cmath>
+#include <csignal>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <limits>
@@ -458,6 +462,47 @@ TEST(Writers, AFailedWriteLeavesNoFile) {
   EXPECT_THROW(writeFileAtomically(p, [](std::ostream&) { throw std::runtime_error("boom"); }),
                std::runtime_error);
   EXPECT_FALSE(fs::exists(p));
+  EXPECT_FALSE(fs::exists(p + ".tmp"));
+}
+
+// A recording whose write fails (here the file-size limit, as a full disk does) keeps every
+// whole record written before the failure and reads without error: the file is cut back to the
+// end of the last whole record and its gzip stream ended there.
+TEST(RawlogWriter, ARecordingWhoseWriteFailsEndsAtItsLastWholeRecord) {
+  const std::string p = tmpPath("cut_recording.rawlog");
+  fs::remove(p);
+  const auto records = readRawlog(std::string(FREEINIT_SOURCE_DIR) + "/rawlogs/dyna_01.rawlog");
+  ASSERT_GT(records.size(), 100u);
+  RawlogWriter w(p);
+  w.keepPartial();
+  rlimit old{};
+  ASSERT_EQ(getrlimit(RLIMIT_FSIZE, &old), 0);
+  const auto previous = std::signal(SIGXFSZ, SIG_IGN);
+  rlimit small = old;
+  small.rlim_cur = 400 * 1024;  // [bytes] about a fifth of the sample
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &small), 0);
+  bool failed = false;
+  for (const auto& r : records) {
+    try {
+      w.write(*r.obs);
+    } catch (const std::exception& e) {
+      failed = true;
+      EXPECT_NE(std::string(e.what()).find(std::strerror(EFBIG)), std::string::npos) << e.what();
+      break;
+    }
+  }
+  ASSERT_EQ(setrlimit(RLIMIT_FSIZE, &old), 0);
+  std::signal(SIGXFSZ, previous);
+  ASSERT_TRUE(failed);
+  EXPECT_EQ(w.error(), std::strerror(EFBIG));
+  const std::size_t whole = w.records();
+  EXPECT_GT(whole, 10u);
+  EXPECT_LT(whole, records.size());
+  EXPECT_THROW(w.commit(), std::runtime_error);  // kept, and the failure still reported
+  const auto back = readRawlog(p);
+  ASSERT_EQ(back.size(), whole);
+  for (std::size_t i = 0; i < whole; ++i)
+    EXPECT_EQ(back[i].obs->timestamp, records[i].obs->timestamp) << i;
   EXPECT_FALSE(fs::exists(p + ".tmp"));
 }
 

@@ -408,6 +408,22 @@ TEST(StreamReceiver, GarbageIsCountedByReason) {
   EXPECT_TRUE(ev.empty());
 }
 
+namespace {
+
+/// The samples and 500-point frames of imu(k) / frame(k, 500) that came out are exactly as sent.
+void expectAsSent(const Output& o) {
+  for (const auto& s : o.imu) {
+    const int k = static_cast<int>((s.stamp_ns - kT0) / 5'000'000LL);
+    ASSERT_EQ(s.gyro, imu(k).gyro);
+  }
+  for (const auto& f : o.frames) {
+    const int k = static_cast<int>((f.stamp_ns - kT0) / 100'000'000LL);
+    expectSamePoints(f.points, frame(k, 500).points);
+  }
+}
+
+}  // namespace
+
 TEST(UdpLoopback, FaultyStreamIsSurvivedAndCounted) {
   UdpSourceParams sp;
   sp.port = 0;  // ephemeral
@@ -449,18 +465,39 @@ TEST(UdpLoopback, FaultyStreamIsSurvivedAndCounted) {
   // Stamps strictly increase; samples come out exactly as sent.
   for (std::size_t i = 1; i < o.imu.size(); ++i)
     ASSERT_GT(o.imu[i].stamp_ns, o.imu[i - 1].stamp_ns);
-  for (const auto& s : o.imu) {
-    const int k = static_cast<int>((s.stamp_ns - kT0) / 5'000'000LL);
-    ASSERT_EQ(s.gyro, imu(k).gyro);
-  }
-  for (const auto& f : o.frames) {
-    const int k = static_cast<int>((f.stamp_ns - kT0) / 100'000'000LL);
-    expectSamePoints(f.points, frame(k, 500).points);
-  }
+  expectAsSent(o);
   // Nothing vanished silently: IMU samples not delivered are covered by counted losses.
   EXPECT_GT(st.receiver.lost, 0u);
   EXPECT_LT(o.imu.size(), static_cast<std::size_t>(n_imu));
   EXPECT_EQ(st.queue_dropped_frames + st.queue_dropped_imu, 0u);
+}
+
+// Datagrams cut short (a broken link): each is refused as malformed, never read as a shorter
+// message; what arrives whole comes out exactly as sent.
+TEST(UdpLoopback, TruncatedDatagramsAreRefusedEachOne) {
+  UdpSourceParams sp;
+  sp.port = 0;
+  UdpStreamSource source(sp);
+  source.start();
+  FaultParams faults;
+  faults.truncate = 0.1;
+  faults.seed = 7;
+  StreamSender sender("127.0.0.1", source.port(), 1472, faults);
+  const int n_imu = 400;
+  for (int k = 0; k < n_imu; ++k) {
+    sender.sendImu(imu(k));
+    if (k % 20 == 19) sender.sendFrame(frame(k / 20, 500));
+  }
+  sender.sendEndOfStream();
+  std::vector<StreamEvent> ev;
+  for (int i = 0; i < 200 && collect(ev).ends == 0; ++i) source.poll(ev, 0.05);
+  const Output o = collect(ev);
+  ASSERT_EQ(o.ends, 1) << "end of stream not received";
+  const SenderStats& ss = sender.stats();
+  ASSERT_GT(ss.truncated, 10u);
+  EXPECT_EQ(source.stats().receiver.malformed, ss.truncated);
+  EXPECT_LT(o.imu.size(), static_cast<std::size_t>(n_imu));
+  expectAsSent(o);
 }
 
 TEST(UdpLoopback, AnEmptyDatagramIsCountedAsMalformed) {

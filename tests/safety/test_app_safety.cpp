@@ -63,17 +63,18 @@ void expectStoppedCleanly(const std::vector<std::string>& argv, const fs::path& 
   FAIL() << "the run always ended before it could be stopped";
 }
 
-// Ctrl-C while freeinit works: the outputs of the earlier run go with this run's (nothing in the
-// folder passes for a result), no temporary file, the user's file stays.
-TEST(StopSignals, FreeinitLeavesNoOutputOfOursAndNoTemporaryFile) {
+// Ctrl-C while freeinit works: nothing of this run is left, no temporary file; the earlier run's
+// outputs stay as they were (only a complete new set replaces them), and so does the user's file.
+TEST(StopSignals, FreeinitLeavesNoOutputOfItsOwnAndTheEarlierSetAsItWas) {
   for (const int sig : {SIGINT, SIGTERM}) {
     const fs::path d = freshDir(sig == SIGINT ? "freeinit_sigint" : "freeinit_sigterm");
     const fs::path out = d / "out";
     earlierFreeinitRun(out);
     std::ofstream(out / "notes.txt") << "mine\n";
+    const std::string state = readText(out / "initial_state.ini");
     expectStoppedCleanly({FREEINIT_APP, kIni, kSample, "-q", "--check-all", "--out", out.string()},
-                         d, out / ".freeinit.staging", sig,
-                         {"earlier.out", "earlier.err", "out", "out/notes.txt"}, "freeinit");
+                         d, out / ".freeinit.staging", sig, listing(d), "freeinit");
+    EXPECT_EQ(readText(out / "initial_state.ini"), state);
   }
 }
 
@@ -135,33 +136,29 @@ TEST(OutputLock, ASecondRunOnTheSameOutputIsRefused) {
 }
 
 // A full disk: one line saying "no space left" and naming the file; nothing that looks like a
-// result is left (the folder the run created goes too).
+// result is left (the folder the run created goes too). (freeinit-sim refuses a recording that
+// will not fit before it writes: test_user_data.cpp.)
 TEST(FullDisk, NoSpaceLeftNamesTheFileAndLeavesNothing) {
   const fs::path d = freshDir("full_disk");
   const fs::path mnt = d / "mnt";
-  const std::string script =
-      std::string(FREEINIT_APP) + " -q " + kIni + " " + kSample + " --out " + mnt.string() +
-      "/out > " + (d / "freeinit.out").string() + " 2> " + (d / "freeinit.err").string() +
-      "; echo $? > " + (d / "freeinit.rc").string() + "; ls -A " + mnt.string() + " > " +
-      (d / "freeinit.left").string() + "; " + FREEINIT_SIM_APP + " -p stat_01 -d 1 -n 6000 -o " +
-      mnt.string() + "/sim/x.rawlog > /dev/null 2> " + (d / "sim.err").string() + "; echo $? > " +
-      (d / "sim.rc").string() + "; ls -A " + mnt.string() + "/sim > " + (d / "sim.left").string();
+  const std::string script = std::string(FREEINIT_APP) + " -q " + kIni + " " + kSample + " --out " +
+                             mnt.string() + "/out > " + (d / "freeinit.out").string() + " 2> " +
+                             (d / "freeinit.err").string() + "; echo $? > " +
+                             (d / "freeinit.rc").string() + "; ls -A " + mnt.string() + " > " +
+                             (d / "freeinit.left").string();
   if (!withSmallDisk(mnt, "400k", script, d / "unshare.log"))
     GTEST_SKIP() << "cannot mount a tmpfs here (not root?)";
   EXPECT_EQ(readText(d / "freeinit.rc"), "1\n") << readText(d / "unshare.log");
   const std::string err = readText(d / "freeinit.err");
   EXPECT_EQ(lineCount(err), 1u) << err;
-  EXPECT_TRUE(std::regex_search(err, std::regex("^freeinit: error: " + mnt.string() +
-                                                "/out/[a-z_.]+: cannot be written: no space left "
-                                                "on the device")))
+  EXPECT_TRUE(std::regex_search(
+      err, std::regex("^freeinit: error: " + mnt.string() +
+                      "/out/[a-z_.]+: cannot be written: no space left "
+                      "on the device \\(" +
+                      mnt.string() + "/out is full\\); nothing of this run is left in " +
+                      mnt.string() + "/out\n$")))
       << err;
   EXPECT_EQ(readText(d / "freeinit.left"), "");
-  EXPECT_EQ(readText(d / "sim.rc"), "1\n");
-  const std::string sim_err = readText(d / "sim.err");
-  EXPECT_EQ(lineCount(sim_err), 1u) << sim_err;
-  EXPECT_CONTAINS(sim_err, "freeinit-sim: error: " + mnt.string() +
-                               "/sim/x.rawlog: cannot be written: no space left on the device");
-  EXPECT_EQ(readText(d / "sim.left"), "");
 }
 
 // --- live recordings ---
@@ -187,7 +184,8 @@ TEST(LiveRecordings, StoppedWhileStreamingTheRecordingIsReadableAndTheEarlierOne
     ASSERT_GT(port, 0) << online.err();
     Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port), "-x", "0.5"}, d,
                    "stream");
-    // Data arrived: the earlier run's outputs are gone, its recording renamed.
+    // The window closed: this run's state and configuration replaced the earlier run's outputs,
+    // its recording renamed.
     ASSERT_TRUE(waitUntil([&] { return fs::exists(out / "effective_config.ini"); }));
     std::this_thread::sleep_for(std::chrono::milliseconds(300));
     online.signal(sig);
@@ -216,8 +214,42 @@ TEST(LiveRecordings, StoppedWhileStreamingTheRecordingIsReadableAndTheEarlierOne
   }
 }
 
-// Re-running freeinit-online when no data ever arrives keeps the earlier recording (renamed).
-TEST(LiveRecordings, NoDataTheEarlierRecordingIsKept) {
+// A stop signal that comes after the stream ended, while the outputs are written: it asks for
+// what is under way, so the run finishes its outputs, exit code the run's.
+TEST(LiveRecordings, ASignalWhileTheOutputsAreWrittenCostsNothing) {
+  const fs::path d = freshDir("live_late_signal");
+  const fs::path out = d / "live";
+  for (int attempt = 0;; ++attempt) {
+    ASSERT_LT(attempt, 5) << "the outputs were always written before the signal";
+    Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-i", "30"}, d,
+                   "online");
+    const int port = listeningPort(online);
+    ASSERT_GT(port, 0) << online.err();
+    Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port), "-x", "2"}, d,
+                   "stream");
+    // The statistics are staged once the stream has ended, before the other outputs.
+    const fs::path stats = out / ".freeinit.staging" / "stream_stats.ini";
+    ASSERT_TRUE(waitUntil([&] { return fs::exists(stats) || !online.running(); }));
+    online.signal(SIGSTOP);
+    const bool in_time = fs::exists(stats);
+    if (in_time) online.signal(SIGTERM);
+    online.signal(SIGCONT);
+    const int st = online.wait();
+    stream.wait();
+    if (!in_time) continue;
+    EXPECT_EQ(exitCode(st), 0) << st << online.err();
+    EXPECT_EQ(online.err(), "");
+    for (const char* f :
+         {"initial_state.ini", "static_map.ply", "velocity.png", "live.rawlog", "stream_stats.ini"})
+      EXPECT_TRUE(fs::exists(out / f)) << f;
+    EXPECT_EQ(readText(out / "stream_stats.ini").find("stopped_by"), std::string::npos);
+    break;
+  }
+}
+
+// Re-running freeinit-online when no data ever arrives leaves the earlier recording as it was;
+// into a new folder, it leaves no folder.
+TEST(LiveRecordings, NoDataTheEarlierRecordingIsLeftAsItWas) {
   const fs::path d = freshDir("live_no_data");
   const fs::path out = d / "live";
   fs::create_directories(out);
@@ -225,12 +257,21 @@ TEST(LiveRecordings, NoDataTheEarlierRecordingIsKept) {
   Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-w", "0.3"}, d,
                  "online");
   EXPECT_EQ(exitCode(online.wait()), 1);
-  EXPECT_EQ(
-      online.err(),
-      "freeinit-online: error: live stream: no data received within 0.3 s; nothing written\n");
-  const auto left = listing(out);
-  ASSERT_EQ(left.size(), 1u);
-  EXPECT_TRUE(std::regex_match(*left.begin(), std::regex("live\\.[0-9]{8}-[0-9]{6}\\.rawlog")));
+  EXPECT_EQ(online.err(),
+            "freeinit-online: error: live stream: no data received within 0.3 s; nothing of this "
+            "run is left in " +
+                out.string() + ", the earlier outputs there are as they were\n");
+  EXPECT_EQ(listing(out), (std::set<std::string>{"live.rawlog"}));
+  EXPECT_EQ(fs::file_size(out / "live.rawlog"), fs::file_size(kSample));
+
+  Process fresh({FREEINIT_ONLINE_APP, kIni, "-o", (d / "new").string(), "-p", "0", "-w", "0.3"}, d,
+                "fresh");
+  EXPECT_EQ(exitCode(fresh.wait()), 1);
+  EXPECT_EQ(fresh.err(),
+            "freeinit-online: error: live stream: no data received within 0.3 s; nothing of this "
+            "run is left in " +
+                (d / "new").string() + "\n");
+  EXPECT_FALSE(fs::exists(d / "new"));
 }
 
 // A run killed outright (SIGKILL, a power loss) leaves its recording in the staging folder: the

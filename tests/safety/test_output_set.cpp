@@ -1,6 +1,6 @@
 // The output set (output_set.h): a run's outputs appear whole or not at all, replace the earlier
-// run's as a whole, never touch what is not ours, never delete a recording, and two sets on one
-// folder exclude each other.
+// run's as a whole and only as a whole (a failed run leaves them as they were), never touch what
+// is not ours, never delete a recording, and two sets on one folder exclude each other.
 #include <freeinit/app_support/app_config.h>
 #include <freeinit/app_support/output_set.h>
 #include <freeinit/app_support/result_files.h>
@@ -84,17 +84,21 @@ TEST(OutputSet, ReplacesTheEarlierSetAsAWholeAndKeepsWhatIsNotOurs) {
   EXPECT_EQ(get(d / "initial_state.ini"), "new\n");
 }
 
-TEST(OutputSet, AFailedRunLeavesNoneOfOursAndNoTemporaryFile) {
+TEST(OutputSet, AFailedRunLeavesTheEarlierSetAsItWasAndNoTemporaryFile) {
   const fs::path d = freshDir("abandon");
   earlierRun(d);
+  const auto earlier = listing(d);
   std::ostringstream log;
   {
     OutputSet set(d.string(), "", folderSetOptions(), log);
     writeText(set, "initial_state.ini", "new\n");
     set.write("static_map.ply", [](const std::string& p) { put(p + ".tmp", "half"); });
+    EXPECT_EQ(set.leftBehind(), "nothing of this run is left in " + d.string() +
+                                    ", the earlier outputs there are as they were");
     // destroyed without commit(): a failure on the way
   }
-  EXPECT_EQ(listing(d), (std::set<std::string>{"notes.txt"}));
+  EXPECT_EQ(listing(d), earlier);
+  EXPECT_EQ(get(d / "initial_state.ini"), "earlier\n");
 }
 
 TEST(OutputSet, AFailedRunInANewFolderLeavesNoFolder) {
@@ -144,7 +148,7 @@ TEST(OutputSet, SetsOfFilesNamedAfterDifferentOutputsAreIndependent) {
   writeText(a, "a.rawlog", "new a\n");
   a.commit();
   b.abandon();
-  EXPECT_EQ(listing(d), (std::set<std::string>{"a.rawlog", "b.truth.csv"}));
+  EXPECT_EQ(listing(d), (std::set<std::string>{"a.rawlog", "b.rawlog", "b.truth.csv"}));
   EXPECT_EQ(get(d / "a.rawlog"), "new a\n");
 }
 
@@ -175,21 +179,104 @@ TEST(OutputSet, AnEarlierRecordingIsRenamedNeverDeleted) {
   EXPECT_EQ(get(d / "live.rawlog"), "new recording\n");
 }
 
-TEST(OutputSet, AFailedLiveRunKeepsItsRecording) {
+// A live run that fails before its state is installed: the earlier set stays whole (its
+// recording under its name), this run's recording and statistics are kept beside it.
+TEST(OutputSet, ALiveRunThatFailsBeforeItsInstallKeepsItsRecordingBesideTheEarlierSet) {
   const fs::path d = freshDir("recording_abandon");
   put(d / "live.rawlog", "earlier recording\n");
+  put(d / "stream_stats.ini", "earlier stats\n");
+  put(d / "initial_state.ini", "earlier\n");
   std::ostringstream log;
-  std::string kept;
+  std::string left;
   {
     OutputSet set(d.string(), "", liveOptions(), log);
-    kept = set.keptRecordingName("live.rawlog");
     writeText(set, "live.rawlog", "this run's recording\n");
     writeText(set, "stream_stats.ini", "this run's stats\n");
     writeText(set, "static_map.ply", "not whole\n");
+    left = set.leftBehind();
   }
-  EXPECT_EQ(listing(d), (std::set<std::string>{kept, "live.rawlog", "stream_stats.ini"}));
+  const auto files = listing(d);
+  ASSERT_EQ(files.size(), 5u);
+  std::string kept;
+  for (const auto& f : files)
+    if (f != "live.rawlog" && f.size() > 7 && f.compare(f.size() - 7, 7, ".rawlog") == 0) kept = f;
+  ASSERT_EQ(kept.rfind("live.", 0), 0u) << kept;
+  const std::string stem = kept.substr(0, kept.size() - 7);
+  EXPECT_EQ(files, (std::set<std::string>{"live.rawlog", "stream_stats.ini", "initial_state.ini",
+                                          kept, stem + ".stream_stats.ini"}));
+  EXPECT_EQ(get(d / "live.rawlog"), "earlier recording\n");
+  EXPECT_EQ(get(d / "stream_stats.ini"), "earlier stats\n");
+  EXPECT_EQ(get(d / "initial_state.ini"), "earlier\n");
+  EXPECT_EQ(get(d / kept), "this run's recording\n");
+  EXPECT_EQ(get(d / (stem + ".stream_stats.ini")), "this run's stats\n");
+  EXPECT_EQ(left, "this run's recording is kept as " + (d / kept).string() +
+                      " with its statistics " + stem + ".stream_stats.ini" +
+                      ", the earlier outputs there are as they were");
+}
+
+// A live run that fails after its state was installed (a full disk at the map): the folder holds
+// this run's state with its recording and statistics, nothing of the earlier run but its
+// recording, renamed.
+TEST(OutputSet, ALiveRunThatFailsAfterItsStateKeepsTheStateWithItsRecording) {
+  const fs::path d = freshDir("recording_after_state");
+  put(d / "live.rawlog", "earlier recording\n");
+  put(d / "initial_state.ini", "earlier\n");
+  put(d / "static_map.ply", "earlier\n");
+  std::ostringstream log;
+  std::string kept, left;
+  {
+    OutputSet set(d.string(), "", liveOptions(), log);
+    kept = set.keptRecordingName("live.rawlog");
+    writeText(set, "initial_state.ini", "new\n");
+    set.install({"initial_state.ini"});
+    writeText(set, "live.rawlog", "this run's recording\n");
+    writeText(set, "stream_stats.ini", "this run's stats\n");
+    left = set.leftBehind();
+  }
+  EXPECT_EQ(listing(d),
+            (std::set<std::string>{kept, "initial_state.ini", "live.rawlog", "stream_stats.ini"}));
+  EXPECT_EQ(get(d / "initial_state.ini"), "new\n");
   EXPECT_EQ(get(d / "live.rawlog"), "this run's recording\n");
   EXPECT_EQ(get(d / kept), "earlier recording\n");
+  EXPECT_EQ(left, "this run's initial_state.ini, live.rawlog and stream_stats.ini are in " +
+                      d.string() + ", its other outputs are not");
+}
+
+// Statistics whose recording is not there (a recording under another name) are kept too.
+TEST(OutputSet, StatisticsWithoutTheirRecordingAreKept) {
+  const fs::path d = freshDir("stats_alone");
+  put(d / "stream_stats.ini", "earlier stats\n");
+  put(d / "initial_state.ini", "earlier\n");
+  std::ostringstream log;
+  {
+    OutputSet set(d.string(), "", folderSetOptions(), log);
+    writeText(set, "initial_state.ini", "new\n");
+    set.commit();
+  }
+  const auto files = listing(d);
+  ASSERT_EQ(files.size(), 2u);
+  const std::string kept = *files.rbegin();
+  EXPECT_EQ(kept.rfind("stream_stats.", 0), 0u) << kept;
+  EXPECT_EQ(get(d / kept), "earlier stats\n");
+}
+
+// Room for ending a run on a full disk: held in the staging folder, never installed, never left.
+TEST(OutputSet, TheReserveIsHeldWhileTheRunWorksAndLeavesWithIt) {
+  const fs::path d = freshDir("reserve");
+  OutputSetOptions options = liveOptions();
+  options.reserve_bytes = 64 * 1024;
+  std::ostringstream log;
+  OutputSet set(d.string(), "", options, log);
+  const fs::path reserve = d / ".freeinit.staging" / ".reserve";
+  ASSERT_TRUE(fs::exists(reserve));
+  EXPECT_EQ(fs::file_size(reserve), 64u * 1024u);
+  set.releaseReserve();
+  EXPECT_FALSE(fs::exists(reserve));
+  set.holdReserve();
+  EXPECT_TRUE(fs::exists(reserve));
+  writeText(set, "initial_state.ini", "new\n");
+  set.commit();
+  EXPECT_EQ(listing(d), (std::set<std::string>{"initial_state.ini"}));
 }
 
 TEST(OutputSet, TheStateCanBeInstalledBeforeTheRestNeverBesideAnEarlierRunsOutputs) {
@@ -227,8 +314,8 @@ TEST(OutputSet, AnInstallCutByAPowerLossIsFinishedByTheNextRun) {
   EXPECT_EQ(get(d / "initial_state.ini"), "staged\n");
   EXPECT_EQ(get(d / "static_map.ply"), "installed\n");
   EXPECT_FALSE(fs::exists(d / "errors_wrt_gt.ini"));
-  set.abandon();
-  EXPECT_TRUE(fs::is_empty(d));
+  set.abandon();  // what the interrupted run installed is its set now: it stays
+  EXPECT_EQ(listing(d), (std::set<std::string>{"initial_state.ini", "static_map.ply"}));
 }
 
 TEST(OutputSet, TheStagingOfARunThatDiedGoesButItsRecordingIsKept) {

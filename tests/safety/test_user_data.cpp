@@ -1,9 +1,17 @@
 // A user's data and earlier results are safe, second pass: what lies beside a recording, a gzip
-// stream whose checksum fails, and the bounds of what a flag may ask for. Each case runs the app
-// as a process and asserts the exit status, the message and what is left on disk.
+// stream whose checksum fails, the bounds of what a flag may ask for, live recordings on a full
+// disk and earlier results that only a complete new set replaces. Each case runs the app as a
+// process and asserts the exit status, the message and what is left on disk.
+#include <freeinit/mrpt_plugins/rawlog_reader.h>
+
+#include <algorithm>
 #include <filesystem>
 #include <fstream>
+#include <functional>
+#include <map>
+#include <regex>
 #include <string>
+#include <vector>
 
 #include "app_process.h"
 
@@ -52,6 +60,280 @@ TEST(Simulator, ARecordingTooLargeForTheDiskIsRefusedBeforeAnyWork) {
   EXPECT_CONTAINS(err, "(-d is in seconds)");
   EXPECT_EQ(readText(d / "sim.out"), "");
   EXPECT_EQ(readText(d / "sim.left"), "");
+}
+
+// --- live recordings on a full disk; earlier results replaced only by a complete new set ---
+
+/// Every file under `dir` with its content.
+std::map<std::string, std::string> contents(const fs::path& dir) {
+  std::map<std::string, std::string> out;
+  for (const auto& e : fs::recursive_directory_iterator(dir))
+    if (e.is_regular_file()) out[fs::relative(e.path(), dir).string()] = readText(e.path());
+  return out;
+}
+
+std::size_t wholeRecords(const fs::path& rawlog) {
+  return freeinit::mrpt_plugins::readRawlog(rawlog.string()).size();
+}
+
+/// The names in `dir` matching `pattern`.
+std::vector<std::string> matching(const fs::path& dir, const std::string& pattern) {
+  std::vector<std::string> out;
+  for (const auto& e : fs::directory_iterator(dir)) {
+    const std::string n = e.path().filename().string();
+    if (std::regex_match(n, std::regex(pattern))) out.push_back(n);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+const char* const kKeptRecording = "live\\.[0-9]{8}-[0-9]{6}(-[0-9]+)?\\.rawlog";
+
+/// A finished freeinit-online run into `out`: the sample streamed, the whole set written.
+void finishedLiveRun(const fs::path& out, const fs::path& d) {
+  Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-i", "5"}, d,
+                 "finished");
+  const int port = listeningPort(online);
+  ASSERT_GT(port, 0) << online.err();
+  Process stream({FREEINIT_STREAM_APP, "-i", kSample, "-p", std::to_string(port)}, d,
+                 "finished_stream");
+  ASSERT_EQ(exitCode(online.wait()), 0) << online.err();
+  stream.wait();
+  for (const char* f : {"initial_state.ini", "effective_config.ini", "static_map.ply",
+                        "static_map.simplemap", "static_map.png", "velocity.png",
+                        "trajectory_tum.txt", "velocimeter.csv", "live.rawlog", "stream_stats.ini"})
+    ASSERT_TRUE(fs::exists(out / f)) << f;
+}
+
+/// freeinit-online on a `size` tmpfs (its output folder `<mnt>/out`, prepared by `prepare`),
+/// fed by freeinit-stream with `stream_args`; the exit code, output and errors go to d/online.*,
+/// and what the run left is copied to d/left (the tmpfs goes with the namespace). False when no
+/// tmpfs can be mounted here.
+bool liveOnSmallDisk(const fs::path& d, const std::string& size, const std::string& prepare,
+                     const std::string& stream_args) {
+  const fs::path mnt = d / "mnt";
+  const std::string out = (mnt / "out").string(), log = (d / "online.out").string();
+  const std::string script =
+      "mkdir -p " + out + "; " + prepare + "; " + FREEINIT_ONLINE_APP + " " + kIni + " -o " + out +
+      " -p 0 -i 1 > " + log + " 2> " + (d / "online.err").string() +
+      " & pid=$!; port=; for i in $(seq 1 3000); do port=$(sed -n "
+      "\"s/.*Listening on UDP 127.0.0.1:\\([0-9]*\\).*/\\1/p\" " +
+      log + "); [ -n \"$port\" ] && break; kill -0 $pid 2>/dev/null || break; sleep 0.01; done; " +
+      FREEINIT_STREAM_APP + " " + stream_args + " -p ${port:-9} > " + (d / "stream.out").string() +
+      " 2>&1; wait $pid; echo $? > " + (d / "online.rc").string() + "; cp -a " + out + " " +
+      (d / "left").string();
+  return withSmallDisk(mnt, size, script, d / "unshare.log");
+}
+
+// The disk fills while freeinit-online records, after the window closed: the recording keeps
+// every whole record up to there and reads without error, stream_stats.ini says why and when it
+// stopped, the state stays with them, and one line says so, naming the file (no MRPT text).
+TEST(LiveFullDisk, TheRecordingIsKeptUpToItsLastWholeRecordWithTheStateAndTheStatistics) {
+  const fs::path d = freshDir("live_full_disk");
+  if (!liveOnSmallDisk(d, "2m", "true", "-P dyna_01 -d 3 -n 8000"))
+    GTEST_SKIP() << "cannot mount a tmpfs here (not root?)";
+  const std::string out = (d / "mnt" / "out").string();
+  EXPECT_EQ(readText(d / "online.rc"), "1\n") << readText(d / "unshare.log");
+  const std::string err = readText(d / "online.err");
+  EXPECT_EQ(lineCount(err), 1u) << err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_match(
+      err, m,
+      std::regex("freeinit-online: error: " + out +
+                 "/live\\.rawlog: the recording stopped after ([0-9]+) whole records \\([0-9.]+ "
+                 "s of the stream\\): no space left on the device \\(" +
+                 out +
+                 " is full\\); this run's effective_config\\.ini, initial_state\\.ini, "
+                 "live\\.rawlog and stream_stats\\.ini are in " +
+                 out + ", its other outputs are not\n")))
+      << err;
+  const std::size_t records = std::stoul(m[1]);
+  EXPECT_GT(records, 100u);
+  const fs::path left = d / "left";
+  EXPECT_EQ(listing(left), (std::set<std::string>{"effective_config.ini", "initial_state.ini",
+                                                  "live.rawlog", "stream_stats.ini"}));
+  EXPECT_EQ(wholeRecords(left / "live.rawlog"), records);
+  const std::string stats = readText(left / "stream_stats.ini");
+  EXPECT_CONTAINS(stats, "recorded            = " + std::to_string(records) + "\n");
+  EXPECT_CONTAINS(stats,
+                  "recording_stopped   = no space left on the device (" + out + " is full)\n");
+  EXPECT_TRUE(std::regex_search(stats, std::regex("recording_stopped_after_s = [0-9.]+ ")));
+  EXPECT_TRUE(std::regex_search(stats, std::regex("recording_last_stamp = 17[0-9]{8}\\.[0-9]+ ")));
+  EXPECT_CONTAINS(readText(left / "initial_state.ini"), "status    = ok");
+  // What was recorded reproduces the state offline.
+  Process offline(
+      {FREEINIT_APP, kIni, (left / "live.rawlog").string(), "-q", "--out", (d / "off").string()}, d,
+      "offline");
+  EXPECT_EQ(exitCode(offline.wait()), 0) << offline.err();
+  EXPECT_EQ(readText(d / "off" / "initial_state.ini"), readText(left / "initial_state.ini"));
+}
+
+// The disk fills before the window closes: the earlier run's outputs stay as they were, and
+// this run's recording (readable) and statistics are kept beside them under a name with their
+// time.
+TEST(LiveFullDisk, BeforeTheWindowClosesTheEarlierSetStaysAndTheRecordingIsKeptBeside) {
+  const fs::path d = freshDir("live_full_disk_early");
+  const fs::path earlier = d / "earlier";
+  fs::create_directories(earlier);
+  for (const char* f : {"initial_state.ini", "static_map.ply", "velocity.png", "live.rawlog",
+                        "stream_stats.ini", "trajectory_tum.txt"})
+    std::ofstream(earlier / f) << "earlier " << f << "\n";
+  if (!liveOnSmallDisk(d, "300k", "cp " + earlier.string() + "/* " + (d / "mnt/out").string(),
+                       "-P dyna_01 -d 3 -n 8000"))
+    GTEST_SKIP() << "cannot mount a tmpfs here (not root?)";
+  const std::string out = (d / "mnt" / "out").string();
+  EXPECT_EQ(readText(d / "online.rc"), "1\n") << readText(d / "unshare.log");
+  const fs::path left = d / "left";
+  const auto kept = matching(left, kKeptRecording);
+  ASSERT_EQ(kept.size(), 1u);
+  const std::string stem = kept[0].substr(0, kept[0].size() - 7);
+  const std::string err = readText(d / "online.err");
+  std::smatch m;
+  ASSERT_TRUE(std::regex_match(
+      err, m,
+      std::regex("freeinit-online: error: " + out +
+                 "/live\\.rawlog: the recording stopped after ([0-9]+) whole records \\([0-9.]+ "
+                 "s of the stream, before the window closed\\): no space left on the device \\(" +
+                 out + " is full\\); this run's recording is kept as " + out + "/" + stem +
+                 "\\.rawlog with its statistics " + stem +
+                 "\\.stream_stats\\.ini, the earlier outputs there are as they were\n")))
+      << err;
+  auto now = contents(left);
+  EXPECT_EQ(wholeRecords(left / kept[0]), std::stoul(m[1]));
+  EXPECT_CONTAINS(now[stem + ".stream_stats.ini"], "recording_stopped   = no space left");
+  now.erase(kept[0]);
+  now.erase(stem + ".stream_stats.ini");
+  EXPECT_EQ(now, contents(earlier));
+}
+
+// The disk fills at the end, while the map is written: the message says what is there (the
+// state, the recording, the statistics), not that nothing is.
+TEST(LiveFullDisk, AtTheEndTheMessageSaysWhatIsLeft) {
+  const fs::path d = freshDir("live_full_disk_end");
+  if (!liveOnSmallDisk(d, "2700k", "true", "-i " + kSample))
+    GTEST_SKIP() << "cannot mount a tmpfs here (not root?)";
+  const std::string out = (d / "mnt" / "out").string();
+  EXPECT_EQ(readText(d / "online.rc"), "1\n") << readText(d / "unshare.log");
+  const std::string err = readText(d / "online.err");
+  EXPECT_TRUE(std::regex_match(
+      err,
+      std::regex("freeinit-online: error: " + out +
+                 "/static_map\\.[a-z]+: cannot be written: no space left on the device \\(" + out +
+                 " is full\\); this run's effective_config\\.ini, "
+                 "initial_state\\.ini, live\\.rawlog and stream_stats\\.ini are in " +
+                 out + ", its other outputs are not\n")))
+      << err;
+  const fs::path left = d / "left";
+  EXPECT_EQ(listing(left), (std::set<std::string>{"effective_config.ini", "initial_state.ini",
+                                                  "live.rawlog", "stream_stats.ini"}));
+  EXPECT_GT(wholeRecords(left / "live.rawlog"), 300u);
+}
+
+// A run that receives nothing leaves the finished run's outputs as they were, every file.
+TEST(EarlierOutputs, ALiveRunThatReceivesNothingLeavesTheFinishedRunAsItWas) {
+  const fs::path d = freshDir("earlier_no_data");
+  const fs::path out = d / "live";
+  finishedLiveRun(out, d);
+  const auto before = contents(out);
+  Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-w", "1"}, d,
+                 "nothing");
+  EXPECT_EQ(exitCode(online.wait()), 1);
+  EXPECT_EQ(online.err(),
+            "freeinit-online: error: live stream: no data received within 1 s; nothing of this "
+            "run is left in " +
+                out.string() + ", the earlier outputs there are as they were\n");
+  EXPECT_EQ(contents(out), before);
+  EXPECT_EQ(listing(out).size(), before.size());  // no staging folder, no lock
+}
+
+/// Starts freeinit-online on `out` fed by freeinit-stream `stream_args` and SIGKILLs it when
+/// `ready` holds (polled), or when it ends.
+void killedLiveRun(const fs::path& out, const fs::path& d,
+                   const std::vector<std::string>& stream_args,
+                   const std::function<bool(Process&)>& ready) {
+  Process online({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-i", "30"}, d,
+                 "killed");
+  const int port = listeningPort(online);
+  ASSERT_GT(port, 0);
+  std::vector<std::string> args = {FREEINIT_STREAM_APP, "-p", std::to_string(port)};
+  args.insert(args.end(), stream_args.begin(), stream_args.end());
+  Process stream(args, d, "killed_stream");
+  EXPECT_TRUE(waitUntil([&] { return ready(online) || !online.running(); }));
+  online.signal(SIGKILL);
+  EXPECT_TRUE(killedBy(online.wait(), SIGKILL));
+  stream.signal(SIGKILL);
+  stream.wait();
+}
+
+// A run killed after its state was written (its set replaced the finished one): the next run,
+// receiving nothing, keeps that state, and keeps the killed run's recording, saying so.
+TEST(EarlierOutputs, AKilledRunsStateIsNotRemovedByTheNextRun) {
+  const fs::path d = freshDir("earlier_killed");
+  const fs::path out = d / "live";
+  finishedLiveRun(out, d);
+  killedLiveRun(out, d, {"-P", "dyna_01", "-n", "8000", "-d", "3", "-x", "0.5"},
+                [](Process& p) { return p.out().find("State written") != std::string::npos; });
+  const std::string state = readText(out / "initial_state.ini");
+  EXPECT_CONTAINS(state, "status    = ok");
+  EXPECT_EQ(matching(out, kKeptRecording).size(), 1u);  // the finished run's, renamed
+  Process next({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-w", "1"}, d, "next");
+  EXPECT_EQ(exitCode(next.wait()), 1);
+  EXPECT_CONTAINS(next.err(), "nothing of this run is left in " + out.string() +
+                                  ", the earlier outputs there are as they were\n");
+  EXPECT_EQ(readText(out / "initial_state.ini"), state);
+  EXPECT_TRUE(fs::exists(out / "effective_config.ini"));
+  std::smatch m;
+  const std::string log = next.out();
+  ASSERT_TRUE(std::regex_search(
+      log, m, std::regex("Kept the recording of an interrupted run as (\\S+\\.rawlog)")))
+      << log;
+  EXPECT_TRUE(fs::exists(std::string(m[1])));
+  EXPECT_EQ(matching(out, kKeptRecording).size(), 2u);
+}
+
+// A run killed before its window closed: the finished run's outputs stay whole, with the killed
+// run's recording beside them once the next run has moved it out.
+TEST(EarlierOutputs, ARunKilledBeforeItsStateLeavesTheFinishedRunWhole) {
+  const fs::path d = freshDir("earlier_killed_early");
+  const fs::path out = d / "live";
+  finishedLiveRun(out, d);
+  const auto before = contents(out);
+  const fs::path staged = out / ".freeinit.staging" / "live.rawlog.tmp";
+  killedLiveRun(out, d, {"-i", kSample, "-x", "0.1"}, [&](Process&) {
+    std::error_code ec;
+    return fs::file_size(staged, ec) > 100000 && !ec;
+  });
+  EXPECT_EQ(readText(out / "initial_state.ini"), before.at("initial_state.ini"));
+  Process next({FREEINIT_ONLINE_APP, kIni, "-o", out.string(), "-p", "0", "-w", "0.5"}, d, "next");
+  EXPECT_EQ(exitCode(next.wait()), 1);
+  auto now = contents(out);
+  const auto kept = matching(out, kKeptRecording);
+  ASSERT_EQ(kept.size(), 1u);
+  now.erase(kept[0]);
+  EXPECT_EQ(now, before);
+}
+
+// freeinit --out on a live run's folder: the earlier recording and its statistics are kept as a
+// pair under a name with their time, as freeinit-online keeps them; never left under their
+// names beside the new state, never deleted.
+TEST(EarlierOutputs, OfflineOnALiveRunsFolderKeepsTheRecordingAndItsStatisticsAsAPair) {
+  const fs::path d = freshDir("earlier_offline_on_live");
+  const fs::path out = d / "live";
+  finishedLiveRun(out, d);
+  const std::string recording = readText(out / "live.rawlog");
+  const std::string stats = readText(out / "stream_stats.ini");
+  Process offline(
+      {FREEINIT_APP, kIni, kSrc + "/rawlogs/stat_01.rawlog", "-q", "--out", out.string()}, d,
+      "offline");
+  EXPECT_EQ(exitCode(offline.wait()), 0) << offline.err();
+  EXPECT_FALSE(fs::exists(out / "live.rawlog"));
+  EXPECT_FALSE(fs::exists(out / "stream_stats.ini"));
+  const auto kept = matching(out, kKeptRecording);
+  ASSERT_EQ(kept.size(), 1u);
+  const std::string stem = kept[0].substr(0, kept[0].size() - 7);
+  EXPECT_EQ(readText(out / kept[0]), recording);
+  EXPECT_EQ(readText(out / (stem + ".stream_stats.ini")), stats);
+  EXPECT_TRUE(fs::exists(out / "errors_wrt_gt.ini"));  // the new set, whole
 }
 
 }  // namespace

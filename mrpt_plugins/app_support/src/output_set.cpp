@@ -22,6 +22,7 @@ namespace {
 namespace fs = std::filesystem;
 
 constexpr const char* kJournal = ".install";
+constexpr const char* kReserve = ".reserve";
 
 std::string sysError() { return std::strerror(errno); }
 
@@ -100,6 +101,7 @@ OutputSet::OutputSet(std::string dir, std::string name, OutputSetOptions options
     lock();
     recover();
     fs::create_directory(staging_);
+    holdReserve();
   } catch (...) {
     if (lock_fd_ >= 0) unlock();
     for (const auto& d : created_dirs_) fs::remove(d, ec);  // only empty ones go
@@ -182,7 +184,7 @@ void OutputSet::recover() {
     for (const std::string& staged : {options_.recording, options_.recording + ".tmp"}) {
       const fs::path p = fs::path(staging_) / staged;
       if (!fs::is_regular_file(p, ec) || fs::file_size(p, ec) == 0) continue;
-      const std::string kept = keptRecordingName(options_.recording);
+      const std::string kept = keptName(options_.recording, p.string());
       fs::rename(p, fs::path(dir_) / kept);
       const fs::path stats = fs::path(staging_) / options_.recording_companion;
       if (!options_.recording_companion.empty() && fs::is_regular_file(stats, ec)) {
@@ -198,14 +200,36 @@ void OutputSet::recover() {
 }
 
 std::string OutputSet::keptRecordingName(const std::string& recording) const {
+  return keptName(recording, joined(dir_, recording));
+}
+
+std::string OutputSet::keptName(const std::string& recording, const std::string& stamped) const {
   const auto [stem, ext] = splitExtension(recording);
-  const fs::path current = fs::path(dir_) / recording;
-  const std::string base = stem + "." + stampOf(current);
+  const std::string base = stem + "." + stampOf(stamped);
   std::error_code ec;
   std::string name = base + ext;
   for (int k = 2; fs::exists(fs::path(dir_) / name, ec); ++k)
     name = base + "-" + std::to_string(k) + ext;
   return name;
+}
+
+void OutputSet::holdReserve() noexcept {
+  if (options_.reserve_bytes == 0 || reserve_held_ || done_) return;
+  const std::string p = joined(staging_, kReserve);
+  const int fd = ::open(p.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (fd < 0) return;
+  const bool held = ::posix_fallocate(fd, 0, static_cast<off_t>(options_.reserve_bytes)) == 0;
+  ::close(fd);
+  if (held)
+    reserve_held_ = true;
+  else
+    ::unlink(p.c_str());  // no room: the run goes on without
+}
+
+void OutputSet::releaseReserve() noexcept {
+  if (!reserve_held_) return;
+  ::unlink(joined(staging_, kReserve).c_str());
+  reserve_held_ = false;
 }
 
 std::string OutputSet::finalPath(const std::string& name) const { return joined(dir_, name); }
@@ -218,16 +242,86 @@ std::string OutputSet::path(const std::string& name) {
   return p.string();
 }
 
+bool OutputSet::noSpace(const std::string& message) const {
+  std::error_code ec;
+  return message.find(std::strerror(ENOSPC)) != std::string::npos ||
+         fileSystemFull(fs::exists(staging_, ec) ? staging_ : dir_);
+}
+
 std::string OutputSet::describe(const std::string& name, const std::string& message) const {
   std::string m = message;
   replaceAll(m, staging_ + "/", dir_ + "/");
   replaceAll(m, staging_, dir_);
-  const bool no_space = m.find(std::strerror(ENOSPC)) != std::string::npos ||
-                        fileSystemFull(fs::exists(staging_) ? staging_ : dir_);
-  if (no_space)
+  if (noSpace(m))
     return finalPath(name) + ": cannot be written: no space left on the device (" + dir_ +
-           " is full); nothing of this run is left there";
+           " is full); " + leftBehind();
   return m;
+}
+
+bool OutputSet::earlierSetPresent() const {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir_, ec)) {
+    const std::string n = e.path().filename().string();
+    if (e.path() == fs::path(staging_) || e.path() == fs::path(lock_path_)) continue;
+    if (n == options_.recording || n == options_.recording_companion ||
+        owned(n, e.is_directory(ec)))
+      return true;
+  }
+  return false;
+}
+
+std::vector<OutputSet::Step> OutputSet::keepSteps() const {
+  std::vector<Step> steps;
+  if (options_.recording.empty()) return steps;
+  std::error_code ec;
+  const fs::path staging(staging_);
+  const std::string staging_name = staging.filename().string() + "/";
+  for (const std::string& staged : {options_.recording, options_.recording + ".tmp"}) {
+    const fs::path p = staging / staged;
+    if (!fs::is_regular_file(p, ec)) continue;
+    // In place of the earlier set once it is replaced, else beside it, under a name with its time.
+    const bool in_place = replaced_ && !fs::exists(fs::path(dir_) / options_.recording, ec);
+    const std::string kept =
+        in_place ? options_.recording : keptName(options_.recording, p.string());
+    steps.push_back({Step::Rename, staging_name + staged, kept});
+    const std::string& companion = options_.recording_companion;
+    if (!companion.empty() && fs::is_regular_file(staging / companion, ec)) {
+      const std::string kept_companion =
+          in_place ? companion : splitExtension(kept).first + "." + companion;
+      steps.push_back({Step::Rename, staging_name + companion, kept_companion});
+    }
+    break;
+  }
+  return steps;
+}
+
+std::string OutputSet::leftBehind() const {
+  std::vector<std::string> ours = installed_, moved;
+  for (const Step& s : keepSteps())
+    (replaced_ && (s.to == options_.recording || s.to == options_.recording_companion) ? ours
+                                                                                       : moved)
+        .push_back(s.to);
+  const auto list = [](const std::vector<std::string>& names) {
+    std::string text;
+    for (std::size_t i = 0; i < names.size(); ++i)
+      text += (i == 0 ? "" : i + 1 == names.size() ? " and " : ", ") + names[i];
+    return text;
+  };
+  std::string text;
+  if (!ours.empty()) {
+    text = "this run's " + list(ours) + (ours.size() > 1 ? " are in " : " is in ") + dir_ +
+           ", its other outputs are not";
+    if (!moved.empty()) text += "; its recording is kept as " + joined(dir_, moved.front());
+    return text;
+  }
+  if (!moved.empty()) {
+    text = "this run's recording is kept as " + joined(dir_, moved.front());
+    if (moved.size() > 1) text += " with its statistics " + moved[1];
+  } else {
+    text = "nothing of this run is left in " + dir_;
+  }
+  if (earlierSetPresent()) text += ", the earlier outputs there are as they were";
+  return text;
 }
 
 void OutputSet::write(const std::string& name,
@@ -260,16 +354,19 @@ std::vector<OutputSet::Step> OutputSet::replacementSteps(
   if (!replaced_) {
     const fs::path dir(dir_);
     bool companion_renamed = false;
+    const std::string& companion = options_.recording_companion;
+    const bool has_companion = !companion.empty() && fs::is_regular_file(dir / companion, ec);
     if (!options_.recording.empty() && fs::is_regular_file(dir / options_.recording, ec)) {
       const std::string kept = keptRecordingName(options_.recording);
       steps.push_back({Step::Rename, options_.recording, kept});
-      if (!options_.recording_companion.empty() &&
-          fs::is_regular_file(dir / options_.recording_companion, ec)) {
-        const auto [stem, ext] = splitExtension(kept);
-        steps.push_back({Step::Rename, options_.recording_companion,
-                         stem + "." + options_.recording_companion});
+      if (has_companion) {
+        steps.push_back({Step::Rename, companion, splitExtension(kept).first + "." + companion});
         companion_renamed = true;
       }
+    } else if (has_companion) {
+      // Statistics of a recording kept under another name: kept too, with their own time.
+      steps.push_back({Step::Rename, companion, keptName(companion, joined(dir_, companion))});
+      companion_renamed = true;
     }
     for (const auto& e : fs::directory_iterator(dir, ec)) {
       const std::string n = e.path().filename().string();
@@ -342,6 +439,9 @@ void OutputSet::install(const std::vector<std::string>& names) {
   if (done_) throw std::logic_error(dir_ + ": output set already closed");
   run(replacementSteps(names));
   replaced_ = true;
+  for (const auto& n : names)
+    if (std::find(installed_.begin(), installed_.end(), n) == installed_.end())
+      installed_.push_back(n);
 }
 
 void OutputSet::commit() {
@@ -349,7 +449,7 @@ void OutputSet::commit() {
   std::vector<std::string> names;
   for (const auto& e : fs::directory_iterator(staging_)) {
     const std::string n = e.path().filename().string();
-    if (n == kJournal) continue;
+    if (n == kJournal || n == kReserve) continue;
     names.push_back(n);
   }
   const auto rank = [&](const std::string& n) {
@@ -360,6 +460,7 @@ void OutputSet::commit() {
   std::sort(names.begin(), names.end(), [&](const std::string& a, const std::string& b) {
     return std::make_pair(rank(a), a) < std::make_pair(rank(b), b);
   });
+  releaseReserve();  // room for the journal, should the disk be full
   install(names);
   std::error_code ec;
   fs::remove_all(staging_, ec);
@@ -369,24 +470,34 @@ void OutputSet::commit() {
 
 void OutputSet::abandon() noexcept {
   if (done_) return;
-  done_ = true;
   std::error_code ec;
+  releaseReserve();
+  // This run's recording (and its statistics) stay: a recording is never lost. The earlier set
+  // stays as it was unless this run's replaced it already (install()).
+  std::vector<Step> keep;
   try {
-    std::vector<std::string> keep;
-    // This run's recording (and its statistics) stay: a recording is never lost.
-    if (!options_.recording.empty() &&
-        fs::is_regular_file(fs::path(staging_) / options_.recording, ec)) {
-      keep.push_back(options_.recording);
-      if (!options_.recording_companion.empty() &&
-          fs::is_regular_file(fs::path(staging_) / options_.recording_companion, ec))
-        keep.push_back(options_.recording_companion);
-    }
-    run(replacementSteps(keep));
-    replaced_ = true;
+    keep = keepSteps();
+    run(keep);
   } catch (...) {
-    // Best effort: what could not be removed stays; the staging folder goes below.
+    // The journal could not be written: the renames alone.
+    for (const Step& s : keep) fs::rename(fs::path(dir_) / s.from, fs::path(dir_) / s.to, ec);
   }
-  fs::remove_all(staging_, ec);
+  done_ = true;
+  bool kept = true;
+  for (const Step& s : keep) kept = kept && !fs::exists(fs::path(dir_) / s.from, ec);
+  if (kept) {
+    fs::remove_all(staging_, ec);
+  } else {
+    // Left for the next run, which moves it out (recover()); the rest goes.
+    std::vector<fs::path> others;
+    for (const auto& e : fs::directory_iterator(staging_, ec)) {
+      const std::string n = e.path().filename().string();
+      if (n != options_.recording && n != options_.recording + ".tmp" &&
+          n != options_.recording_companion)
+        others.push_back(e.path());
+    }
+    for (const auto& p : others) fs::remove_all(p, ec);
+  }
   unlock();
   for (const auto& d : created_dirs_) fs::remove(d, ec);  // only empty ones go
 }

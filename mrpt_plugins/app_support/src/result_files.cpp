@@ -40,6 +40,10 @@ OutputSetOptions folderSetOptions() {
   OutputSetOptions o;
   o.owned = folderOutputNames();
   o.install_last = {"initial_state.ini", "starts.csv", "starts.md"};
+  // freeinit-online's recording and its statistics, kept as a pair by whichever app replaces the
+  // set (freeinit --out on a live run's folder renames them as freeinit-online does).
+  o.recording = "live.rawlog";
+  o.recording_companion = "stream_stats.ini";
   return o;
 }
 

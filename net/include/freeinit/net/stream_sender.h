@@ -1,6 +1,6 @@
 // Sends a live stream in the wire format over UDP, optionally with injected network faults
-// (for tests and for checking a receiver): lost, duplicated, reordered and corrupted datagrams,
-// garbage datagrams, and sender restarts (a new session id).
+// (for tests and for checking a receiver): lost, duplicated, reordered, corrupted and truncated
+// datagrams, garbage datagrams, and sender restarts (a new session id).
 #pragma once
 
 #include <freeinit/net/udp_socket.h>
@@ -21,6 +21,7 @@ struct FaultParams {
   double duplicate = 0;  ///< sent twice
   double reorder = 0;    ///< held back and sent after the next datagram
   double corrupt = 0;    ///< one byte flipped after the CRC was computed
+  double truncate = 0;   ///< cut short (1 byte to all but the last), as a broken link delivers
   std::uint64_t seed = 1;
 };
 
@@ -29,6 +30,7 @@ struct SenderStats {
   std::uint64_t datagrams = 0, bytes = 0;
   std::uint64_t imu_samples = 0, frames = 0, sessions = 0;
   std::uint64_t dropped = 0, duplicated = 0, reordered = 0, corrupted = 0, garbage = 0;
+  std::uint64_t truncated = 0;
   std::uint64_t refused = 0;  ///< the kernel refused to send (e.g. no listener)
 };
 void printStats(std::ostream& o, const SenderStats& s);

@@ -9,12 +9,28 @@
 // it (the machine lost power while installing) finishes the install first. Signals cannot split an
 // install: the apps' handlers only record them (stop_signal.h).
 //
-// The rule users can rely on: after a run, the folder holds the complete outputs of that run, or
-// none of ours. A run that fails, is interrupted or finds a full disk removes its staging folder
-// and the earlier run's outputs, so that nothing there passes for its result. What is not ours is
-// never touched (only the names an app of this project writes are removed), and a live recording
-// is never deleted: the set that replaces an earlier one renames the earlier recording (and its
-// stream statistics) with the time it was last written, e.g. live.20251201-215503.rawlog.
+// The rule users can rely on: earlier outputs are replaced only by a complete new set. A run that
+// fails, is interrupted or finds a full disk before its set is installed removes its staging
+// folder and leaves the earlier run's outputs as they were; after any run the folder holds one
+// run's outputs, never a mix of two. What is not ours is never touched (only the names an app of
+// this project writes are removed).
+//
+// A set installed in two steps (the online app: install() of the state the moment the
+// initialization window closes, commit() of the rest when the stream ends) replaces the earlier
+// set at its first install: from then on the folder holds this run's state, and a failure at the
+// end leaves it with this run's recording and statistics, its other outputs missing (the message
+// says which files are there: leftBehind()).
+//
+// Recordings are never deleted. The earlier run's recording (and its stream statistics) is
+// renamed with the time it was last written, e.g. live.20251201-215503.rawlog and
+// live.20251201-215503.stream_stats.ini, when a new set replaces it. This run's, when the run
+// fails: installed under its own name if the set has replaced the earlier one, else moved out
+// beside the earlier outputs under a name with its time; one left in the staging folder of a run
+// that died (SIGKILL, a power loss) is moved out the same way by the next run, which says so.
+//
+// A full disk: a set with a reserve (OutputSetOptions::reserve_bytes, the online app's) holds that
+// much room in its staging folder and releases it when the disk has filled, so that the recording
+// can be ended at its last whole record, its statistics written and the install journaled.
 //
 // Lock: two runs on one set cannot interleave. The set holds an exclusive lock (flock) on
 // `<dir>/.freeinit.lock` (or `.<name>.freeinit.lock`) from construction to the end; a second run
@@ -23,6 +39,7 @@
 // outputs.
 #pragma once
 
+#include <cstddef>
 #include <functional>
 #include <iosfwd>
 #include <stdexcept>
@@ -52,10 +69,14 @@ struct OutputSetOptions {
   /// deleted. The one of an earlier run is renamed (with its time) when this set replaces it; one
   /// left in the staging folder of a run that died is moved out the same way.
   std::string recording;
-  /// Belongs to the recording (renamed with it): "stream_stats.ini".
+  /// Belongs to the recording (renamed with it, never deleted): "stream_stats.ini". Found
+  /// without the recording (a recording under another name), it is renamed alone with its time.
   std::string recording_companion;
   /// Installed after every other entry (the file readers wait for, e.g. initial_state.ini).
   std::vector<std::string> install_last;
+  /// [bytes] Room held in the staging folder for ending the run on a full disk (releaseReserve());
+  /// 0: none.
+  std::size_t reserve_bytes = 0;
 };
 
 class OutputSet {
@@ -87,16 +108,32 @@ class OutputSet {
   /// Installs everything staged (install_last entries last), removes the staging folder and
   /// releases the lock.
   void commit();
-  /// Removes the staging folder and the earlier set (its recording renamed, as install() does),
-  /// then releases the lock; folders created for the set are removed when empty. No-throw.
+  /// Ends a run that failed: keeps its staged recording and statistics (installed under their
+  /// names if an install() replaced the earlier set, else moved out under a name with their
+  /// time), removes the staging folder, leaves the earlier set as it was and releases the lock;
+  /// folders created for the set are removed when empty. No-throw.
   void abandon() noexcept;
 
-  /// `message` of a failed write with staged paths replaced by final ones, and "no space left on
-  /// the device" when the file system of the set is full.
+  /// What abandon() would leave in dir() now, for the message of a failure: "nothing of this run
+  /// is left in d", "this run's recording is kept as d/live.20251201-215503.rawlog ...", or
+  /// "this run's initial_state.ini, live.rawlog and stream_stats.ini are in d, its other outputs
+  /// are not"; with ", the earlier outputs in d are as they were" when an earlier set is there.
+  std::string leftBehind() const;
+
+  /// `message` of a failed write with staged paths replaced by final ones; when the file system
+  /// of the set is full, "<final path>: cannot be written: no space left on the device (<dir> is
+  /// full); " and leftBehind().
   std::string describe(const std::string& name, const std::string& message) const;
+  /// True when `message` says the disk is full or the file system of the set is (almost) full.
+  bool noSpace(const std::string& message) const;
 
   /// What an earlier run's recording of `recording` would be renamed to now (for messages).
   std::string keptRecordingName(const std::string& recording) const;
+
+  /// Gives back the room held for a full disk (reserve_bytes), e.g. before ending a recording the
+  /// disk full stopped; holdReserve() takes it again when there is room. Both no-throw.
+  void releaseReserve() noexcept;
+  void holdReserve() noexcept;
 
  private:
   struct Step {
@@ -107,6 +144,12 @@ class OutputSet {
   void unlock() noexcept;
   void recover();
   std::vector<Step> replacementSteps(const std::vector<std::string>& installing) const;
+  /// What abandon() does with this run's staged recording and its statistics.
+  std::vector<Step> keepSteps() const;
+  /// "live.20251201-215503.rawlog": `recording` renamed with the time `stamped` was last written
+  /// (a name not taken in dir_).
+  std::string keptName(const std::string& recording, const std::string& stamped) const;
+  bool earlierSetPresent() const;
   void run(const std::vector<Step>& steps);
   bool owned(const std::string& entry, bool is_dir) const;
 
@@ -115,8 +158,10 @@ class OutputSet {
   std::ostream& log_;
   int lock_fd_ = -1;
   std::vector<std::string> created_dirs_;  ///< made for the set, innermost first
+  std::vector<std::string> installed_;     ///< names of this run in place (install())
   bool replaced_ = false;                  ///< the earlier set is gone
   bool done_ = false;                      ///< committed or abandoned
+  bool reserve_held_ = false;
 };
 
 }  // namespace freeinit::app_support

@@ -56,7 +56,9 @@ std::vector<std::string> resultFileNames();
 /// freeinit-icp-slam and its export, freeinit-eval-rawlog's plots), the result files included:
 /// what a folder set owns, so that one app's set replaces another's as a whole.
 std::vector<std::string> folderOutputNames();
-/// The options of a folder set (folderOutputNames()), with initial_state.ini installed last.
+/// The options of a folder set (folderOutputNames()), with initial_state.ini installed last and
+/// freeinit-online's recording ("live.rawlog") and its statistics ("stream_stats.ini") kept as a
+/// pair, renamed with their time, whichever app replaces the set.
 OutputSetOptions folderSetOptions();
 
 /// Stages the result files [output] enables in `set`, under `prefix` ("" or "start_0012.000/").

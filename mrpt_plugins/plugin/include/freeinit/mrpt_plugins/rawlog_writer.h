@@ -3,9 +3,11 @@
 // or any observation as it is, gz-compressed, into "<path>.tmp", renamed onto the path by
 // commit(). A writer destroyed without commit() (an exception on the way) removes its temporary,
 // and so does a commit() whose final flush fails: the rawlog is complete or absent. A recording
-// (keepPartial()) is never removed: what was written is renamed onto the path in every case, to
-// be read up to its last whole record. Write errors name the file and the system's reason ("No
-// space left on device").
+// (keepPartial()) is never removed: what was written is renamed onto the path in every case, and
+// each of its records goes to the file whole as it is written, so that when a write fails (a full
+// disk) the file is cut back to the end of the last whole record and closed there: it reads
+// without error up to that record (records()). Write errors name the file and the system's reason
+// ("No space left on device").
 #pragma once
 
 #include <freeinit/types.h>
@@ -38,14 +40,19 @@ class RawlogWriter {
   void write(const mrpt::obs::CObservation& obs);
   /// Any object (e.g. a CSimpleMap: a .simplemap is a gz archive of one); not counted by class.
   void writeObject(const mrpt::serialization::CSerializable& obj);
-  /// A recording: keep what was written (renamed onto the path) even without commit() or when
-  /// the final flush fails.
+  /// A recording (call it before the first write): each record is flushed to the file whole as
+  /// it is written; what was written is kept (renamed onto the path) even without commit() or
+  /// when a write fails, cut back to the last whole record and readable up to it.
   void keepPartial();
   /// Closes the file and renames it onto the path. Throws std::runtime_error on I/O errors
-  /// (including a failed final flush), removing the temporary instead of renaming it.
+  /// (including a failed final flush), removing the temporary instead of renaming it (a
+  /// recording: keeping it, see keepPartial()).
   void commit();
 
+  /// Records written whole (with keepPartial(): those the file holds after a failed write).
   std::size_t records() const { return records_; }
+  /// Why a write failed, the system's reason ("No space left on device"); "" if none did.
+  std::string error() const;
   std::size_t imuRecords() const { return imu_; }
   std::size_t frameRecords() const { return frames_; }
   const std::string& path() const { return path_; }
@@ -58,6 +65,7 @@ class RawlogWriter {
   std::unique_ptr<Stream> stream_;
   std::size_t records_ = 0, imu_ = 0, frames_ = 0;
   bool keep_partial_ = false;
+  std::string error_;  ///< error() once the file is closed
 };
 
 /// "dir/name" for "dir/name.rawlog" (the path itself otherwise): the stem of the files written
