@@ -42,7 +42,8 @@ double ImuScreen::robustSigma(bool accel) const {
   const std::vector<double>& ring = accel ? recent_a_ : recent_g_;
   const std::size_t n = std::min(recent_n_, kRecentSamples) * 3;
   if (n < 15) return floor;
-  std::vector<double> v(ring.begin(), ring.begin() + static_cast<std::ptrdiff_t>(n));
+  std::vector<double>& v = scratch_;  // no allocation per sample
+  v.assign(ring.begin(), ring.begin() + static_cast<std::ptrdiff_t>(n));
   auto mid = v.begin() + static_cast<std::ptrdiff_t>(n / 2);
   std::nth_element(v.begin(), mid, v.end());
   return std::max(floor, 1.4826 * *mid);

@@ -93,7 +93,8 @@ class ImuScreen {
   std::vector<ImuGap> gaps_;
   std::vector<double> recent_g_, recent_a_;  ///< |r| components of the last samples (ring)
   std::size_t recent_n_ = 0;
-  std::size_t next_ = 0;  ///< the next raw sample to decide
+  mutable std::vector<double> scratch_;  ///< robustSigma's copy of a ring
+  std::size_t next_ = 0;                 ///< the next raw sample to decide
   double h_ = 0;
 };
 

@@ -577,7 +577,8 @@ class JointPipeline final : public Pipeline {
     if (n < kMinReturns) return false;
     const double share = static_cast<double>(accepted) / static_cast<double>(n);
     if (recent_acceptance_.size() >= kHistory) {
-      std::vector<double> v(recent_acceptance_.end() - kHistory, recent_acceptance_.end());
+      std::vector<double>& v = acceptance_scratch_;  // no allocation per node
+      v.assign(recent_acceptance_.end() - kHistory, recent_acceptance_.end());
       std::nth_element(v.begin(), v.begin() + kHistory / 2, v.end());
       const double median = v[kHistory / 2];
       if (median >= 0.5 && share < 0.25 * median) {
@@ -991,8 +992,9 @@ class JointPipeline final : public Pipeline {
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
   std::optional<DopplerInertialFilter> filter_;
   ImuScreen screen_;
-  std::vector<double> recent_acceptance_;  ///< acceptanceCollapsed: the nodes' shares
-  std::size_t collapsed_nodes_ = 0;        ///< ... nodes in a row under a quarter of the median
+  std::vector<double> recent_acceptance_;   ///< acceptanceCollapsed: the nodes' shares
+  std::vector<double> acceptance_scratch_;  ///< ... the last of them, for their median
+  std::size_t collapsed_nodes_ = 0;         ///< ... nodes in a row under a quarter of the median
   double collapse_t_ = 0, collapse_from_ = 0, collapse_to_ = 0;  ///< ... the first of them
   RestTracker rest_;
   std::vector<bool> node_rest_;
