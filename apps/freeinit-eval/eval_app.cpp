@@ -54,6 +54,9 @@ const char* const kUsage =
     "                       (LO:HI: uniform per run), either sign, injected into the recording\n"
     "                       (it replaces a randomized scenario's own; these runs are measured\n"
     "                       against their bound, not counted apart as a wrong calibration)\n"
+    "  --imu-spikes N:MAG   N accelerometer samples of the window made off by MAG m/s^2 (a\n"
+    "                       random axis and sign each, seeded by the run)\n"
+    "  --imu-gap S          one IMU gap of S seconds at a random time inside the window\n"
     "  --jobs N             parallel jobs (0: hardware concurrency, the default)\n"
     "  --md FILE            Markdown report (paper Table I/II layout, errors against the\n"
     "                       Cramer-Rao bound, statuses, every run)\n"
@@ -149,6 +152,23 @@ EvalAppParams parseParams(int argc, const char* const* argv) {
       {"--imu-noise-factor", [&](int& i) { o.imu_noise_factor = range(i, 0.01, 100); }},
       {"--doppler-noise-factor", [&](int& i) { o.doppler_noise_factor = range(i, 0.01, 100); }},
       {"--time-offset", [&](int& i) { o.time_offset = range(i, 0, 0.1); }},
+      {"--imu-spikes",
+       [&](int& i) {
+         const std::string flag = argv[i], v = value(i);
+         const std::size_t colon = v.find(':');
+         const auto n = report::parseDouble(v.substr(0, colon));
+         const auto mag =
+             colon == std::string::npos ? std::nullopt : report::parseDouble(v.substr(colon + 1));
+         if (!n || !mag || !(*n >= 0 && *n <= 1000) || *n != std::floor(*n) ||
+             !(std::abs(*mag) <= 1e6))
+           throw UsageError(flag +
+                            ": must be N:MAG, N a whole number in [0, 1000], |MAG| <= "
+                            "1e6 m/s^2, not '" +
+                            v + "'");
+         o.imu_spikes = static_cast<int>(*n);
+         o.imu_spike_magnitude = *mag;
+       }},
+      {"--imu-gap", [&](int& i) { o.imu_gap = number(i, 0, 10); }},
       {"--jobs", [&](int& i) { o.jobs = static_cast<unsigned>(integer(i, 0, 1024)); }},
       {"--md", [&](int& i) { o.md = value(i); }},
       {"--csv", [&](int& i) { o.csv = value(i); }},
@@ -330,8 +350,39 @@ FreeInitConfig configFor(const EvalAppParams& o, const EvalCase& c, const sim::R
   return cfg;
 }
 
+/// --imu-spikes and --imu-gap: the faults, at times drawn from the run's seed inside the window
+/// (which starts at the first LiDAR point).
+void injectImuFaults(const EvalAppParams& o, const EvalCase& c, const FreeInitConfig& cfg,
+                     sim::Recording& rec) {
+  if ((o.imu_spikes == 0 && !(o.imu_gap > 0)) || rec.frames.empty() || rec.imu.empty()) return;
+  const LidarFrame& f = rec.frames.front();
+  const double t0 = f.stamp + (f.points.empty() ? 0.0 : f.points.front().time_offset);
+  const double T = cfg.window.duration;
+  std::mt19937_64 rng(0x44F00000ULL + static_cast<std::uint64_t>(c.seed));
+  std::uniform_real_distribution<double> u(0, 1);
+  auto indexAt = [&](double t) {
+    return static_cast<std::size_t>(
+        std::lower_bound(rec.imu.begin(), rec.imu.end(), t,
+                         [](const ImuSample& s, double x) { return s.t < x; }) -
+        rec.imu.begin());
+  };
+  for (int n = 0; n < o.imu_spikes; ++n) {
+    const std::size_t k = indexAt(t0 + 0.02 * T + 0.96 * T * u(rng));
+    const int axis = std::min(2, static_cast<int>(3 * u(rng)));
+    const double sign = u(rng) < 0.5 ? -1.0 : 1.0;
+    if (k < rec.imu.size()) rec.imu[k].accel(axis) += sign * o.imu_spike_magnitude;
+  }
+  if (o.imu_gap > 0) {
+    const double start = t0 + 0.05 * T + (0.9 * T - std::min(o.imu_gap, 0.9 * T)) * u(rng);
+    const auto first = rec.imu.begin() + static_cast<std::ptrdiff_t>(indexAt(start));
+    const auto last = rec.imu.begin() + static_cast<std::ptrdiff_t>(indexAt(start + o.imu_gap));
+    rec.imu.erase(first, last);
+  }
+}
+
 JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
-  const auto rec = sim::simulate(c.scenario);
+  sim::Recording rec = sim::simulate(c.scenario);
+  injectImuFaults(o, c, configFor(o, c, rec), rec);
   const FreeInitConfig cfg = configFor(o, c, rec);
   const sim::NoiseFigures truth_noise = sim::trueNoise(rec);
   const auto runs =
@@ -358,8 +409,8 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
     row.wrong_calibration = c.wrong_calibration;
     row.block = c.block;
     const bool datasheet = declaresDatasheetNoise(o);
-    row.imu_noise_factor = datasheet ? c.misdeclared.imu_noise_factor
-                                     : rec.config.gyro_sigma / cfg.imu.gyro_sigma;
+    row.imu_noise_factor =
+        datasheet ? c.misdeclared.imu_noise_factor : rec.config.gyro_sigma / cfg.imu.gyro_sigma;
     row.doppler_noise_factor = datasheet ? c.misdeclared.doppler_noise_factor
                                          : rec.config.doppler_sigma / cfg.doppler.doppler_sigma;
     row.noise_gyro.declared = cfg.imu.gyro_sigma;
@@ -399,6 +450,9 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
           m.result.diag.node_residual_ratio,
           static_cast<double>(m.result.diag.points_used) /
               std::max<std::size_t>(1, m.result.diag.points_used + m.result.diag.points_rejected));
+    if (m.method == "free-init" && (o.imu_spikes > 0 || o.imu_gap > 0))
+      appendf(out.log, "  imu_faults=%zu imu_gap=%.3f s", m.result.diag.imu_faults,
+              m.result.diag.imu_gap_s);
     if (!m.result.state.warnings.empty())
       appendf(out.log, "  %zu warning(s)", m.result.state.warnings.size());
     if (c.wrong_calibration) out.log += "  [wrong calibration]";

@@ -53,6 +53,13 @@ struct EvalAppParams {
   /// injected into the recording. Unset: the datasheet noise (--random) or the configuration's
   /// (presets), and the scenario's own offset.
   std::optional<sim::DrawRange> imu_noise_factor, doppler_noise_factor, time_offset;
+  /// Gross IMU faults injected into each recording (issue 44): imu_spikes accelerometer samples
+  /// of the window, each on a random axis with a random sign, made off by imu_spike_magnitude
+  /// [m/s^2]; and [s] one IMU gap of imu_gap at a random time inside the window (0: none).
+  /// Seeded by the run's seed.
+  int imu_spikes = 0;
+  double imu_spike_magnitude = 0;
+  double imu_gap = 0;
 };
 
 /// One run of the evaluation: a scenario of the simulator, its name in the tables and what the

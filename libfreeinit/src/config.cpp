@@ -5,6 +5,7 @@
 #include <freeinit/initial_state.h>
 #include <freeinit/io/config_section.h>
 
+#include <algorithm>
 #include <cmath>
 #include <iostream>
 #include <ostream>
@@ -96,7 +97,24 @@ const config::Section<ImuParams>& imuSection() {
           .number("accel_bias_random_walk", &P::accel_bias_random_walk, "m/s^2/sqrt(s)",
                   between(0, 1), "accelerometer bias random walk")
           .readBy("joint")
-          .formerly("estimator");
+          .formerly("estimator")
+          .number("gyro_range", &P::gyro_range, "rad/s", aboveUpTo(0, 1e4),
+                  "a gyro reading at or beyond this on an axis is a fault (saturation)")
+          .readBy("joint")
+          .number("accel_range", &P::accel_range, "m/s^2", aboveUpTo(0, 1e5),
+                  "an accelerometer reading at or beyond this on an axis is a fault")
+          .readBy("joint")
+          .number("fault_sigmas", &P::fault_sigmas, "sigma", between(3, 1e6),
+                  "a reading this many robust sigmas from the cubic through its neighbours, on "
+                  "both sides, is a fault: replaced by that cubic with its noise, never integrated")
+          .readBy("joint")
+          .number("max_fault_share", &P::max_fault_share, "-", between(0, 1),
+                  "the window declines when more of its IMU samples than this are faults")
+          .readBy("joint")
+          .number("max_bridged_gap", &P::max_bridged_gap, "s", between(0, 10),
+                  "an IMU gap up to this is bridged (interpolated, its noise growing with the "
+                  "gap); a longer one, or more missing in all, declines the window")
+          .readBy("joint");
   return s;
 }
 
@@ -427,10 +445,29 @@ WindowSample windowSample(double t_first, double t_prev, double t, double durati
   return WindowSample::Inside;
 }
 
+WindowSample windowSampleAt(double t_first, double t, double interval, double duration) {
+  if (!(t > t_first)) return WindowSample::Inside;  // the first sample
+  const double end = duration - 0.01 * interval;
+  if (t - t_first >= end) return WindowSample::Outside;
+  if (t - t_first + interval >= end) return WindowSample::Last;
+  return WindowSample::Inside;
+}
+
+double nominalInterval(const std::vector<ImuSample>& imu, std::size_t first) {
+  constexpr std::size_t kIntervals = 20;
+  if (first + 1 >= imu.size()) return 0.0;
+  const std::size_t n = std::min(kIntervals, imu.size() - 1 - first);
+  std::vector<double> dt(n);
+  for (std::size_t i = 0; i < n; ++i) dt[i] = imu[first + i + 1].t - imu[first + i].t;
+  std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(n / 2), dt.end());
+  return dt[n / 2];
+}
+
 std::optional<std::size_t> windowLastSample(const std::vector<ImuSample>& imu, std::size_t first,
                                             double duration) {
+  const double h = nominalInterval(imu, first);
   for (std::size_t k = first + 1; k < imu.size(); ++k) {
-    switch (windowSample(imu[first].t, imu[k - 1].t, imu[k].t, duration)) {
+    switch (windowSampleAt(imu[first].t, imu[k].t, h, duration)) {
       case WindowSample::Outside:
         return k - 1;
       case WindowSample::Last:

@@ -1,6 +1,7 @@
 #include <freeinit/net/stream_receiver.h>
 
 #include <algorithm>
+#include <cmath>
 #include <ostream>
 
 namespace freeinit::net {
@@ -8,6 +9,17 @@ namespace {
 constexpr std::size_t kMaxRetiredSessions = 16;
 constexpr std::size_t kMaxSkippedRemembered = 4096;
 constexpr std::uint64_t kMaxSequenceJump = std::uint64_t{1} << 32;
+/// The IMU clock model: the last this many accepted samples' stamp minus receipt time; it judges
+/// a stamp once it holds at least kClockMinSamples.
+constexpr std::size_t kClockSamples = 50, kClockMinSamples = 20;
+/// [s] a stamp this far from the model (or 50 of the stream's sample intervals, if more) is an
+/// anomaly; [s] an anomaly lasting this long in receipt time is the sender's clock stepping:
+/// the model starts again from it.
+constexpr double kClockTolerance = 0.5, kClockStepAfter = 1.0;
+
+double seconds(SteadyClock::time_point t) {
+  return std::chrono::duration<double>(t.time_since_epoch()).count();
+}
 }  // namespace
 
 void printStats(std::ostream& o, const ReceiverStats& s) {
@@ -35,6 +47,7 @@ void printStats(std::ostream& o, const ReceiverStats& s) {
     << "end_of_stream       = " << s.end_of_stream << "\n"
     << "imu_samples         = " << s.imu_samples << "\n"
     << "imu_stale           = " << s.imu_stale << "\n"
+    << "imu_stamp_anomaly   = " << s.imu_stamp_anomaly << "\n"
     << "frames              = " << s.frames << "\n"
     << "frames_incomplete   = " << s.frames_incomplete << "\n"
     << "frames_stale        = " << s.frames_stale << "\n"
@@ -157,6 +170,11 @@ void StreamReceiver::handle(Packet& p, SteadyClock::time_point received,
           ++stats_.imu_stale;
           continue;
         }
+        // A stamp ahead of the stream's clock is not adopted as its last one.
+        if (!stampFitsClock(s.stamp_ns, received)) {
+          ++stats_.imu_stamp_anomaly;
+          continue;
+        }
         last_imu_ns_ = s.stamp_ns;
         ++stats_.imu_samples;
         StreamEvent e;
@@ -181,6 +199,35 @@ void StreamReceiver::handle(Packet& p, SteadyClock::time_point received,
       break;
     }
   }
+}
+
+bool StreamReceiver::stampFitsClock(std::int64_t stamp_ns, SteadyClock::time_point received) {
+  const double stamp = static_cast<double>(stamp_ns) * 1e-9;
+  const double offset = stamp - seconds(received);
+  auto accept = [&] {
+    clock_offsets_.push_back(offset);
+    clock_stamps_.push_back(stamp);
+    if (clock_offsets_.size() > kClockSamples) {
+      clock_offsets_.pop_front();
+      clock_stamps_.pop_front();
+    }
+    anomalous_since_.reset();
+    return true;
+  };
+  const std::size_t n = clock_offsets_.size();
+  if (n < kClockMinSamples) return accept();
+  std::vector<double> v(clock_offsets_.begin(), clock_offsets_.end());
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(n / 2), v.end());
+  const double interval =
+      std::abs(clock_stamps_.back() - clock_stamps_.front()) / static_cast<double>(n - 1);
+  if (std::abs(offset - v[n / 2]) <= std::max(kClockTolerance, 50.0 * interval)) return accept();
+  if (!anomalous_since_) anomalous_since_ = received;
+  if (seconds(received) - seconds(*anomalous_since_) > kClockStepAfter) {
+    clock_offsets_.clear();  // the sender's clock stepped: a new model from here
+    clock_stamps_.clear();
+    return accept();
+  }
+  return false;
 }
 
 void StreamReceiver::handleChunk(FrameChunk& c, SteadyClock::time_point received,

@@ -18,6 +18,7 @@
 #include <mrpt/config/CConfigFile.h>
 #include <mrpt/maps/CPointsMapXYZI.h>
 #include <mrpt/maps/CSimpleMap.h>
+#include <mrpt/obs/CObservationIMU.h>
 #include <mrpt/obs/CObservationPointCloud.h>
 #include <mrpt/obs/CSensoryFrame.h>
 
@@ -28,6 +29,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 
@@ -855,6 +857,66 @@ TEST(FreeInitAppChecks, BadRecordOutsideTheWindowIsAWarningInsideAnError) {
         << e.what();
   }
   EXPECT_FALSE(fs::exists(in_window.params.out_dir));
+}
+
+// Issue 44's repro: one accelerometer sample of 1,000 m/s^2 in the dyna_01 sample, 0.2 s into its
+// window, gave a state 5 m/s off with status ok. The sample is rejected, counted in the state
+// file and warned; the state is as good as without it. One IMU record stamped 10 days ahead is
+// dropped with a warning naming it, and the window keeps its length.
+TEST(FreeInitAppChecks, AnImuFaultAndAStampJumpAreDroppedCountedAndWarned) {
+  double t_cloud = 0;
+  for (const auto& r : readRawlog(kDyna))
+    if (dynamic_cast<const mrpt::obs::CObservationPointCloud*>(r.obs.get()) != nullptr) {
+      t_cloud = toUnix(r.obs->timestamp);
+      break;
+    }
+  auto imuAfter = [&](double dt) {
+    auto done = std::make_shared<bool>(false);
+    return [=](mrpt::obs::CObservation::Ptr& o) -> mrpt::obs::CObservationIMU* {
+      auto* imu = dynamic_cast<mrpt::obs::CObservationIMU*>(o.get());
+      if (imu == nullptr || *done || toUnix(imu->timestamp) < t_cloud + dt) return nullptr;
+      *done = true;
+      return imu;
+    };
+  };
+  auto withTruth = [&](const std::string& rawlog) {
+    fs::copy_file(kSrc + "/rawlogs/dyna_01.truth.csv", rawlogStem(rawlog) + ".truth.csv",
+                  fs::copy_options::overwrite_existing);
+    return rawlog;
+  };
+  auto spiked = imuAfter(0.2);
+  const std::string spike =
+      withTruth(editedSample(kDyna, "spike.rawlog", [&](mrpt::obs::CObservation::Ptr& o) {
+        if (auto* imu = spiked(o))
+          imu->set(mrpt::obs::IMU_X_ACC, imu->get(mrpt::obs::IMU_X_ACC) + 1000.0);
+        return true;
+      }));
+  auto app = makeApp(spike, outDir("spike"), quickIni());
+  std::ostringstream log;
+  ASSERT_EQ(app.run(log), 0) << log.str();
+  ASSERT_TRUE(app.errors_wrt_gt) << log.str();
+  EXPECT_LE(app.errors_wrt_gt->velocity, 0.05) << log.str();
+  EXPECT_LE(app.errors_wrt_gt->gravity_deg, 0.5) << log.str();
+  EXPECT_NE(log.str().find("1 of the window's"), std::string::npos) << log.str();
+  EXPECT_NE(log.str().find("rejected as faults"), std::string::npos) << log.str();
+  mrpt::config::CConfigFile state((fs::path(app.params.out_dir) / "initial_state.ini").string());
+  EXPECT_EQ(state.read_int("initial_state", "imu_faults", -1), 1);
+  EXPECT_EQ(state.read_double("initial_state", "imu_gap_s", -1), 0.0);
+
+  auto jumped = imuAfter(0.2);
+  const std::string jump =
+      withTruth(editedSample(kDyna, "jump.rawlog", [&](mrpt::obs::CObservation::Ptr& o) {
+        if (auto* imu = jumped(o)) imu->timestamp = fromUnix(toUnix(imu->timestamp) + 864000.0);
+        return true;
+      }));
+  auto japp = makeApp(jump, outDir("jump"), quickIni());
+  std::ostringstream jlog;
+  ASSERT_EQ(japp.run(jlog), 0) << jlog.str();
+  ASSERT_TRUE(japp.errors_wrt_gt) << jlog.str();
+  EXPECT_LE(japp.errors_wrt_gt->velocity, 0.05) << jlog.str();
+  EXPECT_NEAR(japp.result.diag.window_duration, 0.5, 0.01);
+  EXPECT_NE(jlog.str().find("stamped 864000 s ahead of its stream (dropped)"), std::string::npos)
+      << jlog.str();
 }
 
 // A file cut after the window: not noticed without --check-all (and said so), a warning with it.

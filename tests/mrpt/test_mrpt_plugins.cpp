@@ -845,3 +845,59 @@ TEST(InputValidator, ACloudWhoseExtrinsicsAreNotARigidPoseIsABadRecord) {
   EXPECT_TRUE(out[1].ok()) << out[1].problem;
   EXPECT_NE(out[2].problem.find("not a rigid pose"), std::string::npos) << out[2].problem;
 }
+
+// One IMU sample stamped 10 days ahead of its stream (which goes on on its clock) is dropped as an
+// ignored record naming it, never handed on; the samples after it and a cloud between them come
+// out in input order. A sample that comes late (earlier than the one before the held one) stays
+// a bad record.
+TEST(InputValidator, AnImuStampThatJumpsAheadIsDroppedAndTheStreamGoesOn) {
+  const AppConfig config = loadAppConfigFromText("", "test.ini");
+  RecordChecker checker(config);
+  std::vector<CheckedItem> out;
+  auto imu = [](std::size_t record, double t) {
+    IngestItem it;
+    it.kind = IngestItem::Kind::Imu;
+    it.record = record;
+    it.t = t;
+    it.imu.t = t;
+    it.imu.accel = Vec3(0, 0, kGravity);
+    return it;
+  };
+  const double t0 = 1700000000.0;
+  checker.push(imu(0, t0), out);
+  checker.push(imu(1, t0 + 0.005), out);
+  checker.push(imu(2, t0 + 0.010 + 864000.0), out);  // ten days ahead
+  IngestItem cloud;
+  cloud.kind = IngestItem::Kind::Frame;
+  cloud.record = 3;
+  cloud.t = t0 + 0.011;
+  cloud.frame = std::make_shared<LidarFrame>(randomFrame(cloud.t, 50, 3));
+  checker.push(cloud, out);
+  checker.push(imu(4, t0 + 0.015), out);
+  checker.push(imu(5, t0 + 0.020), out);
+  checker.push(imu(6, t0 + 0.001), out);  // late: before record 5's predecessor
+  checker.finish(out);
+  ASSERT_EQ(out.size(), 7u);
+  EXPECT_EQ(checker.stampJumps(), 1u);
+  std::vector<std::size_t> imu_records;
+  for (const CheckedItem& c : out)
+    if (c.ok() && c.item.kind == IngestItem::Kind::Imu) imu_records.push_back(c.item.record);
+  EXPECT_EQ(imu_records, (std::vector<std::size_t>{0, 1, 4, 5}));
+  EXPECT_EQ(out[2].item.kind, IngestItem::Kind::Other);
+  EXPECT_TRUE(out[2].ok());
+  EXPECT_EQ(out[2].item.what, "IMU record 2 stamped 864000 s ahead of its stream (dropped)");
+  EXPECT_EQ(out[3].item.record, 3u);  // the cloud, in input order
+  EXPECT_EQ(out[4].item.record, 4u);
+  // The late sample: a bad record, after record 5 (held when it came).
+  EXPECT_EQ(out[5].item.record, 5u);
+  EXPECT_EQ(out[6].item.record, 6u);
+  EXPECT_FALSE(out[6].ok());
+  // Through a session: counted as an ignored observation, the session not failed.
+  InitSession session(config, "jump.rawlog");
+  for (const CheckedItem& c : out) session.push(c);
+  EXPECT_FALSE(session.failed());
+  bool named = false;
+  for (const std::string& w : session.warnings())
+    named = named || w.find("IMU record 2 stamped 864000 s ahead") != std::string::npos;
+  EXPECT_TRUE(named);
+}

@@ -357,6 +357,39 @@ TEST(StreamReceiver, SenderRestartDropsThePartialFrameAndStaleData) {
   EXPECT_EQ(collect(ev).imu.size(), o.imu.size());
 }
 
+// Live, one IMU packet stamped 10 days ahead (issue 44): a counted anomaly, not the stream's last
+// stamp: every later sample comes out (none stale), so an estimator's window does not close at
+// it. A clock that steps and stays is taken on after a second.
+TEST(StreamReceiver, AStampFarAheadOfTheStreamsClockIsAnAnomalyNotItsEnd) {
+  StreamReceiver r;
+  std::vector<StreamEvent> ev;
+  const SteadyClock::time_point t0 = SteadyClock::now();
+  auto at = [&](int k) { return t0 + std::chrono::microseconds(5000 * k + 1200); };
+  std::uint64_t seq = 0;
+  for (int k = 0; k < 400; ++k) {
+    ImuMessage s = imu(k);
+    if (k == 150) s.stamp_ns += 864'000LL * 1'000'000'000LL;  // ten days ahead
+    push(r, encodeImu({s}, 7, seq), ev, at(k));
+  }
+  const Output o = collect(ev);
+  EXPECT_EQ(r.stats().imu_stamp_anomaly, 1u);
+  EXPECT_EQ(r.stats().imu_stale, 0u);
+  EXPECT_EQ(r.stats().anomalies(), 1u);
+  ASSERT_EQ(o.imu.size(), 399u);
+  EXPECT_EQ(o.imu.back().stamp_ns, imu(399).stamp_ns);
+
+  // The sender's clock steps by 10 s and stays: after a second of anomalies, the stream again.
+  std::size_t before = o.imu.size();
+  for (int k = 400; k < 800; ++k) {
+    ImuMessage s = imu(k);
+    s.stamp_ns += 10'000'000'000LL;
+    push(r, encodeImu({s}, 7, seq), ev, at(k));
+  }
+  const Output o2 = collect(ev);
+  EXPECT_GT(o2.imu.size(), before + 150);
+  EXPECT_EQ(o2.imu.back().stamp_ns, imu(799).stamp_ns + 10'000'000'000LL);
+}
+
 TEST(StreamReceiver, GarbageIsCountedByReason) {
   StreamReceiver r;
   std::vector<StreamEvent> ev;

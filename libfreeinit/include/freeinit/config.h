@@ -63,6 +63,21 @@ struct ImuParams {
   double accel_bias_prior_sigma = 0.1;   ///< [m/s^2] zero-mean prior (typical MEMS, ~10 mg)
   double accel_bias_bound = 0.5;         ///< [m/s^2] |b_a| per axis is kept below this
   double accel_bias_random_walk = 1e-3;  ///< [m/s^2/sqrt(s)] accelerometer bias driving noise
+  // Gross faults and gaps (joint estimator; the screen in imu_screen.h): a sample no motion
+  // explains is replaced by the value its neighbours imply, with the noise of that
+  // interpolation, never integrated as read.
+  double gyro_range = 34.9;    ///< [rad/s] per axis: a reading at or beyond it is a fault
+  double accel_range = 156.9;  ///< [m/s^2] per axis (16 g)
+  /// [-] a reading farther than this many robust sigmas (and a physical floor) from the cubic
+  /// through its four neighbours, on both sides, is a fault.
+  double fault_sigmas = 8.0;
+  /// [-] the window declines (not_enough_data) when more than this share of its samples are
+  /// faults.
+  double max_fault_share = 0.05;
+  /// [s] a gap in the IMU stream up to this long is bridged by interpolated samples whose noise
+  /// grows with the gap; a longer one inside the window declines it, as does missing more than
+  /// this much in all.
+  double max_bridged_gap = 0.1;
 };
 
 /// The Doppler LiDAR's noise and which of its returns are used. INI section [doppler].
@@ -224,8 +239,16 @@ struct PaperPassesParams {
 enum class WindowSample { Inside, Last, Outside };
 /// `t_prev`: the sample before `t` (t_prev < t; for the first sample pass t_prev = t).
 WindowSample windowSample(double t_first, double t_prev, double t, double duration);
-/// The index of the last sample of the span that starts at imu[first], or nullopt if the samples
-/// end before it closes.
+/// The window rule with the stream's nominal sample interval [s] (e.g. the median of its first
+/// intervals) as the prediction of the next stamp, instead of the last interval: a sample closes
+/// the span when t + interval >= t_first + duration (within 1 % of the interval), one at or
+/// beyond the end is Outside. A gap inside the span then does not close it early (with the last
+/// interval, a sample after a 0.2 s gap predicted its successor beyond a 0.5 s window).
+WindowSample windowSampleAt(double t_first, double t, double interval, double duration);
+/// The median of the first (up to 20) intervals from imu[first] [s] (0 with fewer than 2 samples).
+double nominalInterval(const std::vector<ImuSample>& imu, std::size_t first);
+/// The index of the last sample of the span that starts at imu[first] (windowSampleAt with
+/// nominalInterval), or nullopt if the samples end before it closes.
 std::optional<std::size_t> windowLastSample(const std::vector<ImuSample>& imu, std::size_t first,
                                             double duration);
 

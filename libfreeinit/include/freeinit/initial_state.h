@@ -131,6 +131,11 @@ struct Diagnostics {
   /// DopplerInertialFilter::nodeResiduals; 0: not tested): about 0.8-1 when the noise model
   /// holds; above its 99.9 % quantile the state's covariance is scaled up by it.
   double node_residual_ratio = 0;
+  /// IMU samples of the window rejected as gross faults (joint estimator, ImuScreen): replaced
+  /// by the value their neighbours imply, with that interpolation's noise, never integrated.
+  std::size_t imu_faults = 0;
+  /// [s] IMU gaps inside the window bridged by interpolated samples, in all (joint estimator).
+  double imu_gap_s = 0;
   double window_duration = 0;         ///< [s] from the window start to the state time
   std::size_t frames_in_window = 0;   ///< LiDAR frames with points in the window
   bool imu_at_rest_at_start = false;  ///< the IMU showed only noise over the start decision's span

@@ -588,16 +588,24 @@ DopplerInertialFilter::VecS DopplerInertialFilter::IntegrationJacobian::transpos
 }
 
 DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const IntegrationJacobian& F,
-                                                                       const MatS& P, double dt,
-                                                                       bool full) const {
+                                                                       const MatS& P, std::size_t k,
+                                                                       double dt, bool full) const {
   const detail::TransitionBlocks blocks{F.th_th.data(), F.th_bg.data(), F.p_th.data(),
                                         F.p_bg.data(),  F.p_ba.data(),  F.v_th.data(),
                                         F.v_bg.data(),  F.v_ba.data(),  F.tau};
   // The IMU white noises are the process noise (sigma^2 dt^2 per step for the per-sample noise
   // sigma at the IMU rate): velocity qa, the position integrating it (dt/2 per step, fully
   // correlated within the step); the biases may walk.
-  const double qg = params_.gyro_sigma * params_.gyro_sigma * dt * dt;
-  const double qa = params_.accel_sigma * params_.accel_sigma * dt * dt;
+  // A sample interpolated in place of a fault or a gap carries its interpolation's noise: the
+  // step takes the larger scale of its two samples.
+  double sg = 1.0, sa = 1.0;
+  if (k + 1 < imu_noise_scale_.size()) {
+    const Eigen::Vector2f s = imu_noise_scale_[k].cwiseMax(imu_noise_scale_[k + 1]);
+    sg = static_cast<double>(s(0));
+    sa = static_cast<double>(s(1));
+  }
+  const double qg = sg * sg * params_.gyro_sigma * params_.gyro_sigma * dt * dt;
+  const double qa = sa * sa * params_.accel_sigma * params_.accel_sigma * dt * dt;
   const detail::ProcessNoiseBlocks Q{
       qg,
       qa * dt * dt / 4.0,
@@ -725,9 +733,13 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   return Q;
 }
 
-void DopplerInertialFilter::addImu(const ImuSample& s) {
+void DopplerInertialFilter::addImu(const ImuSample& s, double gyro_scale, double accel_scale) {
   if (!imu_.empty() && !(s.t > imu_.back().t))
     throw std::invalid_argument("DopplerInertialFilter::addImu: time does not increase");
+  const bool measured = gyro_scale == 1.0 && accel_scale == 1.0;
+  if (!measured && imu_noise_scale_.empty()) imu_noise_scale_.assign(imu_.size(), {1.0f, 1.0f});
+  if (!imu_noise_scale_.empty())
+    imu_noise_scale_.emplace_back(static_cast<float>(gyro_scale), static_cast<float>(accel_scale));
   imu_.push_back(s);
 }
 
@@ -803,7 +815,7 @@ void DopplerInertialFilter::predict() {
   n.k = cur.k + 1;
   IntegrationJacobian F;
   n.x_pred = propagate(cur, cur.x, &F);
-  n.P = propagateCovariance(F, cur.P, imu_[n.k].t - imu_[cur.k].t);
+  n.P = propagateCovariance(F, cur.P, cur.k, imu_[n.k].t - imu_[cur.k].t);
   n.x = n.xs = n.x_pred;
   nodes_.push_back(n);
 }
@@ -982,8 +994,11 @@ DopplerInertialFilter::LeverNoise DopplerInertialFilter::leverNoise(const Node& 
     for (std::size_t j = lo; j <= hi; ++j) {
       const std::size_t col = j - first;
       if (col >= kLeverSamples) continue;  // not reached: the span lies within k -+ 2
+      const double scale =
+          j < imu_noise_scale_.size() ? static_cast<double>(imu_noise_scale_[j](0)) : 1.0;
       for (int m = 0; m < 3; ++m)
-        E.block<3, 3>(3 * m, 3 * static_cast<int>(col)) += n.V_inv(m, i) * w[j - lo] * lever_noise_;
+        E.block<3, 3>(3 * m, 3 * static_cast<int>(col)) +=
+            n.V_inv(m, i) * w[j - lo] * scale * lever_noise_;
     }
   }
   return E;
@@ -1284,7 +1299,7 @@ void DopplerInertialFilter::smootherForward(std::size_t first) {
   auto predictNext = [&](std::size_t k) {
     const Node &n = nodes_[k], &m = nodes_[k + 1];
     dx_p[k + 1] = lin[k].F.times(dx_f[k]) + boxminus(lin[k].x_next, m.xs);
-    P_p[k + 1] = propagateCovariance(lin[k].F, P_f[k], imu_[m.k].t - imu_[n.k].t);
+    P_p[k + 1] = propagateCovariance(lin[k].F, P_f[k], n.k, imu_[m.k].t - imu_[n.k].t);
   };
   if (first == 0) {
     // The prior of node 0, expressed where node 0 now is (its yaw gauge about the current
@@ -1447,7 +1462,7 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
     if (k + 1 == N) break;
     const Node& m = nodes_[k + 1];
     dx = L.F.times(dx) + boxminus(L.x_next, lin[k + 1].x);
-    P = propagateCovariance(L.F, P, imu_[m.k].t - imu_[n.k].t, true);
+    P = propagateCovariance(L.F, P, n.k, imu_[m.k].t - imu_[n.k].t, true);
   }
   out.correction = dx;
   out.covariance = P;

@@ -7,6 +7,7 @@
 //   DopplerInertialFilter              the estimator proper
 //   WindowRecorder (window_parts.h)    the window's returns as received, mapped at the end
 //   RestCells (window_parts.h)         a standing sensor's returns by direction and range
+#include <freeinit/input_checks.h>
 #include <freeinit/rotation.h>
 
 #include <algorithm>
@@ -17,6 +18,7 @@
 #include <sstream>
 #include <utility>
 
+#include "imu_screen.h"
 #include "joint/chi_square.h"
 #include "joint/doppler_inertial_filter.h"
 #include "joint/noise_estimate.h"
@@ -51,6 +53,24 @@ constexpr std::size_t kMinNoiseReturns = 100;
 
 using BodyVelocityJacobian = Eigen::Matrix<double, 3, DopplerInertialFilter::kStateDim>;
 
+ImuScreenParams screenParams(const FreeInitConfig& cfg) {
+  ImuScreenParams p;
+  p.gyro_range = cfg.imu.gyro_range;
+  p.accel_range = cfg.imu.accel_range;
+  p.fault_sigmas = cfg.imu.fault_sigmas;
+  p.gyro_sigma = cfg.imu.gyro_sigma;
+  p.accel_sigma = cfg.imu.accel_sigma;
+  p.max_bridged_gap = cfg.imu.max_bridged_gap;
+  return p;
+}
+
+std::string formatNumber(double v, int precision = 3) {
+  std::ostringstream os;
+  os.precision(precision);
+  os << v;
+  return os.str();
+}
+
 /// The body velocity's derivative w.r.t. the filter's error state at x: dv_b = R^T dv_w +
 /// [v_b]x dtheta.
 BodyVelocityJacobian bodyVelocityJacobian(const FilterState& x) {
@@ -64,10 +84,12 @@ BodyVelocityJacobian bodyVelocityJacobian(const FilterState& x) {
 class JointPipeline final : public Pipeline {
  public:
   JointPipeline(const FreeInitConfig& cfg, const MeasurementSequencer& seq)
-      : cfg_(cfg), seq_(seq), usable_(cfg.doppler) {}
+      : cfg_(cfg), seq_(seq), usable_(cfg.doppler), screen_(screenParams(cfg)) {}
 
   bool processBuffered(InitResult& r) override {
     if (phase_ == Phase::Done) return true;
+    // Everything below reads the screened IMU stream (faults replaced, short gaps bridged).
+    screen_.advance(seq_.imu(), seq_.finished());
     const double t0 = wallSeconds(), solver0 = r.diag.time_solver;
     if (phase_ == Phase::WaitStart) tryStart(r);
     if (phase_ == Phase::Running) run(r);
@@ -119,7 +141,7 @@ class JointPipeline final : public Pipeline {
            "the raw (range-rate) Doppler");
       return;
     }
-    const auto& imu = seq_.imu();
+    const auto& imu = screen_.samples();
     MeasurementSequencer::Cursor c;
     if (!seq_.normalize(c) || imu.empty()) return;
     // Window start: the first IMU sample at or after the first LiDAR point; the start
@@ -285,7 +307,7 @@ class JointPipeline final : public Pipeline {
     filter_.emplace(fp, cfg_.extrinsics);
     // The window's nodes at the IMU rate of the start span (a few more if the rate varies: the
     // nodes then grow as needed).
-    const auto& imu = seq_.imu();
+    const auto& imu = screen_.samples();
     const std::size_t k_last = std::min(imu.size() - 1, k_first_ + 10);
     if (k_last > k_first_) {
       const double dt = (imu[k_last].t - imu[k_first_].t) / static_cast<double>(k_last - k_first_);
@@ -305,8 +327,10 @@ class JointPipeline final : public Pipeline {
   /// filter gets no sample beyond the window's last but one: its interpolation near the window's
   /// end must not depend on how far the IMU stream happens to be ahead.
   void feedImu(std::size_t last) {
-    const auto& imu = seq_.imu();
-    while (fed_ < imu.size() && fed_ <= last) filter_->addImu(imu[fed_++]);
+    const auto& imu = screen_.samples();
+    const auto& scale = screen_.noiseScales();
+    for (; fed_ < imu.size() && fed_ <= last; ++fed_)
+      filter_->addImu(imu[fed_], scale[fed_].gyro, scale[fed_].accel);
   }
 
   /// The open node's points received so far, those of [lo, hi) (the last node: [lo, t_k]): each
@@ -355,18 +379,29 @@ class JointPipeline final : public Pipeline {
   }
 
   void run(InitResult& r) {
-    const auto& imu = seq_.imu();
+    const auto& imu = screen_.samples();
     while (true) {
       const std::size_t k = k_first_ + filter_->nodes() - 1;
       if (!node_open_) {
-        // The window rule (config.h): this sample closes the window, or the next one is beyond.
-        const double duration = cfg_.window.duration;
-        last_ = k > k_first_ && windowSample(imu[k_first_].t, imu[k - 1].t, imu[k].t, duration) ==
-                                    WindowSample::Last;
+        // The window rule (config.h), with the stream's nominal interval: this sample closes
+        // the window, or the next one is beyond.
+        const double duration = cfg_.window.duration, h = screen_.interval();
+        last_ = k > k_first_ &&
+                windowSampleAt(imu[k_first_].t, imu[k].t, h, duration) == WindowSample::Last;
         if (!last_) {
           if (k + 1 >= imu.size()) return;  // the node's interval needs the next sample
-          last_ = windowSample(imu[k_first_].t, imu[k].t, imu[k + 1].t, duration) ==
-                  WindowSample::Outside;
+          // A gap the screen did not bridge, inside the window: the window would end at it.
+          if (imu[k + 1].t - imu[k].t > std::max(cfg_.imu.max_bridged_gap, 2.5 * h)) {
+            fail(r, InitStatus::NotEnoughData,
+                 "IMU gap of " + formatNumber(imu[k + 1].t - imu[k].t) + " s at " +
+                     input::formatStamp(imu[k].t) + " (" + formatNumber(imu[k].t - t_ref_) +
+                     " s into the window of " + formatNumber(duration) +
+                     " s): longer than [imu] max_bridged_gap (" +
+                     formatNumber(cfg_.imu.max_bridged_gap) + " s), it is not bridged");
+            return;
+          }
+          last_ =
+              windowSampleAt(imu[k_first_].t, imu[k + 1].t, h, duration) == WindowSample::Outside;
         }
         // The cubic interpolation of the IMU between k and k + 1 wants sample k + 2 too.
         if (!last_ && k + 2 >= imu.size() && !seq_.finished()) return;
@@ -386,7 +421,21 @@ class JointPipeline final : public Pipeline {
       if (!seq_.lidarPassed(last ? t_k + 1e-9 : hi)) return;  // more points may come
       filter_->setReturns(recorder_.closeNode(usable_, r.diag.points_skipped));
       filter_->update();
+      const std::size_t used_before = r.diag.points_used, rejected_before = r.diag.points_rejected;
       recorder_.judgeNode(*filter_, r.diag.points_used, r.diag.points_rejected);
+      if (acceptanceCollapsed(r.diag.points_used - used_before,
+                              r.diag.points_rejected - rejected_before)) {
+        fail(r, InitStatus::InconsistentData,
+             "the LiDAR returns from " + input::formatStamp(collapse_t_) + " (" +
+                 formatNumber(collapse_t_ - t_ref_) +
+                 " s into the window) on contradict the IMU propagation (their acceptance fell "
+                 "from " +
+                 formatNumber(100.0 * collapse_from_, 2) + " % to " +
+                 formatNumber(100.0 * collapse_to_, 2) +
+                 " %): an IMU fault the screen did not catch ([imu] fault_sigmas, accel_range, "
+                 "gyro_range), or a sudden change of the scene");
+        return;
+      }
       const std::size_t node = recorder_.nodes() - 1;
       const bool was_rest = rest_.atRest();
       const bool rest = rest_.update(imu[k]);
@@ -408,9 +457,12 @@ class JointPipeline final : public Pipeline {
         }
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
       }
+      // An interpolated gyro sample (ImuScreen) measures no rate.
+      const bool measured_gyro = screen_.noiseScales()[k].gyro == 1.0f;
       if (rest)
-        filter_->updateRest(cfg_.joint.rest_velocity_sigma,
-                            cfg_.joint.zero_rate_at_rest ? filter_->params().gyro_sigma : 0.0);
+        filter_->updateRest(cfg_.joint.rest_velocity_sigma, cfg_.joint.zero_rate_at_rest && measured_gyro
+                                                                ? filter_->params().gyro_sigma
+                                                                : 0.0);
       if (rest) r.diag.static_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
       // A rest node's accepted returns are in the rest cells as long as it stays one.
@@ -446,9 +498,10 @@ class JointPipeline final : public Pipeline {
     const double t_solve = wallSeconds();
     Diagnostics& diag = r.diag;
     rejectMovingDirections(r);  // before the counts below: they are of the returns used
-    const auto& imu = seq_.imu();
+    const auto& imu = screen_.samples();
     const double T = imu[k_window_last_].t - t_ref_;
     diag.window_duration = T;
+    if (!screenVerdict(r)) return;
     diag.update_rate_hz = T > 0 ? static_cast<double>(diag.points_used + diag.gyro_updates) / T : 0;
     for (const auto& f : seq_.frames()) {
       if (f.points->empty()) continue;
@@ -548,10 +601,95 @@ class JointPipeline final : public Pipeline {
     map_pending_ = true;  // completeMap(): the state does not wait for the map
   }
 
+  /// The backstop for an IMU fault the screen missed: integrated, it moves the prediction by
+  /// more than the gate, and the returns of every later node are refused. Fed with each node's
+  /// accepted and refused returns (nodes of at least kMinReturns); true once kNodes nodes in a
+  /// row accept under a quarter of the median share of the kHistory nodes before them (at least
+  /// half). A moving object entering the view lowers the share over many nodes, not at once.
+  bool acceptanceCollapsed(std::size_t accepted, std::size_t refused) {
+    constexpr std::size_t kMinReturns = 50, kHistory = 10, kNodes = 3;
+    const std::size_t n = accepted + refused;
+    if (n < kMinReturns) return false;
+    const double share = static_cast<double>(accepted) / static_cast<double>(n);
+    if (recent_acceptance_.size() >= kHistory) {
+      std::vector<double>& v = acceptance_scratch_;  // no allocation per node
+      v.assign(recent_acceptance_.end() - kHistory, recent_acceptance_.end());
+      std::nth_element(v.begin(), v.begin() + kHistory / 2, v.end());
+      const double median = v[kHistory / 2];
+      if (median >= 0.5 && share < 0.25 * median) {
+        if (collapsed_nodes_ == 0) {
+          collapse_t_ = screen_.samples()[k_first_ + filter_->nodes() - 1].t;
+          collapse_from_ = median;
+        }
+        collapse_to_ = share;
+        return ++collapsed_nodes_ >= kNodes;
+      }
+    }
+    collapsed_nodes_ = 0;
+    recent_acceptance_.push_back(share);
+    return false;
+  }
+
+  /// The IMU screen's findings inside the window (ImuScreen): counted in the diagnostics and
+  /// warned of; the window declines when more of its samples than [imu] max_fault_share are
+  /// faults or more than [imu] max_bridged_gap is missing in all. Returns whether it goes on.
+  bool screenVerdict(InitResult& r) {
+    const auto& imu = screen_.samples();
+    const double t_end = imu[k_window_last_].t;
+    Diagnostics& diag = r.diag;
+    const ImuFault* first = nullptr;
+    double last_t = -std::numeric_limits<double>::infinity();
+    for (const ImuFault& f : screen_.faults()) {
+      if (f.t < t_ref_ || f.t > t_end) continue;
+      if (first == nullptr) first = &f;
+      if (f.t != last_t) ++diag.imu_faults;  // a sample faulty in both sensors counts once
+      last_t = f.t;
+    }
+    const ImuGap* longest = nullptr;
+    for (const ImuGap& g : screen_.gaps()) {
+      if (!g.bridged || g.t < t_ref_ || g.t >= t_end) continue;
+      diag.imu_gap_s += g.length;
+      if (longest == nullptr || g.length > longest->length) longest = &g;
+    }
+    const std::size_t samples = k_window_last_ - k_first_ + 1;
+    if (first != nullptr) {
+      const std::string what =
+          std::to_string(diag.imu_faults) + " of the window's " + std::to_string(samples) +
+          " IMU samples rejected as faults (the first at " + input::formatStamp(first->t) + ", " +
+          formatNumber(first->t - t_ref_) +
+          " s into the window: " + (first->accel ? "accelerometer " : "gyro ") +
+          formatNumber(first->magnitude) + (first->accel ? " m/s^2" : " rad/s") +
+          (first->out_of_range ? " beyond its range" : " from what its neighbours imply") + ")";
+      if (static_cast<double>(diag.imu_faults) >
+          cfg_.imu.max_fault_share * static_cast<double>(samples)) {
+        fail(r, InitStatus::NotEnoughData,
+             what + ": more than [imu] max_fault_share (" +
+                 formatNumber(100.0 * cfg_.imu.max_fault_share) + " %); the IMU is not trusted");
+        return false;
+      }
+      r.state.warnings.push_back(what + ": interpolated with their uncertainty, not integrated");
+    }
+    if (longest != nullptr) {
+      const std::string what = "IMU gaps of " + formatNumber(diag.imu_gap_s) +
+                               " s in all inside the window (the longest " +
+                               formatNumber(longest->length) + " s at " +
+                               input::formatStamp(longest->t) + ", " +
+                               formatNumber(longest->t - t_ref_) + " s into the window)";
+      if (diag.imu_gap_s > cfg_.imu.max_bridged_gap + 1e-9) {
+        fail(r, InitStatus::NotEnoughData,
+             what + ": more than [imu] max_bridged_gap (" + formatNumber(cfg_.imu.max_bridged_gap) +
+                 " s) is missing");
+        return false;
+      }
+      r.state.warnings.push_back(what + " bridged by interpolation; the covariance includes it");
+    }
+    return true;
+  }
+
   void completeMap(InitResult& r) override {
     if (!map_pending_) return;
     map_pending_ = false;
-    recorder_.finish(*filter_, seq_.imu(), k_first_, cfg_.extrinsics, r);
+    recorder_.finish(*filter_, screen_.samples(), k_first_, cfg_.extrinsics, r);
   }
 
   /// The noise the data show so far, for the next smoothing: the IMU's from its rest samples (a
@@ -717,7 +855,7 @@ class JointPipeline final : public Pipeline {
     constexpr std::uint32_t kMinCount = 8;
     constexpr std::size_t kMinReturns = 200;
     const double sigma = filter_->params().doppler_sigma;
-    const auto& imu = seq_.imu();
+    const auto& imu = screen_.samples();
     const WindowRecorder& rec = recorder_;
     const std::size_t nodes = rec.nodes();
     prepareMovingCellSums();
@@ -1012,6 +1150,11 @@ class JointPipeline final : public Pipeline {
   bool map_pending_ = false;              ///< a state is out, its map not yet (completeMap)
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
   std::optional<DopplerInertialFilter> filter_;
+  ImuScreen screen_;
+  std::vector<double> recent_acceptance_;   ///< acceptanceCollapsed: the nodes' shares
+  std::vector<double> acceptance_scratch_;  ///< ... the last of them, for their median
+  std::size_t collapsed_nodes_ = 0;         ///< ... nodes in a row under a quarter of the median
+  double collapse_t_ = 0, collapse_from_ = 0, collapse_to_ = 0;  ///< ... the first of them
   RestTracker rest_;
   std::vector<bool> node_rest_;
   WindowRecorder recorder_;

@@ -79,6 +79,57 @@ void RecordChecker::checkExtrinsics(CheckedItem& c) {
 }
 
 void RecordChecker::push(IngestItem item, std::vector<CheckedItem>& out) {
+  // The held IMU sample's stamp jumped ahead when the next one is earlier than it, by more
+  // than it is later than the one before it: the stream goes on on its clock; the held one is
+  // dropped. (A next one equal to the held one, or a little before it, is the next one's fault:
+  // a bad record, as before.)
+  if (item.kind == IngestItem::Kind::Imu && item.problem.empty() && held_imu_ && before_held_ &&
+      std::isfinite(item.imu.t) && item.imu.t > before_held_->t &&
+      held_imu_->item.imu.t - item.imu.t > item.imu.t - before_held_->t)
+    dropHeldImu(item.imu.t, out);
+  std::vector<CheckedItem> checked;
+  check(std::move(item), checked);
+  for (CheckedItem& c : checked) {
+    if (c.item.kind == IngestItem::Kind::Imu && c.ok()) {
+      releaseHeldImu(out);
+      held_imu_ = std::move(c);
+    } else if (held_imu_) {
+      after_held_.push_back(std::move(c));  // input order: after the held sample
+    } else {
+      out.push_back(std::move(c));
+    }
+  }
+}
+
+void RecordChecker::releaseHeldImu(std::vector<CheckedItem>& out) {
+  if (!held_imu_) return;
+  before_held_ = held_imu_->item.imu;
+  out.push_back(std::move(*held_imu_));
+  held_imu_.reset();
+  for (CheckedItem& c : after_held_) out.push_back(std::move(c));
+  after_held_.clear();
+}
+
+void RecordChecker::dropHeldImu(double next_t, std::vector<CheckedItem>& out) {
+  CheckedItem& h = *held_imu_;
+  const double t = h.item.imu.t;
+  std::ostringstream what;
+  what << "IMU record " << h.item.record << " stamped " << std::setprecision(6) << t - next_t
+       << " s ahead of its stream (dropped)";
+  // Taken back: the next sample is checked against the one before it.
+  last_imu_ = before_held_;
+  if (!recent_imu_.empty() && recent_imu_.back().t == t) recent_imu_.pop_back();
+  h.item.kind = IngestItem::Kind::Other;
+  h.item.what = what.str();
+  ++stamp_jumps_;
+  // Not released: before_held_ stays the sample before it.
+  out.push_back(std::move(h));
+  held_imu_.reset();
+  for (CheckedItem& c : after_held_) out.push_back(std::move(c));
+  after_held_.clear();
+}
+
+void RecordChecker::check(IngestItem item, std::vector<CheckedItem>& out) {
   CheckedItem c;
   c.problem = std::move(item.problem);
   c.begin = c.end = item.t;
@@ -106,10 +157,12 @@ void RecordChecker::push(IngestItem item, std::vector<CheckedItem>& out) {
     if (c.ok()) {
       last_imu_ = it.imu;
       recent_imu_.push_back(it.imu);
-      // Keep what the rest test of a held cloud may need, and half a second for the next one.
+      // Keep what the rest test of a held cloud may need, and half a second for the next one
+      // (from the sample held before this one: this one's stamp may have jumped ahead).
+      const double newest = held_imu_ ? held_imu_->item.imu.t : it.imu.t;
       const double keep_from =
-          held_.empty() ? it.imu.t - 0.5
-                        : std::min(it.imu.t - 0.5, held_.front().c.begin - input::kRestMargin);
+          held_.empty() ? newest - 0.5
+                        : std::min(newest - 0.5, held_.front().c.begin - input::kRestMargin);
       while (!recent_imu_.empty() && recent_imu_.front().t < keep_from) recent_imu_.pop_front();
     }
     out.push_back(std::move(c));
@@ -206,7 +259,10 @@ void RecordChecker::resolve(bool force, std::vector<CheckedItem>& out) {
   }
 }
 
-void RecordChecker::finish(std::vector<CheckedItem>& out) { resolve(true, out); }
+void RecordChecker::finish(std::vector<CheckedItem>& out) {
+  releaseHeldImu(out);
+  resolve(true, out);
+}
 
 // ---------------------------------------------------------------------------------------------
 // InitSession

@@ -37,6 +37,8 @@ StateVerdict verdictOf(const InitResult& r, double doppler_sigma) {
   v.time_offset_sigma = s.time_offset_sigma;
   v.time_offset_estimated = s.time_offset_estimated;
   v.noise = r.diag.noise;
+  v.imu_faults = r.diag.imu_faults;
+  v.imu_gap_s = r.diag.imu_gap_s;
   return v;
 }
 
@@ -117,7 +119,9 @@ void writeInitialStateIni(const std::string& path, const InitialState& s,
         << "\npoints_used          = " << v.points_used
         << "\ndoppler_residual_rms = " << v.residual_rms
         << "\ndoppler_sigma        = " << v.doppler_sigma
-        << "\nnode_chi2_per_dof    = " << v.node_residual_ratio << "\n";
+        << "\nnode_chi2_per_dof    = " << v.node_residual_ratio
+        << "\nimu_faults           = " << v.imu_faults << "\nimu_gap_s            = " << v.imu_gap_s
+        << "\n";
       // The white noise used: value, relative 1-sigma, source; the configured one beside.
       const std::tuple<const NoiseUsed*, const char*, const char*> noises[] = {
           {&v.noise.gyro, "noise_gyro           = ", "[rad/s] per sample"},

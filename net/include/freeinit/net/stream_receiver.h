@@ -43,11 +43,17 @@ struct ReceiverStats {
   /// Datagrams the first session sent before the receiver started (its first sequence number):
   /// not a network loss, reported apart.
   std::uint64_t joined_late = 0;
-  std::uint64_t sessions = 0;             ///< sender sessions seen (a restart adds one)
-  std::uint64_t stale_session = 0;        ///< datagrams of a session already replaced: dropped
-  std::uint64_t end_of_stream = 0;        ///< end-of-stream markers received
-  std::uint64_t imu_samples = 0;          ///< emitted
-  std::uint64_t imu_stale = 0;            ///< not newer than the last emitted one: dropped
+  std::uint64_t sessions = 0;       ///< sender sessions seen (a restart adds one)
+  std::uint64_t stale_session = 0;  ///< datagrams of a session already replaced: dropped
+  std::uint64_t end_of_stream = 0;  ///< end-of-stream markers received
+  std::uint64_t imu_samples = 0;    ///< emitted
+  std::uint64_t imu_stale = 0;      ///< not newer than the last emitted one: dropped
+  /// Stamped far from the stream's clock (a glitch 10 days ahead): dropped, and not taken as
+  /// the stream's last stamp, so the samples after it are not stale. The clock model is the
+  /// median of stamp minus receipt time over the last 50 samples; far: beyond 0.5 s or 50
+  /// sample intervals. An offset that persists over 1 s of receipt time is the sender's clock
+  /// stepping: the model restarts from it.
+  std::uint64_t imu_stamp_anomaly = 0;
   std::uint64_t frames = 0;               ///< complete frames emitted
   std::uint64_t frames_incomplete = 0;    ///< dropped for missing chunks (superseded or timed out)
   std::uint64_t frames_stale = 0;         ///< not newer than the last emitted frame: dropped
@@ -55,8 +61,8 @@ struct ReceiverStats {
 
   /// Datagrams or data dropped for any reason (everything but a clean stream).
   std::uint64_t anomalies() const {
-    return malformed + duplicates + late + lost + stale_session + imu_stale + frames_incomplete +
-           frames_stale + frames_inconsistent;
+    return malformed + duplicates + late + lost + stale_session + imu_stale + imu_stamp_anomaly +
+           frames_incomplete + frames_stale + frames_inconsistent;
   }
 };
 /// "key = value" lines, one per counter.
@@ -109,6 +115,9 @@ class StreamReceiver {
   void handle(Packet& p, SteadyClock::time_point received, std::vector<StreamEvent>& out);
   void handleChunk(FrameChunk& c, SteadyClock::time_point received, std::vector<StreamEvent>& out);
   void dropAssembly();
+  /// Whether an IMU stamp received at `received` fits the stream's clock model (updated with it
+  /// if it does; see ReceiverStats::imu_stamp_anomaly).
+  bool stampFitsClock(std::int64_t stamp_ns, SteadyClock::time_point received);
 
   ReceiverParams params_;
   ReceiverStats stats_;
@@ -120,6 +129,9 @@ class StreamReceiver {
   std::set<std::uint64_t> skipped_;     ///< gaps given up (bounded), to tell late from dup
   std::optional<Assembly> assembly_;
   std::optional<std::int64_t> last_imu_ns_, last_frame_ns_;
+  std::deque<double> clock_offsets_;  ///< [s] stamp - receipt time of the last samples
+  std::deque<double> clock_stamps_;   ///< [s] their stamps
+  std::optional<SteadyClock::time_point> anomalous_since_;  ///< first anomaly of a run
 };
 
 }  // namespace freeinit::net

@@ -60,6 +60,14 @@ struct CheckedItem {
 /// the IMU around it is known and passes only if the IMU shows rest. Items come out in input
 /// order except that clouds held for that wait (IMU samples pass them).
 ///
+/// One IMU sample of look-ahead: each IMU sample is held until the next one arrives (or the
+/// input ends). A held sample whose successor is later than the sample before it and earlier
+/// than the held one by more than that interval was stamped ahead of its stream (a glitch of the
+/// clock, the stream going on on its own): it comes out as an ignored observation (Kind::Other,
+/// `what` naming the record and how far ahead it was; stampJumps() counts them), never as a sample,
+/// so the window neither closes at it nor loses the samples after it. A stream that continues from
+/// the new stamp is a gap for the estimator to judge.
+///
 /// The extrinsics of a rawlog (with [extrinsics] from_sensor_pose): every cloud's sensorPose
 /// relative to the IMU's, whatever the order of the records (a cloud before the first IMU sample
 /// waits for it). The first cloud's sets them; every later cloud must give the same (a record
@@ -72,11 +80,19 @@ class RecordChecker {
   /// End of the input: decides the held clouds with the IMU there is.
   void finish(std::vector<CheckedItem>& out);
   std::size_t invalidPointsDropped() const { return dropped_; }
+  /// IMU samples dropped as stamped ahead of their stream (see above).
+  std::size_t stampJumps() const { return stamp_jumps_; }
   /// The LiDAR pose in the body frame the clouds declare, once the first good cloud set it.
   const std::optional<Extrinsics>& declaredExtrinsics() const { return extrinsics_; }
 
  private:
   void resolve(bool force, std::vector<CheckedItem>& out);
+  /// The checks of one record (push() without the IMU look-ahead).
+  void check(IngestItem item, std::vector<CheckedItem>& out);
+  /// Hands on the held IMU sample and what came after it.
+  void releaseHeldImu(std::vector<CheckedItem>& out);
+  /// The held IMU sample stamped ahead (the next is at next_t): dropped, as an ignored record.
+  void dropHeldImu(double next_t, std::vector<CheckedItem>& out);
   /// The cloud's extrinsics from its sensorPose and the IMU's (identity when no IMU sample came),
   /// checked against the rule (see above).
   void checkExtrinsics(CheckedItem& c);
@@ -98,6 +114,10 @@ class RecordChecker {
   std::deque<ImuSample> recent_imu_;  ///< for the rest test of held clouds
   std::deque<Held> held_;             ///< clouds waiting, in order (the first for the IMU)
   std::size_t dropped_ = 0;
+  std::optional<CheckedItem> held_imu_;   ///< the IMU look-ahead: the last good sample
+  std::vector<CheckedItem> after_held_;   ///< items that came after it, in order
+  std::optional<ImuSample> before_held_;  ///< the sample handed on before it
+  std::size_t stamp_jumps_ = 0;
 };
 
 /// A record that failed a check, as a session keeps it.

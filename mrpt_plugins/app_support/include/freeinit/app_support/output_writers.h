@@ -37,6 +37,9 @@ struct StateVerdict {
   /// The white noises the estimator used, their relative sigma, source and configured values
   /// (Diagnostics::noise).
   NoiseReport noise;
+  /// IMU samples of the window rejected as faults (Diagnostics::imu_faults).
+  std::size_t imu_faults = 0;
+  double imu_gap_s = 0;  ///< [s] IMU gaps of the window bridged (Diagnostics::imu_gap_s)
 };
 /// The verdict of an ok result (doppler_sigma: the configured [doppler] doppler_sigma).
 StateVerdict verdictOf(const InitResult& r, double doppler_sigma);
@@ -48,8 +51,8 @@ void printVerdict(std::ostream& log, const StateVerdict& v);
 /// [dtheta p v b_g b_a g]); for ok states time_offset (value [s], std [s], "estimated" or "prior":
 /// InitialState::time_offset_estimated); with a verdict (ok states) also sigma_v_b, sigma_tilt_deg,
 /// sigma_b_g, sigma_b_a, window_s, window_frames, points_used, doppler_residual_rms,
-/// doppler_sigma and node_chi2_per_dof, and noise_gyro, noise_accel, noise_doppler ("value
-/// rel_sigma source", the configured value in the comment); then warnings.
+/// doppler_sigma, node_chi2_per_dof, imu_faults and imu_gap_s, and noise_gyro, noise_accel,
+/// noise_doppler ("value rel_sigma source", the configured value in the comment); then warnings.
 void writeInitialStateIni(const std::string& path, const InitialState& s,
                           const StateVerdict* verdict = nullptr);
 /// TUM: "t x y z qx qy qz qw" per line.

@@ -1,0 +1,255 @@
+// Gross IMU faults and gaps (issue 44, items 3 and 4): the screen on its own (spikes, a real step,
+// gaps), then through the estimator on simulated presets with a fault injected: the fault is
+// removed and counted and the state stays within 3x its Cramer-Rao bound with status ok; too
+// many faults or a gap too long to bridge decline the window with a status that names them.
+#include <freeinit/free_init.h>
+#include <freeinit/sim/evaluation.h>
+#include <freeinit/sim/simulator.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "imu_screen.h"
+
+namespace freeinit {
+namespace {
+
+using detail::ImuScreen;
+using detail::ImuScreenParams;
+
+/// 200 Hz, a slow motion plus white noise at the declared level.
+std::vector<ImuSample> smoothStream(std::size_t n, std::uint64_t seed = 1) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> n01;
+  std::vector<ImuSample> imu(n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const double t = 100.0 + 0.005 * static_cast<double>(k);
+    imu[k].t = t;
+    imu[k].gyro =
+        Vec3(0.3 * std::sin(2 * t), 0.1, -0.2) + 0.002 * Vec3(n01(rng), n01(rng), n01(rng));
+    imu[k].accel = Vec3(std::sin(3 * t), 0.5 * std::cos(3 * t), 9.81) +
+                   0.02 * Vec3(n01(rng), n01(rng), n01(rng));
+  }
+  return imu;
+}
+
+ImuScreen screened(const std::vector<ImuSample>& imu) {
+  ImuScreen s{ImuScreenParams{}};
+  // As a stream: one sample at a time, then the end.
+  std::vector<ImuSample> so_far;
+  for (const ImuSample& x : imu) {
+    so_far.push_back(x);
+    s.advance(so_far, false);
+  }
+  s.advance(so_far, true);
+  return s;
+}
+
+TEST(ImuScreen, PassesACleanStreamUnchanged) {
+  const auto imu = smoothStream(400);
+  const ImuScreen s = screened(imu);
+  ASSERT_EQ(s.samples().size(), imu.size());
+  EXPECT_TRUE(s.faults().empty());
+  EXPECT_TRUE(s.gaps().empty());
+  for (std::size_t k = 0; k < imu.size(); ++k) {
+    EXPECT_EQ(s.samples()[k].accel, imu[k].accel);
+    EXPECT_FALSE(s.noiseScales()[k].synthetic());
+  }
+  EXPECT_NEAR(s.interval(), 0.005, 1e-9);
+}
+
+TEST(ImuScreen, ReplacesSpikesOfAnySizeWithTheirNeighboursValue) {
+  for (const double magnitude : {30.0, 300.0, 1000.0, 10000.0}) {
+    auto imu = smoothStream(200);
+    const Vec3 truth = imu[100].accel;
+    imu[100].accel.x() += magnitude;
+    const ImuScreen s = screened(imu);
+    ASSERT_EQ(s.faults().size(), 1u) << magnitude;
+    EXPECT_TRUE(s.faults()[0].accel);
+    EXPECT_EQ(s.faults()[0].t, imu[100].t);
+    EXPECT_NEAR(s.faults()[0].magnitude, magnitude, 0.2) << magnitude;
+    EXPECT_LT((s.samples()[100].accel - truth).norm(), 0.1) << magnitude;
+    EXPECT_GT(s.noiseScales()[100].accel, 1.0f);
+    EXPECT_EQ(s.noiseScales()[100].gyro, 1.0f);
+  }
+  // The gyro likewise.
+  auto imu = smoothStream(200);
+  imu[60].gyro.z() -= 2.0;
+  const ImuScreen s = screened(imu);
+  ASSERT_EQ(s.faults().size(), 1u);
+  EXPECT_FALSE(s.faults()[0].accel);
+  EXPECT_GT(s.noiseScales()[60].gyro, 1.0f);
+}
+
+TEST(ImuScreen, KeepsAStepOfTheMotion) {
+  // A real shock: the specific force jumps by 20 m/s^2 and stays (one side's extrapolation is
+  // right): not a fault.
+  auto imu = smoothStream(200);
+  for (std::size_t k = 100; k < imu.size(); ++k) imu[k].accel.x() += 20.0;
+  EXPECT_TRUE(screened(imu).faults().empty());
+}
+
+TEST(ImuScreen, ASaturatedReadingIsAFaultAtTheStreamsEndsToo) {
+  auto imu = smoothStream(50);
+  imu[0].accel.z() = 156.9;
+  imu[49].gyro.x() = -40.0;
+  const ImuScreen s = screened(imu);
+  ASSERT_EQ(s.faults().size(), 2u);
+  EXPECT_TRUE(s.faults()[0].out_of_range);
+  EXPECT_TRUE(s.faults()[1].out_of_range);
+  EXPECT_LT(s.samples()[0].accel.z(), 20.0);
+  EXPECT_LT(std::abs(s.samples()[49].gyro.x()), 1.0);
+}
+
+TEST(ImuScreen, BridgesAShortGapWithNoiseGrowingIntoItAndLeavesALongOne) {
+  auto imu = smoothStream(300);
+  // 0.05 s missing after sample 100 (9 samples), 0.2 s after sample 200 (39).
+  imu.erase(imu.begin() + 201, imu.begin() + 240);
+  imu.erase(imu.begin() + 101, imu.begin() + 110);
+  const ImuScreen s = screened(imu);
+  ASSERT_EQ(s.gaps().size(), 2u);
+  EXPECT_TRUE(s.gaps()[0].bridged);
+  EXPECT_NEAR(s.gaps()[0].length, 0.05, 1e-9);
+  EXPECT_EQ(s.gaps()[0].missing, 9u);
+  EXPECT_FALSE(s.gaps()[1].bridged);
+  EXPECT_NEAR(s.gaps()[1].length, 0.2, 1e-9);
+  EXPECT_EQ(s.samples().size(), imu.size() + 9);
+  // The bridged samples at the nominal interval, noisiest in the middle.
+  for (std::size_t k = 101; k <= 110; ++k)
+    EXPECT_NEAR(s.samples()[k].t - s.samples()[k - 1].t, 0.005, 1e-9);
+  EXPECT_GT(s.noiseScales()[105].accel, s.noiseScales()[101].accel);
+  EXPECT_GT(s.noiseScales()[101].accel, 1.0f);
+  EXPECT_FALSE(s.noiseScales()[100].synthetic());
+  EXPECT_FALSE(s.noiseScales()[110].synthetic());
+}
+
+// ---------------------------------------------------------------------------------------------
+// Through the estimator.
+
+struct FaultRun {
+  InitResult result;
+  sim::InitErrors err;
+  eval::Bound bound;
+};
+
+/// `name`'s recording (seed 1), changed by `edit` (given the recording and the index of the IMU
+/// sample 0.2 s into the window), through FreeInit::run with the default configuration.
+template <class Edit>
+FaultRun runWith(const std::string& name, Edit edit) {
+  auto sc = sim::preset(name, 1);
+  sc.duration = 0.8;
+  sim::Recording rec = sim::simulate(sc);
+  const double t0 = rec.frames.front().stamp + rec.frames.front().points.front().time_offset;
+  std::size_t k = 0;
+  while (rec.imu[k].t < t0 + 0.2) ++k;
+  edit(rec, k);
+  FreeInitConfig cfg;
+  cfg.extrinsics = rec.extrinsics;
+  FaultRun r;
+  r.result = FreeInit::run(cfg, rec.imu, rec.frames);
+  if (r.result.state.ok()) {
+    r.err = sim::evaluate(r.result.state, rec);
+    r.bound = sim::cramerRaoBound(rec, cfg, r.result);
+  }
+  return r;
+}
+
+/// ok, within 3x its bound in velocity and gravity (the bound of the window without the fault:
+/// one sample of 100 changes it little).
+void expectWithinBound(const FaultRun& r, const std::string& what) {
+  ASSERT_TRUE(r.result.state.ok()) << what << ": " << r.result.state.message;
+  ASSERT_TRUE(r.bound.ok) << what;
+  EXPECT_LE(r.err.vel_b, 3.0 * r.bound.velocity) << what;
+  EXPECT_LE(r.err.gravity_deg, 3.0 * r.bound.gravity_deg) << what;
+}
+
+bool mentions(const InitialState& s, const std::string& text) {
+  for (const std::string& w : s.warnings)
+    if (w.find(text) != std::string::npos) return true;
+  return false;
+}
+
+TEST(ImuFaults, OneSampleOf1000AtRestAndMovingIsRemovedCountedAndWarned) {
+  for (const char* name : {"stat_01", "dyna_01"}) {
+    const FaultRun r =
+        runWith(name, [](sim::Recording& rec, std::size_t k) { rec.imu[k].accel.x() += 1000.0; });
+    expectWithinBound(r, name);
+    EXPECT_EQ(r.result.diag.imu_faults, 1u) << name;
+    EXPECT_TRUE(mentions(r.result.state, "rejected as faults")) << name;
+  }
+}
+
+TEST(ImuFaults, SpikesOf30And300AndAGyroSpikeLikewise) {
+  for (const char* name : {"stat_01", "dyna_01"}) {
+    for (const double magnitude : {30.0, 300.0}) {
+      const FaultRun r = runWith(
+          name, [&](sim::Recording& rec, std::size_t k) { rec.imu[k].accel.y() -= magnitude; });
+      const std::string what = std::string(name) + " " + std::to_string(magnitude);
+      expectWithinBound(r, what);
+      EXPECT_EQ(r.result.diag.imu_faults, 1u) << what;
+    }
+    const FaultRun g =
+        runWith(name, [](sim::Recording& rec, std::size_t k) { rec.imu[k].gyro.z() += 3.0; });
+    expectWithinBound(g, std::string(name) + " gyro");
+    EXPECT_EQ(g.result.diag.imu_faults, 1u) << name;
+  }
+}
+
+// What the screen lets through (here: switched off) is not integrated into an ok state: the
+// returns after it are refused node after node, and the window declines naming the time.
+TEST(ImuFaults, AFaultTheScreenMissesIsNeverAnOkState) {
+  for (const char* name : {"stat_01", "dyna_01"}) {
+    auto sc = sim::preset(name, 1);
+    sc.duration = 0.8;
+    sim::Recording rec = sim::simulate(sc);
+    const double t0 = rec.frames.front().stamp + rec.frames.front().points.front().time_offset;
+    std::size_t k = 0;
+    while (rec.imu[k].t < t0 + 0.2) ++k;
+    rec.imu[k].accel.x() += 1000.0;
+    FreeInitConfig cfg;
+    cfg.extrinsics = rec.extrinsics;
+    cfg.imu.accel_range = 1e5;
+    cfg.imu.fault_sigmas = 1e6;
+    const InitResult r = FreeInit::run(cfg, rec.imu, rec.frames);
+    EXPECT_EQ(r.state.status, InitStatus::InconsistentData) << name << ": " << r.state.message;
+    EXPECT_NE(r.state.message.find("contradict the IMU propagation"), std::string::npos)
+        << r.state.message;
+  }
+}
+
+TEST(ImuFaults, TooManyFaultsDeclineTheWindowNamingThem) {
+  // One sample in ten: 10 % of the window against max_fault_share = 5 %.
+  const FaultRun r = runWith("dyna_01", [](sim::Recording& rec, std::size_t k) {
+    for (std::size_t j = k - 30; j < rec.imu.size(); j += 10) rec.imu[j].accel.z() += 200.0;
+  });
+  EXPECT_EQ(r.result.state.status, InitStatus::NotEnoughData);
+  EXPECT_NE(r.result.state.message.find("rejected as faults"), std::string::npos)
+      << r.result.state.message;
+  EXPECT_NE(r.result.state.message.find("max_fault_share"), std::string::npos);
+}
+
+TEST(ImuFaults, AGapOf200msDeclinesNamingItAndOf50msIsBridged) {
+  const FaultRun r = runWith("dyna_01", [](sim::Recording& rec, std::size_t k) {
+    rec.imu.erase(rec.imu.begin() + static_cast<std::ptrdiff_t>(k) + 1,
+                  rec.imu.begin() + static_cast<std::ptrdiff_t>(k) + 40);
+  });
+  EXPECT_EQ(r.result.state.status, InitStatus::NotEnoughData);
+  EXPECT_NE(r.result.state.message.find("IMU gap of 0.2 s"), std::string::npos)
+      << r.result.state.message;
+  for (const char* name : {"stat_01", "dyna_01"}) {
+    const FaultRun b = runWith(name, [](sim::Recording& rec, std::size_t k) {
+      rec.imu.erase(rec.imu.begin() + static_cast<std::ptrdiff_t>(k) + 1,
+                    rec.imu.begin() + static_cast<std::ptrdiff_t>(k) + 10);
+    });
+    expectWithinBound(b, std::string(name) + " 50 ms gap");
+    EXPECT_NEAR(b.result.diag.imu_gap_s, 0.05, 1e-6) << name;
+    EXPECT_NEAR(b.result.diag.window_duration, 0.495, 0.006) << name;  // not shortened
+    EXPECT_TRUE(mentions(b.result.state, "bridged by interpolation")) << name;
+  }
+}
+
+}  // namespace
+}  // namespace freeinit
