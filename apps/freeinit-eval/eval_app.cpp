@@ -358,8 +358,8 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
     row.wrong_calibration = c.wrong_calibration;
     row.block = c.block;
     const bool datasheet = declaresDatasheetNoise(o);
-    row.imu_noise_factor = datasheet ? c.misdeclared.imu_noise_factor
-                                     : rec.config.gyro_sigma / cfg.imu.gyro_sigma;
+    row.imu_noise_factor =
+        datasheet ? c.misdeclared.imu_noise_factor : rec.config.gyro_sigma / cfg.imu.gyro_sigma;
     row.doppler_noise_factor = datasheet ? c.misdeclared.doppler_noise_factor
                                          : rec.config.doppler_sigma / cfg.doppler.doppler_sigma;
     row.noise_gyro.declared = cfg.imu.gyro_sigma;
