@@ -117,8 +117,9 @@ TEST(CommandLine, Freeinit) {
   expectUsageError(
       "fi_one", exe, {ini},
       "freeinit: error: missing <input.rawlog>: '" + ini + "' is an INI configuration file");
-  expectUsageError("fi_neither", exe, {kSrc + "/rawlogs/stat_01.truth.csv"},
-                   "stat_01.truth.csv': not an MRPT rawlog (it is a text file)");
+  expectUsageError(
+      "fi_neither", exe, {kSrc + "/rawlogs/stat_01.truth.csv"},
+      "stat_01.truth.csv': neither an MRPT rawlog nor a ROS recording (it is a text file)");
   expectUsageError("fi_three", exe, {ini, kRawlog, "extra"}, "'extra': unexpected argument");
   expectUsageError("fi_no_value", exe, {ini, kRawlog, "-o"}, "-o (--out): missing value");
   expectUsageError("fi_twice", exe, {ini, kRawlog, "-o", "a", "--out", "b"},
@@ -198,9 +199,9 @@ TEST(CommandLine, FreeinitIcpSlam) {
 #ifdef FREEINIT_IMPORT_BAG_APP
 TEST(CommandLine, FreeinitImportBag) {
   const std::string exe = FREEINIT_IMPORT_BAG_APP;
-  expectHelp("import", exe, {"<bag>.rawlog"});
+  expectHelp("import", exe, {"<input>.rawlog"});
   expectUsageError("import_no_config", exe, {"x.bag"}, "-c (--config): missing (required)");
-  expectUsageError("import_no_bag", exe, {"-c", "x.ini"}, "missing <input.bag>");
+  expectUsageError("import_no_bag", exe, {"-c", "x.ini"}, "missing <input>");
 }
 #endif
 

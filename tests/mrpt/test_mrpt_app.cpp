@@ -429,10 +429,11 @@ TEST(FreeInitAppWithoutConfig, ArgumentsAreToldApartByContent) {
                                   "' is an INI configuration file (freeinit "
                                   "[<config.ini>] <input.rawlog>)");
   EXPECT_EQ(problem("", csv),
-            "<input.rawlog> '" + csv + "': not an MRPT rawlog (it is a text file)");
+            "<input.rawlog> '" + csv +
+                "': neither an MRPT rawlog nor a ROS recording (it is a text file)");
   EXPECT_EQ(problem("", png), "<input.rawlog> '" + png +
-                                  "': not an MRPT rawlog (it is binary data, neither gzip nor an "
-                                  "MRPT archive)");
+                                  "': neither an MRPT rawlog nor a ROS recording (it is binary "
+                                  "data, neither gzip nor an MRPT archive)");
   EXPECT_NE(problem("", bag).find("freeinit-import-bag"), std::string::npos);
   EXPECT_EQ(problem(kDyna, ini), "");  // swapped: the INI reader names the binary file
   EXPECT_EQ(problem(ini, png), "");
