@@ -118,7 +118,7 @@ TEST(CommandLine, Freeinit) {
       "fi_one", exe, {ini},
       "freeinit: error: missing <input.rawlog>: '" + ini + "' is an INI configuration file");
   expectUsageError("fi_neither", exe, {kSrc + "/README.md"},
-                   "README.md': not an MRPT rawlog (it is a text file)");
+                   "README.md': neither an MRPT rawlog nor a ROS recording (it is a text file)");
   // A file the apps wrote is told as such, with what to give instead.
   expectUsageError("fi_truth", exe, {kSrc + "/rawlogs/stat_01.truth.csv"},
                    "stat_01.truth.csv' is the ground truth of a simulated recording "
@@ -202,9 +202,9 @@ TEST(CommandLine, FreeinitIcpSlam) {
 #ifdef FREEINIT_IMPORT_BAG_APP
 TEST(CommandLine, FreeinitImportBag) {
   const std::string exe = FREEINIT_IMPORT_BAG_APP;
-  expectHelp("import", exe, {"<bag>.rawlog"});
+  expectHelp("import", exe, {"<input>.rawlog"});
   expectUsageError("import_no_config", exe, {"x.bag"}, "-c (--config): missing (required)");
-  expectUsageError("import_no_bag", exe, {"-c", "x.ini"}, "missing <input.bag>");
+  expectUsageError("import_no_bag", exe, {"-c", "x.ini"}, "missing <input>");
 }
 #endif
 

@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <deque>
+#include <filesystem>
 #include <limits>
 
 namespace freeinit::app_support {
@@ -140,8 +141,16 @@ std::unique_ptr<mrpt_plugins::RawlogReader> openInput(const std::string& path,
   if (kind == K::kRos1Bag)
     throw InputError(path + ": a ROS 1 bag: import it first (freeinit-import-bag " + path +
                      " -c <import.ini>), then run freeinit on the rawlog");
-  if (kind != K::kMcap && kind != K::kSqlite && kind != K::kRosbag2Folder &&
-      kind != K::kPlainFolder)
+  // A folder of ROS 2 files without metadata.yaml: the ROS reader's message lists them.
+  bool ros2_files = false;
+  if (kind == K::kPlainFolder) {
+    std::error_code ec;
+    for (const auto& f : std::filesystem::directory_iterator(path, ec)) {
+      const std::string ext = f.path().extension().string();
+      ros2_files = ros2_files || ext == ".db3" || ext == ".mcap";
+    }
+  }
+  if (kind != K::kMcap && kind != K::kSqlite && kind != K::kRosbag2Folder && !ros2_files)
     return std::make_unique<mrpt_plugins::RawlogReader>(path, index);
   const bags::BagImportConfig& bag = config.bag_import.bag;
   std::unique_ptr<bags::Ros2Reader> reader;
