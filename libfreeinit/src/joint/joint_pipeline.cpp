@@ -460,9 +460,9 @@ class JointPipeline final : public Pipeline {
       // An interpolated gyro sample (ImuScreen) measures no rate.
       const bool measured_gyro = screen_.noiseScales()[k].gyro == 1.0f;
       if (rest)
-        filter_->updateRest(cfg_.joint.rest_velocity_sigma, cfg_.joint.zero_rate_at_rest && measured_gyro
-                                                                ? filter_->params().gyro_sigma
-                                                                : 0.0);
+        filter_->updateRest(
+            cfg_.joint.rest_velocity_sigma,
+            cfg_.joint.zero_rate_at_rest && measured_gyro ? filter_->params().gyro_sigma : 0.0);
       if (rest) r.diag.static_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
       // A rest node's accepted returns are in the rest cells as long as it stays one.
