@@ -184,13 +184,15 @@ TEST(FreeInitAccuracy, CovarianceIsConsistentOverPresetsAndSeeds) {
 }
 
 // The early smoothing (at 75 % of the window) leaves the final one (what an online user waits for)
-// one Gauss-Newton step and its check: two iterations on every preset and seed. The nodes received
-// after the early smoothing start from the propagation of the smoothed ones; started from the
-// filter's states instead, 14 of these 39 runs took three iterations and dyna_05 seed 2 six.
-TEST(FreeInitAccuracy, FinalSmoothingTakesTwoIterations) {
+// a few Gauss-Newton steps: one and its check as before, one more where the LiDAR-IMU clock offset
+// (estimated by default) is still moving, and one re-solve where the Doppler noise read from the
+// final residuals moved by more than 5 % (measured: at most 4 on every preset and seed). More would
+// mean the early smoothing no longer converges the window; the closing call's cost itself is
+// measured by the benchmarks.
+TEST(FreeInitAccuracy, FinalSmoothingTakesAFewIterations) {
   for (const auto& name : sim::presetNames())
     for (int s = 1; s <= kSeeds; ++s)
-      EXPECT_LE(outcome(name, s).result.diag.iterations, 2) << tag(name, s);
+      EXPECT_LE(outcome(name, s).result.diag.iterations, 4) << tag(name, s);
 }
 
 }  // namespace

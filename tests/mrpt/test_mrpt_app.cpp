@@ -491,12 +491,15 @@ TEST(FreeInitAppWithoutConfig, ArgumentsAreToldApartByContent) {
                                   "[<config.ini>] <input.rawlog>)");
   const std::string text = kSrc + "/README.md";
   EXPECT_EQ(problem("", text),
-            "<input.rawlog> '" + text + "': neither an MRPT rawlog nor a ROS recording (it is a text file)");
+            "<input.rawlog> '" + text +
+                "': neither an MRPT rawlog nor a ROS recording (it is a text file)");
   const std::string bytes = tmpFile("bytes.bin");
   std::ofstream(bytes, std::ios::binary).write("\x01\x00\x02", 3);
-  EXPECT_EQ(problem("", bytes), "<input.rawlog> '" + bytes +
-                                    "': neither an MRPT rawlog nor a ROS recording (it is binary data, neither gzip nor "
-                                    "an MRPT archive)");
+  EXPECT_EQ(
+      problem("", bytes),
+      "<input.rawlog> '" + bytes +
+          "': neither an MRPT rawlog nor a ROS recording (it is binary data, neither gzip nor "
+          "an MRPT archive)");
   // Outputs of a run (a simulator's truth, a snapshot), with or without a configuration.
   EXPECT_EQ(problem("", csv).rfind("<input.rawlog> '" + csv + "' is the ground truth", 0), 0u);
   EXPECT_EQ(problem("", png).rfind("<input.rawlog> '" + png + "' is a PNG image", 0), 0u);

@@ -255,7 +255,12 @@ namespace {
 
 std::map<std::string, std::string> runFreeInit(const std::string& input, const std::string& out,
                                                std::optional<double> start = std::nullopt) {
+  // The fixtures hold 0.4 s: a window that fits in them (the default 0.5 s is refused as longer
+  // than the recording).
+  const std::string ini = out + ".ini";
+  std::ofstream(ini) << "[window]\nduration = 0.25\n";
   FreeInitApp app;
+  app.params.config_file = ini;
   app.params.rawlog = input;
   app.params.out_dir = out;
   app.params.progress = false;
