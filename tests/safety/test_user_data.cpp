@@ -63,11 +63,12 @@ TEST(Simulator, ARecordingTooLargeForTheDiskIsRefusedBeforeAnyWork) {
   EXPECT_EQ(readText(d / "sim.left"), "");
 }
 
-/// A complete run of freeinit on the sample, as a user starts it (made once for the tests
-/// that need one): its output folder, and what it printed in "run.out" beside it.
+/// A complete run of freeinit on the sample, as a user starts it (made once per test process
+/// for the tests that need one; a folder per process, since ctest runs tests side by side): its
+/// output folder, and what it printed in "run.out" beside it.
 const fs::path& sampleRun() {
   static const fs::path out = [] {
-    const fs::path d = freshDir("sample_run");
+    const fs::path d = freshDir("sample_run_" + std::to_string(getpid()));
     Process p({FREEINIT_APP, kIni, kSample, "--out", (d / "out").string()}, d, "run");
     EXPECT_EQ(exitCode(p.wait()), 0) << p.err();
     return d / "out";
