@@ -57,6 +57,11 @@ const char* const kUsage =
     "  --imu-spikes N:MAG   N accelerometer samples of the window made off by MAG m/s^2 (a\n"
     "                       random axis and sign each, seeded by the run)\n"
     "  --imu-gap S          one IMU gap of S seconds at a random time inside the window\n"
+    "  --imu-rate HZ | LO:HI\n"
+    "                       the IMU rate [Hz] (LO:HI: log-uniform per run, seeded by the run),\n"
+    "                       the per-sample noise scaled to keep the scenario's noise density\n"
+    "  --node-rate HZ       [joint] node_rate: filter nodes at about this rate (0: one per IMU\n"
+    "                       sample)\n"
     "  --jobs N             parallel jobs (0: hardware concurrency, the default)\n"
     "  --md FILE            Markdown report (paper Table I/II layout, errors against the\n"
     "                       Cramer-Rao bound, statuses, every run)\n"
@@ -169,6 +174,8 @@ EvalAppParams parseParams(int argc, const char* const* argv) {
          o.imu_spike_magnitude = *mag;
        }},
       {"--imu-gap", [&](int& i) { o.imu_gap = number(i, 0, 10); }},
+      {"--imu-rate", [&](int& i) { o.imu_rate = range(i, 10, 10000); }},
+      {"--node-rate", [&](int& i) { o.node_rate = number(i, 0, 10000); }},
       {"--jobs", [&](int& i) { o.jobs = static_cast<unsigned>(integer(i, 0, 1024)); }},
       {"--md", [&](int& i) { o.md = value(i); }},
       {"--csv", [&](int& i) { o.csv = value(i); }},
@@ -252,6 +259,17 @@ void applyOverrides(const EvalAppParams& o, EvalCase& c) {
   sim::ScenarioConfig& sc = c.scenario;
   sc.duration = o.duration;
   if (o.points > 0) sc.points_per_frame = o.points;
+  if (o.imu_rate) {
+    // Log-uniform from a stream of the run's own; the per-sample noise follows the rate at the
+    // scenario's noise density.
+    std::mt19937_64 rng(0x1A7E0000ULL + static_cast<std::uint64_t>(c.seed));
+    std::uniform_real_distribution<double> u(0, 1);
+    const double rate = o.imu_rate->lo * std::pow(o.imu_rate->hi / o.imu_rate->lo, u(rng));
+    const double scale = std::sqrt(rate / sc.imu_rate);
+    sc.gyro_sigma *= scale;
+    sc.accel_sigma *= scale;
+    sc.imu_rate = rate;
+  }
   if (o.zero_bg) {
     sc.random_biases = false;
     sc.b_g.setZero();
@@ -336,6 +354,7 @@ FreeInitConfig configFor(const EvalAppParams& o, const EvalCase& c, const sim::R
   }
   if (o.stride > 0) cfg.doppler.point_stride = o.stride;
   if (o.window > 0) cfg.window.duration = o.window;
+  if (o.node_rate >= 0) cfg.joint.node_rate = o.node_rate;
   if (o.passes >= 0) cfg.paper_passes.refinement_passes = o.passes;
   if (o.seed_samples >= 0) cfg.paper_passes.seed_duration = o.seed_samples / rec.config.imu_rate;
   if (o.tau >= 0) cfg.paper_gravity.velocity_error_correlation_time = o.tau;

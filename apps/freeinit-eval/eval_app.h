@@ -60,6 +60,11 @@ struct EvalAppParams {
   int imu_spikes = 0;
   double imu_spike_magnitude = 0;
   double imu_gap = 0;
+  /// [Hz] the IMU rate of each run, drawn log-uniform per run (seeded by the run's seed) in this
+  /// range, the per-sample noise scaled to keep the scenario's noise density (unset: the
+  /// scenario's own rate).
+  std::optional<sim::DrawRange> imu_rate;
+  double node_rate = -1;  ///< [Hz] [joint] node_rate; < 0: the configuration default
 };
 
 /// One run of the evaluation: a scenario of the simulator, its name in the tables and what the

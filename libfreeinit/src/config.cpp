@@ -198,6 +198,9 @@ const config::Section<JointParams>& jointSection() {
           .number("max_iterations", &P::max_iterations, "-", between(1, 100),
                   "smoother iterations, at most")
           .formerly("estimator")
+          .number("node_rate", &P::node_rate, "Hz", between(0, 1e4),
+                  "filter nodes at about this rate, every m-th IMU sample, all samples "
+                  "integrated (0: a node per IMU sample)")
           .flag("zero_rate_at_rest", &P::zero_rate_at_rest,
                 "while the IMU shows rest the gyro measures its bias")
           .formerly("estimator")

@@ -558,10 +558,120 @@ FilterState DopplerInertialFilter::propagate(const FilterState& x,
 }
 
 FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x,
-                                             IntegrationJacobian* F) const {
-  const double tau = imu_[n.k + 1].t - imu_[n.k].t;
-  FilterState y = integrate(x, imu_, n.k, tau, F, imuAlong(imu_, n.k, tau, n.step_imu));
-  y.t = imu_[n.k + 1].t;
+                                             IntegrationJacobian* F, Mat9* noise_g,
+                                             Mat9* noise_a) const {
+  if (n.k_next == n.k + 1) {
+    const double tau = imu_[n.k + 1].t - imu_[n.k].t;
+    FilterState y = integrate(x, imu_, n.k, tau, F, imuAlong(imu_, n.k, tau, n.step_imu));
+    y.t = imu_[n.k + 1].t;
+    return y;
+  }
+  // Across the samples to the next node, one step per sample interval. The process noise of a
+  // step (as a single step's, propagateCovariance) is carried to the interval's end through the
+  // steps after it: N := Phi N Phi^T + N_step, Phi the step's Jacobian on (dtheta, dp, dv).
+  const std::size_t steps = n.k_next - n.k;
+  if (n.ahead.size() < steps) n.ahead.resize(steps);
+  const bool noise = noise_g != nullptr && noise_a != nullptr;
+  if (noise) {
+    noise_g->setZero();
+    noise_a->setZero();
+  }
+  IntegrationJacobian total, step;
+  FilterState y = x;
+  for (std::size_t i = 0; i < steps; ++i) {
+    const std::size_t j = n.k + i;
+    const double tau = imu_[j + 1].t - imu_[j].t;
+    const bool jacobian = F != nullptr || noise;
+    y = integrate(y, imu_, j, tau, jacobian ? &step : nullptr, imuAlong(imu_, j, tau, n.ahead[i]));
+    y.t = imu_[j + 1].t;
+    if (F != nullptr) compose(step, total);
+    if (noise) {
+      Mat9 Phi = Mat9::Identity();
+      Phi.block<3, 3>(kTheta, kTheta) = step.th_th;
+      Phi.block<3, 3>(kPos, kTheta) = step.p_th;
+      Phi.block<3, 3>(kPos, kVel) = tau * Mat3::Identity();
+      Phi.block<3, 3>(kVel, kTheta) = step.v_th;
+      double sg = 1.0, sa = 1.0;
+      stepNoiseScales(j, sg, sa);
+      const double qg = sg * sg * tau * tau, qa = sa * sa * tau * tau;
+      *noise_g = Phi * *noise_g * Phi.transpose();
+      *noise_a = Phi * *noise_a * Phi.transpose();
+      noise_g->block<3, 3>(kTheta, kTheta).diagonal().array() += qg;
+      noise_a->block<3, 3>(kPos, kPos).diagonal().array() += qa * tau * tau / 4.0;
+      noise_a->block<3, 3>(kPos, kVel).diagonal().array() += qa * tau / 2.0;
+      noise_a->block<3, 3>(kVel, kPos).diagonal().array() += qa * tau / 2.0;
+      noise_a->block<3, 3>(kVel, kVel).diagonal().array() += qa;
+    }
+  }
+  if (F != nullptr) *F = total;
+  return y;
+}
+
+void DopplerInertialFilter::compose(const IntegrationJacobian& later, IntegrationJacobian& J) {
+  // later after J, block by block (th' = th_th th + th_bg b_g; p' = p + tau v + p_th th + p_bg
+  // b_g + p_ba b_a; v' = v + v_th th + v_bg b_g + v_ba b_a; the rest unchanged).
+  const IntegrationJacobian& L = later;
+  IntegrationJacobian C;
+  C.th_th = L.th_th * J.th_th;
+  C.th_bg = L.th_th * J.th_bg + L.th_bg;
+  C.v_th = J.v_th + L.v_th * J.th_th;
+  C.v_bg = J.v_bg + L.v_th * J.th_bg + L.v_bg;
+  C.v_ba = J.v_ba + L.v_ba;
+  C.p_th = J.p_th + L.tau * J.v_th + L.p_th * J.th_th;
+  C.p_bg = J.p_bg + L.tau * J.v_bg + L.p_th * J.th_bg + L.p_bg;
+  C.p_ba = J.p_ba + L.tau * J.v_ba + L.p_ba;
+  C.tau = J.tau + L.tau;
+  J = C;
+}
+
+FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
+                                                   const std::vector<ImuSample>& imu, std::size_t k,
+                                                   double tau, IntegrationJacobian* J,
+                                                   std::vector<ImuAlong>& ahead,
+                                                   std::vector<ImuAlong>& behind, ImuAlong& partial,
+                                                   const ImuAlong** last) {
+  // Whole sample intervals while the end lies at or beyond the next sample (in the direction of
+  // tau), then what is left from the sample reached.
+  const double t_end = imu[k].t + tau;
+  const bool forward = tau > 0;
+  IntegrationJacobian total, step;
+  FilterState y = x;
+  const ImuAlong* along = nullptr;
+  std::size_t j = k;
+  for (std::size_t i = 0;; ++i) {
+    const bool more =
+        forward ? j + 1 < imu.size() && imu[j + 1].t <= t_end : j > 0 && imu[j - 1].t >= t_end;
+    if (!more) break;
+    const std::size_t to = forward ? j + 1 : j - 1;
+    std::vector<ImuAlong>& cache = forward ? ahead : behind;
+    if (cache.size() <= i) cache.resize(i + 1);
+    const double h = imu[to].t - imu[j].t;
+    along = &imuAlong(imu, j, h, cache[i]);
+    y = integrate(y, imu, j, h, J != nullptr ? &step : nullptr, *along);
+    y.t = imu[to].t;
+    if (J != nullptr) compose(step, total);
+    j = to;
+  }
+  const double rest = t_end - imu[j].t;
+  if (rest != 0) {
+    along = &imuAlong(imu, j, rest, partial);
+    y = integrate(y, imu, j, rest, J != nullptr ? &step : nullptr, *along);
+    if (J != nullptr) compose(step, total);
+  }
+  if (J != nullptr) *J = total;
+  if (last != nullptr) *last = along;
+  return y;
+}
+
+FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
+                                                   const std::vector<ImuSample>& imu, std::size_t k,
+                                                   double tau, MatS* J) {
+  std::vector<ImuAlong> ahead, behind;
+  ImuAlong partial;
+  IntegrationJacobian blocks;
+  const FilterState y = integrateAcross(x, imu, k, tau, J != nullptr ? &blocks : nullptr, ahead,
+                                        behind, partial, nullptr);
+  if (J != nullptr) *J = blocks.matrix();
   return y;
 }
 
@@ -587,9 +697,20 @@ DopplerInertialFilter::VecS DopplerInertialFilter::IntegrationJacobian::transpos
   return z;
 }
 
+void DopplerInertialFilter::stepNoiseScales(std::size_t k, double& sg, double& sa) const {
+  sg = sa = 1.0;
+  if (k + 1 < imu_noise_scale_.size()) {
+    const Eigen::Vector2f s = imu_noise_scale_[k].cwiseMax(imu_noise_scale_[k + 1]);
+    sg = static_cast<double>(s(0));
+    sa = static_cast<double>(s(1));
+  }
+}
+
 DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const IntegrationJacobian& F,
-                                                                       const MatS& P, std::size_t k,
-                                                                       double dt, bool full) const {
+                                                                       const MatS& P, const Node& n,
+                                                                       bool full) const {
+  const std::size_t k = n.k;
+  const double dt = imu_[n.k_next].t - imu_[n.k].t;
   const detail::TransitionBlocks blocks{F.th_th.data(), F.th_bg.data(), F.p_th.data(),
                                         F.p_bg.data(),  F.p_ba.data(),  F.v_th.data(),
                                         F.v_bg.data(),  F.v_ba.data(),  F.tau};
@@ -598,12 +719,14 @@ DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const Int
   // correlated within the step); the biases may walk.
   // A sample interpolated in place of a fault or a gap carries its interpolation's noise: the
   // step takes the larger scale of its two samples.
+  // Across several samples: the noise propagate() accumulated step by step (Node::noise_g,
+  // noise_a), added after F P F^T.
+  const bool across = n.k_next > k + 1;
   double sg = 1.0, sa = 1.0;
-  if (k + 1 < imu_noise_scale_.size()) {
-    const Eigen::Vector2f s = imu_noise_scale_[k].cwiseMax(imu_noise_scale_[k + 1]);
-    sg = static_cast<double>(s(0));
-    sa = static_cast<double>(s(1));
-  }
+  if (across)
+    sg = sa = 0.0;
+  else
+    stepNoiseScales(k, sg, sa);
   const double qg = sg * sg * params_.gyro_sigma * params_.gyro_sigma * dt * dt;
   const double qa = sa * sa * params_.accel_sigma * params_.accel_sigma * dt * dt;
   const detail::ProcessNoiseBlocks Q{
@@ -623,6 +746,12 @@ DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const Int
       break;
     default:
       detail::propagateCovarianceKernel<kCoreDim>(blocks, Q, P.data(), out.data());
+  }
+  if (across) {
+    const double vg = params_.gyro_sigma * params_.gyro_sigma,
+                 va = params_.accel_sigma * params_.accel_sigma;
+    const Mat9 N = vg * n.noise_g + va * n.noise_a;
+    out.topLeftCorner<9, 9>() += 0.5 * (N + N.transpose());
   }
   return out;
 }
@@ -660,8 +789,8 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
 Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
                                           std::size_t k, double tau, const Mat3& R_bl,
                                           const Mat3* Jr_phi,
-                                          Eigen::Matrix<double, 3, kStateDim>* J,
-                                          ImuAlong* cache) const {
+                                          Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
+                                          const Node* chain) const {
   const double tau_true = tau - x.dt_l;
   IntegrationJacobian Js;
   // The IMU at the LiDAR time: the node's sample at tau_true = 0 (interpolated there too for the
@@ -672,6 +801,17 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   if (tau_true == 0) {
     y = integrate(x, imu, k, 0.0, Jy, ImuAlong{});
     if (J != nullptr) interpolateImu(imu, imu[k].t, gyro, accel, k, &alpha);
+  } else if (chain != nullptr && cache != nullptr) {
+    // Across the samples between: the IMU at the end is that of the integration's last step.
+    const ImuAlong* along = nullptr;
+    y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, *cache, &along);
+    if (along != nullptr) {
+      gyro = along->gyro[2];
+      accel = along->accel[2];
+      alpha = along->gyro_rate;
+    } else if (J != nullptr) {  // tau_true below the time's resolution: no step
+      interpolateImu(imu, imu[k].t, gyro, accel, k, &alpha);
+    }
   } else {
     ImuAlong sampled;
     if (cache == nullptr) sampleImu(imu, k, tau_true, sampled);
@@ -724,7 +864,8 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   for (int i = 0; i < 3; ++i) {
     const Vec3 v =
         lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, R_bl, G != nullptr ? &Jr_phi : nullptr,
-                      G != nullptr ? &J : nullptr, &n.fit_imu[static_cast<std::size_t>(i)]);
+                      G != nullptr ? &J : nullptr, &n.fit_imu[static_cast<std::size_t>(i)],
+                      n.spansSamples() ? &n : nullptr);
     for (int m = 0; m < 3; ++m) {
       Q.segment<3>(3 * m) += Vinv(m, i) * v;
       if (G != nullptr) G->middleRows<3>(3 * m) += Vinv(m, i) * J;
@@ -809,26 +950,34 @@ void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior
 void DopplerInertialFilter::predict() {
   if (nodes_.empty()) throw std::logic_error("DopplerInertialFilter::predict before start");
   const Node& cur = nodes_.back();
-  if (cur.k + 1 >= imu_.size())
-    throw std::logic_error("DopplerInertialFilter::predict: no IMU sample after the node");
+  if (cur.k_next >= imu_.size() || cur.k_next <= cur.k)
+    throw std::logic_error("DopplerInertialFilter::predict: no IMU sample for the next node");
   Node n;
-  n.k = cur.k + 1;
+  n.k = cur.k_next;
+  n.k_prev = cur.k;
+  n.k_next = n.k + 1;
   IntegrationJacobian F;
-  n.x_pred = propagate(cur, cur.x, &F);
-  n.P = propagateCovariance(F, cur.P, cur.k, imu_[n.k].t - imu_[cur.k].t);
+  // Across several samples, the process noise is carried through the steps at the state
+  // integrated here (its dependence on the state is of second order), and kept for the
+  // smoother's passes.
+  Node& c = nodes_.back();
+  const bool across = c.k_next > c.k + 1;
+  n.x_pred = propagate(c, c.x, &F, across ? &c.noise_g : nullptr, across ? &c.noise_a : nullptr);
+  n.P = propagateCovariance(F, c.P, c);
   n.x = n.xs = n.x_pred;
   nodes_.push_back(n);
 }
 
-void DopplerInertialFilter::beginNode(bool last) {
+void DopplerInertialFilter::beginNode(bool last, std::size_t next) {
   Node& n = nodes_.back();
   nodeChanged(nodes_.size() - 1);
   n.last = last;
   node_open_ = true;
-  if (!last && n.k + 1 >= imu_.size())
-    throw std::logic_error("DopplerInertialFilter::beginNode: no IMU sample after the node");
-  before_ = n.k > 0 ? 0.5 * (imu_[n.k].t - imu_[n.k - 1].t) : 0.0;
-  after_ = last ? 0.0 : 0.5 * (imu_[n.k + 1].t - imu_[n.k].t);
+  n.k_next = last ? n.k : next == 0 ? n.k + 1 : next;
+  if (!last && (n.k_next <= n.k || n.k_next >= imu_.size()))
+    throw std::logic_error("DopplerInertialFilter::beginNode: no IMU sample for the next node");
+  before_ = n.k > 0 ? 0.5 * (imu_[n.k].t - imu_[n.k_prev].t) : 0.0;
+  after_ = last ? 0.0 : 0.5 * (imu_[n.k_next].t - imu_[n.k].t);
   n.h = std::max({before_, after_, 1e-6});
   if (before_ > 0 && after_ > 0)
     n.s_fit = {-before_ / n.h, 0.0, after_ / n.h};
@@ -1004,6 +1153,43 @@ DopplerInertialFilter::LeverNoise DopplerInertialFilter::leverNoise(const Node& 
   return E;
 }
 
+DopplerInertialFilter::LeverNoiseAcross DopplerInertialFilter::leverNoiseAcross(
+    const Node& n) const {
+  // As leverNoise(): the gyro at each fit instant is the cubic through the samples around it,
+  // which for a node whose intervals span several samples are three groups apart. Columns: the
+  // distinct samples, in the order met.
+  LeverNoiseAcross E = LeverNoiseAcross::Zero();
+  std::array<std::size_t, kLeverSamplesAcross> sample{};
+  std::size_t used = 0;
+  for (int i = 0; i < 3; ++i) {
+    const double t = imu_[n.k].t + n.s_fit[static_cast<std::size_t>(i)] * n.h;
+    std::size_t lo = 0;
+    const std::size_t hi = interpolationSpan(imu_, t, n.k, lo);
+    double w[4], dw[4];
+    lagrangeWeights(imu_, t, lo, hi, w, dw);
+    for (std::size_t j = lo; j <= hi; ++j) {
+      std::size_t col = 0;
+      while (col < used && sample[col] != j) ++col;
+      if (col == used) sample[used++] = j;
+      const double scale =
+          j < imu_noise_scale_.size() ? static_cast<double>(imu_noise_scale_[j](0)) : 1.0;
+      for (int m = 0; m < 3; ++m)
+        E.block<3, 3>(3 * m, 3 * static_cast<int>(col)) +=
+            n.V_inv(m, i) * w[j - lo] * scale * lever_noise_;
+    }
+  }
+  return E;
+}
+
+DopplerInertialFilter::Mat9 DopplerInertialFilter::leverCovariance(const Node& n) const {
+  if (n.spansSamples()) {
+    const LeverNoiseAcross E = leverNoiseAcross(n);
+    return E.lazyProduct(E.transpose());
+  }
+  const LeverNoise E = leverNoise(n);
+  return E.lazyProduct(E.transpose());
+}
+
 void DopplerInertialFilter::marginalizeLeverNoise(const Node& n, Mat9& A, Vec9& b) const {
   // The node's LiDAR velocity is computed with the measured gyro, omega = gyro - b_g, through the
   // lever arm: v_l = R_bl^T (v_b + omega x p_bl). The gyro's white noise (gyro_sigma per sample
@@ -1019,9 +1205,14 @@ void DopplerInertialFilter::marginalizeLeverNoise(const Node& n, Mat9& A, Vec9& 
   // kappa = (2/3) sigma_g^2 |p_bl|^2 n_node / sigma_d^2 was near or above 1.
   // Not modelled: the correlation between neighbouring nodes (they share samples) and with the
   // same samples' noise in the attitude propagation (its process noise).
-  const LeverNoise E = leverNoise(n);
   // Coefficient-based products (lazyProduct): at these sizes Eigen's blocked kernels cost more.
-  const Mat9 C_scaled = E.lazyProduct(E.transpose()) / lever_ratio_;  // C / sigma_d^2
+  Mat9 C_scaled;  // C / sigma_d^2
+  if (n.spansSamples()) {
+    C_scaled = leverCovariance(n) / lever_ratio_;
+  } else {
+    const LeverNoise E = leverNoise(n);
+    C_scaled = E.lazyProduct(E.transpose()) / lever_ratio_;
+  }
   Mat9 Y = A.lazyProduct(C_scaled);
   Y.diagonal().array() += 1.0;
   Eigen::Matrix<double, 9, 10> X;
@@ -1224,7 +1415,7 @@ DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, con
     r.head<3>() = w * v_b;
   }
   if (n.rest_rate_sigma > 0) {
-    const double w = 1.0 / n.rest_rate_sigma;
+    const double w = std::sqrt(static_cast<double>(n.rest_samples)) / n.rest_rate_sigma;
     H.block<3, 3>(3, 9) = w * Mat3::Identity();
     r.tail<3>() = -w * (gyro - x.b_g);
   }
@@ -1244,10 +1435,28 @@ DopplerInertialFilter::VecS DopplerInertialFilter::restUpdate(const Node& n, con
 void DopplerInertialFilter::updateRest(double velocity_sigma, double rate_sigma) {
   Node& n = nodes_.back();
   nodeChanged(nodes_.size() - 1);
-  n.rest_velocity_sigma = velocity_sigma;
-  n.rest_rate_sigma = rate_sigma;
+  // The zero velocity holds at every sample the node stands for (those after the previous node
+  // up to this one): as many measurements' information as a node per sample would have.
+  const std::size_t span = n.k > n.k_prev ? n.k - n.k_prev : 1;
+  n.rest_velocity_sigma = velocity_sigma / std::sqrt(static_cast<double>(span));
+  // The gyro's measured samples after the previous node up to this one's: their mean measures
+  // the bias (an interpolated sample, ImuScreen, measures no rate).
+  auto measured = [&](std::size_t j) {
+    return j >= imu_noise_scale_.size() || imu_noise_scale_[j](0) == 1.0f;
+  };
+  const std::size_t first = n.k > n.k_prev ? n.k_prev + 1 : n.k;
+  std::size_t count = 0;
+  Vec3 sum = Vec3::Zero();
+  for (std::size_t j = first; j <= n.k; ++j)
+    if (measured(j)) {
+      sum += imu_[j].gyro;
+      ++count;
+    }
+  n.rest_rate_sigma = count > 0 ? rate_sigma : 0.0;
+  n.rest_samples = std::max<std::size_t>(count, 1);
+  n.rest_gyro = count > 0 ? Vec3(sum / static_cast<double>(count)) : imu_[n.k].gyro;
   MatS P = n.P;
-  const VecS dx = restUpdate(n, imu_[n.k].gyro, n.x, VecS::Zero(), P);
+  const VecS dx = restUpdate(n, n.rest_gyro, n.x, VecS::Zero(), P);
   n.x = n.xs = boxplus(n.x, dx);
   n.P = P;
 }
@@ -1299,7 +1508,7 @@ void DopplerInertialFilter::smootherForward(std::size_t first) {
   auto predictNext = [&](std::size_t k) {
     const Node &n = nodes_[k], &m = nodes_[k + 1];
     dx_p[k + 1] = lin[k].F.times(dx_f[k]) + boxminus(lin[k].x_next, m.xs);
-    P_p[k + 1] = propagateCovariance(lin[k].F, P_f[k], n.k, imu_[m.k].t - imu_[n.k].t);
+    P_p[k + 1] = propagateCovariance(lin[k].F, P_f[k], n);
   };
   if (first == 0) {
     // The prior of node 0, expressed where node 0 now is (its yaw gauge about the current
@@ -1317,7 +1526,7 @@ void DopplerInertialFilter::smootherForward(std::size_t first) {
     Linearization& L = lin[k];
     linearize(k, L);
     MatS P = P_p[k];
-    dx_f[k] = restUpdate(n, imu_[n.k].gyro, n.xs, dopplerUpdate(n, L.Q, L.G, dx_p[k], P, false), P);
+    dx_f[k] = restUpdate(n, n.rest_gyro, n.xs, dopplerUpdate(n, L.Q, L.G, dx_p[k], P, false), P);
     P_f[k] = P;
     if (k + 1 < N) predictNext(k);
   }
@@ -1458,11 +1667,10 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
   for (std::size_t k = 0; k < N; ++k) {
     const Node& n = nodes_[k];
     const Linearization& L = lin[k];
-    dx = restUpdate(n, imu_[n.k].gyro, L.x, dopplerUpdate(n, L.Q, L.G, dx, P, true), P, true);
+    dx = restUpdate(n, n.rest_gyro, L.x, dopplerUpdate(n, L.Q, L.G, dx, P, true), P, true);
     if (k + 1 == N) break;
-    const Node& m = nodes_[k + 1];
     dx = L.F.times(dx) + boxminus(L.x_next, lin[k + 1].x);
-    P = propagateCovariance(L.F, P, n.k, imu_[m.k].t - imu_[n.k].t, true);
+    P = propagateCovariance(L.F, P, n, true);
   }
   out.correction = dx;
   out.covariance = P;
@@ -1534,8 +1742,13 @@ DopplerInertialFilter::NodeResiduals DopplerInertialFilter::nodeResiduals(
     if (lever_ratio_ > 0) {  // g moves by [S0 S1 S2] E n with the gyro noise n
       Eigen::Matrix<double, 3, 9> G;
       for (int m = 0; m < 3; ++m) G.middleCols<3>(3 * m) = n.sums.moment(m);
-      const Eigen::Matrix<double, 3, kLeverDim> GE = G.lazyProduct(leverNoise(n));
-      cov += var_g * GE.lazyProduct(GE.transpose());
+      if (n.spansSamples()) {
+        const Eigen::Matrix<double, 3, 9> GC = G.lazyProduct(leverCovariance(n));
+        cov += var_g * GC.lazyProduct(G.transpose());
+      } else {
+        const Eigen::Matrix<double, 3, kLeverDim> GE = G.lazyProduct(leverNoise(n));
+        cov += var_g * GE.lazyProduct(GE.transpose());
+      }
     }
     const Eigen::LDLT<Mat3> ldlt(cov);
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().minCoeff() > 0)) continue;

@@ -4,7 +4,8 @@
 // bias afterwards, this estimator solves for everything at once, with the accelerometer in the
 // propagation from the first instant.
 //
-// State at IMU sample k (a node), world frame w (gravity-aligned, z up; the caller fixes the yaw
+// State at IMU sample k (a node; by default one per sample, or every m-th sample, see below),
+// world frame w (gravity-aligned, z up; the caller fixes the yaw
 // and origin at the window start): R_wb (attitude), p_w, v_w (body origin), b_g, b_a (constant
 // over the window up to a random walk), and the correction of the declared LiDAR-IMU
 // calibration: the rotation phi_bl (R_bl,true = R_bl Exp(phi_bl)) and the LiDAR clock's offset
@@ -18,6 +19,13 @@
 // rotation with coning correction, trapezoidal velocity, exact position for a linear
 // acceleration); the IMU white noises are the process noise (sigma^2 dt^2 per step for the
 // per-sample noise sigma at the IMU rate), the biases may walk.
+// Nodes at a bounded rate: with a fast IMU the caller may put the nodes at every m-th sample
+// (beginNode's `next`). Every sample between two nodes is still integrated, one step per sample
+// interval (the last one partial where an integration ends between samples), the steps'
+// Jacobians composed (their block form is closed under composition), and the process noise of
+// each step carried to the interval's end through the steps after it, each with its own
+// samples' noise. A node's interval of returns is then m times longer; nothing else in the
+// model changes (at a 2 kHz IMU with nodes at 200 Hz its intervals are those of a 200 Hz IMU).
 // Doppler: every point is one scalar measurement at its own time t_j,
 //   z_j = -d_j^T v_l(t_j) + n_j,   v_l = R_bl^T (R_wb^T v_w + omega_b x p_bl),
 // d_j the unit direction in the LiDAR frame. A point belongs to the node whose interval holds its
@@ -164,8 +172,9 @@ class DopplerInertialFilter {
 
   /// Opens the current node for points; `last`: the last node of the window, which then takes
   /// points up to its own time only. Points with tau = t - t_node in [-intervalBefore(),
-  /// intervalAfter()) belong to it.
-  void beginNode(bool last);
+  /// intervalAfter()) belong to it. `next`: the IMU sample (index among those given) of the next
+  /// node, after this node's (0: the next sample); predict() puts it there.
+  void beginNode(bool last, std::size_t next = 0);
   double intervalBefore() const { return before_; }
   double intervalAfter() const { return after_; }
 
@@ -201,8 +210,12 @@ class DopplerInertialFilter {
     return static_cast<double>(static_cast<float>(tau)) * nodes_[k].inv_h;
   }
   /// Rest knowledge at the open node (the IMU shows rest): zero body velocity with std
-  /// `velocity_sigma` [m/s] and zero rotation, the gyro sample then measuring the bias, with std
-  /// `rate_sigma` [rad/s] (<= 0: that part is not used). Call after update().
+  /// `velocity_sigma` [m/s] per IMU sample the node stands for (those after the previous node up
+  /// to its own: over the root of their count) and zero rotation, the gyro then measuring the bias:
+  /// the mean of the measured gyro samples after the previous node up to this one's (those the
+  /// caller saw at rest), with std `rate_sigma` [rad/s] per sample over the root of their count (<=
+  /// 0, or no measured sample: that part is not used; a sample interpolated by the IMU screen
+  /// measures no rate). Call after update().
   void updateRest(double velocity_sigma, double rate_sigma);
   /// Takes back the rest knowledge of the nodes at or after time t (the motion began before it
   /// was detected): the smoother does not use it. The filtered states keep it.
@@ -248,6 +261,8 @@ class DopplerInertialFilter {
   CalibrationTest testCalibration(double rotation_sigma, double time_sigma) const;
 
   std::size_t nodes() const { return nodes_.size(); }
+  /// Node k's IMU sample (index among those given to addImu()).
+  std::size_t nodeSample(std::size_t k) const { return nodes_[k].k; }
   /// The LiDAR velocity over node k's interval at its smoothed state (after smooth()), as the
   /// coefficients of 1, s and s^2 (s = normalizedTime(k, tau)): the Doppler of a static return
   /// in direction d there is -d . v_l.
@@ -295,6 +310,10 @@ class DopplerInertialFilter {
   /// then the biases and the calibration) with respect to x's.
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
                                std::size_t k, double tau, MatS* J = nullptr);
+  /// integrate() over any tau: one step per sample interval from sample k on (backwards for a
+  /// negative tau), the last one partial, their Jacobians composed.
+  static FilterState integrateAcross(const FilterState& x, const std::vector<ImuSample>& imu,
+                                     std::size_t k, double tau, MatS* J = nullptr);
   /// Nominal propagation of x from sample k to sample k + 1; F (if given): its transition
   /// Jacobian (analytic, first order).
   static FilterState propagate(const FilterState& x, const std::vector<ImuSample>& imu,
@@ -372,6 +391,8 @@ class DopplerInertialFilter {
     FilterState x_pred;  ///< predicted (first pass)
     MatS P = MatS::Identity();
     std::size_t k = 0;              ///< the node's IMU sample (index in imu_)
+    std::size_t k_prev = 0;         ///< the previous node's (k for the first node)
+    std::size_t k_next = 1;         ///< the next node's (beginNode)
     bool last = false;              ///< the window's last node (no points after its time)
     double h = 0;                   ///< [s] time normalization of the interval
     double inv_h = 1;               ///< [1/s] its inverse
@@ -380,7 +401,9 @@ class DopplerInertialFilter {
     DopplerSums sums;
     Rows rows;
     double rest_velocity_sigma = 0;  ///< > 0: zero body velocity at the node
-    double rest_rate_sigma = 0;      ///< > 0: the node's gyro sample measures the bias
+    double rest_rate_sigma = 0;      ///< > 0: the node's gyro samples measure the bias ...
+    std::size_t rest_samples = 1;    ///< ... so many (rest_rate_sigma is per sample) ...
+    Vec3 rest_gyro = Vec3::Zero();   ///< ... their mean
     bool rows_stale = false;         ///< the sums changed after the rows were built
     /// The IMU along the integrations every linearization of the node repeats (to its three fit
     /// instants, to the next node): they depend on the IMU and the clock offset only, not on
@@ -388,6 +411,17 @@ class DopplerInertialFilter {
     /// concurrent use).
     mutable std::array<ImuAlong, 3> fit_imu;
     mutable ImuAlong step_imu;
+    /// Intervals across several samples (spansSamples()): the IMU along the steps from sample k
+    /// to each sample after it up to k_next (ahead[i]: k + i to k + i + 1) and before it down to
+    /// k_prev (behind[i]: k - i to k - i - 1), sampled as step_imu; fit_imu then holds the
+    /// last, partial step of each fit instant's integration.
+    mutable std::vector<ImuAlong> ahead, behind;
+    /// Intervals across several samples: the process noise over the interval to the next node
+    /// (attitude, position, velocity) per unit gyro and accelerometer variance, the samples'
+    /// noise scales in it, carried through the steps at the state predict() integrated.
+    Mat9 noise_g = Mat9::Zero(), noise_a = Mat9::Zero();
+    /// Whether an interval of the node spans more than one sample interval.
+    bool spansSamples() const { return k_next > k + 1 || k > k_prev + 1; }
   };
 
   /// Adds a point to the sums (w = 1) or takes it out (w = -1).
@@ -454,22 +488,39 @@ class DopplerInertialFilter {
   /// smooth()'s forward pass around the states xs from node `first` on, the nodes before it as
   /// the last pass left them (first > 0: that pass was made around the same states).
   void smootherForward(std::size_t first);
+  /// J := later J (the composition of two integrations: the block form is closed under it).
+  static void compose(const IntegrationJacobian& later, IntegrationJacobian& J);
+  /// integrateAcross() with the IMU along its full steps cached in ahead and behind (grown as
+  /// needed) and along its last partial one in partial; *last (if given): the IMU along the
+  /// integration's last step (nullptr: tau = 0, no step).
+  static FilterState integrateAcross(const FilterState& x, const std::vector<ImuSample>& imu,
+                                     std::size_t k, double tau, IntegrationJacobian* J,
+                                     std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind,
+                                     ImuAlong& partial, const ImuAlong** last);
   /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
   /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
                                std::size_t k, double tau, IntegrationJacobian* J,
                                const ImuAlong& along);
-  /// propagate() from node n (its IMU sampled once), with the transition's blocks (if F).
-  FilterState propagate(const Node& n, const FilterState& x, IntegrationJacobian* F) const;
-  /// F P F^T plus the process noise over dt, on the components updated (all 19: full).
-  /// k: the step's first sample (its noise scales, addImu).
-  MatS propagateCovariance(const IntegrationJacobian& F, const MatS& P, std::size_t k, double dt,
+  /// propagate() from node n to the next one (its IMU sampled once), with the transition's
+  /// blocks (if F); noise_g, noise_a (if given): the process noise over the interval
+  /// (Node::noise_g, noise_a), when it spans several samples.
+  FilterState propagate(const Node& n, const FilterState& x, IntegrationJacobian* F,
+                        Mat9* noise_g = nullptr, Mat9* noise_a = nullptr) const;
+  /// The larger noise scales (gyro, accelerometer) of samples j and j + 1 (addImu).
+  void stepNoiseScales(std::size_t j, double& sg, double& sa) const;
+  /// F P F^T plus the process noise from node n to the next, on the components updated (all 19:
+  /// full).
+  MatS propagateCovariance(const IntegrationJacobian& F, const MatS& P, const Node& n,
                            bool full = false) const;
   /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
   /// given): the IMU along the integration, as imuAlong() keeps it.
+  /// chain (if given): the node at sample k, whose intervals span several samples: integrated
+  /// across them (integrateAcross) with its caches.
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
                      double tau, const Mat3& R_bl, const Mat3* Jr_phi,
-                     Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache) const;
+                     Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
+                     const Node* chain = nullptr) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
   /// .. k + 2), and dQ/dn for their noise (column block j: sample k - 2 + j; fewer at the ends).
@@ -477,6 +528,14 @@ class DopplerInertialFilter {
   static constexpr int kLeverDim = 3 * static_cast<int>(kLeverSamples);
   using LeverNoise = Eigen::Matrix<double, 9, kLeverDim>;
   LeverNoise leverNoise(const Node& n) const;
+  /// For a node whose intervals span several samples, the samples read at the three fit
+  /// instants are three groups of up to four (around k - (k - k_prev) / 2, k and
+  /// k + (k_next - k) / 2): up to twelve distinct ones, in the order met.
+  static constexpr std::size_t kLeverSamplesAcross = 12;
+  using LeverNoiseAcross = Eigen::Matrix<double, 9, 3 * static_cast<int>(kLeverSamplesAcross)>;
+  LeverNoiseAcross leverNoiseAcross(const Node& n) const;
+  /// E E^T of the node's lever-arm noise (leverNoise or leverNoiseAcross).
+  Mat9 leverCovariance(const Node& n) const;
   /// Takes the gyro noise carried through the lever arm out of node n's quadratic form (A, b)
   /// in Q (see the definition).
   void marginalizeLeverNoise(const Node& n, Mat9& A, Vec9& b) const;

@@ -1,5 +1,6 @@
 // The joint pipeline: start decision, then the Doppler-aided inertial filter over the window's
-// nodes (one per IMU sample) as the data arrive, then the iterated smoother and the outputs.
+// nodes (one per IMU sample, or at every m-th sample with [joint] node_rate, the window's last
+// sample always a node) as the data arrive, then the iterated smoother and the outputs.
 //
 // Parts, each with one job:
 //   decideStart (start_detector.h)     what moves at the window start, and the first state
@@ -305,12 +306,18 @@ class JointPipeline final : public Pipeline {
     }
     if (doppler_noise_.sigma > 0) fp.doppler_sigma = doppler_noise_.sigma;
     filter_.emplace(fp, cfg_.extrinsics);
-    // The window's nodes at the IMU rate of the start span (a few more if the rate varies: the
-    // nodes then grow as needed).
+    // The window's nodes at the IMU rate of the start span over the node stride (a few more if
+    // the rate varies: the nodes then grow as needed).
     const auto& imu = screen_.samples();
+    node_stride_ = 1;
+    const double h_imu = screen_.interval();
+    if (cfg_.joint.node_rate > 0 && h_imu > 0)
+      node_stride_ =
+          static_cast<std::size_t>(std::max(1.0, std::round(1.0 / (h_imu * cfg_.joint.node_rate))));
     const std::size_t k_last = std::min(imu.size() - 1, k_first_ + 10);
     if (k_last > k_first_) {
-      const double dt = (imu[k_last].t - imu[k_first_].t) / static_cast<double>(k_last - k_first_);
+      const double dt = static_cast<double>(node_stride_) * (imu[k_last].t - imu[k_first_].t) /
+                        static_cast<double>(k_last - k_first_);
       constexpr double kMostNodes = 1e5;
       const std::size_t nodes =
           static_cast<std::size_t>(std::min(kMostNodes, 1.1 * cfg_.window.duration / dt)) + 4;
@@ -378,36 +385,53 @@ class JointPipeline final : public Pipeline {
     }
   }
 
+  /// The IMU sample (index into the screened stream) of node i.
+  std::size_t nodeSample(std::size_t i) const { return k_first_ + filter_->nodeSample(i); }
+
   void run(InitResult& r) {
     const auto& imu = screen_.samples();
     while (true) {
-      const std::size_t k = k_first_ + filter_->nodes() - 1;
+      const std::size_t k = nodeSample(filter_->nodes() - 1);
       if (!node_open_) {
         // The window rule (config.h), with the stream's nominal interval: this sample closes
         // the window, or the next one is beyond.
         const double duration = cfg_.window.duration, h = screen_.interval();
         last_ = k > k_first_ &&
                 windowSampleAt(imu[k_first_].t, imu[k].t, h, duration) == WindowSample::Last;
-        if (!last_) {
-          if (k + 1 >= imu.size()) return;  // the node's interval needs the next sample
+        // The next node: node_stride_ samples on, or at the window's last sample before that.
+        std::size_t next = k;
+        for (std::size_t j = k + 1; !last_ && next == k; ++j) {
+          if (j >= imu.size()) return;  // the node's interval needs the samples up to the next
           // A gap the screen did not bridge, inside the window: the window would end at it.
-          if (imu[k + 1].t - imu[k].t > std::max(cfg_.imu.max_bridged_gap, 2.5 * h)) {
+          if (imu[j].t - imu[j - 1].t > std::max(cfg_.imu.max_bridged_gap, 2.5 * h)) {
             fail(r, InitStatus::NotEnoughData,
-                 "IMU gap of " + formatNumber(imu[k + 1].t - imu[k].t) + " s at " +
-                     input::formatStamp(imu[k].t) + " (" + formatNumber(imu[k].t - t_ref_) +
+                 "IMU gap of " + formatNumber(imu[j].t - imu[j - 1].t) + " s at " +
+                     input::formatStamp(imu[j - 1].t) + " (" + formatNumber(imu[j - 1].t - t_ref_) +
                      " s into the window of " + formatNumber(duration) +
                      " s): longer than [imu] max_bridged_gap (" +
                      formatNumber(cfg_.imu.max_bridged_gap) + " s), it is not bridged");
             return;
           }
-          last_ =
-              windowSampleAt(imu[k_first_].t, imu[k + 1].t, h, duration) == WindowSample::Outside;
+          switch (windowSampleAt(imu[k_first_].t, imu[j].t, h, duration)) {
+            case WindowSample::Outside:  // the window closed with the sample before
+              if (j == k + 1)
+                last_ = true;
+              else
+                next = j - 1;
+              break;
+            case WindowSample::Last:
+              next = j;
+              break;
+            case WindowSample::Inside:
+              if (j == k + node_stride_) next = j;
+              break;
+          }
         }
-        // The cubic interpolation of the IMU between k and k + 1 wants sample k + 2 too.
-        if (!last_ && k + 2 >= imu.size() && !seq_.finished()) return;
+        // The cubic interpolation of the IMU up to the next node wants the sample after it.
+        if (!last_ && next + 1 >= imu.size() && !seq_.finished()) return;
         if (last_) k_window_last_ = k;
-        feedImu(last_ ? k + 1 : k + 2);
-        filter_->beginNode(last_);
+        feedImu(last_ ? k + 1 : next + 1);
+        filter_->beginNode(last_, last_ ? 0 : next - k_first_);
         node_open_ = true;
       }
       const bool last = last_;
@@ -438,14 +462,22 @@ class JointPipeline final : public Pipeline {
       }
       const std::size_t node = recorder_.nodes() - 1;
       const bool was_rest = rest_.atRest();
-      const bool rest = rest_.update(imu[k]);
+      // The rest tracker sees every sample after the previous node up to this one; t_moved: the
+      // one at which it saw the motion.
+      const std::size_t k_prev = node > 0 ? nodeSample(node - 1) : k - 1;
+      bool rest = was_rest;
+      double t_moved = t_k;
+      for (std::size_t j = k_prev + 1; j <= k && rest; ++j) {
+        rest = rest_.update(imu[j]);
+        t_moved = imu[j].t;
+      }
       if (was_rest && !rest) {
         // The IMU shows motion only once it has grown beyond its noise: the last nodes held at
         // rest may already have moved (a gentle start). The smoother does without their rest.
-        filter_->cancelRestFrom(t_k - kRestBackdating);
+        filter_->cancelRestFrom(t_moved - kRestBackdating);
         // Every node before this one was at rest (the rest ends once).
         std::size_t backdated = node_rest_.size();
-        while (backdated > 0 && imu[k_first_ + backdated - 1].t >= t_k - kRestBackdating)
+        while (backdated > 0 && imu[nodeSample(backdated - 1)].t >= t_moved - kRestBackdating)
           node_rest_[--backdated] = false;
         // Their returns were not seen from a standing sensor after all: their accepted ones out
         // of the rest cells, last first.
@@ -455,14 +487,13 @@ class JointPipeline final : public Pipeline {
             if (nr.cell[i] != WindowRecorder::kNoCell)
               rest_cells_.remove(nr.cell[i], static_cast<double>(nr.residual[i]));
         }
-        r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
+        r.diag.static_duration = t_moved - t_ref_;  // when the IMU showed the motion
       }
-      // An interpolated gyro sample (ImuScreen) measures no rate.
-      const bool measured_gyro = screen_.noiseScales()[k].gyro == 1.0f;
+      // The node's gyro samples measure the bias (the filter leaves out those the screen
+      // interpolated).
       if (rest)
-        filter_->updateRest(
-            cfg_.joint.rest_velocity_sigma,
-            cfg_.joint.zero_rate_at_rest && measured_gyro ? filter_->params().gyro_sigma : 0.0);
+        filter_->updateRest(cfg_.joint.rest_velocity_sigma,
+                            cfg_.joint.zero_rate_at_rest ? filter_->params().gyro_sigma : 0.0);
       if (rest) r.diag.static_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
       // A rest node's accepted returns are in the rest cells as long as it stays one.
@@ -576,7 +607,7 @@ class JointPipeline final : public Pipeline {
     r.velocities.clear();
     for (std::size_t k = 0; k < N; ++k) {
       const FilterState& xk = filter_->state(k);
-      const ImuSample& sk = imu[k_first_ + k];
+      const ImuSample& sk = imu[nodeSample(k)];
       PoseSample p;
       p.t = sk.t;
       p.q_wb = Quat(xk.R_wb).normalized();
@@ -618,7 +649,7 @@ class JointPipeline final : public Pipeline {
       const double median = v[kHistory / 2];
       if (median >= 0.5 && share < 0.25 * median) {
         if (collapsed_nodes_ == 0) {
-          collapse_t_ = screen_.samples()[k_first_ + filter_->nodes() - 1].t;
+          collapse_t_ = screen_.samples()[nodeSample(filter_->nodes() - 1)].t;
           collapse_from_ = median;
         }
         collapse_to_ = share;
@@ -874,12 +905,12 @@ class JointPipeline final : public Pipeline {
         ++k;
         continue;
       }
-      const double t_begin = imu[k_first_ + k].t;
+      const double t_begin = imu[nodeSample(k)].t;
       const std::size_t span_first = k;
       std::size_t slots = 0;
       double sumsq = 0;
       std::size_t total = 0;
-      for (; k < nodes && imu[k_first_ + k].t < t_begin + kSpan; ++k) {
+      for (; k < nodes && imu[nodeSample(k)].t < t_begin + kSpan; ++k) {
         if (!moving(k)) continue;
         const WindowRecorder::NodeReturns nr = rec.node(k);
         const std::size_t n = nr.end - nr.begin;
@@ -1048,12 +1079,12 @@ class JointPipeline final : public Pipeline {
                            "(the covariance is then optimistic)");
     // Few returns: under ten per IMU sample (2,000 per second at 200 Hz, a fiftieth of what a
     // 64-line LiDAR gives at 120,000 points/s) the state rests on little Doppler.
-    const std::size_t nodes = filter_->nodes();
-    if (d.points_used < 10 * nodes)
-      s.warnings.push_back("only " + std::to_string(d.points_used) +
-                           " LiDAR returns were used in the window (" +
-                           fmt(static_cast<double>(d.points_used) / static_cast<double>(nodes), 2) +
-                           " per IMU sample): the state rests on few Doppler measurements");
+    const std::size_t samples = k_window_last_ - k_first_ + 1;
+    if (d.points_used < 10 * samples)
+      s.warnings.push_back(
+          "only " + std::to_string(d.points_used) + " LiDAR returns were used in the window (" +
+          fmt(static_cast<double>(d.points_used) / static_cast<double>(samples), 2) +
+          " per IMU sample): the state rests on few Doppler measurements");
     if (judged >= 100 && agree < 0.3)
       s.warnings.push_back("only " + fmt(100.0 * agree, 2) +
                            " % of the LiDAR returns in the window agree with the estimated "
@@ -1134,6 +1165,7 @@ class JointPipeline final : public Pipeline {
   UsablePoints usable_;
   Phase phase_ = Phase::WaitStart;
   std::size_t k_first_ = 0, k_window_last_ = 0;
+  std::size_t node_stride_ = 1;  ///< IMU samples from one node to the next ([joint] node_rate)
   double t_ref_ = 0;
   int stride_ = 1;
   std::size_t stride_counter_ = 0;

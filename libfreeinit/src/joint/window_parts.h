@@ -387,7 +387,7 @@ class WindowRecorder {
       const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
       if (n == 0) continue;
       const FilterState& x = filter.state(k);
-      const Vec3 omega = imu[k_first + k].gyro - x.b_g;
+      const Vec3 omega = imu[k_first + filter.nodeSample(k)].gyro - x.b_g;
       const Vec3 v_b = x.R_wb.transpose() * x.v_w;
       const Eigen::Matrix3f A = (x.R_wb * ext.R_bl).cast<float>();
       const Eigen::Matrix3f B = (x.R_wb * skew(omega) * ext.R_bl).cast<float>();
