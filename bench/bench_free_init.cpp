@@ -18,7 +18,8 @@
 //                          ms_map = the map built after it (FreeInit::result()). Sweeps on
 //                          dyna_05: every 2nd, 4th, 8th point (_stride2..8: the cost of a return
 //                          against that of the window) and the IMU at 400 and 1000 Hz instead
-//                          of 200 (_imu400.., _imu1000..: one filter node per IMU sample).
+//                          of 200 (_imu400.., _imu1000.., _imu2000..: one filter node per IMU
+//                          sample; _imu<rate>_nodes200..: nodes at 200 Hz, [joint] node_rate).
 // The recordings are simulated once, outside the timed loops.
 // BM_FreeInitRun's updates_per_s_of_data is the velocimeter's output rate: its state updates per
 // second of recording (the paper reports > 10 kHz).
@@ -179,13 +180,16 @@ void BM_VelocimeterDoppler(benchmark::State& state, const std::string& name) {
       static_cast<double>(accepted) / static_cast<double>(state.iterations() * stream.points);
 }
 
-/// stride 0: the default configuration as it is; imu_rate 0: the preset's (one filter node per
-/// IMU sample: the rate sets the nodes of the window).
-void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride, double imu_rate) {
+/// stride 0: the default configuration as it is; imu_rate 0: the preset's; node_rate: [joint]
+/// node_rate (0: one filter node per IMU sample, the rate then sets the nodes of the window;
+/// < 0: the configuration's default).
+void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride, double imu_rate,
+                    double node_rate) {
   const freeinit::sim::Recording& rec = recording(name, imu_rate);
   freeinit::FreeInitConfig cfg;
   cfg.extrinsics = rec.extrinsics;
   if (stride > 0) cfg.doppler.point_stride = stride;
+  if (node_rate >= 0) cfg.joint.node_rate = node_rate;
   HeapStats before{}, after{};
   std::size_t used = 0;
   double t_div = 0, t_solve = 0, t_result = 0, t_map = 0;
@@ -349,23 +353,41 @@ BENCHMARK_CAPTURE(BM_VelocimeterDoppler, dyna_05, std::string("dyna_05"))
 BENCHMARK_CAPTURE(BM_VelocimeterDoppler, dyna_04, std::string("dyna_04"))
     ->Unit(benchmark::kMillisecond);
 
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_every_point, std::string("dyna_05"), 1, 0.0)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_every_point, std::string("dyna_05"), 1, 0.0, -1.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_01_every_point, std::string("dyna_01"), 1, 0.0)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_01_every_point, std::string("dyna_01"), 1, 0.0, -1.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, stat_01_every_point, std::string("stat_01"), 1, 0.0)
+BENCHMARK_CAPTURE(BM_FreeInitRun, stat_01_every_point, std::string("stat_01"), 1, 0.0, -1.0)
     ->Unit(benchmark::kMillisecond);
 // Decimation sweep on dyna_05 (the default's candidates).
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride2, std::string("dyna_05"), 2, 0.0)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride2, std::string("dyna_05"), 2, 0.0, -1.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride4, std::string("dyna_05"), 4, 0.0)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride4, std::string("dyna_05"), 4, 0.0, -1.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride8, std::string("dyna_05"), 8, 0.0)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_stride8, std::string("dyna_05"), 8, 0.0, -1.0)
     ->Unit(benchmark::kMillisecond);
-// IMU-rate sweep on dyna_05 (the preset's is 200 Hz): the window's nodes, 100 at 200 Hz.
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu400_every_point, std::string("dyna_05"), 1, 400.0)
+// IMU-rate sweep on dyna_05 (the preset's is 200 Hz) with a node per IMU sample: the window's
+// nodes, 100 at 200 Hz, grow with the rate.
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu400_every_point, std::string("dyna_05"), 1, 400.0, 0.0)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu1000_every_point, std::string("dyna_05"), 1, 1000.0)
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu1000_every_point, std::string("dyna_05"), 1, 1000.0,
+                  0.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu2000_every_point, std::string("dyna_05"), 1, 2000.0,
+                  0.0)
+    ->Unit(benchmark::kMillisecond);
+// The same with nodes at 200 Hz ([joint] node_rate): every sample integrated, 100 nodes.
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu200_nodes200_every_point, std::string("dyna_05"), 1,
+                  200.0, 200.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu400_nodes200_every_point, std::string("dyna_05"), 1,
+                  400.0, 200.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu1000_nodes200_every_point, std::string("dyna_05"), 1,
+                  1000.0, 200.0)
+    ->Unit(benchmark::kMillisecond);
+BENCHMARK_CAPTURE(BM_FreeInitRun, dyna_05_imu2000_nodes200_every_point, std::string("dyna_05"), 1,
+                  2000.0, 200.0)
     ->Unit(benchmark::kMillisecond);
 
 // Every preset at the default configuration: BM_FreeInitRun/<preset>_default.
@@ -379,7 +401,7 @@ int main(int argc, char** argv) {
   mallopt(M_TRIM_THRESHOLD, 512 << 20);
   for (const std::string& name : freeinit::sim::presetNames())
     benchmark::RegisterBenchmark(("BM_FreeInitRun/" + name + "_default").c_str(), BM_FreeInitRun,
-                                 name, 0, 0.0)
+                                 name, 0, 0.0, -1.0)
         ->Unit(benchmark::kMillisecond);
   benchmark::Initialize(&argc, argv);
   if (benchmark::ReportUnrecognizedArguments(argc, argv)) return 1;
