@@ -80,7 +80,16 @@ void ImuScreen::decide(std::size_t j) {
     const double sigma = accel ? p_.accel_sigma : p_.gyro_sigma;
     const Vec3 y = channel(work_[j], accel);
     const bool out_of_range = !(y.cwiseAbs().maxCoeff() < range);
-    const double s = robustSigma(accel);
+    // The robust scale (a median over the recent residuals, the most of a sample's cost) only
+    // where it decides: it is never below its floor (robustSigma), so residuals within the
+    // threshold at the floor are no fault whatever it is.
+    double s = 0;
+    bool scaled = false;
+    auto scale_now = [&]() {
+      if (!scaled) s = robustSigma(accel);
+      scaled = true;
+      return s;
+    };
     bool fault = out_of_range;
     Vec3 fit = Vec3::Zero();
     if (neighbours) {
@@ -93,7 +102,12 @@ void ImuScreen::decide(std::size_t j) {
       const Vec3 left = *v[1] + (*v[1] - *v[0]) * ((work_[j].t - t[1]) / (t[1] - t[0]));
       const Vec3 right = *v[2] + (*v[2] - *v[3]) * ((t[2] - work_[j].t) / (t[3] - t[2]));
       const Vec3 el = y - left, er = y - right;
-      const double threshold = p_.fault_sigmas * s + (accel ? kAccelFloor : kGyroFloor);
+      const double floor_threshold =
+          p_.fault_sigmas * (1.4 * sigma) + (accel ? kAccelFloor : kGyroFloor);
+      const double threshold =
+          r.cwiseAbs().maxCoeff() > floor_threshold
+              ? p_.fault_sigmas * scale_now() + (accel ? kAccelFloor : kGyroFloor)
+              : floor_threshold;
       for (int a = 0; a < 3 && !fault; ++a)
         fault = std::abs(r(a)) > threshold && std::abs(el(a)) > 0.5 * threshold &&
                 std::abs(er(a)) > 0.5 * threshold && el(a) * r(a) > 0 && er(a) * r(a) > 0;
@@ -115,8 +129,9 @@ void ImuScreen::decide(std::size_t j) {
     f.out_of_range = out_of_range;
     faults_.push_back(f);
     channel(work_[j], accel) = fit;
+    const double sf = scale_now();
     const float k =
-        static_cast<float>(std::sqrt(kResidualVariance * s * s + sigma * sigma) / sigma);
+        static_cast<float>(std::sqrt(kResidualVariance * sf * sf + sigma * sigma) / sigma);
     (accel ? scale.accel : scale.gyro) = k;
   }
   if (neighbours) ++recent_n_;

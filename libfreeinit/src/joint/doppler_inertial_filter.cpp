@@ -569,9 +569,16 @@ FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x
   // Across the samples to the next node, one step per sample interval. The process noise of a
   // step (as a single step's, propagateCovariance) is carried to the interval's end through the
   // steps after it: N := Phi N Phi^T + N_step, Phi the step's Jacobian on (dtheta, dp, dv).
+  const bool noise = noise_g != nullptr && noise_a != nullptr;
+  if (!noise) {
+    // The smoother's passes: through the interval's preintegration (made once, at the biases of
+    // the first pass that needs it).
+    if (n.pre.size() < 4) n.pre.resize(4);
+    return applyPreintegration(preintegrated(imu_, n.k, n.k_next, x, n.ahead, n.behind, n.pre[3]),
+                               imu_, x, F);
+  }
   const std::size_t steps = n.k_next - n.k;
   if (n.ahead.size() < steps) n.ahead.resize(steps);
-  const bool noise = noise_g != nullptr && noise_a != nullptr;
   if (noise) {
     noise_g->setZero();
     noise_a->setZero();
@@ -629,7 +636,7 @@ FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
                                                    double tau, IntegrationJacobian* J,
                                                    std::vector<ImuAlong>& ahead,
                                                    std::vector<ImuAlong>& behind, ImuAlong& partial,
-                                                   const ImuAlong** last) {
+                                                   const ImuAlong** last, Preintegration* pre) {
   // Whole sample intervals while the end lies at or beyond the next sample (in the direction of
   // tau), then what is left from the sample reached.
   const double t_end = imu[k].t + tau;
@@ -638,7 +645,18 @@ FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
   FilterState y = x;
   const ImuAlong* along = nullptr;
   std::size_t j = k;
-  for (std::size_t i = 0;; ++i) {
+  if (pre != nullptr) {
+    // The whole intervals at once, preintegrated.
+    while (forward ? j + 1 < imu.size() && imu[j + 1].t <= t_end : j > 0 && imu[j - 1].t >= t_end)
+      j = forward ? j + 1 : j - 1;
+    if (j != k) {
+      const Preintegration& P = preintegrated(imu, k, j, x, ahead, behind, *pre);
+      y = applyPreintegration(P, imu, x, J != nullptr ? &total : nullptr);
+      const std::size_t steps = forward ? j - k : k - j;
+      along = &(forward ? ahead : behind)[steps - 1];
+    }
+  }
+  for (std::size_t i = 0; pre == nullptr; ++i) {
     const bool more =
         forward ? j + 1 < imu.size() && imu[j + 1].t <= t_end : j > 0 && imu[j - 1].t >= t_end;
     if (!more) break;
@@ -660,6 +678,67 @@ FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
   }
   if (J != nullptr) *J = total;
   if (last != nullptr) *last = along;
+  return y;
+}
+
+const DopplerInertialFilter::Preintegration& DopplerInertialFilter::preintegrated(
+    const std::vector<ImuSample>& imu, std::size_t from, std::size_t to, const FilterState& x,
+    std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind, Preintegration& cache) {
+  // Made again when the biases moved by more than these: the first order's error, of the order
+  // of (db tau)^2, is then below 1e-8 rad and m/s over a node's interval of tens of ms.
+  constexpr double kMostGyroBiasChange = 2e-3, kMostAccelBiasChange = 2e-2;
+  Preintegration& P = cache;
+  if (P.samples == imu.size() && P.from == from && P.to == to &&
+      (x.b_g - P.b_g).cwiseAbs().maxCoeff() <= kMostGyroBiasChange &&
+      (x.b_a - P.b_a).cwiseAbs().maxCoeff() <= kMostAccelBiasChange)
+    return P;
+  // The steps from R = I, v = p = 0 at x's biases: gravity enters as g tau and g tau^2 / 2
+  // (every step adds it in the world frame), taken out to leave the body frame's increments.
+  FilterState x0;
+  x0.b_g = x.b_g;
+  x0.b_a = x.b_a;
+  const double tau = imu[to].t - imu[from].t;
+  ImuAlong unused;
+  const FilterState y =
+      integrateAcross(x0, imu, from, tau, &P.J, ahead, behind, unused, nullptr, nullptr);
+  P.from = from;
+  P.to = to;
+  P.samples = imu.size();
+  P.b_g = x.b_g;
+  P.b_a = x.b_a;
+  P.dR = y.R_wb;
+  P.dv = y.v_w - kGravityW * tau;
+  P.dp = y.p_w - 0.5 * kGravityW * (tau * tau);
+  return P;
+}
+
+FilterState DopplerInertialFilter::applyPreintegration(const Preintegration& P,
+                                                       const std::vector<ImuSample>& imu,
+                                                       const FilterState& x,
+                                                       IntegrationJacobian* J) {
+  const Vec3 dbg = x.b_g - P.b_g, dba = x.b_a - P.b_a;
+  const double tau = P.J.tau;
+  const Mat3 E = P.dR * Exp(Vec3(P.J.th_bg * dbg));
+  const Vec3 dv = P.dv + P.J.v_bg * dbg + P.J.v_ba * dba;
+  const Vec3 dp = P.dp + P.J.p_bg * dbg + P.J.p_ba * dba;
+  FilterState y = x;
+  y.t = imu[P.to].t;
+  y.R_wb = x.R_wb * E;
+  y.v_w = x.v_w + kGravityW * tau + x.R_wb * dv;
+  y.p_w = x.p_w + x.v_w * tau + 0.5 * kGravityW * (tau * tau) + x.R_wb * dp;
+  if (J != nullptr) {
+    // R Exp(dtheta) d = R d + R [dtheta]x d = R d - R [d]x dtheta; the bias blocks rotated by R
+    // (to first order in the bias change, as the increments).
+    J->tau = tau;
+    J->th_th = E.transpose();
+    J->th_bg = P.J.th_bg;
+    J->v_th = -x.R_wb * skew(dv);
+    J->v_bg = x.R_wb * P.J.v_bg;
+    J->v_ba = x.R_wb * P.J.v_ba;
+    J->p_th = -x.R_wb * skew(dp);
+    J->p_bg = x.R_wb * P.J.p_bg;
+    J->p_ba = x.R_wb * P.J.p_ba;
+  }
   return y;
 }
 
@@ -790,7 +869,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
                                           std::size_t k, double tau, const Mat3& R_bl,
                                           const Mat3* Jr_phi,
                                           Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
-                                          const Node* chain) const {
+                                          const Node* chain, Preintegration* pre) const {
   const double tau_true = tau - x.dt_l;
   IntegrationJacobian Js;
   // The IMU at the LiDAR time: the node's sample at tau_true = 0 (interpolated there too for the
@@ -804,7 +883,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   } else if (chain != nullptr && cache != nullptr) {
     // Across the samples between: the IMU at the end is that of the integration's last step.
     const ImuAlong* along = nullptr;
-    y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, *cache, &along);
+    y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, *cache, &along, pre);
     if (along != nullptr) {
       gyro = along->gyro[2];
       accel = along->accel[2];
@@ -861,11 +940,13 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
   Mat3 Jr_phi;
   if (G != nullptr) Jr_phi = rightJacobian(x.phi_bl);
+  if (n.spansSamples() && n.pre.size() < 4) n.pre.resize(4);
   for (int i = 0; i < 3; ++i) {
     const Vec3 v =
         lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, R_bl, G != nullptr ? &Jr_phi : nullptr,
                       G != nullptr ? &J : nullptr, &n.fit_imu[static_cast<std::size_t>(i)],
-                      n.spansSamples() ? &n : nullptr);
+                      n.spansSamples() ? &n : nullptr,
+                      n.spansSamples() ? &n.pre[static_cast<std::size_t>(i)] : nullptr);
     for (int m = 0; m < 3; ++m) {
       Q.segment<3>(3 * m) += Vinv(m, i) * v;
       if (G != nullptr) G->middleRows<3>(3 * m) += Vinv(m, i) * J;

@@ -385,6 +385,33 @@ class DopplerInertialFilter {
   static const ImuAlong& imuAlong(const std::vector<ImuSample>& imu, std::size_t k, double tau,
                                   ImuAlong& cache);
 
+  /// The blocks of integrate()'s Jacobian that are not those of the identity: the rows of
+  /// dtheta, dp and dv against dtheta, db_g and db_a (dp against dv is tau I; every other block
+  /// is the identity's). Those who read a few rows (lidarVelocity) take them without the 19x19.
+  struct IntegrationJacobian {
+    Mat3 th_th = Mat3::Identity(), th_bg = Mat3::Zero();
+    Mat3 v_th = Mat3::Zero(), v_bg = Mat3::Zero(), v_ba = Mat3::Zero();
+    Mat3 p_th = Mat3::Zero(), p_bg = Mat3::Zero(), p_ba = Mat3::Zero();
+    double tau = 0;
+    MatS matrix() const;
+    /// F dx and F^T y, with the blocks.
+    VecS times(const VecS& dx) const;
+    VecS transposeTimes(const VecS& y) const;
+  };
+  /// The integration over the whole sample intervals from sample `from` to sample `to` (either
+  /// way) expressed in the start's body frame (a preintegration, as Forster et al.'s): from any
+  /// state x with the biases b = b0 + db, R' = R dR Exp(J.th_bg db_g), v' = v + g tau + R (dv +
+  /// J.v_bg db_g + J.v_ba db_a), p' = p + v tau + g tau^2 / 2 + R (dp + J.p_bg db_g + J.p_ba
+  /// db_a): exact at the biases b0 it was made at, first order in their change. What a node's
+  /// linearizations repeat then costs the same whatever the number of samples.
+  struct Preintegration {
+    std::size_t from = 0, to = 0;
+    std::size_t samples = 0;                      ///< the IMU samples there were (0: nothing held)
+    Vec3 b_g = Vec3::Zero(), b_a = Vec3::Zero();  ///< b0
+    Mat3 dR = Mat3::Identity();
+    Vec3 dv = Vec3::Zero(), dp = Vec3::Zero();
+    IntegrationJacobian J;  ///< of the integration from R = I, v = p = 0 at b0
+  };
   struct Node {
     FilterState x;       ///< filtered
     FilterState xs;      ///< smoothed
@@ -416,6 +443,9 @@ class DopplerInertialFilter {
     /// k_prev (behind[i]: k - i to k - i - 1), sampled as step_imu; fit_imu then holds the
     /// last, partial step of each fit instant's integration.
     mutable std::vector<ImuAlong> ahead, behind;
+    /// ... and the preintegrations of the whole intervals of each fit instant's integration
+    /// (0..2) and of the interval to the next node (3); empty for a node per sample.
+    mutable std::vector<Preintegration> pre;
     /// Intervals across several samples: the process noise over the interval to the next node
     /// (attitude, position, velocity) per unit gyro and accelerometer variance, the samples'
     /// noise scales in it, carried through the steps at the state predict() integrated.
@@ -462,19 +492,6 @@ class DopplerInertialFilter {
   Vec9 velocityPolynomial(const Node& n, const FilterState& x, Mat9xS* G) const;
   /// Throws std::invalid_argument unless Q holds one polynomial per node.
   void checkPolynomials(const std::vector<Vec9>& Q) const;
-  /// The blocks of integrate()'s Jacobian that are not those of the identity: the rows of
-  /// dtheta, dp and dv against dtheta, db_g and db_a (dp against dv is tau I; every other block
-  /// is the identity's). Those who read a few rows (lidarVelocity) take them without the 19x19.
-  struct IntegrationJacobian {
-    Mat3 th_th = Mat3::Identity(), th_bg = Mat3::Zero();
-    Mat3 v_th = Mat3::Zero(), v_bg = Mat3::Zero(), v_ba = Mat3::Zero();
-    Mat3 p_th = Mat3::Zero(), p_bg = Mat3::Zero(), p_ba = Mat3::Zero();
-    double tau = 0;
-    MatS matrix() const;
-    /// F dx and F^T y, with the blocks.
-    VecS times(const VecS& dx) const;
-    VecS transposeTimes(const VecS& y) const;
-  };
   /// Node k's part of a forward pass around the states xs: the state, its velocity polynomial
   /// and Jacobian (if the node has rows), and the transition to the next node (if any).
   struct Linearization {
@@ -490,13 +507,24 @@ class DopplerInertialFilter {
   void smootherForward(std::size_t first);
   /// J := later J (the composition of two integrations: the block form is closed under it).
   static void compose(const IntegrationJacobian& later, IntegrationJacobian& J);
+  /// cache, made again unless it holds from -> to with as many samples as there are and biases
+  /// within a small change of x's (the first order's error then far below the integration's).
+  static const Preintegration& preintegrated(const std::vector<ImuSample>& imu, std::size_t from,
+                                             std::size_t to, const FilterState& x,
+                                             std::vector<ImuAlong>& ahead,
+                                             std::vector<ImuAlong>& behind, Preintegration& cache);
+  /// x moved by a preintegration (the time set to its last sample's); J: the blocks.
+  static FilterState applyPreintegration(const Preintegration& P, const std::vector<ImuSample>& imu,
+                                         const FilterState& x, IntegrationJacobian* J);
   /// integrateAcross() with the IMU along its full steps cached in ahead and behind (grown as
   /// needed) and along its last partial one in partial; *last (if given): the IMU along the
   /// integration's last step (nullptr: tau = 0, no step).
+  /// pre (if given): the whole intervals through a preintegration cached there.
   static FilterState integrateAcross(const FilterState& x, const std::vector<ImuSample>& imu,
                                      std::size_t k, double tau, IntegrationJacobian* J,
                                      std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind,
-                                     ImuAlong& partial, const ImuAlong** last);
+                                     ImuAlong& partial, const ImuAlong** last,
+                                     Preintegration* pre = nullptr);
   /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
   /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
@@ -516,11 +544,11 @@ class DopplerInertialFilter {
   /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
   /// given): the IMU along the integration, as imuAlong() keeps it.
   /// chain (if given): the node at sample k, whose intervals span several samples: integrated
-  /// across them (integrateAcross) with its caches.
+  /// across them (integrateAcross) with its caches, the whole intervals through pre.
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
                      double tau, const Mat3& R_bl, const Mat3* Jr_phi,
                      Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
-                     const Node* chain = nullptr) const;
+                     const Node* chain = nullptr, Preintegration* pre = nullptr) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
   /// .. k + 2), and dQ/dn for their noise (column block j: sample k - 2 + j; fewer at the ends).
