@@ -1,6 +1,13 @@
 // Filter nodes at a bounded rate ([joint] node_rate): with a 1 kHz IMU and nodes at every fifth
 // sample, every sample is still integrated, so the estimate must be the one with a node per
 // sample up to a small fraction of what the data resolve (the Cramer-Rao bound of the window).
+//
+// One part of the model differs between the two layouts: a node's LiDAR velocity carries the
+// measured gyro through the lever arm, read at the node's three fit instants, so the two read
+// the gyro noise of different samples. On a rig where that noise is a good part of what bounds
+// the velocity (here 0.1-0.3 m of lever arm, a gyro of a few mrad/s per sample at 1 kHz), the
+// two velocities differ by up to a third of their bound, alike for other node rates from 500 Hz
+// down; without the lever arm (or with a gyro a hundred times quieter) by a fortieth.
 #include <freeinit/free_init.h>
 #include <freeinit/rotation.h>
 #include <freeinit/sim/evaluation.h>
@@ -12,7 +19,6 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstdlib>
 #include <string>
 
 namespace freeinit {
@@ -35,63 +41,72 @@ sim::ScenarioConfig fastImuScenario(const std::string& start) {
   }
 }
 
-void expectSameEstimate(const std::string& start) {
-  const sim::ScenarioConfig c = fastImuScenario(start);
+/// |estimate with nodes at every fifth sample - estimate with a node per sample| / bound, per
+/// quantity.
+struct Difference {
+  double velocity = 0, gravity = 0, gyro_bias = 0, accel_bias = 0;
+};
+
+Difference differenceOverBound(const sim::ScenarioConfig& c, const char* name) {
   const sim::Recording rec = sim::simulate(c);
   FreeInitConfig cfg;
   cfg.extrinsics = rec.declared_extrinsics;
   cfg.doppler.doppler_sigma = c.doppler_sigma;
   cfg.imu.gyro_sigma = c.gyro_sigma;
   cfg.imu.accel_sigma = c.accel_sigma;
-  if (std::getenv("NOLEVER")) cfg.joint.lever_arm_gyro_noise = false;
-  if (std::getenv("NOTIME")) cfg.joint.time_offset_sigma = 0;
+  cfg.joint.node_rate = 0;
   const InitResult every = FreeInit::run(cfg, rec.imu, rec.frames);
-  cfg.joint.node_rate = std::getenv("NODERATE") ? std::atof(std::getenv("NODERATE")) : 200.0;
+  cfg.joint.node_rate = 200.0;  // every fifth sample
   const InitResult fifth = FreeInit::run(cfg, rec.imu, rec.frames);
-  ASSERT_TRUE(every.state.ok()) << every.state.message;
-  ASSERT_TRUE(fifth.state.ok()) << fifth.state.message;
-  // A node at every fifth sample and at the window's last (the last interval may be shorter).
+  Difference d;
+  EXPECT_TRUE(every.state.ok()) << every.state.message;
+  EXPECT_TRUE(fifth.state.ok()) << fifth.state.message;
+  if (!every.state.ok() || !fifth.state.ok()) return d;
+  // A node at every fifth sample and at the window's last (the last interval may be shorter):
+  // the same state time.
   EXPECT_EQ(fifth.trajectory.size(), (every.trajectory.size() - 1 + 4) / 5 + 1);
-  // The same state time (the window's last sample is a node either way).
   EXPECT_EQ(every.state.timestamp, fifth.state.timestamp);
   const eval::Bound b = sim::cramerRaoBound(rec, cfg, every);
-  ASSERT_TRUE(b.ok) << b.message;
+  EXPECT_TRUE(b.ok) << b.message;
+  if (!b.ok) return d;
   const InitialState &x = every.state, &y = fifth.state;
-  const Vec3 g_x = x.g_b(), g_y = y.g_b();
-  const double gravity_deg = std::acos(std::min(1.0, g_x.normalized().dot(g_y.normalized()))) *
-                             180.0 / 3.14159265358979323846;
-  const double dv = (x.v_b() - y.v_b()).norm() / b.velocity;
-  const double dg = gravity_deg / b.gravity_deg;
-  const double dbg = (x.b_g - y.b_g).norm() / b.gyro_bias;
-  const double dba = (x.b_a - y.b_a).norm() / b.accel_bias;
-  const sim::InitErrors ex = sim::evaluate(x, rec), ey = sim::evaluate(y, rec);
-  std::printf("%s: error / bound, node per sample: velocity %.3f b_g %.3f; every fifth: %.3f %.3f\n",
-              start.c_str(), ex.vel_b / b.velocity, ex.gyro_bias / b.gyro_bias,
-              ey.vel_b / b.velocity, ey.gyro_bias / b.gyro_bias);
-  std::printf("used %zu %zu rejected %zu %zu iterations %d %d rms %.5f %.5f\n", every.diag.points_used,
-              fifth.diag.points_used, every.diag.points_rejected, fifth.diag.points_rejected,
-              every.diag.iterations, fifth.diag.iterations, every.diag.doppler_residual_rms,
-              fifth.diag.doppler_residual_rms);
-  if (std::getenv("TRACE"))
-    for (std::size_t i = 0; i < fifth.velocities.size(); ++i) {
-      const VelocitySample& f = fifth.velocities[i];
-      for (const VelocitySample& e : every.velocities)
-        if (e.t == f.t) {
-          const Vec3 tv = rec.truth(f.t).R_wb.transpose() * rec.truth(f.t).v_w;
-          std::printf("t %.4f dv %.5f  err every %.5f fifth %.5f  dbg %.6f\n", f.t - every.velocities[0].t, (e.v_b - f.v_b).norm(), (e.v_b-tv).norm(), (f.v_b-tv).norm(), (e.b_g - f.b_g).norm());
-        }
-    }
-  std::printf("%s: difference / bound: velocity %.3f gravity %.3f b_g %.3f b_a %.3f\n",
-              start.c_str(), dv, dg, dbg, dba);
-  EXPECT_LT(dv, 0.1);
-  EXPECT_LT(dg, 0.1);
-  EXPECT_LT(dbg, 0.1);
-  EXPECT_LT(dba, 0.1);
+  const double cos_g = std::min(1.0, x.g_b().normalized().dot(y.g_b().normalized()));
+  d.velocity = (x.v_b() - y.v_b()).norm() / b.velocity;
+  d.gravity = std::acos(cos_g) * 180.0 / 3.14159265358979323846 / b.gravity_deg;
+  d.gyro_bias = (x.b_g - y.b_g).norm() / b.gyro_bias;
+  d.accel_bias = (x.b_a - y.b_a).norm() / b.accel_bias;
+  std::printf("%s: difference / bound: velocity %.3f gravity %.3f b_g %.3f b_a %.3f\n", name,
+              d.velocity, d.gravity, d.gyro_bias, d.accel_bias);
+  return d;
 }
 
-TEST(NodeRate, MovingStartWithAFastImuGivesTheSameEstimate) { expectSameEstimate("moving"); }
+TEST(NodeRate, StaticStartWithAFastImuGivesTheSameEstimate) {
+  // Development: 0.039, 0.003, 0.004, 0.002.
+  const Difference d = differenceOverBound(fastImuScenario("static"), "static");
+  EXPECT_LT(d.velocity, 0.1);
+  EXPECT_LT(d.gravity, 0.1);
+  EXPECT_LT(d.gyro_bias, 0.1);
+  EXPECT_LT(d.accel_bias, 0.1);
+}
 
-TEST(NodeRate, StaticStartWithAFastImuGivesTheSameEstimate) { expectSameEstimate("static"); }
+TEST(NodeRate, MovingStartWithAFastImuGivesTheSameEstimate) {
+  // The rig as drawn (development: 0.33, 0.014, 0.065, 0.026: the velocity differs by the gyro
+  // noise the lever arm carries, see the top of the file), then without a lever arm (0.026,
+  // 0.001, 0.008, 0.005).
+  sim::ScenarioConfig c = fastImuScenario("moving");
+  const Difference d = differenceOverBound(c, "moving");
+  EXPECT_LT(d.velocity, 0.4);
+  EXPECT_LT(d.gravity, 0.1);
+  EXPECT_LT(d.gyro_bias, 0.1);
+  EXPECT_LT(d.accel_bias, 0.1);
+  c.lidar_position.setZero();
+  c.lidar_position_jitter = 0;
+  const Difference e = differenceOverBound(c, "moving, no lever arm");
+  EXPECT_LT(e.velocity, 0.1);
+  EXPECT_LT(e.gravity, 0.1);
+  EXPECT_LT(e.gyro_bias, 0.1);
+  EXPECT_LT(e.accel_bias, 0.1);
+}
 
 }  // namespace
 }  // namespace freeinit

@@ -593,16 +593,11 @@ FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x
     y.t = imu_[j + 1].t;
     if (F != nullptr) compose(step, total);
     if (noise) {
-      Mat9 Phi = Mat9::Identity();
-      Phi.block<3, 3>(kTheta, kTheta) = step.th_th;
-      Phi.block<3, 3>(kPos, kTheta) = step.p_th;
-      Phi.block<3, 3>(kPos, kVel) = tau * Mat3::Identity();
-      Phi.block<3, 3>(kVel, kTheta) = step.v_th;
       double sg = 1.0, sa = 1.0;
       stepNoiseScales(j, sg, sa);
       const double qg = sg * sg * tau * tau, qa = sa * sa * tau * tau;
-      *noise_g = Phi * *noise_g * Phi.transpose();
-      *noise_a = Phi * *noise_a * Phi.transpose();
+      transportNoise(step, *noise_g);
+      transportNoise(step, *noise_a);
       noise_g->block<3, 3>(kTheta, kTheta).diagonal().array() += qg;
       noise_a->block<3, 3>(kPos, kPos).diagonal().array() += qa * tau * tau / 4.0;
       noise_a->block<3, 3>(kPos, kVel).diagonal().array() += qa * tau / 2.0;
@@ -612,6 +607,26 @@ FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x
   }
   if (F != nullptr) *F = total;
   return y;
+}
+
+void DopplerInertialFilter::transportNoise(const IntegrationJacobian& F, Mat9& N) {
+  // Phi N Phi^T by 3 x 3 blocks (theta, p, v), Phi = [A 0 0; C I tau I; B 0 I] with A = th_th,
+  // C = p_th, B = v_th: M = Phi N, then M Phi^T.
+  const double tau = F.tau;
+  auto blk = [](Mat9& X, int i, int j) { return X.block<3, 3>(3 * i, 3 * j); };
+  Mat9 M;
+  for (int j = 0; j < 3; ++j) {
+    const Mat3 Ntj = blk(N, 0, j);
+    blk(M, 0, j) = F.th_th * Ntj;
+    blk(M, 1, j) = F.p_th * Ntj + blk(N, 1, j) + tau * blk(N, 2, j);
+    blk(M, 2, j) = F.v_th * Ntj + blk(N, 2, j);
+  }
+  for (int i = 0; i < 3; ++i) {
+    const Mat3 Mit = blk(M, i, 0);
+    blk(N, i, 0) = Mit * F.th_th.transpose();
+    blk(N, i, 1) = Mit * F.p_th.transpose() + blk(M, i, 1) + tau * blk(M, i, 2);
+    blk(N, i, 2) = Mit * F.v_th.transpose() + blk(M, i, 2);
+  }
 }
 
 void DopplerInertialFilter::compose(const IntegrationJacobian& later, IntegrationJacobian& J) {
@@ -646,8 +661,11 @@ FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
   const ImuAlong* along = nullptr;
   std::size_t j = k;
   if (pre != nullptr) {
-    // The whole intervals at once, preintegrated.
-    while (forward ? j + 1 < imu.size() && imu[j + 1].t <= t_end : j > 0 && imu[j - 1].t >= t_end)
+    // The whole intervals to the sample nearest the end at once, preintegrated, then the rest
+    // (either way): an end near a sample (a fit instant there, moved by the clock offset's
+    // estimate) keeps its preintegration whichever side of the sample it falls.
+    while (forward ? j + 1 < imu.size() && imu[j + 1].t - t_end <= t_end - imu[j].t
+                   : j > 0 && t_end - imu[j - 1].t <= imu[j].t - t_end)
       j = forward ? j + 1 : j - 1;
     if (j != k) {
       const Preintegration& P = preintegrated(imu, k, j, x, ahead, behind, *pre);

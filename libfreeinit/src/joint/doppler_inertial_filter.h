@@ -505,6 +505,9 @@ class DopplerInertialFilter {
   /// smooth()'s forward pass around the states xs from node `first` on, the nodes before it as
   /// the last pass left them (first > 0: that pass was made around the same states).
   void smootherForward(std::size_t first);
+  /// N := Phi N Phi^T, Phi the block of F on (dtheta, dp, dv): a covariance carried through a
+  /// step.
+  static void transportNoise(const IntegrationJacobian& F, Mat9& N);
   /// J := later J (the composition of two integrations: the block form is closed under it).
   static void compose(const IntegrationJacobian& later, IntegrationJacobian& J);
   /// cache, made again unless it holds from -> to with as many samples as there are and biases
