@@ -212,7 +212,8 @@ class JointPipeline final : public Pipeline {
     pts.reserve(usable.size() / thin + 1);
     for (std::size_t i = 0; i < usable.size(); i += thin) {
       const DopplerPoint& p = *usable[i].p;
-      pts.push_back({usable[i].t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
+      const Vec3 p_l = p.p_l.cast<double>();
+      pts.push_back({usable[i].t - t_ref, p_l.normalized(), p.doppler, p_l.norm()});
     }
     const StartDecision d = decideStart(imu, k, k_last, pts, cfg_.extrinsics,
                                         cfg_.imu.gyro_bias_prior, startDetectorParams(cfg_));
