@@ -1014,6 +1014,18 @@ class JointPipeline final : public Pipeline {
                      " m/s): moving objects may fill the view");
       return;
     }
+    // The IMU at rest all through, the returns showing motion faster than rest ([start]
+    // rest_speed), and few of them agreeing with it: a standing sensor amid moving objects (a
+    // crowd, traffic) whose Doppler the estimate followed. (A sensor cruising so smoothly that
+    // its IMU looks still sees a world that agrees: the view is mostly static.)
+    if (rest_withdrawn_ && judged >= 100 && agree < 0.5 && s.v_b().norm() > cfg_.start.rest_speed) {
+      failResult(r, InitStatus::AmbiguousMotion,
+                 "the IMU showed rest through the window, but the LiDAR returns show motion (" +
+                     fmt(s.v_b().norm()) + " m/s) that only " + fmt(100.0 * agree, 2) +
+                     " % of them agree with: moving objects may fill the view of a standing "
+                     "sensor");
+      return;
+    }
     if (rest_withdrawn_)
       s.warnings.push_back(
           "the IMU showed rest through the window, but the LiDAR returns show "
