@@ -848,6 +848,7 @@ StartHypothesis refineOffset(const Rows& rows, const OffsetColumns& oc, const Co
   std::size_t inliers = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double r = equation(i, j);
+    wk.res[static_cast<Eigen::Index>(i)] = r;  // with the offset's share, for robustScale()
     if (std::abs(r) > p.gate) continue;
     mask[i] = 1;
     ++inliers;
@@ -864,6 +865,8 @@ StartHypothesis refineOffset(const Rows& rows, const OffsetColumns& oc, const Co
   h.time_offset = x(9);
   h.inliers = inliers;
   h.residual_rms = inliers > 0 ? std::sqrt(ss / static_cast<double>(inliers)) : 0.0;
+  // The noise the residuals show is that of this fit: the start's carried the offset's error.
+  robustScale(wk.res.head(static_cast<Eigen::Index>(n)), p.gate, h);
   const double k = std::max(1.0, h.residual_rms / p.doppler_sigma);
   const Mat10 cov = info.ldlt().solve(Mat10::Identity()) * k * k;
   h.cov = cov.topLeftCorner<6, 6>();
