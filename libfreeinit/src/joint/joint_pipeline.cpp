@@ -457,6 +457,7 @@ class JointPipeline final : public Pipeline {
               rest_cells_.remove(nr.cell[i], static_cast<double>(nr.residual[i]));
         }
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
+        r.diag.zero_rate_duration = r.diag.static_duration;
       }
       // An interpolated gyro sample (ImuScreen) measures no rate.
       const bool measured_gyro = screen_.noiseScales()[k].gyro == 1.0f;
@@ -464,7 +465,7 @@ class JointPipeline final : public Pipeline {
         filter_->updateRest(
             cfg_.joint.rest_velocity_sigma,
             cfg_.joint.zero_rate_at_rest && measured_gyro ? filter_->params().gyro_sigma : 0.0);
-      if (rest) r.diag.static_duration = t_k - t_ref_;
+      if (rest) r.diag.static_duration = r.diag.zero_rate_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
       // A rest node's accepted returns are in the rest cells as long as it stays one.
       if (rest) {
@@ -518,8 +519,10 @@ class JointPipeline final : public Pipeline {
     diag.iterations = filter_->smooth();
     if (restContradicted()) {
       // The IMU showed rest to the end, but the returns say the sensor moves: a start too gentle
-      // for the accelerometer. The state is that of a moving sensor, without the rest knowledge.
-      filter_->cancelRestFrom(-std::numeric_limits<double>::infinity());
+      // for the accelerometer, or moving objects' returns pulling a standing sensor's velocity.
+      // The state is that of a moving sensor, without the zero velocity; the gyro, which showed
+      // no rotation, still measures its bias.
+      filter_->cancelRestFrom(-std::numeric_limits<double>::infinity(), true);
       std::fill(node_rest_.begin(), node_rest_.end(), false);
       diag.static_duration = 0;
       diag.iterations += filter_->smooth();
