@@ -458,7 +458,7 @@ TEST(FreeInitConfigIni, DeclarationsDocumentEveryKey) {
       ++n;
     }
   }
-  EXPECT_EQ(n, 63u);
+  EXPECT_EQ(n, 64u);
   // The readers are shown in the echo: after each key's doc, and per section.
   const std::string dump = dumpOf(FreeInitConfig{});
   EXPECT_CONTAINS(dump, "[imu]\n; the IMU's noise and bias model");
