@@ -254,8 +254,7 @@ std::string FreeInitAppParams::argumentsProblem() const {
   if (input == app_support::FileKind::Ini)
     return "missing <input.rawlog>: '" + rawlog + "' is " + app_support::describe(input) +
            " (freeinit [<config.ini>] <input.rawlog>)";
-  if (input == app_support::FileKind::Text || input == app_support::FileKind::RosBag ||
-      input == app_support::FileKind::Binary)
+  if (input == app_support::FileKind::Text || input == app_support::FileKind::Binary)
     return "<input.rawlog> '" + rawlog + "': neither an MRPT rawlog nor a ROS recording (it is " +
            app_support::describe(input) + ")";
   return "";

@@ -72,7 +72,7 @@ std::string describe(FileKind kind) {
     case FileKind::Rawlog:
       return "an MRPT rawlog";
     case FileKind::RosBag:
-      return "a ROS 1 bag (freeinit-import-bag makes a rawlog of it)";
+      return "a ROS 1 bag";
     case FileKind::Mcap:
       return "an MCAP file (ROS 2)";
     case FileKind::Sqlite:
@@ -92,6 +92,9 @@ std::string describe(FileKind kind) {
 }
 
 bool isReadableInput(FileKind kind) {
+#ifdef FREEINIT_WITH_ROSBAG
+  if (kind == FileKind::RosBag) return true;
+#endif
   return kind == FileKind::Rawlog || kind == FileKind::Mcap || kind == FileKind::Sqlite ||
          kind == FileKind::Rosbag2Folder;
 }
