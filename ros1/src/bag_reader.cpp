@@ -74,7 +74,8 @@ class Ros1Bytes {
 std::vector<ros2::TransformStamped> parseTfMessage(const std::uint8_t* data, std::size_t n) {
   Ros1Bytes in(data, n);
   const auto count = in.get<std::uint32_t>();
-  in.need(std::size_t{count} * 92);  // the smallest TransformStamped: empty strings
+  // The smallest TransformStamped, empty strings: seq, stamp, two string lengths, 7 doubles.
+  in.need(std::size_t{count} * 76);
   std::vector<ros2::TransformStamped> out(count);
   for (auto& t : out) {
     in.get<std::uint32_t>();  // seq
