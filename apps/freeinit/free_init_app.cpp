@@ -610,8 +610,8 @@ int FreeInitApp::main(int argc, char** argv) {
                                    false);
   const auto& rawlog = cli.positional(
       "input.rawlog",
-      "input rawlog, or a ROS 2 recording read straight in (an MCAP file, a rosbag2 folder, a "
-      ".db3; [bag_import] of the INI says how)");
+      "input rawlog, or a ROS recording read straight in (a ROS 1 bag, an MCAP file, a rosbag2 "
+      "folder, a .db3; [bag_import] of the INI says how)");
   const auto& out =
       cli.text("o", "out", "output folder (its earlier outputs are replaced)", "", "DIR",
                std::string(kDefaultOutDir) +
