@@ -476,6 +476,14 @@ void Ros1Reader::start(std::int64_t from, std::int64_t to) {
   x.done = 0;
   x.trigger_view.reset();
   try {
+    // Messages are named by their number in the topic: those before the window are counted from
+    // the index.
+    auto before = [&](const std::string& topic, std::int64_t t) -> std::size_t {
+      if (rosTime(t) <= ros::TIME_MIN) return 0;
+      return rosbag::View(x.bag, rosbag::TopicQuery(topic), ros::TIME_MIN, rosTime(t - 1)).size();
+    };
+    x.imu_index = before(config.imu_topic, from);
+    x.lidar_index = before(config.lidar_topic, from);
     x.view = std::make_unique<rosbag::View>(
         x.bag, rosbag::TopicQuery(std::vector<std::string>{config.imu_topic, config.lidar_topic}),
         rosTime(from), rosTime(to));
@@ -484,12 +492,13 @@ void Ros1Reader::start(std::int64_t from, std::int64_t to) {
     if (config.stamp_source == StampSource::kTrigger) {
       // From kTriggerSlack before the window: a cloud's trigger is recorded before it.
       const std::int64_t lead = static_cast<std::int64_t>(kTriggerSlack * 1e9);
+      const std::int64_t trigger_from =
+          from < std::numeric_limits<std::int64_t>::min() + lead ? from : from - lead;
       x.triggers.clear();
       x.trigger_view = std::make_unique<rosbag::View>(
-          x.bag, rosbag::TopicQuery(config.trigger_topic),
-          rosTime(from < std::numeric_limits<std::int64_t>::min() + lead ? from : from - lead),
-          rosTime(to));
+          x.bag, rosbag::TopicQuery(config.trigger_topic), rosTime(trigger_from), rosTime(to));
       x.trigger_it = x.trigger_view->begin();
+      x.trigger_index = before(config.trigger_topic, trigger_from);
     }
   } catch (const std::exception& e) {
     throw BagError(x.path + ": cannot read the bag's index: " + e.what() + " (corrupt bag?)");
