@@ -191,6 +191,22 @@ TEST(Ros1StraightIn, FreeInitOnABagIsFreeInitOnItsImport) {
     EXPECT_EQ(straight.log.find("Warning"), std::string::npos) << straight.log;
   }
 
+  // The INI's extrinsics win over /tf_static, a disagreement is one warning line; neither is an
+  // error naming the bag.
+  const std::string given = writeText(d + "/given.ini",
+                                      "[bag_import]\n[extrinsics]\nfrom_sensor_pose = false\n"
+                                      "R_bl = 1 0 0 0 1 0 0 0 1\np_bl = 0 0 0\n");
+  EXPECT_CONTAINS(runFreeInit(given, bag, d + "/given").log,
+                  "[extrinsics] and /tf_static of " + bag + " (imu -> aeva) differ by ");
+  ros1::writeBag(d + "/no_tf.bag", sim.rec.imu, sim.rec.frames, ros1::BagWriteOptions());
+  try {
+    runFreeInit(ini, d + "/no_tf.bag", d + "/no_tf");
+    ADD_FAILURE() << "ran without extrinsics";
+  } catch (const std::exception& e) {
+    EXPECT_CONTAINS(e.what(), d + "/no_tf.bag: a ROS 1 bag: no /tf_static linking the IMU's frame "
+                                  "to the LiDAR's");
+  }
+
   // freeinit-eval-rawlog: the bag and its import give the same rows.
   auto evaluate = [&](const std::string& input) {
     EvalRawlogApp app;
