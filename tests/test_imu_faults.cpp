@@ -56,7 +56,7 @@ TEST(ImuScreen, PassesACleanStreamUnchanged) {
   EXPECT_TRUE(s.gaps().empty());
   for (std::size_t k = 0; k < imu.size(); ++k) {
     EXPECT_EQ(s.samples()[k].accel, imu[k].accel);
-    EXPECT_FALSE(s.noiseScales()[k].synthetic());
+    EXPECT_FALSE(s.extraNoise()[k].synthetic());
   }
   EXPECT_NEAR(s.interval(), 0.005, 1e-9);
 }
@@ -72,8 +72,10 @@ TEST(ImuScreen, ReplacesSpikesOfAnySizeWithTheirNeighboursValue) {
     EXPECT_EQ(s.faults()[0].t, imu[100].t);
     EXPECT_NEAR(s.faults()[0].magnitude, magnitude, 0.2) << magnitude;
     EXPECT_LT((s.samples()[100].accel - truth).norm(), 0.1) << magnitude;
-    EXPECT_GT(s.noiseScales()[100].accel, 1.0f);
-    EXPECT_EQ(s.noiseScales()[100].gyro, 1.0f);
+    EXPECT_TRUE(s.extraNoise()[100].accel_synthetic);
+    EXPECT_GT(s.extraNoise()[100].accel, 0.0f);
+    EXPECT_FALSE(s.extraNoise()[100].gyro_synthetic);
+    EXPECT_EQ(s.extraNoise()[100].gyro, 0.0f);
   }
   // The gyro likewise.
   auto imu = smoothStream(200);
@@ -81,7 +83,60 @@ TEST(ImuScreen, ReplacesSpikesOfAnySizeWithTheirNeighboursValue) {
   const ImuScreen s = screened(imu);
   ASSERT_EQ(s.faults().size(), 1u);
   EXPECT_FALSE(s.faults()[0].accel);
-  EXPECT_GT(s.noiseScales()[60].gyro, 1.0f);
+  EXPECT_TRUE(s.extraNoise()[60].gyro_synthetic);
+  EXPECT_GT(s.extraNoise()[60].gyro, 0.0f);
+}
+
+TEST(ImuScreen, ReplacesRunsOfTwoAndThreeSpikesSampleBySample) {
+  // Equal spikes in a row: each one's neighbours include another, so a test against the raw
+  // neighbours sees a step. Every sample of the run is a fault, and none is replaced from
+  // another.
+  for (const std::size_t run : {2u, 3u}) {
+    for (const double magnitude : {1000.0, -1000.0, 30.0}) {
+      auto imu = smoothStream(200);
+      const auto truth = imu;
+      for (std::size_t k = 100; k < 100 + run; ++k) imu[k].accel.x() += magnitude;
+      const ImuScreen s = screened(imu);
+      const std::string what = std::to_string(run) + " x " + std::to_string(magnitude);
+      ASSERT_EQ(s.faults().size(), run) << what;
+      for (std::size_t i = 0; i < run; ++i) {
+        EXPECT_TRUE(s.faults()[i].accel) << what;
+        EXPECT_EQ(s.faults()[i].t, imu[100 + i].t) << what;
+        EXPECT_NEAR(s.faults()[i].magnitude, std::abs(magnitude), 0.3) << what;
+        EXPECT_LT((s.samples()[100 + i].accel - truth[100 + i].accel).norm(), 0.15) << what;
+      }
+    }
+  }
+  // Unequal and alternating runs, and the gyro.
+  auto imu = smoothStream(200);
+  imu[80].accel.y() += 500.0;
+  imu[81].accel.y() -= 700.0;
+  imu[82].accel.z() += 300.0;
+  imu[140].gyro.z() += 3.0;
+  imu[141].gyro.z() += 3.0;
+  imu[142].gyro.z() += 3.0;
+  const ImuScreen s = screened(imu);
+  ASSERT_EQ(s.faults().size(), 6u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_TRUE(s.faults()[i].accel);
+    EXPECT_FALSE(s.faults()[3 + i].accel);
+    EXPECT_EQ(s.faults()[3 + i].t, imu[140 + i].t);
+    EXPECT_LT(std::abs(s.samples()[140 + i].gyro.z() - (-0.2)), 0.02);
+  }
+}
+
+TEST(ImuScreen, ASaturatedRunIsReplacedFromReadingsInRange) {
+  // Three saturated readings in a row: the replacement comes from the samples around the run,
+  // never from another saturated one.
+  auto imu = smoothStream(200);
+  const auto truth = imu;
+  for (std::size_t k = 120; k < 123; ++k) imu[k].accel.z() = 156.9;
+  const ImuScreen s = screened(imu);
+  ASSERT_EQ(s.faults().size(), 3u);
+  for (std::size_t i = 0; i < 3; ++i) {
+    EXPECT_TRUE(s.faults()[i].out_of_range);
+    EXPECT_LT((s.samples()[120 + i].accel - truth[120 + i].accel).norm(), 0.15);
+  }
 }
 
 TEST(ImuScreen, KeepsAStepOfTheMotion) {
@@ -120,10 +175,11 @@ TEST(ImuScreen, BridgesAShortGapWithNoiseGrowingIntoItAndLeavesALongOne) {
   // The bridged samples at the nominal interval, noisiest in the middle.
   for (std::size_t k = 101; k <= 110; ++k)
     EXPECT_NEAR(s.samples()[k].t - s.samples()[k - 1].t, 0.005, 1e-9);
-  EXPECT_GT(s.noiseScales()[105].accel, s.noiseScales()[101].accel);
-  EXPECT_GT(s.noiseScales()[101].accel, 1.0f);
-  EXPECT_FALSE(s.noiseScales()[100].synthetic());
-  EXPECT_FALSE(s.noiseScales()[110].synthetic());
+  EXPECT_GT(s.extraNoise()[105].accel, s.extraNoise()[101].accel);
+  EXPECT_GT(s.extraNoise()[101].accel, 0.0f);
+  EXPECT_TRUE(s.extraNoise()[101].synthetic());
+  EXPECT_FALSE(s.extraNoise()[100].synthetic());
+  EXPECT_FALSE(s.extraNoise()[110].synthetic());
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -195,6 +251,24 @@ TEST(ImuFaults, SpikesOf30And300AndAGyroSpikeLikewise) {
         runWith(name, [](sim::Recording& rec, std::size_t k) { rec.imu[k].gyro.z() += 3.0; });
     expectWithinBound(g, std::string(name) + " gyro");
     EXPECT_EQ(g.result.diag.imu_faults, 1u) << name;
+  }
+}
+
+TEST(ImuFaults, RunsOfTwoAndThreeSpikesAndAGyroRunAreAllRemoved) {
+  for (const char* name : {"stat_01", "dyna_01"}) {
+    for (const std::size_t run : {2u, 3u}) {
+      const FaultRun r = runWith(name, [&](sim::Recording& rec, std::size_t k) {
+        for (std::size_t j = k; j < k + run; ++j) rec.imu[j].accel.x() += 1000.0;
+      });
+      const std::string what = std::string(name) + " " + std::to_string(run) + " spikes";
+      expectWithinBound(r, what);
+      EXPECT_EQ(r.result.diag.imu_faults, run) << what;
+    }
+    const FaultRun g = runWith(name, [](sim::Recording& rec, std::size_t k) {
+      for (std::size_t j = k; j < k + 3; ++j) rec.imu[j].gyro.y() -= 3.0;
+    });
+    expectWithinBound(g, std::string(name) + " gyro run");
+    EXPECT_EQ(g.result.diag.imu_faults, 3u) << name;
   }
 }
 

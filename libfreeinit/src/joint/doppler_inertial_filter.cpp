@@ -596,16 +596,16 @@ DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const Int
   // The IMU white noises are the process noise (sigma^2 dt^2 per step for the per-sample noise
   // sigma at the IMU rate): velocity qa, the position integrating it (dt/2 per step, fully
   // correlated within the step); the biases may walk.
-  // A sample interpolated in place of a fault or a gap carries its interpolation's noise: the
-  // step takes the larger scale of its two samples.
-  double sg = 1.0, sa = 1.0;
-  if (k + 1 < imu_noise_scale_.size()) {
-    const Eigen::Vector2f s = imu_noise_scale_[k].cwiseMax(imu_noise_scale_[k + 1]);
-    sg = static_cast<double>(s(0));
-    sa = static_cast<double>(s(1));
+  // A sample interpolated in place of a fault or a gap adds its interpolation's error: the step
+  // takes the larger of its two samples'.
+  double vg = 0.0, va = 0.0;
+  if (k + 1 < imu_extra_var_.size()) {
+    const Eigen::Vector2f v = imu_extra_var_[k].cwiseMax(imu_extra_var_[k + 1]);
+    vg = static_cast<double>(v(0));
+    va = static_cast<double>(v(1));
   }
-  const double qg = sg * sg * params_.gyro_sigma * params_.gyro_sigma * dt * dt;
-  const double qa = sa * sa * params_.accel_sigma * params_.accel_sigma * dt * dt;
+  const double qg = (params_.gyro_sigma * params_.gyro_sigma + vg) * dt * dt;
+  const double qa = (params_.accel_sigma * params_.accel_sigma + va) * dt * dt;
   const detail::ProcessNoiseBlocks Q{
       qg,
       qa * dt * dt / 4.0,
@@ -733,13 +733,13 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   return Q;
 }
 
-void DopplerInertialFilter::addImu(const ImuSample& s, double gyro_scale, double accel_scale) {
+void DopplerInertialFilter::addImu(const ImuSample& s, double gyro_var, double accel_var) {
   if (!imu_.empty() && !(s.t > imu_.back().t))
     throw std::invalid_argument("DopplerInertialFilter::addImu: time does not increase");
-  const bool measured = gyro_scale == 1.0 && accel_scale == 1.0;
-  if (!measured && imu_noise_scale_.empty()) imu_noise_scale_.assign(imu_.size(), {1.0f, 1.0f});
-  if (!imu_noise_scale_.empty())
-    imu_noise_scale_.emplace_back(static_cast<float>(gyro_scale), static_cast<float>(accel_scale));
+  const bool measured = gyro_var == 0.0 && accel_var == 0.0;
+  if (!measured && imu_extra_var_.empty()) imu_extra_var_.assign(imu_.size(), {0.0f, 0.0f});
+  if (!imu_extra_var_.empty())
+    imu_extra_var_.emplace_back(static_cast<float>(gyro_var), static_cast<float>(accel_var));
   imu_.push_back(s);
 }
 
@@ -994,8 +994,11 @@ DopplerInertialFilter::LeverNoise DopplerInertialFilter::leverNoise(const Node& 
     for (std::size_t j = lo; j <= hi; ++j) {
       const std::size_t col = j - first;
       if (col >= kLeverSamples) continue;  // not reached: the span lies within k -+ 2
-      const double scale =
-          j < imu_noise_scale_.size() ? static_cast<double>(imu_noise_scale_[j](0)) : 1.0;
+      // Its noise relative to gyro_sigma (C below is sigma_g^2 E E^T).
+      const double scale = j < imu_extra_var_.size()
+                               ? std::sqrt(1.0 + static_cast<double>(imu_extra_var_[j](0)) /
+                                                     (params_.gyro_sigma * params_.gyro_sigma))
+                               : 1.0;
       for (int m = 0; m < 3; ++m)
         E.block<3, 3>(3 * m, 3 * static_cast<int>(col)) +=
             n.V_inv(m, i) * w[j - lo] * scale * lever_noise_;

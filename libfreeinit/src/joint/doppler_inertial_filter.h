@@ -125,10 +125,11 @@ class DopplerInertialFilter {
   /// integration between two samples interpolates the gyro and the accelerometer with a cubic
   /// through the samples around them, so the filter wants sample k + 2 before it predicts node
   /// k + 1 or takes the points of node k (with fewer it falls back to lower orders).
-  /// gyro_scale, accel_scale: the sample's white noise relative to gyro_sigma, accel_sigma (a
-  /// sample interpolated in place of a fault or a gap, ImuScreen; 1: measured). A step's
-  /// process noise takes the larger scale of its two samples; the lever-arm noise each sample's.
-  void addImu(const ImuSample& s, double gyro_scale = 1.0, double accel_scale = 1.0);
+  /// gyro_var [(rad/s)^2], accel_var [(m/s^2)^2]: the variance per axis the sample's value adds
+  /// to the white noise gyro_sigma^2, accel_sigma^2 (a sample interpolated in place of a fault
+  /// or a gap, ImuScreen; 0: measured). A step's process noise takes the larger of its two
+  /// samples'; the lever-arm noise each sample's.
+  void addImu(const ImuSample& s, double gyro_var = 0.0, double accel_var = 0.0);
 
   /// The prior of the window's first node, in terms the filter re-expresses wherever node 0's
   /// estimate moves in the smoother's iterations: roll and pitch in the world (the yaw and the
@@ -462,7 +463,7 @@ class DopplerInertialFilter {
   /// propagate() from node n (its IMU sampled once), with the transition's blocks (if F).
   FilterState propagate(const Node& n, const FilterState& x, IntegrationJacobian* F) const;
   /// F P F^T plus the process noise over dt, on the components updated (all 19: full).
-  /// k: the step's first sample (its noise scales, addImu).
+  /// k: the step's first sample (its extra noise variances, addImu).
   MatS propagateCovariance(const IntegrationJacobian& F, const MatS& P, std::size_t k, double dt,
                            bool full = false) const;
   /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
@@ -498,9 +499,9 @@ class DopplerInertialFilter {
   Mat3 R_bl_;
   Vec3 p_bl_;
   std::vector<ImuSample> imu_;
-  /// Per sample of imu_: its noise relative to gyro_sigma, accel_sigma (addImu); empty while
-  /// every sample given is a measured one.
-  std::vector<Eigen::Vector2f> imu_noise_scale_;
+  /// Per sample of imu_: the variance added to gyro_sigma^2, accel_sigma^2 (addImu); empty
+  /// while every sample given is a measured one.
+  std::vector<Eigen::Vector2f> imu_extra_var_;
   std::vector<Node> nodes_;
   /// Nodes a smoothing has already been through (the first smoothed_ of nodes_): the later ones
   /// start the next smoothing from the propagation of the last smoothed one (smooth()).

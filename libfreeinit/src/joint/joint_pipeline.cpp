@@ -328,9 +328,9 @@ class JointPipeline final : public Pipeline {
   /// end must not depend on how far the IMU stream happens to be ahead.
   void feedImu(std::size_t last) {
     const auto& imu = screen_.samples();
-    const auto& scale = screen_.noiseScales();
+    const auto& extra = screen_.extraNoise();
     for (; fed_ < imu.size() && fed_ <= last; ++fed_)
-      filter_->addImu(imu[fed_], scale[fed_].gyro, scale[fed_].accel);
+      filter_->addImu(imu[fed_], extra[fed_].gyro, extra[fed_].accel);
   }
 
   /// The open node's points received so far, those of [lo, hi) (the last node: [lo, t_k]): each
@@ -458,7 +458,7 @@ class JointPipeline final : public Pipeline {
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
       }
       // An interpolated gyro sample (ImuScreen) measures no rate.
-      const bool measured_gyro = screen_.noiseScales()[k].gyro == 1.0f;
+      const bool measured_gyro = !screen_.extraNoise()[k].gyro_synthetic;
       if (rest)
         filter_->updateRest(
             cfg_.joint.rest_velocity_sigma,
