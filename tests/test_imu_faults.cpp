@@ -139,6 +139,28 @@ TEST(ImuScreen, ASaturatedRunIsReplacedFromReadingsInRange) {
   }
 }
 
+TEST(ImuScreen, AReplacementCarriesItsInterpolationErrorOnly) {
+  // White noise at the declared 0.02 m/s^2 and a slow motion: the lone sample's residual has
+  // the robust sigma s ~ 1.4 sigma (its floor), of which s^2 - sigma^2 is the cubic's error (the
+  // sample's own noise is the rest), the variance the replacement adds. Counting the 1.94 of the
+  // residual's variance again gave 1.94 s^2 + sigma^2 (4.8 sigma^2) in all.
+  constexpr double kSigma2 = 0.02 * 0.02;
+  auto imu = smoothStream(200);
+  imu[100].accel.x() += 50.0;
+  const ImuScreen s = screened(imu);
+  ASSERT_EQ(s.faults().size(), 1u);
+  EXPECT_GT(s.extraNoise()[100].accel, 0.9 * kSigma2);
+  EXPECT_LT(s.extraNoise()[100].accel, 1.6 * kSigma2);
+  // In a run of three, each farther from its clean neighbours: the cubic's nodes are farther and
+  // its error larger.
+  auto run = smoothStream(200);
+  for (std::size_t k = 100; k < 103; ++k) run[k].accel.x() += 50.0;
+  const ImuScreen r = screened(run);
+  ASSERT_EQ(r.faults().size(), 3u);
+  EXPECT_GT(r.extraNoise()[100].accel, s.extraNoise()[100].accel);
+  EXPECT_LT(r.extraNoise()[100].accel, 10.0 * kSigma2);
+}
+
 TEST(ImuScreen, KeepsAStepOfTheMotion) {
   // A real shock: the specific force jumps by 20 m/s^2 and stays (one side's extrapolation is
   // right): not a fault.
