@@ -11,6 +11,7 @@
 #include <freeinit/rotation.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -214,8 +215,9 @@ class JointPipeline final : public Pipeline {
       const DopplerPoint& p = *usable[i].p;
       pts.push_back({usable[i].t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
     }
-    const StartDecision d = decideStart(imu, k, k_last, pts, cfg_.extrinsics,
-                                        cfg_.imu.gyro_bias_prior, startDetectorParams(cfg_));
+    const StartDecision d =
+        decideStart(imu, k, k_last, pts, cfg_.extrinsics, cfg_.imu.gyro_bias_prior,
+                    startDetectorParams(cfg_), &screen_.extraNoise());
     r.diag.imu_at_rest_at_start = d.imu_still;
     switch (d.kind) {
       case StartDecision::Kind::NoData:
@@ -438,7 +440,8 @@ class JointPipeline final : public Pipeline {
       }
       const std::size_t node = recorder_.nodes() - 1;
       const bool was_rest = rest_.atRest();
-      const bool rest = rest_.update(imu[k]);
+      const ImuExtraNoise& extra = screen_.extraNoise()[k];
+      const bool rest = rest_.update(imu[k], !extra.gyro_synthetic, !extra.accel_synthetic);
       if (was_rest && !rest) {
         // The IMU shows motion only once it has grown beyond its noise: the last nodes held at
         // rest may already have moved (a gentle start). The smoother does without their rest.
@@ -458,7 +461,7 @@ class JointPipeline final : public Pipeline {
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
       }
       // An interpolated gyro sample (ImuScreen) measures no rate.
-      const bool measured_gyro = !screen_.extraNoise()[k].gyro_synthetic;
+      const bool measured_gyro = !extra.gyro_synthetic;
       if (rest)
         filter_->updateRest(
             cfg_.joint.rest_velocity_sigma,
@@ -607,13 +610,12 @@ class JointPipeline final : public Pipeline {
   /// row accept under a quarter of the median share of the kHistory nodes before them (at least
   /// half). A moving object entering the view lowers the share over many nodes, not at once.
   bool acceptanceCollapsed(std::size_t accepted, std::size_t refused) {
-    constexpr std::size_t kMinReturns = 50, kHistory = 10, kNodes = 3;
+    constexpr std::size_t kMinReturns = 50, kHistory = kAcceptanceHistory, kNodes = 3;
     const std::size_t n = accepted + refused;
     if (n < kMinReturns) return false;
     const double share = static_cast<double>(accepted) / static_cast<double>(n);
-    if (recent_acceptance_.size() >= kHistory) {
-      std::vector<double>& v = acceptance_scratch_;  // no allocation per node
-      v.assign(recent_acceptance_.end() - kHistory, recent_acceptance_.end());
+    if (acceptance_count_ >= kHistory) {
+      std::array<double, kHistory> v = recent_acceptance_;  // the median is the ring's in any order
       std::nth_element(v.begin(), v.begin() + kHistory / 2, v.end());
       const double median = v[kHistory / 2];
       if (median >= 0.5 && share < 0.25 * median) {
@@ -626,7 +628,8 @@ class JointPipeline final : public Pipeline {
       }
     }
     collapsed_nodes_ = 0;
-    recent_acceptance_.push_back(share);
+    recent_acceptance_[acceptance_count_ % kHistory] = share;
+    ++acceptance_count_;
     return false;
   }
 
@@ -1151,9 +1154,11 @@ class JointPipeline final : public Pipeline {
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
   std::optional<DopplerInertialFilter> filter_;
   ImuScreen screen_;
-  std::vector<double> recent_acceptance_;   ///< acceptanceCollapsed: the nodes' shares
-  std::vector<double> acceptance_scratch_;  ///< ... the last of them, for their median
-  std::size_t collapsed_nodes_ = 0;         ///< ... nodes in a row under a quarter of the median
+  /// acceptanceCollapsed: the shares of the last nodes (a ring), and how many were given.
+  static constexpr std::size_t kAcceptanceHistory = 10;
+  std::array<double, kAcceptanceHistory> recent_acceptance_{};
+  std::size_t acceptance_count_ = 0;
+  std::size_t collapsed_nodes_ = 0;  ///< ... nodes in a row under a quarter of the median
   double collapse_t_ = 0, collapse_from_ = 0, collapse_to_ = 0;  ///< ... the first of them
   RestTracker rest_;
   std::vector<bool> node_rest_;
