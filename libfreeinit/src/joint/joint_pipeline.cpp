@@ -54,6 +54,9 @@ constexpr std::size_t kMinNoiseReturns = 100;
 
 using BodyVelocityJacobian = Eigen::Matrix<double, 3, DopplerInertialFilter::kStateDim>;
 
+/// The screen's settings. The configured noises floor its tests and are the white part of its
+/// replacements' error; the variance it hands the filter is absolute (ImuExtraNoise), added to
+/// whichever noise the filter uses.
 ImuScreenParams screenParams(const FreeInitConfig& cfg) {
   ImuScreenParams p;
   p.gyro_range = cfg.imu.gyro_range;
