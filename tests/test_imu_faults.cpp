@@ -139,6 +139,21 @@ TEST(ImuScreen, ASaturatedRunIsReplacedFromReadingsInRange) {
     EXPECT_TRUE(s.faults()[i].out_of_range);
     EXPECT_LT((s.samples()[120 + i].accel - truth[120 + i].accel).norm(), 0.15);
   }
+  // Longer than kMaxRun: no pair in range within reach; the last screened value is held, its
+  // error growing with the time since the last measurement, until the pair after the run is
+  // within reach (the held values' error then carries into the cubic's).
+  auto longer = smoothStream(200);
+  for (std::size_t k = 120; k < 126; ++k) longer[k].accel.z() = -156.9;
+  const ImuScreen l = screened(longer);
+  ASSERT_EQ(l.faults().size(), 6u);
+  for (std::size_t k = 120; k < 126; ++k) {
+    EXPECT_LT(std::abs(l.samples()[k].accel.z() - 9.81), 0.2) << k;
+    EXPECT_TRUE(l.extraNoise()[k].accel_synthetic) << k;
+    if (k > 120 && k < 123) {
+      EXPECT_GT(l.extraNoise()[k].accel, l.extraNoise()[k - 1].accel) << k;
+    }
+    EXPECT_GE(l.extraNoise()[k].accel, l.extraNoise()[120].accel) << k;
+  }
 }
 
 TEST(ImuScreen, AReplacementCarriesItsInterpolationErrorOnly) {

@@ -99,6 +99,10 @@ void ImuScreen::decide(std::size_t j) {
   if (neighbours) ++recent_n_;
   out_.push_back(work_[j]);
   extra_.push_back(extra);
+  for (const int k : {0, 1}) {
+    left_var_[k][1] = left_var_[k][0];
+    left_var_[k][0] = k == 1 ? extra.accel : extra.gyro;
+  }
 }
 
 bool ImuScreen::screenSensor(std::size_t j, bool accel, bool neighbours, Vec3& fit,
@@ -112,13 +116,18 @@ bool ImuScreen::screenSensor(std::size_t j, bool accel, bool neighbours, Vec3& f
   const std::vector<ImuSample>& w = work_;
   auto value = [&](std::size_t i) -> const Vec3& { return channel(work_[i], accel); };
   auto in_range = [&](std::size_t i) { return !outOfRange(value(i), range); };
-  // The right pair (a, b) continues to b + 1 (when there is one, in range and no gap away).
-  auto pair_continues = [&](std::size_t a, std::size_t b, double threshold) {
+  // The right pair (a, b) is clean: a is met by the cubic through j-2, j-1, b, b+1 (b + 1 in
+  // range and no gap away; else nothing to tell). A faulty a, or a b or b + 1 that is one, make
+  // it miss. An interpolation, not an extrapolation: its noise (1.4 sigma) and the motion it
+  // misses (3 to 10 times the lone test's) stay within the threshold where linear
+  // extrapolations from one side miss a vibrating platform by many times it.
+  auto pair_clean = [&](std::size_t a, std::size_t b, double threshold) {
     const std::size_t c = b + 1;
-    if (c >= n || !in_range(c) || (h_ > 0 && w[c].t - w[b].t > kGapIntervals * h_)) return true;
-    const Vec3 e =
-        value(c) - (value(b) + (value(b) - value(a)) * ((w[c].t - w[b].t) / (w[b].t - w[a].t)));
-    return e.cwiseAbs().maxCoeff() <= threshold;
+    if (j < 2 || c >= n || !in_range(c) || (h_ > 0 && w[c].t - w[b].t > kGapIntervals * h_))
+      return true;
+    const double t[4] = {w[j - 2].t, w[j - 1].t, w[b].t, w[c].t};
+    const Vec3* const v[4] = {&value(j - 2), &value(j - 1), &value(b), &value(c)};
+    return (value(a) - lagrange(t, v, w[a].t)).cwiseAbs().maxCoeff() <= threshold;
   };
 
   // The lone-sample test's residual.
@@ -150,7 +159,7 @@ bool ImuScreen::screenSensor(std::size_t j, bool accel, bool neighbours, Vec3& f
       if (rb >= n) break;
       if (h_ > 0 && w[rb].t - w[j - 2].t > (kNeighbourSpan + static_cast<double>(L - 1)) * h_)
         break;
-      if (!in_range(ra) || !in_range(rb) || !pair_continues(ra, rb, threshold)) continue;
+      if (!in_range(ra) || !in_range(rb) || !pair_clean(ra, rb, threshold)) continue;
       const double t[4] = {w[j - 2].t, w[j - 1].t, w[ra].t, w[rb].t};
       const Vec3* const v[4] = {&value(j - 2), &value(j - 1), &value(ra), &value(rb)};
       // Each sample of the run against the cubic and the linear extrapolations from each side.
@@ -170,24 +179,26 @@ bool ImuScreen::screenSensor(std::size_t j, bool accel, bool neighbours, Vec3& f
       }
       if (!run) continue;
       fit = lagrange(t, v, w[j].t);
-      // The interpolation's error: the nodes' noise and the motion the cubic misses.
-      double weights = 0, poly = 1;
+      // The interpolation's error: the nodes' noise (and a replaced left node's own error), and
+      // the motion the cubic misses.
+      double weights = 0, left = 0, poly = 1;
       for (int i = 0; i < 4; ++i) {
         double wi = 1.0;
         for (int m = 0; m < 4; ++m)
           if (m != i) wi *= (w[j].t - t[m]) / (t[i] - t[m]);
         weights += wi * wi;
+        if (i < 2) left += wi * wi * left_var_[accel ? 1 : 0][1 - i];
         poly *= w[j].t - t[i];
       }
       const double motion = std::max(0.0, s * s - kResidualVariance * sigma * sigma);
       const double ratio = h_ > 0 ? poly / (4.0 * h_ * h_ * h_ * h_) : 1.0;
-      extra_var = sigma * sigma * weights + motion * ratio * ratio;
+      extra_var = sigma * sigma * weights + left + motion * ratio * ratio;
       return true;
     }
   }
   if (!out_of_range) {
     // Not a fault: its residual joins the scale's span unless a faulty neighbour made it.
-    if (neighbours && lone_nodes && pair_continues(j + 1, j + 2, threshold)) record(r1);
+    if (neighbours && lone_nodes && pair_clean(j + 1, j + 2, threshold)) record(r1);
     return false;
   }
   // Out of range with no cubic to replace it: the nearest screened value, held.
@@ -202,8 +213,12 @@ bool ImuScreen::screenSensor(std::size_t j, bool accel, bool neighbours, Vec3& f
       t_held = w[i].t;
     }
   }
-  const double q = accel ? kAccelRateChange : kGyroRateChange;
+  // Its error grows with the time d since the sensor's last measurement at the rate of change
+  // before it (a vibrating platform's) plus the gaps' allowance.
   const int k = accel ? 1 : 0;
+  if (j >= 2 && w[j - 1].t > w[j - 2].t && left_var_[k][0] == 0 && left_var_[k][1] == 0)
+    hold_rate_[k] = (value(j - 1) - value(j - 2)).cwiseAbs().maxCoeff() / (w[j - 1].t - w[j - 2].t);
+  const double q = (accel ? kAccelRateChange : kGyroRateChange) + hold_rate_[k];
   const double d = std::abs(w[j].t - (measured_[k] ? t_measured_[k] : t_held));
   extra_var = s * s + q * q * d * d;
   return true;

@@ -64,20 +64,23 @@ struct ImuExtraNoise {
 ///    look like a step to the test above). So the test is repeated with the right pair moved
 ///    past a run of L = 1..kMaxRun samples (j+L, j+L+1): the run is faulty when each of its
 ///    samples is out of range or a spike against that cubic and both sides' extrapolations.
-///    The right pair must be in range and its linear extrapolation must meet j+L+2 within the
-///    threshold, so that no replacement is built from a faulty or out-of-range neighbour (the
-///    left pair is screened already). Each sample of a run is then decided, and counted, in its
-///    turn. A run beyond kMaxRun cannot be told from a step of the motion (the estimator's
-///    acceptance test is the backstop for what the screen lets through).
+///    The right pair must be in range and clean: j+L within the threshold of the cubic through
+///    j-2, j-1, j+L+1, j+L+2 (an interpolation: a linear extrapolation misses a vibrating
+///    platform by far more), so that no replacement is built from a faulty or out-of-range
+///    neighbour (the left pair is screened already). Each sample of a run is then decided, and
+///    counted, in its turn. A run beyond kMaxRun cannot be told from a step of the motion (the
+///    estimator's acceptance test is the backstop for what the screen lets through).
 /// A faulty reading is replaced by that cubic's value with the extra variance of the
 /// interpolation's error: sigma^2 sum_i w_i^2 from the noise of the nodes (Lagrange weights
-/// w_i at t_j) plus the motion the cubic misses, m^2 (P(t_j) / P_1)^2, with P(t) = prod_i
+/// w_i at t_j; a left node that is itself a replacement adds w_i^2 times its own extra
+/// variance) plus the motion the cubic misses, m^2 (P(t_j) / P_1)^2, with P(t) = prod_i
 /// (t - t_i), P_1 = 4 h^4 its value for a lone sample at the nominal rate and m^2 = s^2 - 1.94
 /// sigma^2 the part of the residual's variance that is not white noise. For a lone sample at
 /// the nominal rate that is s^2 - sigma^2: s^2 counts the sample's own noise and the fit's, and
 /// only the fit's is the replacement's. Where no cubic can be built (the stream's ends, next to
 /// a gap, an out-of-range run beyond kMaxRun) the nearest screened value is held, with s^2 +
-/// (q d)^2, d the time from the sensor's last measurement (q as for gaps).
+/// (q d)^2, d the time from the sensor's last measurement and q the rate of change before it
+/// plus the gaps' allowance.
 ///
 /// Gaps: the nominal interval h is the median of the first 20 intervals. An interval beyond
 /// 2.5 h is a gap; up to max_bridged_gap it is filled with samples at about h, valued on the line
@@ -128,6 +131,11 @@ class ImuScreen {
   std::size_t next_ = 0;                 ///< the next raw sample to decide
   double t_measured_[2] = {0, 0};        ///< [s] per sensor (gyro, accel): its last measurement
   bool measured_[2] = {false, false};    ///< t_measured_ is set
+  /// Per sensor (gyro, accel), the extra variance of samples j - 1 and j - 2 (0: measured).
+  double left_var_[2][2] = {{0, 0}, {0, 0}};
+  /// Per sensor, [unit/s] the rate of change between the two measured samples before the
+  /// last held one.
+  double hold_rate_[2] = {0, 0};
   double h_ = 0;
 };
 
