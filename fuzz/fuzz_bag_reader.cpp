@@ -3,7 +3,9 @@
 // configuration follows the topics the input names: "/trigger" -> a radar-like layout with
 // trigger stamps, "/radar" -> the same with bag-time stamps, otherwise the release layout.
 // Invariants of the output: stamps strictly increasing per stream, frames non-empty with finite
-// points sorted by time, the summary's point count equal to the points passed on.
+// points sorted by time, the summary's point count equal to the points passed on. Then the same
+// bag as the apps read it straight in (ros1::Ros1Reader: the index checked on opening, each chunk
+// when first read), over the second half of its time span and then whole: the same invariants.
 #include <freeinit/ros1/bag_reader.h>
 #include <unistd.h>
 
@@ -71,8 +73,9 @@ std::string fuzzOne(const std::uint8_t* data, std::size_t size) {
     points += f.points.size();
   };
   std::string outcome;
+  const ros1::BagImportConfig config = configFor(data, size);
   try {
-    const ros1::BagSummary s = ros1::readBag(path, configFor(data, size), cb);
+    const ros1::BagSummary s = ros1::readBag(path, config, cb);
     if (s.points != points) broken("summary point count differs from the points passed on");
     outcome = "ok: " + std::to_string(imu) + " IMU samples, " + std::to_string(frames) +
               " frames, " + std::to_string(points) + " points";
@@ -81,8 +84,37 @@ std::string fuzzOne(const std::uint8_t* data, std::size_t size) {
   } catch (const std::invalid_argument& e) {
     outcome = "error: " + firstLine(e.what());
   }
+  // Straight in: a window, then all of it, each a fresh stream.
+  std::string straight;
+  try {
+    ros1::Ros1Reader reader(path, config);
+    reader.staticExtrinsics();
+    std::int64_t first = 0, last = 0;
+    for (const auto& c : reader.checked().index().chunks)
+      for (const auto& [conn, span] : c.connections) {
+        first = first == 0 ? static_cast<std::int64_t>(span.first)
+                           : std::min(first, static_cast<std::int64_t>(span.first));
+        last = std::max(last, static_cast<std::int64_t>(span.last));
+      }
+    for (const bool window : {true, false}) {
+      last_imu = last_frame = -1;
+      bags::ImportStream stream(config, cb);
+      if (window)
+        reader.start(first + (last - first) / 2, last);
+      else
+        reader.start();
+      while (reader.step(stream)) {
+      }
+      stream.finish(path);
+    }
+    straight = "ok";
+  } catch (const ros1::BagError& e) {
+    straight = "error: " + firstLine(e.what());
+  } catch (const std::invalid_argument& e) {
+    straight = "error: " + firstLine(e.what());
+  }
   std::remove(path.c_str());
-  return outcome;
+  return outcome + "; straight in: " + straight;
 }
 
 }  // namespace freeinit::fuzz

@@ -77,7 +77,8 @@ const char* const kUsage =
     "  --gyro-prior SIGMA   gyro-bias prior: the truth plus noise of this std [rad/s]\n"
     "  --passes N, --seed-samples N, --tau S, --no-gyro-bias-estimate, --zero-gyro-bias:\n"
     "                       estimator variants\n"
-    "  --trace              print Free-Init's velocity errors over the window\n"
+    "  --trace              print Free-Init's velocity errors over the window and its\n"
+    "                       warnings\n"
     "  -q                   no per-run lines\n"
     "  -h, --help           this text;  --version: the version\n"
     "Exit status: 0 done, 1 a run could not be made, 2 a bad option or value.\n";
@@ -457,6 +458,8 @@ JobResult runCase(const EvalAppParams& o, const EvalCase& c) {
       appendf(out.log, "  %zu warning(s)", m.result.state.warnings.size());
     if (c.wrong_calibration) out.log += "  [wrong calibration]";
     out.log += wrong.empty() ? "\n" : "  CONFIDENT WRONG: " + wrong + "\n";
+    if (o.trace)
+      for (const std::string& w : m.result.state.warnings) out.log += "    warning: " + w + "\n";
   }
   out.tracks =
       report::velocityTracks(runs, rec.config.t0, [&](double t) -> Vec3 { return truth(t).v_b(); });

@@ -254,8 +254,7 @@ std::string FreeInitAppParams::argumentsProblem() const {
   if (input == app_support::FileKind::Ini)
     return "missing <input.rawlog>: '" + rawlog + "' is " + app_support::describe(input) +
            " (freeinit [<config.ini>] <input.rawlog>)";
-  if (input == app_support::FileKind::Text || input == app_support::FileKind::RosBag ||
-      input == app_support::FileKind::Binary)
+  if (input == app_support::FileKind::Text || input == app_support::FileKind::Binary)
     return "<input.rawlog> '" + rawlog + "': neither an MRPT rawlog nor a ROS recording (it is " +
            app_support::describe(input) + ")";
   return "";
@@ -611,8 +610,8 @@ int FreeInitApp::main(int argc, char** argv) {
                                    false);
   const auto& rawlog = cli.positional(
       "input.rawlog",
-      "input rawlog, or a ROS 2 recording read straight in (an MCAP file, a rosbag2 folder, a "
-      ".db3; [bag_import] of the INI says how)");
+      "input rawlog, or a ROS recording read straight in (a ROS 1 bag, an MCAP file, a rosbag2 "
+      "folder, a .db3; [bag_import] of the INI says how)");
   const auto& out =
       cli.text("o", "out", "output folder (its earlier outputs are replaced)", "", "DIR",
                std::string(kDefaultOutDir) +

@@ -69,6 +69,8 @@ Ros2Reader::Ros2Reader(const std::string& path, const BagImportConfig& config) :
 
 Ros2Reader::~Ros2Reader() = default;
 
+const std::string& Ros2Reader::path() const { return rec_->path(); }
+
 std::string Ros2Reader::firstFrameId(std::size_t topic, bool imu) {
   rec_->start({std::numeric_limits<std::int64_t>::min(),
                std::numeric_limits<std::int64_t>::max(),

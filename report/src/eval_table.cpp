@@ -658,8 +658,9 @@ std::string boundsMarkdown(const std::vector<EvalRow>& rows, const eval::NoticeF
        "the state's covariance) is below "
     << kOwnSigmaBelowBound
     << " of the bound: a covariance that claims more than the data hold (0 for a consistent "
-       "estimator). Runs that used the knowledge of rest (zero velocity and rate while the IMU "
-       "showed rest) are left out: the bound does not know of it.\n\n| method | velocity | gravity "
+       "estimator). Runs that used the knowledge of rest (zero velocity and rate, or the rate "
+       "alone, while the IMU showed rest) are left out: the bound does not know of it.\n\n| method "
+       "| velocity | gravity "
        "| b_g | b_a |\n|---|---|---|---|---|\n";
   shareRows(o, summaries, &MethodSummary::sigma_below_bound, &MethodSummary::with_sigma);
   const auto& names = statusNames();

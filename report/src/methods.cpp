@@ -125,7 +125,8 @@ EvalRow makeEvalRow(const std::string& source, int seed, const MethodRun& run, c
   row.time_ms = run.time_ms;
   if (!r.state.ok()) return row;
   row.warnings = static_cast<int>(r.state.warnings.size());
-  row.rest_duration = r.diag.static_duration;
+  // The knowledge of rest the bound does not have: zero velocity, or zero rotation rate only.
+  row.rest_duration = std::max(r.diag.static_duration, r.diag.zero_rate_duration);
   const eval::StateTruth gt = truth(r.state.timestamp);
   const eval::StateErrors e = eval::stateErrors(r.state, gt);
   row.speed = e.speed;

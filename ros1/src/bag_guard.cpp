@@ -8,13 +8,16 @@
 // format) and chunk_count chunk-info records (op 0x06: ver, chunk_pos, start/end time, count;
 // data = count x {u32 conn, u32 messages}). All integers little-endian.
 #include <bzlib.h>
+#include <fcntl.h>
 #include <freeinit/ros1/bag_guard.h>
 #include <lz4.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <array>
+#include <cerrno>
 #include <cstring>
-#include <fstream>
 #include <map>
 #include <memory>
 #include <set>
@@ -114,23 +117,38 @@ class Bytes {
   virtual void read(std::uint64_t at, std::uint8_t* dst, std::size_t n) = 0;
 };
 
+// The file, read with pread: exactly the bytes asked for (a buffered stream would read a buffer's
+// worth at every seek, most of a small chunk).
 class FileBytes : public Bytes {
  public:
-  explicit FileBytes(const std::string& path) : in_(path, std::ios::binary) {
-    if (!in_) throw std::runtime_error("cannot open");
-    in_.seekg(0, std::ios::end);
-    size_ = static_cast<std::uint64_t>(in_.tellg());
+  explicit FileBytes(const std::string& path) : fd_(::open(path.c_str(), O_RDONLY | O_CLOEXEC)) {
+    struct stat st {};
+    if (fd_ < 0 || ::fstat(fd_, &st) != 0 || !S_ISREG(st.st_mode)) {
+      if (fd_ >= 0) ::close(fd_);
+      throw std::runtime_error("cannot open");
+    }
+    size_ = static_cast<std::uint64_t>(st.st_size);
   }
+  ~FileBytes() override { ::close(fd_); }
+  FileBytes(const FileBytes&) = delete;
+  FileBytes& operator=(const FileBytes&) = delete;
   std::uint64_t size() const override { return size_; }
   void read(std::uint64_t at, std::uint8_t* dst, std::size_t n) override {
-    in_.seekg(static_cast<std::streamoff>(at));
-    in_.read(reinterpret_cast<char*>(dst), static_cast<std::streamsize>(n));
-    if (!in_) throw Bad(at, "read error");
+    std::size_t done = 0;
+    while (done < n) {
+      const ::ssize_t k = ::pread(fd_, dst + done, n - done, static_cast<::off_t>(at + done));
+      if (k < 0 && errno == EINTR) continue;
+      if (k <= 0) throw Bad(at + done, "read error");
+      done += static_cast<std::size_t>(k);
+    }
+    bytes_read_ += n;
   }
+  std::uint64_t bytesRead() const { return bytes_read_; }
 
  private:
-  std::ifstream in_;
+  int fd_ = -1;
   std::uint64_t size_ = 0;
+  std::uint64_t bytes_read_ = 0;
 };
 
 class MemoryBytes : public Bytes {
@@ -293,15 +311,7 @@ class Checker {
 
   void run() {
     const std::uint64_t size = file_.size();
-    std::array<std::uint8_t, kVersionLineBytes> line{};
-    if (size < kVersionLineBytes)
-      throw Bad(0, "only " + std::to_string(size) + " bytes: not a ROS bag");
-    file_.read(0, line.data(), line.size());
-    if (std::memcmp(line.data(), kVersionLine, kVersionLineBytes) != 0) {
-      if (std::memcmp(line.data(), "#ROSBAG V1.2", 12) == 0)
-        throw Bad(0, "a ROS bag of format 1.2: only 2.0 is read (convert it with `rosbag fix`)");
-      throw Bad(0, "does not start with \"#ROSBAG V2.0\": not a ROS bag (v2.0)");
-    }
+    versionLine();
     std::uint64_t at = kVersionLineBytes;
     std::vector<std::pair<std::uint64_t, std::uint8_t>> top;  // (offset, op) of every record
     while (at < size) {
@@ -334,7 +344,110 @@ class Checker {
     finish(top);
   }
 
+  // What librosbag reads when it opens a bag, and nothing else: the version line, the file header,
+  // the connection and chunk info records at index_pos, and for every chunk its record header and
+  // the index records after its data. The chunks' data are not read.
+  void readIndex(BagIndex& out) {
+    const std::uint64_t size = file_.size();
+    versionLine();
+    const Record h = readRecord(file_, kVersionLineBytes, size, "record");
+    if (h.op != kOpFileHeader)
+      throw Bad(h.at, "the first record is a " + opName(h.op) + ", not the file header");
+    fileHeader(h);
+    if (conn_count_ == 0 && chunk_count_ == 0) return;  // a bag closed without a message
+    if (index_pos_ < h.next() || index_pos_ >= size)
+      throw Bad(h.at, "the file header's index position " + std::to_string(index_pos_) +
+                          " is not within the file's " + std::to_string(size) +
+                          " bytes (truncated bag?)");
+    std::uint64_t at = index_pos_;
+    for (std::uint32_t k = 0; k < conn_count_; ++k) {
+      const Record r = readRecord(file_, at, size, "connection record");
+      if (r.op != kOpConnection)
+        throw Bad(at, "a " + opName(r.op) + " where the index has a connection record");
+      connection(r, file_);
+      out.topics[fixedField<std::uint32_t>(r.header, "conn", at, "connection record")] =
+          r.header.at("topic");
+      at = r.next();
+    }
+    for (std::uint32_t k = 0; k < chunk_count_; ++k) {
+      const Record r = readRecord(file_, at, size, "chunk info record");
+      if (r.op != kOpChunkInfo)
+        throw Bad(at, "a " + opName(r.op) + " where the index has a chunk info record");
+      chunkInfo(r);
+      at = r.next();
+    }
+    for (const Info& info : infos_) {
+      BagIndex::Chunk c;
+      c.pos = info.chunk_pos;
+      const Record r = readRecord(file_, c.pos, size, "chunk record");
+      if (r.op != kOpChunk)
+        throw Bad(info.at, "chunk info points at byte " + std::to_string(c.pos) + ", a " +
+                               opName(r.op) + ", not a chunk record");
+      chunkHeader(r);
+      std::uint64_t next = r.next();
+      for (std::size_t i = 0; i < info.connections; ++i) {
+        const Record x = readRecord(file_, next, size, "index record");
+        if (x.op != kOpIndex)
+          throw Bad(next, "a " + opName(x.op) + " where chunk info at byte " +
+                              std::to_string(info.at) + " announces " +
+                              std::to_string(info.connections) + " index records");
+        const IndexEntries e = indexEntries(x);
+        if (out.topics.count(e.conn) == 0)
+          throw Bad(x.at, "connection " + std::to_string(e.conn) +
+                              " is used but not among the index's connection records");
+        auto& span = c.connections[e.conn];
+        for (std::uint32_t j = 0; j < e.count; ++j) {
+          const std::uint64_t t = std::uint64_t{u32At(e.data.data() + 12 * j)} * 1000000000U +
+                                  u32At(e.data.data() + 12 * j + 4);
+          span.first = span.messages == 0 ? t : std::min(span.first, t);
+          span.last = span.messages == 0 ? t : std::max(span.last, t);
+          ++span.messages;
+        }
+        next = x.next();
+      }
+      c.bytes = next - c.pos;
+      c.index_records = info.connections;
+      out.chunks.push_back(std::move(c));
+    }
+  }
+
+  // The data of one chunk of the index (chunk record at `pos`, followed by `index_records`
+  // index records), checked as run() checks every chunk: decompressed within its declared size,
+  // its records walked, its index entries pointing at message records of known connections.
+  void checkChunk(std::uint64_t pos, std::size_t index_records,
+                  const std::map<std::uint32_t, std::string>& topics) {
+    const std::uint64_t size = file_.size();
+    const Record r = readRecord(file_, pos, size, "chunk record");
+    if (r.op != kOpChunk) throw Bad(pos, "a " + opName(r.op) + ", not a chunk record");
+    referenced_.clear();
+    chunk(r);
+    std::uint64_t at = r.next();
+    for (std::size_t i = 0; i < index_records; ++i) {
+      const Record x = readRecord(file_, at, size, "index record");
+      if (x.op != kOpIndex) throw Bad(at, "a " + opName(x.op) + " where an index record was");
+      index(x);
+      at = x.next();
+    }
+    for (const auto& [conn, where] : referenced_)
+      if (topics.count(conn) == 0)
+        throw Bad(where, "connection " + std::to_string(conn) +
+                             " is used but not among the index's connection records");
+  }
+
  private:
+  void versionLine() {
+    const std::uint64_t size = file_.size();
+    std::array<std::uint8_t, kVersionLineBytes> line{};
+    if (size < kVersionLineBytes)
+      throw Bad(0, "only " + std::to_string(size) + " bytes: not a ROS bag");
+    file_.read(0, line.data(), line.size());
+    if (std::memcmp(line.data(), kVersionLine, kVersionLineBytes) != 0) {
+      if (std::memcmp(line.data(), "#ROSBAG V1.2", 12) == 0)
+        throw Bad(0, "a ROS bag of format 1.2: only 2.0 is read (convert it with `rosbag fix`)");
+      throw Bad(0, "does not start with \"#ROSBAG V2.0\": not a ROS bag (v2.0)");
+    }
+  }
+
   void fileHeader(const Record& r) {
     const char* w = "file header record";
     index_pos_ = fixedField<std::uint64_t>(r.header, "index_pos", r.at, w);
@@ -349,31 +462,38 @@ class Checker {
                 "`rosbag reindex` on it");
   }
 
-  void chunk(const Record& r) {
+  // The chunk record's header fields: compression and declared size (what librosbag reads of a
+  // chunk when it opens the bag).
+  std::pair<std::string, std::uint32_t> chunkHeader(const Record& r) {
     const char* w = "chunk record";
     const std::string& compression = stringField(r.header, "compression", r.at, w);
     const std::uint32_t declared = fixedField<std::uint32_t>(r.header, "size", r.at, w);
     if (declared > limits_.max_chunk_bytes)
       throw Bad(r.at, "chunk of " + std::to_string(declared) + " bytes, more than the " +
                           std::to_string(limits_.max_chunk_bytes) + " accepted");
+    if (compression != "none" && compression != "bz2" && compression != "lz4")
+      throw Bad(r.at, "chunk compression '" + compression + "' (none, bz2 or lz4 are read)");
+    if (compression == "none" && declared != r.data_len)
+      throw Bad(r.at, "uncompressed chunk of size " + std::to_string(declared) + " holds " +
+                          std::to_string(r.data_len) + " bytes");
+    return {compression, declared};
+  }
+
+  void chunk(const Record& r) {
+    const auto [compression, declared] = chunkHeader(r);
     Chunk& c = chunk_;
     c.at = r.at;
     c.records.clear();
     std::vector<std::uint8_t> data;
     if (compression == "none") {
-      if (declared != r.data_len)
-        throw Bad(r.at, "uncompressed chunk of size " + std::to_string(declared) + " holds " +
-                            std::to_string(r.data_len) + " bytes");
       data = readData(file_, r);
-    } else if (compression == "bz2" || compression == "lz4") {
+    } else {
       const std::vector<std::uint8_t> packed = readData(file_, r);
       data = compression == "bz2" ? bz2Decompress(packed, declared, r.data_at)
                                   : lz4Decompress(packed, declared, r.data_at);
       if (data.size() != declared)
         throw Bad(r.at, compression + " chunk of declared size " + std::to_string(declared) +
                             " decompresses to " + std::to_string(data.size()) + " bytes");
-    } else {
-      throw Bad(r.at, "chunk compression '" + compression + "' (none, bz2 or lz4 are read)");
     }
     walkChunk(data, c);
     index_records_[r.at] = 0;
@@ -414,27 +534,43 @@ class Checker {
     parseFields(d.data(), d.size(), r.data_at, "connection header");
   }
 
-  void index(const Record& r) {
+  // An index record's fields and entries (12 bytes each: sec, nsec, offset in the chunk), their
+  // times valid.
+  struct IndexEntries {
+    std::uint32_t conn = 0, count = 0;
+    std::vector<std::uint8_t> data;
+  };
+  IndexEntries indexEntries(const Record& r) {
     const char* w = "index record";
-    if (!have_chunk_) throw Bad(r.at, "an index record before any chunk");
-    if (index_pos_ != 0 && r.at >= index_pos_)
-      throw Bad(r.at, "an index record after the index position");
     const std::uint32_t ver = fixedField<std::uint32_t>(r.header, "ver", r.at, w);
-    const std::uint32_t conn = fixedField<std::uint32_t>(r.header, "conn", r.at, w);
-    const std::uint32_t count = fixedField<std::uint32_t>(r.header, "count", r.at, w);
+    IndexEntries e;
+    e.conn = fixedField<std::uint32_t>(r.header, "conn", r.at, w);
+    e.count = fixedField<std::uint32_t>(r.header, "count", r.at, w);
     if (ver != 1) throw Bad(r.at, "index record version " + std::to_string(ver) + " (1 is read)");
-    if (static_cast<std::uint64_t>(count) * 12 != r.data_len)
-      throw Bad(r.at, "index record of " + std::to_string(count) + " entries holds " +
+    if (static_cast<std::uint64_t>(e.count) * 12 != r.data_len)
+      throw Bad(r.at, "index record of " + std::to_string(e.count) + " entries holds " +
                           std::to_string(r.data_len) + " bytes");
-    referenced_.emplace(conn, r.at);
-    const std::vector<std::uint8_t> d = readData(file_, r);
-    for (std::uint32_t i = 0; i < count; ++i) {
+    e.data = readData(file_, r);
+    for (std::uint32_t i = 0; i < e.count; ++i) {
       // librosbag logs and drops an entry whose time is not in [0 s 1 ns, the largest time].
-      const std::uint32_t sec = u32At(d.data() + 12 * i), nsec = u32At(d.data() + 12 * i + 4);
+      const std::uint32_t sec = u32At(e.data.data() + 12 * i);
+      const std::uint32_t nsec = u32At(e.data.data() + 12 * i + 4);
       if ((sec == 0 && nsec == 0) || nsec >= 1000000000U)
         throw Bad(r.data_at + 12 * i, "index entry " + std::to_string(i) +
                                           " has an invalid time (" + std::to_string(sec) + " s " +
                                           std::to_string(nsec) + " ns)");
+    }
+    return e;
+  }
+
+  void index(const Record& r) {
+    if (!have_chunk_) throw Bad(r.at, "an index record before any chunk");
+    if (index_pos_ != 0 && r.at >= index_pos_)
+      throw Bad(r.at, "an index record after the index position");
+    const IndexEntries e = indexEntries(r);
+    referenced_.emplace(e.conn, r.at);
+    const std::vector<std::uint8_t>& d = e.data;
+    for (std::uint32_t i = 0; i < e.count; ++i) {
       const std::uint32_t offset = u32At(d.data() + 12 * i + 8);
       // librosbag reads the record at `offset`, skipping connection records, and expects a
       // message record there.
@@ -595,6 +731,48 @@ void checkBagFile(const std::string& path, const BagGuardLimits& limits) {
     throw BagError(path + ": cannot be checked as a ROS1 bag: " + e.what());
   }
 }
+
+struct CheckedBag::Impl {
+  Impl(const std::string& path, const BagGuardLimits& limits) : file(path), checker(file, limits) {}
+  FileBytes file;
+  Checker checker;
+};
+
+CheckedBag::CheckedBag(const std::string& path, const BagGuardLimits& limits) : path_(path) {
+  try {
+    impl_ = std::make_unique<Impl>(path, limits);
+  } catch (const std::exception&) {
+    throw BagError(path + ": cannot open as a ROS1 bag: cannot read the file");
+  }
+  try {
+    impl_->checker.readIndex(index_);
+  } catch (const Bad& e) {
+    throw BagError(path + ": byte " + std::to_string(e.offset) + ": " + e.what() +
+                   " (corrupt bag)");
+  } catch (const std::exception& e) {
+    throw BagError(path + ": cannot be checked as a ROS1 bag: " + e.what());
+  }
+  checked_.assign(index_.chunks.size(), false);
+}
+
+CheckedBag::~CheckedBag() = default;
+
+void CheckedBag::checkChunk(std::size_t k) {
+  if (checked_.at(k)) return;
+  const BagIndex::Chunk& c = index_.chunks[k];
+  try {
+    impl_->checker.checkChunk(c.pos, c.index_records, index_.topics);
+  } catch (const Bad& e) {
+    throw BagError(path_ + ": byte " + std::to_string(e.offset) + ": " + e.what() +
+                   " (corrupt bag)");
+  } catch (const std::exception& e) {
+    throw BagError(path_ + ": chunk at byte " + std::to_string(c.pos) + ": " + e.what());
+  }
+  checked_[k] = true;
+  ++checked_count_;
+}
+
+std::uint64_t CheckedBag::bytesRead() const { return impl_->file.bytesRead(); }
 
 std::size_t checkSerialized(RosMessage type, const std::uint8_t* data, std::size_t n, bool exact) {
   switch (type) {

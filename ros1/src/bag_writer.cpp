@@ -21,6 +21,7 @@ void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
     bag.setCompression(o.compression == C::kBz2   ? rosbag::compression::BZ2
                        : o.compression == C::kLz4 ? rosbag::compression::LZ4
                                                   : rosbag::compression::Uncompressed);
+    bag.setChunkThreshold(o.chunk_threshold);
     const double accel_scale = o.config.imu_accel_in_g ? 1.0 / kGravity : 1.0;
     if (!o.tf_static.empty() && !imu.empty()) {
       tf2_msgs::TFMessage tf;
@@ -41,11 +42,12 @@ void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
       }
       bag.write(o.config.tf_static_topic, ros::Time(imu.front().t), tf);
     }
-    std::size_t seq = 0;
-    for (const ImuSample& s : imu) {
+    // In bag-time order, as a recorder writes what it receives: the chunks hold both topics.
+    auto writeImu = [&](std::size_t k) {
+      const ImuSample& s = imu[k];
       sensor_msgs::Imu m;
       m.header.stamp = ros::Time(s.t);
-      m.header.seq = static_cast<std::uint32_t>(seq++);
+      m.header.seq = static_cast<std::uint32_t>(k);
       m.header.frame_id = o.imu_frame_id;
       m.orientation_covariance[0] = -1;  // no orientation estimate
       m.angular_velocity.x = s.gyro.x();
@@ -55,8 +57,11 @@ void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
       m.linear_acceleration.y = accel_scale * s.accel.y();
       m.linear_acceleration.z = accel_scale * s.accel.z();
       bag.write(o.config.imu_topic, m.header.stamp, m);
-    }
-    for (const LidarFrame& f : frames) {
+    };
+    auto cloudBagTime = [&](const LidarFrame& f) {
+      return ros::Time(f.stamp - o.config.lidar_time_offset + o.lidar_publish_delay);
+    };
+    auto writeCloud = [&](const LidarFrame& f) {
       LidarFrame shifted;
       shifted.stamp = f.stamp - o.config.lidar_time_offset;
       shifted.points = f.points;
@@ -64,6 +69,13 @@ void writeBag(const std::string& path, const std::vector<ImuSample>& imu,
       encodeCloud(shifted, o.config.cloud, o.reflectivity, o.big_endian, m);
       m.header.frame_id = o.lidar_frame_id;
       bag.write(o.config.lidar_topic, ros::Time(shifted.stamp + o.lidar_publish_delay), m);
+    };
+    std::size_t i = 0, j = 0;
+    while (i < imu.size() || j < frames.size()) {
+      if (j == frames.size() || (i < imu.size() && ros::Time(imu[i].t) <= cloudBagTime(frames[j])))
+        writeImu(i++);
+      else
+        writeCloud(frames[j++]);
     }
     bag.close();
   } catch (const std::exception& e) {

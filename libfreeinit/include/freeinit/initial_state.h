@@ -122,9 +122,13 @@ struct Diagnostics {
   std::size_t points_skipped = 0;   ///< by decimation or range limits
   std::size_t points_rejected = 0;  ///< gated out as dynamic or outlier
   std::size_t gyro_updates = 0;
-  double update_rate_hz = 0;        ///< velocimeter updates per second of data
-  bool static_start = false;        ///< the window started at rest
-  double static_duration = 0;       ///< [s] time spent in zero-velocity mode
+  double update_rate_hz = 0;   ///< velocimeter updates per second of data
+  bool static_start = false;   ///< the window started at rest
+  double static_duration = 0;  ///< [s] time spent in zero-velocity mode
+  /// [s] of the window whose gyro samples measured the bias (the IMU at rest): the zero-velocity
+  /// time, or longer when the returns showed a translation too gentle for the IMU (joint
+  /// estimator: the zero velocity is then withdrawn, the zero rotation rate kept)
+  double zero_rate_duration = 0;
   double doppler_residual_rms = 0;  ///< [m/s] RMS of the used points' Doppler residuals at the
                                     ///< estimate (compare with the configured Doppler noise)
   /// Chi-square per degree of freedom of the nodes' Doppler residuals (joint estimator,

@@ -1255,13 +1255,13 @@ void DopplerInertialFilter::updateRest(double velocity_sigma, double rate_sigma)
   n.P = P;
 }
 
-void DopplerInertialFilter::cancelRestFrom(double t) {
+void DopplerInertialFilter::cancelRestFrom(double t, bool keep_rate) {
   for (std::size_t k = 0; k < nodes_.size(); ++k) {
     Node& n = nodes_[k];
     if (imu_[n.k].t < t) continue;
-    if (n.rest_velocity_sigma > 0 || n.rest_rate_sigma > 0) nodeChanged(k);
+    if (n.rest_velocity_sigma > 0 || (n.rest_rate_sigma > 0 && !keep_rate)) nodeChanged(k);
     n.rest_velocity_sigma = 0;
-    n.rest_rate_sigma = 0;
+    if (!keep_rate) n.rest_rate_sigma = 0;
   }
 }
 

@@ -206,8 +206,10 @@ class DopplerInertialFilter {
   /// `rate_sigma` [rad/s] (<= 0: that part is not used). Call after update().
   void updateRest(double velocity_sigma, double rate_sigma);
   /// Takes back the rest knowledge of the nodes at or after time t (the motion began before it
-  /// was detected): the smoother does not use it. The filtered states keep it.
-  void cancelRestFrom(double t);
+  /// was detected): the smoother does not use it. The filtered states keep it. keep_rate: only
+  /// the zero velocity is taken back, the gyro samples still measure the bias (the returns show
+  /// a translation, the gyro no rotation).
+  void cancelRestFrom(double t, bool keep_rate = false);
 
   /// The white noises from here on ([m/s] per return, [rad/s] and [m/s^2] per sample; <= 0:
   /// unchanged), e.g. as the window's data tell them: the next nodes' gates and updates use

@@ -216,7 +216,8 @@ class JointPipeline final : public Pipeline {
     pts.reserve(usable.size() / thin + 1);
     for (std::size_t i = 0; i < usable.size(); i += thin) {
       const DopplerPoint& p = *usable[i].p;
-      pts.push_back({usable[i].t - t_ref, p.p_l.cast<double>().normalized(), p.doppler});
+      const Vec3 p_l = p.p_l.cast<double>();
+      pts.push_back({usable[i].t - t_ref, p_l.normalized(), p.doppler, p_l.norm()});
     }
     const StartDecision d =
         decideStart(imu, k, k_last, pts, cfg_.extrinsics, cfg_.imu.gyro_bias_prior,
@@ -462,6 +463,7 @@ class JointPipeline final : public Pipeline {
               rest_cells_.remove(nr.cell[i], static_cast<double>(nr.residual[i]));
         }
         r.diag.static_duration = t_k - t_ref_;  // when the IMU showed the motion
+        r.diag.zero_rate_duration = r.diag.static_duration;
       }
       // An interpolated gyro sample (ImuScreen) measures no rate.
       const bool measured_gyro = !extra.gyro_synthetic;
@@ -469,7 +471,7 @@ class JointPipeline final : public Pipeline {
         filter_->updateRest(
             cfg_.joint.rest_velocity_sigma,
             cfg_.joint.zero_rate_at_rest && measured_gyro ? filter_->params().gyro_sigma : 0.0);
-      if (rest) r.diag.static_duration = t_k - t_ref_;
+      if (rest) r.diag.static_duration = r.diag.zero_rate_duration = t_k - t_ref_;
       node_rest_.push_back(rest);
       // A rest node's accepted returns are in the rest cells as long as it stays one.
       if (rest) {
@@ -523,8 +525,10 @@ class JointPipeline final : public Pipeline {
     diag.iterations = filter_->smooth();
     if (restContradicted()) {
       // The IMU showed rest to the end, but the returns say the sensor moves: a start too gentle
-      // for the accelerometer. The state is that of a moving sensor, without the rest knowledge.
-      filter_->cancelRestFrom(-std::numeric_limits<double>::infinity());
+      // for the accelerometer, or moving objects' returns pulling a standing sensor's velocity.
+      // The state is that of a moving sensor, without the zero velocity; the gyro, which showed
+      // no rotation, still measures its bias.
+      filter_->cancelRestFrom(-std::numeric_limits<double>::infinity(), true);
       std::fill(node_rest_.begin(), node_rest_.end(), false);
       diag.static_duration = 0;
       diag.iterations += filter_->smooth();
@@ -1017,6 +1021,18 @@ class JointPipeline final : public Pipeline {
                      "estimated motion and their residuals (RMS " +
                      fmt(d.doppler_residual_rms) + " m/s) exceed the Doppler noise (" + fmt(sigma) +
                      " m/s): moving objects may fill the view");
+      return;
+    }
+    // The IMU at rest all through, the returns showing motion faster than rest ([start]
+    // rest_speed), and few of them agreeing with it: a standing sensor amid moving objects (a
+    // crowd, traffic) whose Doppler the estimate followed. (A sensor cruising so smoothly that
+    // its IMU looks still sees a world that agrees: the view is mostly static.)
+    if (rest_withdrawn_ && judged >= 100 && agree < 0.5 && s.v_b().norm() > cfg_.start.rest_speed) {
+      failResult(r, InitStatus::AmbiguousMotion,
+                 "the IMU showed rest through the window, but the LiDAR returns show motion (" +
+                     fmt(s.v_b().norm()) + " m/s) that only " + fmt(100.0 * agree, 2) +
+                     " % of them agree with: moving objects may fill the view of a standing "
+                     "sensor");
       return;
     }
     if (rest_withdrawn_)

@@ -848,6 +848,7 @@ StartHypothesis refineOffset(const Rows& rows, const OffsetColumns& oc, const Co
   std::size_t inliers = 0;
   for (std::size_t i = 0; i < n; ++i) {
     const double r = equation(i, j);
+    wk.res[static_cast<Eigen::Index>(i)] = r;  // with the offset's share, for robustScale()
     if (std::abs(r) > p.gate) continue;
     mask[i] = 1;
     ++inliers;
@@ -864,6 +865,8 @@ StartHypothesis refineOffset(const Rows& rows, const OffsetColumns& oc, const Co
   h.time_offset = x(9);
   h.inliers = inliers;
   h.residual_rms = inliers > 0 ? std::sqrt(ss / static_cast<double>(inliers)) : 0.0;
+  // The noise the residuals show is that of this fit: the start's carried the offset's error.
+  robustScale(wk.res.head(static_cast<Eigen::Index>(n)), p.gate, h);
   const double k = std::max(1.0, h.residual_rms / p.doppler_sigma);
   const Mat10 cov = info.ldlt().solve(Mat10::Identity()) * k * k;
   h.cov = cov.topLeftCorner<6, 6>();
@@ -1105,6 +1108,57 @@ std::vector<StartHypothesis> refineStarts(const std::vector<Vec3>& starts, const
   return hypotheses;
 }
 
+/// What the ground says of hypothesis b (StartDetectorParams::ground_share): how many returns
+/// were taken as the ground (0: too few below the sensor to tell), the share of them b
+/// explains, and the other hypothesis that explains most of the rest with that share.
+struct GroundVerdict {
+  std::size_t returns = 0;
+  double chosen_share = 1;
+  std::size_t other = 0;
+  double other_share = 0;
+};
+GroundVerdict groundVerdict(const Rows& rows, const std::vector<double>& range, const Vec3& p_bl,
+                            const std::vector<StartHypothesis>& hypotheses,
+                            const std::vector<std::vector<std::uint8_t>>& masks, std::size_t b,
+                            const StartDetectorParams& p) {
+  GroundVerdict out;
+  const Vec3 up = -hypotheses[b].g_b0.normalized();
+  if (!up.allFinite()) return out;
+  // Heights above the sensor's origin in b0 (the span's motion moves them by |v_z| T at most).
+  std::vector<std::pair<double, std::size_t>> height;
+  height.reserve(range.size());
+  for (std::size_t j = 0; j < range.size(); ++j)
+    if (range[j] > 0)
+      height.emplace_back(range[j] * up.dot(rows.w(static_cast<Eigen::Index>(j))) + up.dot(p_bl),
+                          j);
+  constexpr std::size_t kFewest = 30;
+  const std::size_t n =
+      static_cast<std::size_t>(p.ground_share * static_cast<double>(height.size()));
+  if (n < kFewest) return out;
+  std::nth_element(height.begin(), height.begin() + static_cast<std::ptrdiff_t>(n - 1),
+                   height.end());
+  if (!(height[n - 1].first < -p.ground_depth)) return out;  // the lowest are not below
+  std::size_t chosen = 0;
+  std::vector<std::size_t> others(hypotheses.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    const std::size_t j = height[i].second;
+    if (masks[b][j] != 0) {
+      ++chosen;
+      continue;
+    }
+    for (std::size_t h = 0; h < hypotheses.size(); ++h)
+      if (h != b && masks[h][j] != 0) ++others[h];
+  }
+  out.returns = n;
+  out.chosen_share = static_cast<double>(chosen) / static_cast<double>(n);
+  for (std::size_t h = 0; h < hypotheses.size(); ++h)
+    if (h != b && static_cast<double>(others[h]) / static_cast<double>(n) > out.other_share) {
+      out.other = h;
+      out.other_share = static_cast<double>(others[h]) / static_cast<double>(n);
+    }
+  return out;
+}
+
 }  // namespace
 
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first,
@@ -1155,6 +1209,8 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
   for (auto* v : {&r_t, &r_tau, &r_dx, &r_dy, &r_dz, &r_z}) v->reserve(points.size());
   std::vector<Vec3> d_l;  // the directions in the LiDAR frame, for the coverage grid
   d_l.reserve(points.size());
+  std::vector<double> range;  // for the ground check
+  range.reserve(points.size());
   for (std::size_t j = 1; j < points.size(); ++j)
     if (!(points[j].t >= points[j - 1].t))
       throw std::invalid_argument("decideStart: return " + std::to_string(j) +
@@ -1171,6 +1227,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
     r_dz.push_back(sp.d_l.z());
     r_z.push_back(sp.doppler);
     d_l.push_back(sp.d_l);
+    range.push_back(sp.range);
   }
   const Eigen::Index n = static_cast<Eigen::Index>(d_l.size());
   if (n < 10) {
@@ -1310,6 +1367,22 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
     out.message = "two motions fit the LiDAR returns (" + speed(best) + " and " +
                   speed(out.hypotheses[c]) + " m/s over " + percent(best.coverage) + " and " +
                   percent(contender) + " % of the view): a large moving object may fill the view";
+    return out;
+  }
+  // The ground does not move: a motion that leaves the lowest returns to another one is a
+  // large object filling the view (a bus, a truck alongside), with the world seen on the ground
+  // only. Its share of the view says nothing then.
+  if (const GroundVerdict ground =
+          groundVerdict(rows, range, extrinsics.p_bl, out.hypotheses, masks, b, p);
+      ground.returns > 0 && ground.chosen_share <= p.ground_explained_max &&
+      ground.other_share >= p.ground_other_min) {
+    out.kind = StartDecision::Kind::Ambiguous;
+    out.message = "the motion over most of the view (" + speed(best) + " m/s over " +
+                  percent(best.coverage) + " % of it) leaves the ground to another one (" +
+                  speed(out.hypotheses[ground.other]) + " m/s explains " +
+                  percent(ground.other_share) + " % of the " + std::to_string(ground.returns) +
+                  " lowest returns, it " + percent(ground.chosen_share) +
+                  " %): a large moving object may fill the view";
     return out;
   }
   out.chosen = best;

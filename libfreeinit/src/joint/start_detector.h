@@ -48,6 +48,15 @@ struct StartDetectorParams {
   /// the IMU as well), so the start is ambiguous. A car passing a vehicle covers far less.
   double ambiguity_ratio = 0.25;
   double min_contender_coverage = 0.1;
+  /// The ground check: the lowest `ground_share` of the returns (by height under the chosen
+  /// motion's gravity, at least ground_depth below the sensor, at least 30 of them) are taken to
+  /// be on the ground, which does not move. When the chosen motion explains at most
+  /// ground_explained_max of them and another motion at least ground_other_min, the chosen one
+  /// is an object filling the view and the world shows only on the ground: ambiguous.
+  double ground_share = 0.05;
+  double ground_depth = 0.3;  ///< [m]
+  double ground_explained_max = 0.1;
+  double ground_other_min = 0.5;
   /// [m/s^2] a hypothesis whose refined |gravity| is further than this from 9.81 is not chosen
   /// (it may still be a contender).
   double max_gravity_error = 3.0;
@@ -67,6 +76,7 @@ struct StartPoint {
   double t = 0;             ///< [s] from the window start
   Vec3 d_l = Vec3::Zero();  ///< unit direction in the LiDAR frame
   double doppler = 0;       ///< [m/s]
+  double range = 0;         ///< [m] of the return (0: not known; the ground check skips it)
 };
 
 /// A motion the returns support.

@@ -6,6 +6,8 @@
 #include <fstream>
 #include <string_view>
 
+#include "ini_text.h"
+
 namespace freeinit::app_support {
 namespace {
 
@@ -22,20 +24,11 @@ bool isMrptArchive(std::string_view head) {
                      [](char c) { return isClassNameChar(static_cast<unsigned char>(c)); });
 }
 
+// A section header or a key = value as the first line that is not a comment; blank lines and
+// comments only: every key at its default.
 bool isIni(std::string_view text) {
-  std::size_t pos = 0;
-  while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string_view::npos) end = text.size();
-    std::string_view line = text.substr(pos, end - pos);
-    pos = end + 1;
-    const auto b = line.find_first_not_of(" \t\r");
-    if (b == std::string_view::npos) continue;
-    line.remove_prefix(b);
-    if (line[0] == ';' || line[0] == '#') continue;
-    return line[0] == '[' || line.find('=') != std::string_view::npos;
-  }
-  return true;  // blank lines and comments only: every key at its default
+  const std::string_view line = firstIniLine(text);
+  return line.empty() || line[0] == '[' || line.find('=') != std::string_view::npos;
 }
 
 }  // namespace
@@ -72,7 +65,7 @@ std::string describe(FileKind kind) {
     case FileKind::Rawlog:
       return "an MRPT rawlog";
     case FileKind::RosBag:
-      return "a ROS 1 bag (freeinit-import-bag makes a rawlog of it)";
+      return "a ROS 1 bag";
     case FileKind::Mcap:
       return "an MCAP file (ROS 2)";
     case FileKind::Sqlite:
@@ -92,6 +85,9 @@ std::string describe(FileKind kind) {
 }
 
 bool isReadableInput(FileKind kind) {
+#ifdef FREEINIT_WITH_ROSBAG
+  if (kind == FileKind::RosBag) return true;
+#endif
   return kind == FileKind::Rawlog || kind == FileKind::Mcap || kind == FileKind::Sqlite ||
          kind == FileKind::Rosbag2Folder;
 }

@@ -9,11 +9,15 @@
 
 namespace freeinit::app_support {
 
-std::string truthPathFor(const std::string& rawlog_path) {
-  std::string p = rawlog_path;
-  const std::string ext = ".rawlog";
-  if (p.size() > ext.size() && p.compare(p.size() - ext.size(), ext.size(), ext) == 0)
-    p.erase(p.size() - ext.size());
+std::string truthPathFor(const std::string& input_path) {
+  std::string p = input_path;
+  // A rosbag2 folder given as "rec/": the truth sits beside the folder, not in it.
+  while (p.size() > 1 && p.back() == '/') p.pop_back();
+  for (const std::string ext : {".rawlog", ".mcap", ".bag", ".db3"})
+    if (p.size() > ext.size() && p.compare(p.size() - ext.size(), ext.size(), ext) == 0) {
+      p.erase(p.size() - ext.size());
+      break;
+    }
   return p + ".truth.csv";
 }
 

@@ -4,6 +4,8 @@
 #include <fstream>
 #include <string_view>
 
+#include "ini_text.h"
+
 namespace freeinit::app_support {
 namespace {
 
@@ -31,24 +33,6 @@ std::optional<std::string> head(const std::string& path) {
 
 bool startsWith(std::string_view s, std::string_view prefix) {
   return s.substr(0, prefix.size()) == prefix;
-}
-
-/// The first line that is neither blank nor a comment (';' or '#').
-std::string_view firstIniLine(std::string_view text) {
-  std::size_t pos = 0;
-  while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string_view::npos) end = text.size();
-    std::string_view line = text.substr(pos, end - pos);
-    pos = end + 1;
-    const auto b = line.find_first_not_of(" \t\r");
-    if (b == std::string_view::npos) continue;
-    line.remove_prefix(b);
-    if (line[0] == ';' || line[0] == '#') continue;
-    const auto e = line.find_last_not_of(" \t\r");
-    return line.substr(0, e + 1);
-  }
-  return {};
 }
 
 /// An MRPT archive whose first object is of class `name` (its name written as one byte

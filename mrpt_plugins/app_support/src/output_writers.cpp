@@ -52,11 +52,13 @@ void printVerdict(std::ostream& log, const StateVerdict& v) {
       << v.sigma_tilt_deg << " deg\n"
       << std::setprecision(3) << "  window: " << v.window_s << " s, " << v.window_frames
       << " frames; Doppler residual RMS " << std::setprecision(4) << v.residual_rms
-      << " m/s (configured noise " << v.doppler_sigma << " m/s)\n"
-      << std::setprecision(2) << "  LiDAR-IMU clock offset " << 1e3 * v.time_offset << " ms, sigma "
-      << 1e3 * v.time_offset_sigma << " ms ("
-      << (v.time_offset_estimated ? "estimated from the motion" : "its prior: not observed")
-      << ")\n";
+      << " m/s (configured noise " << v.doppler_sigma << " m/s)\n";
+  // Clocks declared synchronized ([joint] time_offset_sigma = 0): no offset line.
+  if (v.time_offset_estimated || v.time_offset_sigma > 0)
+    log << std::setprecision(2) << "  LiDAR-IMU clock offset " << 1e3 * v.time_offset
+        << " ms, sigma " << 1e3 * v.time_offset_sigma << " ms ("
+        << (v.time_offset_estimated ? "estimated from the motion" : "its prior: not observed")
+        << ")\n";
   const std::tuple<const NoiseUsed*, const char*, const char*> noises[] = {
       {&v.noise.gyro, "gyro", "rad/s"},
       {&v.noise.accel, "accel", "m/s^2"},

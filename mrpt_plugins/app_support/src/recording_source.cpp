@@ -2,6 +2,9 @@
 #include <freeinit/bags/ros2_import.h>
 #include <freeinit/mrpt_plugins/conversions.h>
 #include <freeinit/ros2/open_recording.h>
+#ifdef FREEINIT_WITH_ROSBAG
+#include <freeinit/ros1/bag_reader.h>
+#endif
 
 #include <cmath>
 #include <deque>
@@ -21,10 +24,11 @@ std::int64_t toNs(double t) {
   return static_cast<std::int64_t>(std::floor(t * 1e9));
 }
 
-class Ros2Source : public mrpt_plugins::RecordSource {
+// A recording of either ROS generation as a source of rawlog records.
+class BagSource : public mrpt_plugins::RecordSource {
  public:
-  Ros2Source(std::unique_ptr<bags::Ros2Reader> reader, const bags::BagImportConfig& config,
-             const Extrinsics& extrinsics, const InputParams& input)
+  BagSource(std::unique_ptr<bags::RecordingReader> reader, const bags::BagImportConfig& config,
+            const Extrinsics& extrinsics, const InputParams& input)
       : reader_(std::move(reader)),
         config_(config),
         extrinsics_(extrinsics),
@@ -103,7 +107,7 @@ class Ros2Source : public mrpt_plugins::RecordSource {
           newest_ = std::max(newest_, reader_->lastLogTime());
           continue;
         }
-        stream_.finish(reader_->recording().path() + ": " + config_.imu_topic);
+        stream_.finish(reader_->path() + ": " + config_.imu_topic);
         finished_ = true;
       }
     } catch (const std::exception& e) {  // BagError, a corrupt container: one line
@@ -113,7 +117,7 @@ class Ros2Source : public mrpt_plugins::RecordSource {
     return !queue_.empty();
   }
 
-  std::unique_ptr<bags::Ros2Reader> reader_;
+  std::unique_ptr<bags::RecordingReader> reader_;
   bags::BagImportConfig config_;
   Extrinsics extrinsics_;
   std::string imu_label_, lidar_label_;
@@ -138,9 +142,6 @@ std::unique_ptr<mrpt_plugins::RawlogReader> openInput(const std::string& path,
                                                       std::vector<std::string>* warnings) {
   using K = ros2::RecordingKind;
   const K kind = ros2::identifyRecording(path);
-  if (kind == K::kRos1Bag)
-    throw InputError(path + ": a ROS 1 bag: import it first (freeinit-import-bag " + path +
-                     " -c <import.ini>), then run freeinit on the rawlog");
   // A folder of ROS 2 files without metadata.yaml: the ROS reader's message lists them.
   bool ros2_files = false;
   if (kind == K::kPlainFolder) {
@@ -150,12 +151,24 @@ std::unique_ptr<mrpt_plugins::RawlogReader> openInput(const std::string& path,
       ros2_files = ros2_files || ext == ".db3" || ext == ".mcap";
     }
   }
-  if (kind != K::kMcap && kind != K::kSqlite && kind != K::kRosbag2Folder && !ros2_files)
+  if (kind != K::kMcap && kind != K::kSqlite && kind != K::kRosbag2Folder && kind != K::kRos1Bag &&
+      !ros2_files)
     return std::make_unique<mrpt_plugins::RawlogReader>(path, index);
   const bags::BagImportConfig& bag = config.bag_import.bag;
-  std::unique_ptr<bags::Ros2Reader> reader;
+  std::unique_ptr<bags::RecordingReader> reader;
   try {
-    reader = std::make_unique<bags::Ros2Reader>(path, bag);
+    if (kind == K::kRos1Bag) {
+#ifdef FREEINIT_WITH_ROSBAG
+      // The index only: each chunk is checked when the window first needs it.
+      reader = std::make_unique<ros1::Ros1Reader>(path, bag);
+#else
+      throw InputError(path +
+                       ": a ROS 1 bag, which this build does not read (configure it with "
+                       "-DFREEINIT_WITH_ROSBAG=ON)");
+#endif
+    } else {
+      reader = std::make_unique<bags::Ros2Reader>(path, bag);
+    }
   } catch (const bags::BagError& e) {
     throw InputError(e.what());
   }
@@ -182,7 +195,7 @@ std::unique_ptr<mrpt_plugins::RawlogReader> openInput(const std::string& path,
     e = recorded->extrinsics;
   } else {
     throw InputError(
-        path + ": " + reader->recording().kind() + ": no " +
+        path + ": " + reader->summary().kind + ": no " +
         (bag.tf_static_topic.empty() ? std::string("tf_static_topic") : bag.tf_static_topic) +
         " linking the IMU's frame to the LiDAR's: give the extrinsics in "
         "[extrinsics] (R_bl, p_bl, from_sensor_pose = false)");
@@ -190,7 +203,7 @@ std::unique_ptr<mrpt_plugins::RawlogReader> openInput(const std::string& path,
   for (const auto& w : reader->summary().warnings)
     if (warnings != nullptr) warnings->push_back(path + ": " + w);
   return std::make_unique<mrpt_plugins::RawlogReader>(
-      path, std::make_unique<Ros2Source>(std::move(reader), bag, e, config.input));
+      path, std::make_unique<BagSource>(std::move(reader), bag, e, config.input));
 }
 
 }  // namespace freeinit::app_support

@@ -8,6 +8,7 @@
 #include <freeinit/bags/cloud_codec.h>
 #include <freeinit/bags/import_config.h>
 #include <freeinit/bags/import_stream.h>
+#include <freeinit/bags/recording_reader.h>
 #include <freeinit/bags/static_transforms.h>
 #include <freeinit/ros2/recording.h>
 
@@ -25,7 +26,7 @@ namespace freeinit::bags {
 double rosSeconds(std::int64_t ns);
 
 /// A ROS 2 recording opened for import, read message by message into an ImportStream.
-class Ros2Reader {
+class Ros2Reader : public RecordingReader {
  public:
   /// Opens `path` and checks the topics: both must exist with the expected types, encoded in CDR.
   /// Throws BagError naming the file and what it is for: a recording that does not open
@@ -33,35 +34,36 @@ class Ros2Reader {
   /// a topic of another type, stamp_source = trigger; std::invalid_argument for a configuration
   /// that does not validate.
   Ros2Reader(const std::string& path, const BagImportConfig& config);
-  ~Ros2Reader();
+  ~Ros2Reader() override;
   Ros2Reader(const Ros2Reader&) = delete;
   Ros2Reader& operator=(const Ros2Reader&) = delete;
 
   const ros2::Recording& recording() const { return *rec_; }
+  const std::string& path() const override;
   /// The topics (type, count where known), the other topics and the reader's warnings.
-  const BagSummary& summary() const { return summary_; }
+  const BagSummary& summary() const override { return summary_; }
 
   /// The LiDAR pose in the IMU frame from config.tf_static_topic, linking the frame_id of the
   /// first IMU message to that of the first cloud; nullopt when the recording has no such topic
   /// or it does not link them. Reads the whole tf topic (a few messages: the index skips the rest)
   /// and one message of each sensor topic.
-  std::optional<RecordedExtrinsics> staticExtrinsics();
+  std::optional<RecordedExtrinsics> staticExtrinsics() override;
 
   /// Starts (again) at the messages logged in [from, to] ([ns] UNIX).
   void start(std::int64_t from = std::numeric_limits<std::int64_t>::min(),
-             std::int64_t to = std::numeric_limits<std::int64_t>::max());
+             std::int64_t to = std::numeric_limits<std::int64_t>::max()) override;
   /// Reads, decodes and feeds one message to `stream`; false at the end. Throws BagError naming
   /// the file, the topic and the message.
-  bool step(ImportStream& stream);
+  bool step(ImportStream& stream) override;
   /// (done, total) for a progress bar: in thousandths of the recording's log-time span.
-  std::pair<std::size_t, std::size_t> progress() const;
+  std::pair<std::size_t, std::size_t> progress() const override;
   /// NaN/inf points dropped so far.
   std::size_t invalidPoints() const { return stats_.invalid_points; }
   /// Messages read per topic so far.
   std::size_t imuRead() const { return imu_read_; }
   std::size_t cloudsRead() const { return clouds_read_; }
   /// [s] UNIX log time of the last message read (rosSeconds).
-  double lastLogTime() const { return rosSeconds(last_log_time_); }
+  double lastLogTime() const override { return rosSeconds(last_log_time_); }
 
  private:
   /// The frame_id of the first message of `topic` (its header).

@@ -74,9 +74,10 @@ struct EvalRow {
   /// undeclared time offset or extrinsics error): such a run must be within 3x its bound, flagged
   /// (a warning or a status), never a plain ok that is wrong.
   bool wrong_calibration = false;
-  /// [s] how long the state used the knowledge of rest (zero velocity and rate while the IMU
-  /// showed rest; Diagnostics::static_duration), NaN without a state. The bound does not know of
-  /// rest: an own sigma below it is then no contradiction.
+  /// [s] how long the state used the knowledge of rest (zero velocity and rate, or the rate
+  /// alone, while the IMU showed rest; Diagnostics::static_duration, zero_rate_duration), NaN
+  /// without a state. The bound does not know of rest: an own sigma below it is then no
+  /// contradiction.
   double rest_duration = kNoValue;
 
   // What the estimator was handed against the truth (freeinit-eval: --imu-noise-factor,

@@ -7,6 +7,7 @@
 #include <freeinit/ros2/messages.h>
 #include <freeinit/types.h>
 
+#include <cstdint>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,8 @@ struct BagWriteOptions {
   bool big_endian = false;   ///< PointCloud2 data big-endian (is_bigendian = true)
   bool reflectivity = true;  ///< add the Aeva driver's float32 reflectivity field (zeros)
   enum class Compression { kNone, kBz2, kLz4 } compression = Compression::kNone;  ///< chunks
+  /// [bytes] a chunk is closed once it holds this much (rosbag record's default: 768 KB).
+  std::uint32_t chunk_threshold = 768 * 1024;
   std::string imu_frame_id = "imu";     ///< header.frame_id of the IMU messages
   std::string lidar_frame_id = "aeva";  ///< header.frame_id of the clouds
   /// Written as one tf2_msgs/TFMessage on config.tf_static_topic at the first IMU stamp (none

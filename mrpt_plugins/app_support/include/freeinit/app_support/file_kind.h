@@ -27,7 +27,8 @@ FileKind fileKind(const std::string& path);
 /// "an MRPT rawlog", "an INI configuration file", ... (for messages).
 std::string describe(FileKind kind);
 
-/// A rawlog or a recording the apps read straight in (an MCAP file, a .db3, a rosbag2 folder).
+/// A rawlog or a recording the apps read straight in (an MCAP file, a .db3, a rosbag2 folder; a
+/// ROS 1 bag when built with FREEINIT_WITH_ROSBAG).
 bool isReadableInput(FileKind kind);
 
 }  // namespace freeinit::app_support

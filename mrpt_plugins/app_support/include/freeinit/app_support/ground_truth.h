@@ -1,4 +1,4 @@
-// Ground truth beside a rawlog ("<name>.truth.csv", written by freeinit-sim) and the comparison
+// Ground truth beside a recording ("<name>.truth.csv", written by freeinit-sim) and the comparison
 // of an initial state against it, through the evaluation module (freeinit/eval): only
 // frame-independent quantities are compared (the body-frame velocity, the gravity direction in the
 // body frame and the biases), with the NEES of the state's covariance.
@@ -16,8 +16,10 @@ namespace freeinit::app_support {
 /// The evaluation's truth type (one sample of the truth file).
 using TruthSample = eval::StateTruth;
 
-/// "<dir>/<stem>.truth.csv" for "<dir>/<stem>.rawlog".
-std::string truthPathFor(const std::string& rawlog_path);
+/// "<dir>/<stem>.truth.csv" for a recording "<dir>/<stem>.rawlog", "<dir>/<stem>.mcap",
+/// "<dir>/<stem>.bag" or "<dir>/<stem>.db3", and for a rosbag2 folder "<dir>/<stem>" (or
+/// "<dir>/<stem>/"): the truth file beside the recording. Another name gets ".truth.csv" appended.
+std::string truthPathFor(const std::string& input_path);
 /// eval::writeTruthCsv.
 void writeTruthCsv(const std::string& path, const std::vector<TruthSample>& truth);
 /// eval::readTruthCsv: throws std::runtime_error naming the file and line on a malformed file.
