@@ -400,6 +400,43 @@ void expectTakenBackAsNeverGiven(bool smooth_first) {
   EXPECT_NEAR(a.residualSumOfSquares(), b.residualSumOfSquares(), 1e-3 * b.residualSumOfSquares());
 }
 
+// A sample interpolated in place of a fault or a gap (ImuScreen) adds the variance of its
+// interpolation's error to the white noise the filter uses, whatever that is (the configured one
+// or the data's): at rest, with R_wb = I, the two steps touching sample 3 each add it times dt^2
+// to the velocity's variance per axis, and nothing else changes.
+TEST(DopplerInertialFilter, ASyntheticSampleAddsItsVarianceToWhicheverWhiteNoise) {
+  constexpr double kDt = 0.005, kExtra = 0.3;  // [s], [(m/s^2)^2]
+  auto velocityVariance = [&](double accel_sigma, double extra) {
+    DopplerInertialFilterParams params;
+    params.accel_sigma = accel_sigma;
+    Filter f(params, test::testExtrinsics());
+    for (std::size_t k = 0; k < 12; ++k) {
+      ImuSample s;
+      s.t = 10.0 + kDt * static_cast<double>(k);
+      s.accel = Vec3(0, 0, kGravity);
+      f.addImu(s, 0.0, k == 3 ? extra : 0.0);
+    }
+    FilterState x0;
+    x0.t = 10.0;
+    f.start(x0, Filter::StartPrior{});
+    NodeArrays none;
+    for (std::size_t k = 0; k < 6; ++k) {
+      f.beginNode(false);
+      f.setReturns(none.arrays());
+      f.update();
+      f.predict();
+    }
+    return f.covariance().block<3, 3>(Filter::kVel, Filter::kVel).eval();
+  };
+  for (const double sigma : {0.02, 0.2}) {
+    const Mat3 added = velocityVariance(sigma, kExtra) - velocityVariance(sigma, 0.0);
+    EXPECT_LT((added - 2.0 * kExtra * kDt * kDt * Mat3::Identity()).norm(),
+              1e-6 * kExtra * kDt * kDt)
+        << sigma << "\n"
+        << added;
+  }
+}
+
 TEST(DopplerInertialFilter, TakingPointsBackEqualsNeverGivingThem) {
   // Taken back after the window.
   expectTakenBackAsNeverGiven(false);

@@ -558,8 +558,7 @@ FilterState DopplerInertialFilter::propagate(const FilterState& x,
 }
 
 FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x,
-                                             IntegrationJacobian* F, Mat9* noise_g,
-                                             Mat9* noise_a) const {
+                                             IntegrationJacobian* F, IntervalNoise* noise) const {
   if (n.k_next == n.k + 1) {
     const double tau = imu_[n.k + 1].t - imu_[n.k].t;
     FilterState y = integrate(x, imu_, n.k, tau, F, imuAlong(imu_, n.k, tau, n.step_imu));
@@ -569,8 +568,7 @@ FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x
   // Across the samples to the next node, one step per sample interval. The process noise of a
   // step (as a single step's, propagateCovariance) is carried to the interval's end through the
   // steps after it: N := Phi N Phi^T + N_step, Phi the step's Jacobian on (dtheta, dp, dv).
-  const bool noise = noise_g != nullptr && noise_a != nullptr;
-  if (!noise) {
+  if (noise == nullptr) {
     // The smoother's passes: through the interval's preintegration (made once, at the biases of
     // the first pass that needs it).
     if (n.pre.size() < 4) n.pre.resize(4);
@@ -579,30 +577,36 @@ FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x
   }
   const std::size_t steps = n.k_next - n.k;
   if (n.ahead.size() < steps) n.ahead.resize(steps);
-  if (noise) {
-    noise_g->setZero();
-    noise_a->setZero();
-  }
+  noise->g.setZero();
+  noise->a.setZero();
+  noise->extra.setZero();
+  noise->has_extra = !imu_extra_var_.empty();
   IntegrationJacobian total, step;
   FilterState y = x;
   for (std::size_t i = 0; i < steps; ++i) {
     const std::size_t j = n.k + i;
     const double tau = imu_[j + 1].t - imu_[j].t;
-    const bool jacobian = F != nullptr || noise;
-    y = integrate(y, imu_, j, tau, jacobian ? &step : nullptr, imuAlong(imu_, j, tau, n.ahead[i]));
+    y = integrate(y, imu_, j, tau, &step, imuAlong(imu_, j, tau, n.ahead[i]));
     y.t = imu_[j + 1].t;
     if (F != nullptr) compose(step, total);
-    if (noise) {
-      double sg = 1.0, sa = 1.0;
-      stepNoiseScales(j, sg, sa);
-      const double qg = sg * sg * tau * tau, qa = sa * sa * tau * tau;
-      transportNoise(step, *noise_g);
-      transportNoise(step, *noise_a);
-      noise_g->block<3, 3>(kTheta, kTheta).diagonal().array() += qg;
-      noise_a->block<3, 3>(kPos, kPos).diagonal().array() += qa * tau * tau / 4.0;
-      noise_a->block<3, 3>(kPos, kVel).diagonal().array() += qa * tau / 2.0;
-      noise_a->block<3, 3>(kVel, kPos).diagonal().array() += qa * tau / 2.0;
-      noise_a->block<3, 3>(kVel, kVel).diagonal().array() += qa;
+    // A step's noise as a single step's (propagateCovariance): qg on the attitude, qa on the
+    // velocity and the position integrating it.
+    auto add = [tau](Mat9& N, double qg, double qa) {
+      N.block<3, 3>(kTheta, kTheta).diagonal().array() += qg;
+      N.block<3, 3>(kPos, kPos).diagonal().array() += qa * tau * tau / 4.0;
+      N.block<3, 3>(kPos, kVel).diagonal().array() += qa * tau / 2.0;
+      N.block<3, 3>(kVel, kPos).diagonal().array() += qa * tau / 2.0;
+      N.block<3, 3>(kVel, kVel).diagonal().array() += qa;
+    };
+    transportNoise(step, noise->g);
+    transportNoise(step, noise->a);
+    add(noise->g, tau * tau, 0.0);
+    add(noise->a, 0.0, tau * tau);
+    if (noise->has_extra) {
+      double vg = 0.0, va = 0.0;
+      stepExtraVariances(j, vg, va);
+      transportNoise(step, noise->extra);
+      add(noise->extra, vg * tau * tau, va * tau * tau);
     }
   }
   if (F != nullptr) *F = total;
@@ -794,12 +798,12 @@ DopplerInertialFilter::VecS DopplerInertialFilter::IntegrationJacobian::transpos
   return z;
 }
 
-void DopplerInertialFilter::stepNoiseScales(std::size_t k, double& sg, double& sa) const {
-  sg = sa = 1.0;
-  if (k + 1 < imu_noise_scale_.size()) {
-    const Eigen::Vector2f s = imu_noise_scale_[k].cwiseMax(imu_noise_scale_[k + 1]);
-    sg = static_cast<double>(s(0));
-    sa = static_cast<double>(s(1));
+void DopplerInertialFilter::stepExtraVariances(std::size_t k, double& vg, double& va) const {
+  vg = va = 0.0;
+  if (k + 1 < imu_extra_var_.size()) {
+    const Eigen::Vector2f v = imu_extra_var_[k].cwiseMax(imu_extra_var_[k + 1]);
+    vg = static_cast<double>(v(0));
+    va = static_cast<double>(v(1));
   }
 }
 
@@ -814,18 +818,17 @@ DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const Int
   // The IMU white noises are the process noise (sigma^2 dt^2 per step for the per-sample noise
   // sigma at the IMU rate): velocity qa, the position integrating it (dt/2 per step, fully
   // correlated within the step); the biases may walk.
-  // A sample interpolated in place of a fault or a gap carries its interpolation's noise: the
-  // step takes the larger scale of its two samples.
-  // Across several samples: the noise propagate() accumulated step by step (Node::noise_g,
-  // noise_a), added after F P F^T.
+  // A sample interpolated in place of a fault or a gap adds its interpolation's error: the step
+  // takes the larger of its two samples'.
+  // Across several samples: the noise propagate() accumulated step by step (Node::noise), added
+  // after F P F^T.
   const bool across = n.k_next > k + 1;
-  double sg = 1.0, sa = 1.0;
-  if (across)
-    sg = sa = 0.0;
-  else
-    stepNoiseScales(k, sg, sa);
-  const double qg = sg * sg * params_.gyro_sigma * params_.gyro_sigma * dt * dt;
-  const double qa = sa * sa * params_.accel_sigma * params_.accel_sigma * dt * dt;
+  double vg = 0.0, va = 0.0;
+  if (!across) stepExtraVariances(k, vg, va);
+  const double white_g = across ? 0.0 : params_.gyro_sigma * params_.gyro_sigma;
+  const double white_a = across ? 0.0 : params_.accel_sigma * params_.accel_sigma;
+  const double qg = (white_g + vg) * dt * dt;
+  const double qa = (white_a + va) * dt * dt;
   const detail::ProcessNoiseBlocks Q{
       qg,
       qa * dt * dt / 4.0,
@@ -845,9 +848,9 @@ DopplerInertialFilter::MatS DopplerInertialFilter::propagateCovariance(const Int
       detail::propagateCovarianceKernel<kCoreDim>(blocks, Q, P.data(), out.data());
   }
   if (across) {
-    const double vg = params_.gyro_sigma * params_.gyro_sigma,
-                 va = params_.accel_sigma * params_.accel_sigma;
-    const Mat9 N = vg * n.noise_g + va * n.noise_a;
+    Mat9 N = params_.gyro_sigma * params_.gyro_sigma * n.noise.g +
+             params_.accel_sigma * params_.accel_sigma * n.noise.a;
+    if (n.noise.has_extra) N += n.noise.extra;
     out.topLeftCorner<9, 9>() += 0.5 * (N + N.transpose());
   }
   return out;
@@ -973,13 +976,13 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   return Q;
 }
 
-void DopplerInertialFilter::addImu(const ImuSample& s, double gyro_scale, double accel_scale) {
+void DopplerInertialFilter::addImu(const ImuSample& s, double gyro_var, double accel_var) {
   if (!imu_.empty() && !(s.t > imu_.back().t))
     throw std::invalid_argument("DopplerInertialFilter::addImu: time does not increase");
-  const bool measured = gyro_scale == 1.0 && accel_scale == 1.0;
-  if (!measured && imu_noise_scale_.empty()) imu_noise_scale_.assign(imu_.size(), {1.0f, 1.0f});
-  if (!imu_noise_scale_.empty())
-    imu_noise_scale_.emplace_back(static_cast<float>(gyro_scale), static_cast<float>(accel_scale));
+  const bool measured = gyro_var == 0.0 && accel_var == 0.0;
+  if (!measured && imu_extra_var_.empty()) imu_extra_var_.assign(imu_.size(), {0.0f, 0.0f});
+  if (!imu_extra_var_.empty())
+    imu_extra_var_.emplace_back(static_cast<float>(gyro_var), static_cast<float>(accel_var));
   imu_.push_back(s);
 }
 
@@ -1061,7 +1064,7 @@ void DopplerInertialFilter::predict() {
   // smoother's passes.
   Node& c = nodes_.back();
   const bool across = c.k_next > c.k + 1;
-  n.x_pred = propagate(c, c.x, &F, across ? &c.noise_g : nullptr, across ? &c.noise_a : nullptr);
+  n.x_pred = propagate(c, c.x, &F, across ? &c.noise : nullptr);
   n.P = propagateCovariance(F, c.P, c);
   n.x = n.xs = n.x_pred;
   nodes_.push_back(n);
@@ -1242,8 +1245,11 @@ DopplerInertialFilter::LeverNoise DopplerInertialFilter::leverNoise(const Node& 
     for (std::size_t j = lo; j <= hi; ++j) {
       const std::size_t col = j - first;
       if (col >= kLeverSamples) continue;  // not reached: the span lies within k -+ 2
-      const double scale =
-          j < imu_noise_scale_.size() ? static_cast<double>(imu_noise_scale_[j](0)) : 1.0;
+      // Its noise relative to gyro_sigma (C below is sigma_g^2 E E^T).
+      const double scale = j < imu_extra_var_.size()
+                               ? std::sqrt(1.0 + static_cast<double>(imu_extra_var_[j](0)) /
+                                                     (params_.gyro_sigma * params_.gyro_sigma))
+                               : 1.0;
       for (int m = 0; m < 3; ++m)
         E.block<3, 3>(3 * m, 3 * static_cast<int>(col)) +=
             n.V_inv(m, i) * w[j - lo] * scale * lever_noise_;
@@ -1270,8 +1276,11 @@ DopplerInertialFilter::LeverNoiseAcross DopplerInertialFilter::leverNoiseAcross(
       std::size_t col = 0;
       while (col < used && sample[col] != j) ++col;
       if (col == used) sample[used++] = j;
-      const double scale =
-          j < imu_noise_scale_.size() ? static_cast<double>(imu_noise_scale_[j](0)) : 1.0;
+      // Its noise relative to gyro_sigma, as in leverNoise().
+      const double scale = j < imu_extra_var_.size()
+                               ? std::sqrt(1.0 + static_cast<double>(imu_extra_var_[j](0)) /
+                                                     (params_.gyro_sigma * params_.gyro_sigma))
+                               : 1.0;
       for (int m = 0; m < 3; ++m)
         E.block<3, 3>(3 * m, 3 * static_cast<int>(col)) +=
             n.V_inv(m, i) * w[j - lo] * scale * lever_noise_;
@@ -1541,7 +1550,7 @@ void DopplerInertialFilter::updateRest(double velocity_sigma, double rate_sigma)
   // The gyro's measured samples after the previous node up to this one's: their mean measures
   // the bias (an interpolated sample, ImuScreen, measures no rate).
   auto measured = [&](std::size_t j) {
-    return j >= imu_noise_scale_.size() || imu_noise_scale_[j](0) == 1.0f;
+    return j >= imu_extra_var_.size() || imu_extra_var_[j](0) == 0.0f;
   };
   const std::size_t first = n.k > n.k_prev ? n.k_prev + 1 : n.k;
   std::size_t count = 0;

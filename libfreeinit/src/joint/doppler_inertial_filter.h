@@ -133,10 +133,11 @@ class DopplerInertialFilter {
   /// integration between two samples interpolates the gyro and the accelerometer with a cubic
   /// through the samples around them, so the filter wants sample k + 2 before it predicts node
   /// k + 1 or takes the points of node k (with fewer it falls back to lower orders).
-  /// gyro_scale, accel_scale: the sample's white noise relative to gyro_sigma, accel_sigma (a
-  /// sample interpolated in place of a fault or a gap, ImuScreen; 1: measured). A step's
-  /// process noise takes the larger scale of its two samples; the lever-arm noise each sample's.
-  void addImu(const ImuSample& s, double gyro_scale = 1.0, double accel_scale = 1.0);
+  /// gyro_var [(rad/s)^2], accel_var [(m/s^2)^2]: the variance per axis the sample's value adds
+  /// to the white noise gyro_sigma^2, accel_sigma^2 (a sample interpolated in place of a fault
+  /// or a gap, ImuScreen; 0: measured). A step's process noise takes the larger of its two
+  /// samples'; the lever-arm noise each sample's.
+  void addImu(const ImuSample& s, double gyro_var = 0.0, double accel_var = 0.0);
 
   /// The prior of the window's first node, in terms the filter re-expresses wherever node 0's
   /// estimate moves in the smoother's iterations: roll and pitch in the world (the yaw and the
@@ -414,6 +415,15 @@ class DopplerInertialFilter {
     Vec3 dv = Vec3::Zero(), dp = Vec3::Zero();
     IntegrationJacobian J;  ///< of the integration from R = I, v = p = 0 at b0
   };
+  /// The process noise (attitude, position, velocity) over an interval spanning several samples,
+  /// each step's carried to the interval's end through the steps after it: per unit gyro and
+  /// accelerometer white variance (g, a: the white noises setNoise() may change later), and the
+  /// absolute part the synthetic samples add (extra, ImuScreen; zero while every sample is a
+  /// measured one).
+  struct IntervalNoise {
+    Mat9 g = Mat9::Zero(), a = Mat9::Zero(), extra = Mat9::Zero();
+    bool has_extra = false;
+  };
   struct Node {
     FilterState x;       ///< filtered
     FilterState xs;      ///< smoothed
@@ -448,10 +458,9 @@ class DopplerInertialFilter {
     /// ... and the preintegrations of the whole intervals of each fit instant's integration
     /// (0..2) and of the interval to the next node (3); empty for a node per sample.
     mutable std::vector<Preintegration> pre;
-    /// Intervals across several samples: the process noise over the interval to the next node
-    /// (attitude, position, velocity) per unit gyro and accelerometer variance, the samples'
-    /// noise scales in it, carried through the steps at the state predict() integrated.
-    Mat9 noise_g = Mat9::Zero(), noise_a = Mat9::Zero();
+    /// Intervals across several samples: the process noise over the interval to the next node,
+    /// carried through the steps at the state predict() integrated.
+    IntervalNoise noise;
     /// Whether an interval of the node spans more than one sample interval.
     bool spansSamples() const { return k_next > k + 1 || k > k_prev + 1; }
   };
@@ -536,12 +545,13 @@ class DopplerInertialFilter {
                                std::size_t k, double tau, IntegrationJacobian* J,
                                const ImuAlong& along);
   /// propagate() from node n to the next one (its IMU sampled once), with the transition's
-  /// blocks (if F); noise_g, noise_a (if given): the process noise over the interval
-  /// (Node::noise_g, noise_a), when it spans several samples.
+  /// blocks (if F); noise (if given): the process noise over the interval (Node::noise), when it
+  /// spans several samples.
   FilterState propagate(const Node& n, const FilterState& x, IntegrationJacobian* F,
-                        Mat9* noise_g = nullptr, Mat9* noise_a = nullptr) const;
-  /// The larger noise scales (gyro, accelerometer) of samples j and j + 1 (addImu).
-  void stepNoiseScales(std::size_t j, double& sg, double& sa) const;
+                        IntervalNoise* noise = nullptr) const;
+  /// The larger extra noise variances (gyro [(rad/s)^2], accelerometer [(m/s^2)^2]) of samples j
+  /// and j + 1 (addImu).
+  void stepExtraVariances(std::size_t j, double& vg, double& va) const;
   /// F P F^T plus the process noise from node n to the next, on the components updated (all 19:
   /// full).
   MatS propagateCovariance(const IntegrationJacobian& F, const MatS& P, const Node& n,
@@ -590,9 +600,9 @@ class DopplerInertialFilter {
   Mat3 R_bl_;
   Vec3 p_bl_;
   std::vector<ImuSample> imu_;
-  /// Per sample of imu_: its noise relative to gyro_sigma, accel_sigma (addImu); empty while
-  /// every sample given is a measured one.
-  std::vector<Eigen::Vector2f> imu_noise_scale_;
+  /// Per sample of imu_: the variance added to gyro_sigma^2, accel_sigma^2 (addImu); empty
+  /// while every sample given is a measured one.
+  std::vector<Eigen::Vector2f> imu_extra_var_;
   std::vector<Node> nodes_;
   /// Nodes a smoothing has already been through (the first smoothed_ of nodes_): the later ones
   /// start the next smoothing from the propagation of the last smoothed one (smooth()).

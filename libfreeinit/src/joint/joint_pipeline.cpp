@@ -12,6 +12,7 @@
 #include <freeinit/rotation.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -54,6 +55,9 @@ constexpr std::size_t kMinNoiseReturns = 100;
 
 using BodyVelocityJacobian = Eigen::Matrix<double, 3, DopplerInertialFilter::kStateDim>;
 
+/// The screen's settings. The configured noises floor its tests and are the white part of its
+/// replacements' error; the variance it hands the filter is absolute (ImuExtraNoise), added to
+/// whichever noise the filter uses.
 ImuScreenParams screenParams(const FreeInitConfig& cfg) {
   ImuScreenParams p;
   p.gyro_range = cfg.imu.gyro_range;
@@ -216,8 +220,9 @@ class JointPipeline final : public Pipeline {
       const Vec3 p_l = p.p_l.cast<double>();
       pts.push_back({usable[i].t - t_ref, p_l.normalized(), p.doppler, p_l.norm()});
     }
-    const StartDecision d = decideStart(imu, k, k_last, pts, cfg_.extrinsics,
-                                        cfg_.imu.gyro_bias_prior, startDetectorParams(cfg_));
+    const StartDecision d =
+        decideStart(imu, k, k_last, pts, cfg_.extrinsics, cfg_.imu.gyro_bias_prior,
+                    startDetectorParams(cfg_), &screen_.extraNoise());
     r.diag.imu_at_rest_at_start = d.imu_still;
     switch (d.kind) {
       case StartDecision::Kind::NoData:
@@ -336,9 +341,9 @@ class JointPipeline final : public Pipeline {
   /// end must not depend on how far the IMU stream happens to be ahead.
   void feedImu(std::size_t last) {
     const auto& imu = screen_.samples();
-    const auto& scale = screen_.noiseScales();
+    const auto& extra = screen_.extraNoise();
     for (; fed_ < imu.size() && fed_ <= last; ++fed_)
-      filter_->addImu(imu[fed_], scale[fed_].gyro, scale[fed_].accel);
+      filter_->addImu(imu[fed_], extra[fed_].gyro, extra[fed_].accel);
   }
 
   /// The open node's points received so far, those of [lo, hi) (the last node: [lo, t_k]): each
@@ -463,13 +468,14 @@ class JointPipeline final : public Pipeline {
       }
       const std::size_t node = recorder_.nodes() - 1;
       const bool was_rest = rest_.atRest();
-      // The rest tracker sees every sample after the previous node up to this one; t_moved: the
-      // one at which it saw the motion.
+      // The rest tracker sees every sample after the previous node up to this one (a synthetic
+      // reading, ImuScreen, stays out of its noise); t_moved: the one at which it saw the motion.
       const std::size_t k_prev = node > 0 ? nodeSample(node - 1) : k - 1;
+      const auto& extra = screen_.extraNoise();
       bool rest = was_rest;
       double t_moved = t_k;
       for (std::size_t j = k_prev + 1; j <= k && rest; ++j) {
-        rest = rest_.update(imu[j]);
+        rest = rest_.update(imu[j], !extra[j].gyro_synthetic, !extra[j].accel_synthetic);
         t_moved = imu[j].t;
       }
       if (was_rest && !rest) {
@@ -642,13 +648,12 @@ class JointPipeline final : public Pipeline {
   /// row accept under a quarter of the median share of the kHistory nodes before them (at least
   /// half). A moving object entering the view lowers the share over many nodes, not at once.
   bool acceptanceCollapsed(std::size_t accepted, std::size_t refused) {
-    constexpr std::size_t kMinReturns = 50, kHistory = 10, kNodes = 3;
+    constexpr std::size_t kMinReturns = 50, kHistory = kAcceptanceHistory, kNodes = 3;
     const std::size_t n = accepted + refused;
     if (n < kMinReturns) return false;
     const double share = static_cast<double>(accepted) / static_cast<double>(n);
-    if (recent_acceptance_.size() >= kHistory) {
-      std::vector<double>& v = acceptance_scratch_;  // no allocation per node
-      v.assign(recent_acceptance_.end() - kHistory, recent_acceptance_.end());
+    if (acceptance_count_ >= kHistory) {
+      std::array<double, kHistory> v = recent_acceptance_;  // the median is the ring's in any order
       std::nth_element(v.begin(), v.begin() + kHistory / 2, v.end());
       const double median = v[kHistory / 2];
       if (median >= 0.5 && share < 0.25 * median) {
@@ -661,7 +666,8 @@ class JointPipeline final : public Pipeline {
       }
     }
     collapsed_nodes_ = 0;
-    recent_acceptance_.push_back(share);
+    recent_acceptance_[acceptance_count_ % kHistory] = share;
+    ++acceptance_count_;
     return false;
   }
 
@@ -1199,9 +1205,11 @@ class JointPipeline final : public Pipeline {
   std::size_t fed_ = 0;  ///< IMU samples handed to the filter (indices into the sequencer's)
   std::optional<DopplerInertialFilter> filter_;
   ImuScreen screen_;
-  std::vector<double> recent_acceptance_;   ///< acceptanceCollapsed: the nodes' shares
-  std::vector<double> acceptance_scratch_;  ///< ... the last of them, for their median
-  std::size_t collapsed_nodes_ = 0;         ///< ... nodes in a row under a quarter of the median
+  /// acceptanceCollapsed: the shares of the last nodes (a ring), and how many were given.
+  static constexpr std::size_t kAcceptanceHistory = 10;
+  std::array<double, kAcceptanceHistory> recent_acceptance_{};
+  std::size_t acceptance_count_ = 0;
+  std::size_t collapsed_nodes_ = 0;  ///< ... nodes in a row under a quarter of the median
   double collapse_t_ = 0, collapse_from_ = 0, collapse_to_ = 0;  ///< ... the first of them
   RestTracker rest_;
   std::vector<bool> node_rest_;

@@ -46,34 +46,53 @@ double DifferenceSums::sigma() const {
 }
 
 ImuRestEvidence imuRestEvidence(const std::vector<ImuSample>& imu, std::size_t begin,
-                                std::size_t end, const RestEvidenceParams& p) {
+                                std::size_t end, const RestEvidenceParams& p,
+                                const std::vector<ImuExtraNoise>* extra) {
   ImuRestEvidence out;
   if (end > imu.size() || end < begin + 5) return out;
-  const double n = static_cast<double>(end - begin);
+  auto measured = [&](std::size_t i, bool accel) {
+    if (extra == nullptr || i >= extra->size()) return true;
+    return !(accel ? (*extra)[i].accel_synthetic : (*extra)[i].gyro_synthetic);
+  };
+  std::size_t count_g = 0, count_a = 0;
   Vec3 mg = Vec3::Zero(), ma = Vec3::Zero();
   for (std::size_t i = begin; i < end; ++i) {
-    mg += imu[i].gyro;
-    ma += imu[i].accel;
+    if (measured(i, false)) {
+      mg += imu[i].gyro;
+      ++count_g;
+    }
+    if (measured(i, true)) {
+      ma += imu[i].accel;
+      ++count_a;
+    }
   }
-  mg /= n;
-  ma /= n;
+  if (count_g < 5 || count_a < 5) return out;
+  const double n_g = static_cast<double>(count_g), n_a = static_cast<double>(count_a);
+  mg /= n_g;
+  ma /= n_a;
   double sg = 0, sa = 0;
   for (std::size_t i = begin; i < end; ++i) {
-    sg += (imu[i].gyro - mg).squaredNorm();
-    sa += (imu[i].accel - ma).squaredNorm();
+    const bool g = measured(i, false), a = measured(i, true);
+    if (g) sg += (imu[i].gyro - mg).squaredNorm();
+    if (a) sa += (imu[i].accel - ma).squaredNorm();
     if (i > begin) {
-      out.gyro.add(imu[i].gyro - imu[i - 1].gyro);
-      out.accel.add(imu[i].accel - imu[i - 1].accel);
+      if (g && measured(i - 1, false)) out.gyro.add(imu[i].gyro - imu[i - 1].gyro);
+      if (a && measured(i - 1, true)) out.accel.add(imu[i].accel - imu[i - 1].accel);
     }
   }
   // Von Neumann's ratio of white noise: mean 2n/(n-1), variance 4(n-2)/((n+1)(n-1)) per axis,
   // a third of it pooled over three. A motion slower than the sample rate adds to the spread,
-  // hardly to the differences. Exact zeros (a quantized, still signal): white as well.
+  // hardly to the differences. Exact zeros (a quantized, still signal): white as well. With
+  // samples left out, the squares per difference over those per deviation (n - 1 of them); the
+  // limit for the sensor with fewer samples.
+  const double n = std::min(n_g, n_a);
   const double sd = std::sqrt(4.0 * (n - 2.0) / ((n + 1.0) * (n - 1.0)) / 3.0);
   constexpr double kZ999 = 3.09;
   out.eta_limit = 2.0 - kZ999 * sd;
-  out.eta_gyro = sg > 0 ? out.gyro.squares / sg : 2.0;
-  out.eta_accel = sa > 0 ? out.accel.squares / sa : 2.0;
+  const double per_g = out.gyro.count > 0 ? (n_g - 1.0) / static_cast<double>(out.gyro.count) : 0;
+  const double per_a = out.accel.count > 0 ? (n_a - 1.0) / static_cast<double>(out.accel.count) : 0;
+  out.eta_gyro = sg > 0 ? out.gyro.squares * per_g / sg : 2.0;
+  out.eta_accel = sa > 0 ? out.accel.squares * per_a / sa : 2.0;
   out.gyro_white = out.eta_gyro >= out.eta_limit;
   out.accel_white = out.eta_accel >= out.eta_limit;
   // Levels: within the prior's range of the configured ones (a vibrating vehicle can look white

@@ -22,6 +22,8 @@
 #include <cstddef>
 #include <vector>
 
+#include "imu_screen.h"
+
 namespace freeinit::detail {
 
 /// [-] the configured noise is taken to be right within this factor either way at 95 %.
@@ -82,7 +84,12 @@ struct RestEvidenceParams {
 /// differences within the prior's range of the configured one, the mean rate within 5 gyro-bias
 /// sigmas of the prior (a constant rotation is white too) and the mean specific force's norm
 /// within sqrt(3) bias bounds of gravity. Fewer than 5 samples: not still.
+/// `extra` (optional, per sample of `imu`, ImuScreen): a sensor's synthetic samples are left out,
+/// and so is every difference touching one (an interpolated value differs from its neighbours
+/// by less than noise would: it would lower the level and the ratio); the ratio is then taken
+/// per difference and per deviation.
 ImuRestEvidence imuRestEvidence(const std::vector<ImuSample>& imu, std::size_t begin,
-                                std::size_t end, const RestEvidenceParams& params);
+                                std::size_t end, const RestEvidenceParams& params,
+                                const std::vector<ImuExtraNoise>* extra = nullptr);
 
 }  // namespace freeinit::detail

@@ -1164,7 +1164,8 @@ GroundVerdict groundVerdict(const Rows& rows, const std::vector<double>& range, 
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first,
                           std::size_t k_last, const std::vector<StartPoint>& points,
                           const Extrinsics& extrinsics, const Vec3& b_g_prior,
-                          const StartDetectorParams& p) {
+                          const StartDetectorParams& p,
+                          const std::vector<detail::ImuExtraNoise>* extra) {
   StartDecision out;
   if (k_last <= k_first || k_last >= imu.size()) {
     out.message = "no IMU samples over the start of the window";
@@ -1197,7 +1198,7 @@ StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first
   rp.gyro_bias_prior = b_g_prior;
   rp.gyro_bias_sigma = p.gyro_bias_sigma;
   rp.accel_bias_bound = p.accel_bias_bound;
-  out.imu_rest = detail::imuRestEvidence(imu, k_first, k_last + 1, rp);
+  out.imu_rest = detail::imuRestEvidence(imu, k_first, k_last + 1, rp, extra);
   out.imu_still = out.imu_rest.still;
 
   // Every return as a linear equation: the returns of the span with their interval, then the

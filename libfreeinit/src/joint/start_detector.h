@@ -144,9 +144,12 @@ StartDetectorParams startDetectorParams(const FreeInitConfig& cfg);
 /// `b_g_prior` is removed from the gyro. A moving start with params.time_offset_sigma > 0 has the
 /// clock offset fitted with its motion (StartHypothesis::time_offset); a motion whose gravity is
 /// implausible with the clocks synchronized is tried again with the offset free. Deterministic.
+/// `extra` (optional, per sample of `imu`): the IMU screen's synthetic samples, which the noise
+/// at rest leaves out (detail::imuRestEvidence).
 StartDecision decideStart(const std::vector<ImuSample>& imu, std::size_t k_first,
                           std::size_t k_last, const std::vector<StartPoint>& points,
                           const Extrinsics& extrinsics, const Vec3& b_g_prior,
-                          const StartDetectorParams& params);
+                          const StartDetectorParams& params,
+                          const std::vector<detail::ImuExtraNoise>* extra = nullptr);
 
 }  // namespace freeinit

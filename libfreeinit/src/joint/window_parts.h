@@ -44,14 +44,17 @@ class RestTracker {
     declared_accel_ = accel_sigma;
     gyro_ = DifferenceSums{};
     accel_ = DifferenceSums{};
-    recent_g_ = {};
-    recent_a_ = {};
+    recent_g_.fill(Vec3::Zero());  // {} leaves Eigen's elements uninitialized
+    recent_a_.fill(Vec3::Zero());
     n_ = 0;
+    last_gyro_ = last_accel_ = false;
     updateLimits();
   }
   bool atRest() const { return at_rest_; }
   /// Feeds the next sample (from the start span's first one on); returns atRest().
-  bool update(const ImuSample& s) {
+  /// `gyro_measured`, `accel_measured`: false for a synthetic value (ImuScreen), which the noise
+  /// leaves out with the differences touching it (they are smaller than the noise's).
+  bool update(const ImuSample& s, bool gyro_measured = true, bool accel_measured = true) {
     if (!at_rest_) return false;
     const Vec3 dg = s.gyro - gyro_mean_, da = s.accel - accel_mean_;
     bool moving = dg.norm() > 7.0 * gyro_limit_ || da.norm() > 7.0 * accel_limit_;
@@ -68,14 +71,16 @@ class RestTracker {
       at_rest_ = false;
       return false;
     }
-    if (n_ > 0) {
-      gyro_.add(s.gyro - last_.gyro);
-      accel_.add(s.accel - last_.accel);
-      if (gyro_.count > span_gyro_.count) updateLimits();
-    }
+    const bool add_g = last_gyro_ && gyro_measured, add_a = last_accel_ && accel_measured;
+    if (add_g) gyro_.add(s.gyro - last_.gyro);
+    if (add_a) accel_.add(s.accel - last_.accel);
+    if ((add_g || add_a) && (gyro_.count > span_gyro_.count || accel_.count > span_accel_.count))
+      updateLimits();
     recent_g_[n_ % 4] = dg;
     recent_a_[n_ % 4] = da;
     last_ = s;
+    last_gyro_ = gyro_measured;
+    last_accel_ = accel_measured;
     ++n_;
     return at_rest_;
   }
@@ -106,6 +111,7 @@ class RestTracker {
   double gyro_limit_ = 1, accel_limit_ = 1;
   std::array<Vec3, 4> recent_g_{}, recent_a_{};
   ImuSample last_;
+  bool last_gyro_ = false, last_accel_ = false;  ///< last_'s readings are measured ones
   std::size_t n_ = 0;
 };
 
