@@ -921,6 +921,13 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
     accel = along.accel[2];
     alpha = along.gyro_rate;
   }
+  if (chain != nullptr) {
+    // The lever arm's gyro: the node's fit (gyroFit), its rate the fit's derivative.
+    const double s = tau_true * chain->inv_h;
+    const std::array<Vec3, 3>& c = chain->gyro_fit;
+    gyro = c[0] + s * (c[1] + s * c[2]);
+    alpha = (c[1] + 2.0 * s * c[2]) * chain->inv_h;
+  }
   const Vec3 omega = gyro - x.b_g;
   const Vec3 v_b = y.R_wb.transpose() * y.v_w;
   const Vec3 v_l = R_bl.transpose() * (v_b + omega.cross(p_bl_));
@@ -1091,6 +1098,8 @@ void DopplerInertialFilter::beginNode(bool last, std::size_t next) {
   Mat3 V;
   for (int i = 0; i < 3; ++i) V.row(i) << 1.0, n.s_fit[i], n.s_fit[i] * n.s_fit[i];
   n.V_inv = V.inverse();
+  n.inv_h = 1.0 / n.h;
+  if (n.spansSamples()) gyroFit(n, &n.gyro_fit, nullptr);
   n.sums = DopplerSums{};
   open_.clear();
   q_open_ = velocityPolynomial(n, n.x_pred, &G_open_);
@@ -1098,7 +1107,6 @@ void DopplerInertialFilter::beginNode(bool last, std::size_t next) {
   const MatS& P_gate =
       nodes_.size() == 1 ? priorCovariance(n.x_pred, prior_.gate_velocity_scale) : n.P;
   M_open_ = G0.lazyProduct(P_gate).lazyProduct(G0.transpose());
-  n.inv_h = 1.0 / n.h;
   gate_speed_open_ = params_.gate_rel * q_open_.head<3>().norm();
 }
 
@@ -1258,41 +1266,57 @@ DopplerInertialFilter::LeverNoise DopplerInertialFilter::leverNoise(const Node& 
   return E;
 }
 
-DopplerInertialFilter::LeverNoiseAcross DopplerInertialFilter::leverNoiseAcross(
-    const Node& n) const {
-  // As leverNoise(): the gyro at each fit instant is the cubic through the samples around it,
-  // which for a node whose intervals span several samples are three groups apart. Columns: the
-  // distinct samples, in the order met.
-  LeverNoiseAcross E = LeverNoiseAcross::Zero();
-  std::array<std::size_t, kLeverSamplesAcross> sample{};
-  std::size_t used = 0;
-  for (int i = 0; i < 3; ++i) {
-    const double t = imu_[n.k].t + n.s_fit[static_cast<std::size_t>(i)] * n.h;
-    std::size_t lo = 0;
-    const std::size_t hi = interpolationSpan(imu_, t, n.k, lo);
-    double w[4], dw[4];
-    lagrangeWeights(imu_, t, lo, hi, w, dw);
-    for (std::size_t j = lo; j <= hi; ++j) {
-      std::size_t col = 0;
-      while (col < used && sample[col] != j) ++col;
-      if (col == used) sample[used++] = j;
+void DopplerInertialFilter::gyroFit(const Node& n, std::array<Vec3, 3>* coef, Mat3* cov) const {
+  // The node's samples: j with k_prev + k <= 2 j <= k + k_next (its interval of returns in
+  // samples), a half weight on a boundary shared with a neighbour.
+  const std::size_t lo = (n.k_prev + n.k + 1) / 2, hi = (n.k + n.k_next) / 2;
+  auto weight = [&](std::size_t j) {
+    const bool shared = (2 * j == n.k_prev + n.k && n.k_prev != n.k) ||
+                        (2 * j == n.k + n.k_next && n.k_next != n.k);
+    return shared ? 0.5 : 1.0;
+  };
+  const int dim = static_cast<int>(std::min<std::size_t>(3, hi - lo + 1));  // degree + 1
+  auto basis = [&](std::size_t j) {
+    const double s = (imu_[j].t - imu_[n.k].t) * n.inv_h;
+    Vec3 x(1.0, s, s * s);
+    x.tail(3 - dim).setZero();
+    return x;
+  };
+  // M = sum w x x^T (its unused degrees the identity's); sample j's coefficients a_j = M^-1 w x.
+  Mat3 M = Mat3::Zero();
+  for (std::size_t j = lo; j <= hi; ++j) {
+    const Vec3 x = basis(j);
+    M += weight(j) * x * x.transpose();
+  }
+  for (int d = dim; d < 3; ++d) M(d, d) = 1.0;
+  const Mat3 M_inv = M.inverse();
+  if (coef != nullptr) coef->fill(Vec3::Zero());
+  if (cov != nullptr) cov->setZero();
+  const double var_g = params_.gyro_sigma * params_.gyro_sigma;
+  for (std::size_t j = lo; j <= hi; ++j) {
+    const Vec3 a = M_inv * basis(j) * weight(j);
+    if (coef != nullptr)
+      for (int m = 0; m < dim; ++m) (*coef)[static_cast<std::size_t>(m)] += a(m) * imu_[j].gyro;
+    if (cov != nullptr) {
       // Its noise relative to gyro_sigma, as in leverNoise().
-      const double scale = j < imu_extra_var_.size()
-                               ? std::sqrt(1.0 + static_cast<double>(imu_extra_var_[j](0)) /
-                                                     (params_.gyro_sigma * params_.gyro_sigma))
-                               : 1.0;
-      for (int m = 0; m < 3; ++m)
-        E.block<3, 3>(3 * m, 3 * static_cast<int>(col)) +=
-            n.V_inv(m, i) * w[j - lo] * scale * lever_noise_;
+      const double rel =
+          j < imu_extra_var_.size() ? 1.0 + static_cast<double>(imu_extra_var_[j](0)) / var_g : 1.0;
+      *cov += rel * a * a.transpose();
     }
   }
-  return E;
 }
 
 DopplerInertialFilter::Mat9 DopplerInertialFilter::leverCovariance(const Node& n) const {
   if (n.spansSamples()) {
-    const LeverNoiseAcross E = leverNoiseAcross(n);
-    return E.lazyProduct(E.transpose());
+    // Q_m's lever-arm part is lever_noise_ c_m (the quadratic through the fit instants of a
+    // quadratic is itself): block (m, l) of the covariance is cov(c_m, c_l) L L^T.
+    Mat3 cov;
+    gyroFit(n, nullptr, &cov);
+    const Mat3 LLt = lever_noise_ * lever_noise_.transpose();
+    Mat9 C;
+    for (int m = 0; m < 3; ++m)
+      for (int l = 0; l < 3; ++l) C.block<3, 3>(3 * m, 3 * l) = cov(m, l) * LLt;
+    return C;
   }
   const LeverNoise E = leverNoise(n);
   return E.lazyProduct(E.transpose());

@@ -24,8 +24,10 @@
 // interval (the last one partial where an integration ends between samples), the steps'
 // Jacobians composed (their block form is closed under composition), and the process noise of
 // each step carried to the interval's end through the steps after it, each with its own
-// samples' noise. A node's interval of returns is then m times longer; nothing else in the
-// model changes (at a 2 kHz IMU with nodes at 200 Hz its intervals are those of a 200 Hz IMU).
+// samples' noise. A node's interval of returns is then m times longer (at a 2 kHz IMU with nodes
+// at 200 Hz its intervals are those of a 200 Hz IMU), and the gyro in its lever-arm term is the
+// least-squares quadratic through its own samples (gyroFit), so that every sample's noise
+// reaches the returns it covers as with a node per sample; nothing else in the model changes.
 // Doppler: every point is one scalar measurement at its own time t_j,
 //   z_j = -d_j^T v_l(t_j) + n_j,   v_l = R_bl^T (R_wb^T v_w + omega_b x p_bl),
 // d_j the unit direction in the LiDAR frame. A point belongs to the node whose interval holds its
@@ -461,6 +463,9 @@ class DopplerInertialFilter {
     /// Intervals across several samples: the process noise over the interval to the next node,
     /// carried through the steps at the state predict() integrated.
     IntervalNoise noise;
+    /// ... and the gyro in the lever-arm term: [rad/s] the coefficients of 1, s, s^2 (s = tau /
+    /// h) of the least-squares fit through the node's own samples (gyroFit).
+    std::array<Vec3, 3> gyro_fit{};
     /// Whether an interval of the node spans more than one sample interval.
     bool spansSamples() const { return k_next > k + 1 || k > k_prev + 1; }
   };
@@ -559,7 +564,8 @@ class DopplerInertialFilter {
   /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
   /// given): the IMU along the integration, as imuAlong() keeps it.
   /// chain (if given): the node at sample k, whose intervals span several samples: integrated
-  /// across them (integrateAcross) with its caches, the whole intervals through pre.
+  /// across them (integrateAcross) with its caches, the whole intervals through pre, the gyro
+  /// of the lever-arm term its fit (Node::gyro_fit).
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
                      double tau, const Mat3& R_bl, const Mat3* Jr_phi,
                      Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
@@ -571,13 +577,18 @@ class DopplerInertialFilter {
   static constexpr int kLeverDim = 3 * static_cast<int>(kLeverSamples);
   using LeverNoise = Eigen::Matrix<double, 9, kLeverDim>;
   LeverNoise leverNoise(const Node& n) const;
-  /// For a node whose intervals span several samples, the samples read at the three fit
-  /// instants are three groups of up to four (around k - (k - k_prev) / 2, k and
-  /// k + (k_next - k) / 2): up to twelve distinct ones, in the order met.
-  static constexpr std::size_t kLeverSamplesAcross = 12;
-  using LeverNoiseAcross = Eigen::Matrix<double, 9, 3 * static_cast<int>(kLeverSamplesAcross)>;
-  LeverNoiseAcross leverNoiseAcross(const Node& n) const;
-  /// E E^T of the node's lever-arm noise (leverNoise or leverNoiseAcross).
+  /// For a node whose intervals span several samples, the gyro in its lever-arm term is the
+  /// least-squares polynomial in s = tau / h through the node's own samples: those within its
+  /// interval of returns (k_prev + k <= 2 j <= k + k_next), a sample on a boundary with another
+  /// node (m even) weighted by a half (the two nodes share it), of degree 2 (the LiDAR
+  /// velocity's) or less with fewer than three samples. So every sample's gyro noise reaches the
+  /// node(s) whose returns it covers, as with a node per sample, where three instants would read
+  /// a dozen samples' (the boundaries' twice) and not the rest. coef (if given): [rad/s] the
+  /// coefficients of 1, s, s^2; cov (if given): their covariance per unit gyro_sigma^2 (a sample
+  /// the screen interpolated with its extra variance).
+  void gyroFit(const Node& n, std::array<Vec3, 3>* coef, Mat3* cov) const;
+  /// E E^T of the node's lever-arm noise (leverNoise, or through gyroFit when its intervals span
+  /// several samples).
   Mat9 leverCovariance(const Node& n) const;
   /// Takes the gyro noise carried through the lever arm out of node n's quadratic form (A, b)
   /// in Q (see the definition).
