@@ -474,11 +474,16 @@ void DopplerInertialFilter::sampleImu(const std::vector<ImuSample>& imu, std::si
                    i == 2 ? &along.gyro_rate : nullptr);
   along.tau = tau;
   along.samples = imu.size();
+  // The span read at the latest instant (the spans grow with the time) ends before the last
+  // sample: samples added later are not read.
+  std::size_t lo = 0;
+  along.complete = interpolationSpan(imu, t + std::max(0.25 * tau, tau), k, lo) + 1 < imu.size();
 }
 
 const DopplerInertialFilter::ImuAlong& DopplerInertialFilter::imuAlong(
     const std::vector<ImuSample>& imu, std::size_t k, double tau, ImuAlong& cache) {
-  if (!(cache.tau == tau && cache.samples == imu.size())) sampleImu(imu, k, tau, cache);
+  if (!(cache.tau == tau && (cache.samples == imu.size() || cache.complete)))
+    sampleImu(imu, k, tau, cache);
   return cache;
 }
 
@@ -650,12 +655,10 @@ void DopplerInertialFilter::compose(const IntegrationJacobian& later, Integratio
   J = C;
 }
 
-FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
-                                                   const std::vector<ImuSample>& imu, std::size_t k,
-                                                   double tau, IntegrationJacobian* J,
-                                                   std::vector<ImuAlong>& ahead,
-                                                   std::vector<ImuAlong>& behind, ImuAlong& partial,
-                                                   const ImuAlong** last, Preintegration* pre) {
+FilterState DopplerInertialFilter::integrateAcross(
+    const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k, double tau,
+    IntegrationJacobian* J, std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind,
+    ImuAlong& partial, const ImuAlong** last, PreintegrationChain* pre) {
   // Whole sample intervals while the end lies at or beyond the next sample (in the direction of
   // tau), then what is left from the sample reached.
   const double t_end = imu[k].t + tau;
@@ -705,33 +708,74 @@ FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
 
 const DopplerInertialFilter::Preintegration& DopplerInertialFilter::preintegrated(
     const std::vector<ImuSample>& imu, std::size_t from, std::size_t to, const FilterState& x,
-    std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind, Preintegration& cache) {
-  // Made again when the biases moved by more than these: the first order's error, of the order
-  // of (db tau)^2, is then below 1e-8 rad and m/s over a node's interval of tens of ms.
-  constexpr double kMostGyroBiasChange = 2e-3, kMostAccelBiasChange = 2e-2;
-  Preintegration& P = cache;
-  if (P.samples == imu.size() && P.from == from && P.to == to &&
-      (x.b_g - P.b_g).cwiseAbs().maxCoeff() <= kMostGyroBiasChange &&
-      (x.b_a - P.b_a).cwiseAbs().maxCoeff() <= kMostAccelBiasChange)
-    return P;
-  // The steps from R = I, v = p = 0 at x's biases: gravity enters as g tau and g tau^2 / 2
-  // (every step adds it in the world frame), taken out to leave the body frame's increments.
-  FilterState x0;
-  x0.b_g = x.b_g;
-  x0.b_a = x.b_a;
-  const double tau = imu[to].t - imu[from].t;
-  ImuAlong unused;
-  const FilterState y =
-      integrateAcross(x0, imu, from, tau, &P.J, ahead, behind, unused, nullptr, nullptr);
-  P.from = from;
-  P.to = to;
-  P.samples = imu.size();
-  P.b_g = x.b_g;
-  P.b_a = x.b_a;
-  P.dR = y.R_wb;
-  P.dv = y.v_w - kGravityW * tau;
-  P.dp = y.p_w - 0.5 * kGravityW * (tau * tau);
-  return P;
+    std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind, PreintegrationChain& chain) {
+  // Made again when the biases moved by more than db_g tau = 1e-4 rad or db_a tau = 1e-3 m/s
+  // over the preintegration's span tau: the first order's error, of the order of the products of
+  // (db tau) (db_g tau with itself, 1e-8 rad; with db_a tau, 5e-8 m/s), then stays below what it
+  // was with fixed limits of 2e-3 rad/s and 2e-2 m/s^2 over 50 ms, whatever the span (at nodes
+  // of 200 Hz the spans are 2.5-5 ms: those limits remade them as the smoother moved the biases,
+  // most of its cost with a fast IMU).
+  constexpr double kMostGyroBiasStep = 1e-4, kMostAccelBiasStep = 1e-3;  // [rad], [m/s]
+  const bool forward = to > from;
+  const std::size_t steps = forward ? to - from : from - to;
+  const double span = std::abs(imu[to].t - imu[from].t);
+  std::vector<Preintegration>& c = chain.prefix;
+  const bool usable = !c.empty() && c.front().from == from && (c.front().to > from) == forward &&
+                      (x.b_g - c.front().b_g).cwiseAbs().maxCoeff() * span <= kMostGyroBiasStep &&
+                      (x.b_a - c.front().b_a).cwiseAbs().maxCoeff() * span <= kMostAccelBiasStep;
+  if (usable) {
+    // Those made before samples they read had arrived go (the last ones: they read the most).
+    while (!c.empty() && !(c.back().samples == imu.size() || c.back().complete)) c.pop_back();
+    if (c.size() >= steps) return c[steps - 1];
+  } else {
+    c.clear();
+  }
+  // The steps from R = I, v = p = 0 at the chain's biases (x's for a new chain), from the last
+  // prefix on: gravity enters as g tau and g tau^2 / 2 (every step adds it in the world frame),
+  // taken out to leave the body frame's increments.
+  FilterState y;
+  IntegrationJacobian total, step;
+  std::size_t j = from;
+  y.b_g = c.empty() ? x.b_g : c.front().b_g;
+  y.b_a = c.empty() ? x.b_a : c.front().b_a;
+  y.t = imu[from].t;
+  if (!c.empty()) {
+    const Preintegration& P = c.back();
+    j = P.to;
+    const double tau = imu[j].t - imu[from].t;
+    y.R_wb = P.dR;
+    y.v_w = P.dv + kGravityW * tau;
+    y.p_w = P.dp + 0.5 * kGravityW * (tau * tau);
+    y.t = imu[j].t;
+    total = P.J;
+  }
+  c.reserve(steps);
+  std::vector<ImuAlong>& along = forward ? ahead : behind;
+  while (j != to) {
+    const std::size_t i = forward ? j - from : from - j;  // the step's index from `from`
+    const std::size_t next = forward ? j + 1 : j - 1;
+    if (along.size() <= i) along.resize(i + 1);
+    const double h = imu[next].t - imu[j].t;
+    y = integrate(y, imu, j, h, &step, imuAlong(imu, j, h, along[i]));
+    y.t = imu[next].t;
+    compose(step, total);
+    j = next;
+    Preintegration P;
+    P.from = from;
+    P.to = j;
+    P.samples = imu.size();
+    // Its steps read samples up to max(from, to) + 2 (the cubic interpolation at each step's end).
+    P.complete = std::max(from, j) + 3 < imu.size();
+    P.b_g = y.b_g;
+    P.b_a = y.b_a;
+    const double tau = imu[j].t - imu[from].t;
+    P.dR = y.R_wb;
+    P.dv = y.v_w - kGravityW * tau;
+    P.dp = y.p_w - 0.5 * kGravityW * (tau * tau);
+    P.J = total;
+    c.push_back(P);
+  }
+  return c[steps - 1];
 }
 
 FilterState DopplerInertialFilter::applyPreintegration(const Preintegration& P,
@@ -890,7 +934,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
                                           std::size_t k, double tau, const Mat3& R_bl,
                                           const Mat3* Jr_phi,
                                           Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
-                                          const Node* chain, Preintegration* pre) const {
+                                          const Node* chain, PreintegrationChain* pre) const {
   const double tau_true = tau - x.dt_l;
   IntegrationJacobian Js;
   // The IMU at the LiDAR time: the node's sample at tau_true = 0 (interpolated there too for the

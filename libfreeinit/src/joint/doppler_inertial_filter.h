@@ -381,12 +381,15 @@ class DopplerInertialFilter {
   struct ImuAlong {
     double tau = std::numeric_limits<double>::quiet_NaN();  ///< [s] what it holds (NaN: nothing)
     std::size_t samples = 0;  ///< the IMU samples there were (with fewer, lower orders)
+    /// Every interpolation had a sample after the span it read: later samples change nothing.
+    bool complete = false;
     std::array<Vec3, 3> gyro, accel;
     Vec3 gyro_rate = Vec3::Zero();
   };
   static void sampleImu(const std::vector<ImuSample>& imu, std::size_t k, double tau,
                         ImuAlong& along);
-  /// cache, sampled again unless it holds tau from sample k with as many samples as there are.
+  /// cache, sampled again unless it holds tau from sample k with as many samples as there are
+  /// (or with all those it reads, complete).
   static const ImuAlong& imuAlong(const std::vector<ImuSample>& imu, std::size_t k, double tau,
                                   ImuAlong& cache);
 
@@ -412,10 +415,18 @@ class DopplerInertialFilter {
   struct Preintegration {
     std::size_t from = 0, to = 0;
     std::size_t samples = 0;                      ///< the IMU samples there were (0: nothing held)
+    bool complete = false;                        ///< ... all it reads (as ImuAlong)
     Vec3 b_g = Vec3::Zero(), b_a = Vec3::Zero();  ///< b0
     Mat3 dR = Mat3::Identity();
     Vec3 dv = Vec3::Zero(), dp = Vec3::Zero();
     IntegrationJacobian J;  ///< of the integration from R = I, v = p = 0 at b0
+  };
+  /// The preintegrations from one sample to each sample after it (or before it), made at one set
+  /// of biases: prefix[i] to from + i + 1 (from - i - 1). An integration whose end moves (a fit
+  /// instant moved by the clock offset's estimate, by whole samples at a fast IMU) reads another
+  /// prefix, or extends the chain by the steps it lacks, instead of making it again.
+  struct PreintegrationChain {
+    std::vector<Preintegration> prefix;
   };
   /// The process noise (attitude, position, velocity) over an interval spanning several samples,
   /// each step's carried to the interval's end through the steps after it: per unit gyro and
@@ -459,7 +470,7 @@ class DopplerInertialFilter {
     mutable std::vector<ImuAlong> ahead, behind;
     /// ... and the preintegrations of the whole intervals of each fit instant's integration
     /// (0..2) and of the interval to the next node (3); empty for a node per sample.
-    mutable std::vector<Preintegration> pre;
+    mutable std::vector<PreintegrationChain> pre;
     /// Intervals across several samples: the process noise over the interval to the next node,
     /// carried through the steps at the state predict() integrated.
     IntervalNoise noise;
@@ -526,12 +537,15 @@ class DopplerInertialFilter {
   static void transportNoise(const IntegrationJacobian& F, Mat9& N);
   /// J := later J (the composition of two integrations: the block form is closed under it).
   static void compose(const IntegrationJacobian& later, IntegrationJacobian& J);
-  /// cache, made again unless it holds from -> to with as many samples as there are and biases
-  /// within a small change of x's (the first order's error then far below the integration's).
+  /// The preintegration from -> to, from the chain when it holds it (from `from`, that way, with
+  /// as many samples as there are or all it reads, and biases within a small change of x's: the
+  /// first order's error then far below the integration's), else made (the chain extended, or
+  /// made again from `from` at x's biases).
   static const Preintegration& preintegrated(const std::vector<ImuSample>& imu, std::size_t from,
                                              std::size_t to, const FilterState& x,
                                              std::vector<ImuAlong>& ahead,
-                                             std::vector<ImuAlong>& behind, Preintegration& cache);
+                                             std::vector<ImuAlong>& behind,
+                                             PreintegrationChain& chain);
   /// x moved by a preintegration (the time set to its last sample's); J: the blocks.
   static FilterState applyPreintegration(const Preintegration& P, const std::vector<ImuSample>& imu,
                                          const FilterState& x, IntegrationJacobian* J);
@@ -543,7 +557,7 @@ class DopplerInertialFilter {
                                      std::size_t k, double tau, IntegrationJacobian* J,
                                      std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind,
                                      ImuAlong& partial, const ImuAlong** last,
-                                     Preintegration* pre = nullptr);
+                                     PreintegrationChain* pre = nullptr);
   /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
   /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
@@ -569,7 +583,7 @@ class DopplerInertialFilter {
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
                      double tau, const Mat3& R_bl, const Mat3* Jr_phi,
                      Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
-                     const Node* chain = nullptr, Preintegration* pre = nullptr) const;
+                     const Node* chain = nullptr, PreintegrationChain* pre = nullptr) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
   /// .. k + 2), and dQ/dn for their noise (column block j: sample k - 2 + j; fewer at the ends).
