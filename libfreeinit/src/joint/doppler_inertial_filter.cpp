@@ -576,9 +576,8 @@ FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x
   if (noise == nullptr) {
     // The smoother's passes: through the interval's preintegration (made once, at the biases of
     // the first pass that needs it).
-    if (n.pre.size() < 4) n.pre.resize(4);
-    return applyPreintegration(preintegrated(imu_, n.k, n.k_next, x, n.ahead, n.behind, n.pre[3]),
-                               imu_, x, F);
+    return applyPreintegration(
+        preintegrated(imu_, n.k, n.k_next, x, n.ahead, n.behind, n.pre.ahead), imu_, x, F);
   }
   const std::size_t steps = n.k_next - n.k;
   if (n.ahead.size() < steps) n.ahead.resize(steps);
@@ -658,7 +657,7 @@ void DopplerInertialFilter::compose(const IntegrationJacobian& later, Integratio
 FilterState DopplerInertialFilter::integrateAcross(
     const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k, double tau,
     IntegrationJacobian* J, std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind,
-    ImuAlong& partial, const ImuAlong** last, PreintegrationChain* pre) {
+    ImuAlong& partial, const ImuAlong** last, PreintegrationChains* pre) {
   // Whole sample intervals while the end lies at or beyond the next sample (in the direction of
   // tau), then what is left from the sample reached.
   const double t_end = imu[k].t + tau;
@@ -675,7 +674,8 @@ FilterState DopplerInertialFilter::integrateAcross(
                    : j > 0 && t_end - imu[j - 1].t <= imu[j].t - t_end)
       j = forward ? j + 1 : j - 1;
     if (j != k) {
-      const Preintegration& P = preintegrated(imu, k, j, x, ahead, behind, *pre);
+      const Preintegration& P =
+          preintegrated(imu, k, j, x, ahead, behind, forward ? pre->ahead : pre->behind);
       y = applyPreintegration(P, imu, x, J != nullptr ? &total : nullptr);
       const std::size_t steps = forward ? j - k : k - j;
       along = &(forward ? ahead : behind)[steps - 1];
@@ -934,7 +934,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
                                           std::size_t k, double tau, const Mat3& R_bl,
                                           const Mat3* Jr_phi,
                                           Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
-                                          const Node* chain, PreintegrationChain* pre) const {
+                                          const Node* chain, PreintegrationChains* pre) const {
   const double tau_true = tau - x.dt_l;
   IntegrationJacobian Js;
   // The IMU at the LiDAR time: the node's sample at tau_true = 0 (interpolated there too for the
@@ -1012,13 +1012,11 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
   Mat3 Jr_phi;
   if (G != nullptr) Jr_phi = rightJacobian(x.phi_bl);
-  if (n.spansSamples() && n.pre.size() < 4) n.pre.resize(4);
   for (int i = 0; i < 3; ++i) {
     const Vec3 v =
         lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, R_bl, G != nullptr ? &Jr_phi : nullptr,
                       G != nullptr ? &J : nullptr, &n.fit_imu[static_cast<std::size_t>(i)],
-                      n.spansSamples() ? &n : nullptr,
-                      n.spansSamples() ? &n.pre[static_cast<std::size_t>(i)] : nullptr);
+                      n.spansSamples() ? &n : nullptr, n.spansSamples() ? &n.pre : nullptr);
     for (int m = 0; m < 3; ++m) {
       Q.segment<3>(3 * m) += Vinv(m, i) * v;
       if (G != nullptr) G->middleRows<3>(3 * m) += Vinv(m, i) * J;

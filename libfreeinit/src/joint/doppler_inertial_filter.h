@@ -428,6 +428,11 @@ class DopplerInertialFilter {
   struct PreintegrationChain {
     std::vector<Preintegration> prefix;
   };
+  /// A node's chains, from its sample to those after it and to those before it: the first holds
+  /// the integration to the fit instant after the node and, further, to the next node.
+  struct PreintegrationChains {
+    PreintegrationChain ahead, behind;
+  };
   /// The process noise (attitude, position, velocity) over an interval spanning several samples,
   /// each step's carried to the interval's end through the steps after it: per unit gyro and
   /// accelerometer white variance (g, a: the white noises setNoise() may change later), and the
@@ -468,9 +473,9 @@ class DopplerInertialFilter {
     /// k_prev (behind[i]: k - i to k - i - 1), sampled as step_imu; fit_imu then holds the
     /// last, partial step of each fit instant's integration.
     mutable std::vector<ImuAlong> ahead, behind;
-    /// ... and the preintegrations of the whole intervals of each fit instant's integration
-    /// (0..2) and of the interval to the next node (3); empty for a node per sample.
-    mutable std::vector<PreintegrationChain> pre;
+    /// ... and the preintegrations of the whole intervals of the fit instants' integrations and
+    /// of the interval to the next node; empty for a node per sample.
+    mutable PreintegrationChains pre;
     /// Intervals across several samples: the process noise over the interval to the next node,
     /// carried through the steps at the state predict() integrated.
     IntervalNoise noise;
@@ -552,12 +557,13 @@ class DopplerInertialFilter {
   /// integrateAcross() with the IMU along its full steps cached in ahead and behind (grown as
   /// needed) and along its last partial one in partial; *last (if given): the IMU along the
   /// integration's last step (nullptr: tau = 0, no step).
-  /// pre (if given): the whole intervals through a preintegration cached there.
+  /// pre (if given): the whole intervals through a preintegration of its chains (the one that
+  /// way).
   static FilterState integrateAcross(const FilterState& x, const std::vector<ImuSample>& imu,
                                      std::size_t k, double tau, IntegrationJacobian* J,
                                      std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind,
                                      ImuAlong& partial, const ImuAlong** last,
-                                     PreintegrationChain* pre = nullptr);
+                                     PreintegrationChains* pre = nullptr);
   /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
   /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
@@ -583,7 +589,7 @@ class DopplerInertialFilter {
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
                      double tau, const Mat3& R_bl, const Mat3* Jr_phi,
                      Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
-                     const Node* chain = nullptr, PreintegrationChain* pre = nullptr) const;
+                     const Node* chain = nullptr, PreintegrationChains* pre = nullptr) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
   /// .. k + 2), and dQ/dn for their noise (column block j: sample k - 2 + j; fewer at the ends).
