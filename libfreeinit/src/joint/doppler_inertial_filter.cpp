@@ -570,71 +570,95 @@ FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x
     y.t = imu_[n.k + 1].t;
     return y;
   }
-  // Across the samples to the next node, one step per sample interval. The process noise of a
-  // step (as a single step's, propagateCovariance) is carried to the interval's end through the
-  // steps after it: N := Phi N Phi^T + N_step, Phi the step's Jacobian on (dtheta, dp, dv).
-  if (noise == nullptr) {
-    // The smoother's passes: through the interval's preintegration (made once, at the biases of
-    // the first pass that needs it).
-    return applyPreintegration(
-        preintegrated(imu_, n.k, n.k_next, x, n.ahead, n.behind, n.pre.ahead), imu_, x, F);
-  }
-  const std::size_t steps = n.k_next - n.k;
-  if (n.ahead.size() < steps) n.ahead.resize(steps);
-  noise->g.setZero();
-  noise->a.setZero();
-  noise->extra.setZero();
-  noise->has_extra = !imu_extra_var_.empty();
-  IntegrationJacobian total, step;
-  FilterState y = x;
-  for (std::size_t i = 0; i < steps; ++i) {
-    const std::size_t j = n.k + i;
-    const double tau = imu_[j + 1].t - imu_[j].t;
-    y = integrate(y, imu_, j, tau, &step, imuAlong(imu_, j, tau, n.ahead[i]));
-    y.t = imu_[j + 1].t;
-    if (F != nullptr) compose(step, total);
-    // A step's noise as a single step's (propagateCovariance): qg on the attitude, qa on the
-    // velocity and the position integrating it.
-    auto add = [tau](Mat9& N, double qg, double qa) {
-      N.block<3, 3>(kTheta, kTheta).diagonal().array() += qg;
-      N.block<3, 3>(kPos, kPos).diagonal().array() += qa * tau * tau / 4.0;
-      N.block<3, 3>(kPos, kVel).diagonal().array() += qa * tau / 2.0;
-      N.block<3, 3>(kVel, kPos).diagonal().array() += qa * tau / 2.0;
-      N.block<3, 3>(kVel, kVel).diagonal().array() += qa;
-    };
-    transportNoise(step, noise->g);
-    transportNoise(step, noise->a);
-    add(noise->g, tau * tau, 0.0);
-    add(noise->a, 0.0, tau * tau);
-    if (noise->has_extra) {
-      double vg = 0.0, va = 0.0;
-      stepExtraVariances(j, vg, va);
-      transportNoise(step, noise->extra);
-      add(noise->extra, vg * tau * tau, va * tau * tau);
-    }
-  }
-  if (F != nullptr) *F = total;
+  // Across the samples to the next node: through the interval's preintegration (the chain of the
+  // node's integrations forward, made once at the biases of the first pass that needs it).
+  const FilterState y = applyPreintegration(
+      preintegrated(imu_, n.k, n.k_next, x, n.ahead, n.behind, n.pre.ahead), imu_, x, F);
+  if (noise != nullptr) intervalNoise(n, x.R_wb, *noise);
   return y;
 }
 
-void DopplerInertialFilter::transportNoise(const IntegrationJacobian& F, Mat9& N) {
-  // Phi N Phi^T by 3 x 3 blocks (theta, p, v), Phi = [A 0 0; C I tau I; B 0 I] with A = th_th,
-  // C = p_th, B = v_th: M = Phi N, then M Phi^T.
-  const double tau = F.tau;
-  auto blk = [](Mat9& X, int i, int j) { return X.block<3, 3>(3 * i, 3 * j); };
-  Mat9 M;
-  for (int j = 0; j < 3; ++j) {
-    const Mat3 Ntj = blk(N, 0, j);
-    blk(M, 0, j) = F.th_th * Ntj;
-    blk(M, 1, j) = F.p_th * Ntj + blk(N, 1, j) + tau * blk(N, 2, j);
-    blk(M, 2, j) = F.v_th * Ntj + blk(N, 2, j);
+void DopplerInertialFilter::intervalNoise(const Node& n, const Mat3& R, IntervalNoise& N) const {
+  // Each step's noise (as a single step's, propagateCovariance: qg on the attitude, qa on the
+  // velocity and the position integrating it) carried to the interval's end by the transition
+  // from the step's end a to it, which the chain's prefixes give in the node's body frame (as
+  // applyPreintegration's blocks): theta' = dR_ae^T theta, p' = p + tau_ae v + C theta, v' = v + B
+  // theta, with C = -[dp_e - dp_a - dv_a tau_ae]x dR_a and B = -[dv_e - dv_a]x dR_a. The white
+  // noises are isotropic on each block, so the attitude's stays qg I whatever the rotation, and
+  // the world's frame is the body's at the node turned by R on position and velocity.
+  const std::vector<Preintegration>& c = n.pre.ahead.prefix;
+  const std::size_t steps = n.k_next - n.k;
+  const Preintegration& e = c[steps - 1];
+  N.has_extra = !imu_extra_var_.empty();
+  Mat3 g_tp = Mat3::Zero(), g_tv = Mat3::Zero(), g_pp = Mat3::Zero(), g_pv = Mat3::Zero(),
+       g_vv = Mat3::Zero();                       // per unit gyro variance
+  double g_tt = 0, a_pp = 0, a_pv = 0, a_vv = 0;  // isotropic parts
+  Mat3 x_tp = Mat3::Zero(), x_tv = Mat3::Zero(), x_pp = Mat3::Zero(), x_pv = Mat3::Zero(),
+       x_vv = Mat3::Zero();  // the synthetic samples' extra, absolute
+  double x_tt = 0, xa_pp = 0, xa_pv = 0, xa_vv = 0;
+  for (std::size_t i = 0; i < steps; ++i) {
+    const std::size_t j = n.k + i;  // the step from j to a = j + 1
+    const double tau = imu_[j + 1].t - imu_[j].t;
+    const double t_ae = imu_[n.k_next].t - imu_[j + 1].t;
+    const double qg = tau * tau, qa_pp = qg * tau * tau / 4.0, qa_pv = qg * tau / 2.0, qa_vv = qg;
+    // Accelerometer: [I t_ae I; 0 I] on (p, v), isotropic.
+    const double s_pp = qa_pp + 2.0 * t_ae * qa_pv + t_ae * t_ae * qa_vv;
+    const double s_pv = qa_pv + t_ae * qa_vv;
+    double vg = 0.0, va = 0.0;
+    if (N.has_extra) stepExtraVariances(j, vg, va);
+    a_pp += s_pp;
+    a_pv += s_pv;
+    a_vv += qa_vv;
+    xa_pp += va * s_pp;
+    xa_pv += va * s_pv;
+    xa_vv += va * qa_vv;
+    g_tt += qg;
+    x_tt += vg * qg;
+    if (i + 1 == steps) {  // the last step ends at the node: no transition
+      continue;
+    }
+    const Preintegration& a = c[i];
+    const Mat3 A = a.dR.transpose() * e.dR;  // dR_ae; theta' = A^T theta
+    const Mat3 B = -skew(Vec3(e.dv - a.dv)) * a.dR;
+    const Mat3 C = -skew(Vec3(e.dp - a.dp - a.dv * t_ae)) * a.dR;
+    const Mat3 At = A.transpose();
+    // Phi Qg Phi^T with Qg = qg I on theta: theta' theta'^T = qg I (A orthogonal).
+    const Mat3 tp = At * C.transpose(), tv = At * B.transpose();
+    const Mat3 pp = C * C.transpose(), pv = C * B.transpose(), vv = B * B.transpose();
+    g_tp += qg * tp;
+    g_tv += qg * tv;
+    g_pp += qg * pp;
+    g_pv += qg * pv;
+    g_vv += qg * vv;
+    if (vg > 0) {
+      x_tp += vg * qg * tp;
+      x_tv += vg * qg * tv;
+      x_pp += vg * qg * pp;
+      x_pv += vg * qg * pv;
+      x_vv += vg * qg * vv;
+    }
   }
-  for (int i = 0; i < 3; ++i) {
-    const Mat3 Mit = blk(M, i, 0);
-    blk(N, i, 0) = Mit * F.th_th.transpose();
-    blk(N, i, 1) = Mit * F.p_th.transpose() + blk(M, i, 1) + tau * blk(M, i, 2);
-    blk(N, i, 2) = Mit * F.v_th.transpose() + blk(M, i, 2);
-  }
+  // In the world's frame: T N T^T with T = diag(I, R, R).
+  auto fill = [&](Mat9& M, double tt, const Mat3& tp, const Mat3& tv, const Mat3& pp, double spp,
+                  const Mat3& pv, double spv, const Mat3& vv, double svv) {
+    const Mat3 Rt = R.transpose();
+    M.block<3, 3>(kTheta, kTheta) = tt * Mat3::Identity();
+    M.block<3, 3>(kTheta, kPos) = tp * Rt;
+    M.block<3, 3>(kTheta, kVel) = tv * Rt;
+    M.block<3, 3>(kPos, kTheta) = M.block<3, 3>(kTheta, kPos).transpose();
+    M.block<3, 3>(kVel, kTheta) = M.block<3, 3>(kTheta, kVel).transpose();
+    M.block<3, 3>(kPos, kPos) = R * pp * Rt + spp * Mat3::Identity();
+    M.block<3, 3>(kPos, kVel) = R * pv * Rt + spv * Mat3::Identity();
+    M.block<3, 3>(kVel, kPos) = M.block<3, 3>(kPos, kVel).transpose();
+    M.block<3, 3>(kVel, kVel) = R * vv * Rt + svv * Mat3::Identity();
+  };
+  const Mat3 Z = Mat3::Zero();
+  fill(N.g, g_tt, g_tp, g_tv, g_pp, 0.0, g_pv, 0.0, g_vv, 0.0);
+  fill(N.a, 0.0, Z, Z, Z, a_pp, Z, a_pv, Z, a_vv);
+  if (N.has_extra)
+    fill(N.extra, x_tt, x_tp, x_tv, x_pp, xa_pp, x_pv, xa_pv, x_vv, xa_vv);
+  else
+    N.extra.setZero();
 }
 
 void DopplerInertialFilter::compose(const IntegrationJacobian& later, IntegrationJacobian& J) {

@@ -537,9 +537,6 @@ class DopplerInertialFilter {
   /// smooth()'s forward pass around the states xs from node `first` on, the nodes before it as
   /// the last pass left them (first > 0: that pass was made around the same states).
   void smootherForward(std::size_t first);
-  /// N := Phi N Phi^T, Phi the block of F on (dtheta, dp, dv): a covariance carried through a
-  /// step.
-  static void transportNoise(const IntegrationJacobian& F, Mat9& N);
   /// J := later J (the composition of two integrations: the block form is closed under it).
   static void compose(const IntegrationJacobian& later, IntegrationJacobian& J);
   /// The preintegration from -> to, from the chain when it holds it (from `from`, that way, with
@@ -574,6 +571,9 @@ class DopplerInertialFilter {
   /// spans several samples.
   FilterState propagate(const Node& n, const FilterState& x, IntegrationJacobian* F,
                         IntervalNoise* noise = nullptr) const;
+  /// The process noise over node n's interval to the next node (Node::noise), from the chain of
+  /// its preintegrations forward (which must reach the next node); R: the attitude at the node.
+  void intervalNoise(const Node& n, const Mat3& R, IntervalNoise& N) const;
   /// The larger extra noise variances (gyro [(rad/s)^2], accelerometer [(m/s^2)^2]) of samples j
   /// and j + 1 (addImu).
   void stepExtraVariances(std::size_t j, double& vg, double& va) const;
