@@ -1165,7 +1165,7 @@ void DopplerInertialFilter::beginNode(bool last, std::size_t next) {
   for (int i = 0; i < 3; ++i) V.row(i) << 1.0, n.s_fit[i], n.s_fit[i] * n.s_fit[i];
   n.V_inv = V.inverse();
   n.inv_h = 1.0 / n.h;
-  if (n.spansSamples()) gyroFit(n, &n.gyro_fit, nullptr);
+  if (n.spansSamples()) gyroFit(n, &n.gyro_fit, &n.gyro_fit_cov);
   n.sums = DopplerSums{};
   open_.clear();
   q_open_ = velocityPolynomial(n, n.x_pred, &G_open_);
@@ -1376,8 +1376,10 @@ DopplerInertialFilter::Mat9 DopplerInertialFilter::leverCovariance(const Node& n
   if (n.spansSamples()) {
     // Q_m's lever-arm part is lever_noise_ c_m (the quadratic through the fit instants of a
     // quadratic is itself): block (m, l) of the covariance is cov(c_m, c_l) L L^T.
-    Mat3 cov;
-    gyroFit(n, nullptr, &cov);
+    // The covariance kept at beginNode() holds while every sample is a measured one (with
+    // synthetic ones it depends on gyro_sigma, which setNoise() may have changed since).
+    Mat3 cov = n.gyro_fit_cov;
+    if (!imu_extra_var_.empty()) gyroFit(n, nullptr, &cov);
     const Mat3 LLt = lever_noise_ * lever_noise_.transpose();
     Mat9 C;
     for (int m = 0; m < 3; ++m)

@@ -482,6 +482,7 @@ class DopplerInertialFilter {
     /// ... and the gyro in the lever-arm term: [rad/s] the coefficients of 1, s, s^2 (s = tau /
     /// h) of the least-squares fit through the node's own samples (gyroFit).
     std::array<Vec3, 3> gyro_fit{};
+    Mat3 gyro_fit_cov = Mat3::Zero();  ///< ... their covariance per unit gyro_sigma^2
     /// Whether an interval of the node spans more than one sample interval.
     bool spansSamples() const { return k_next > k + 1 || k > k_prev + 1; }
   };
