@@ -715,11 +715,11 @@ class JointPipeline final : public Pipeline {
     if (imu_noise_from_rest_) {
       g = rest_.gyroNoise().sigma;
       a = rest_.accelNoise().sigma;
-    } else {
+    } else {  // the data's where they tell, else (again) the configured value
       gyro_motion_ = motionNoise(false, cfg_.imu.gyro_sigma);
       accel_motion_ = motionNoise(true, cfg_.imu.accel_sigma);
-      g = gyro_motion_.sigma;
-      a = accel_motion_.sigma;
+      g = gyro_motion_.sigma > 0 ? gyro_motion_.sigma : cfg_.imu.gyro_sigma;
+      a = accel_motion_.sigma > 0 ? accel_motion_.sigma : cfg_.imu.accel_sigma;
     }
     if (!moved(g, p.gyro_sigma)) g = 0;
     if (!moved(a, p.accel_sigma)) a = 0;
