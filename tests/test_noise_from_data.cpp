@@ -145,6 +145,12 @@ TEST(MotionNoise, LeavesOutDifferencesAcrossAGapOrASyntheticSample) {
   EXPECT_LT(m.dof, clean.dof);
 }
 
+/// "seed S IMU noise declared xF (platform)", for the messages.
+std::string imuRunName(const NoisyRun& r, std::uint64_t seed, double factor) {
+  return "seed " + std::to_string(seed) + " IMU noise declared x" + std::to_string(factor) + " (" +
+         sim::platformName(r.scenario.info.platform) + ")";
+}
+
 double rms(const Vec3& v) { return v.norm() / std::sqrt(3.0); }
 
 // A standing sensor whose IMU is 4x noisier or quieter than configured: rest is still decided
@@ -159,9 +165,7 @@ TEST(NoiseFromData, StaticStartWithTheImuNoiseDeclaredAQuarterOrFourTimesTheTrut
   for (const double factor : {0.25, 4.0}) {
     for (const std::uint64_t seed : seeds) {
       const NoisyRun r = runSeed(seed, factor, 1.0);
-      const std::string what = "seed " + std::to_string(seed) + " IMU noise declared x" +
-                               std::to_string(factor) + " (" +
-                               sim::platformName(r.scenario.info.platform) + ")";
+      const std::string what = imuRunName(r, seed, factor);
       ASSERT_TRUE(r.result.state.ok()) << what << ": " << r.result.state.message;
       EXPECT_TRUE(r.result.diag.static_start) << what;
       EXPECT_GT(r.result.diag.static_duration, 0.4) << what;
@@ -253,9 +257,7 @@ TEST(NoiseFromData, MovingStartsWithTheImuNoiseDeclaredAQuarterOrFourTimesTheTru
     const double factor = f == 0 ? 0.25 : 4.0;
     for (const std::uint64_t seed : seeds) {
       const NoisyRun r = runSeed(seed, factor, 1.0);
-      const std::string what = "seed " + std::to_string(seed) + " IMU noise declared x" +
-                               std::to_string(factor) + " (" +
-                               sim::platformName(r.scenario.info.platform) + ")";
+      const std::string what = imuRunName(r, seed, factor);
       ASSERT_TRUE(r.result.state.ok()) << what << ": " << r.result.state.message;
       const sim::InitErrors e = sim::evaluate(r.result.state, r.rec);
       const eval::Bound b = sim::cramerRaoBound(r.rec, r.cfg, r.result);
