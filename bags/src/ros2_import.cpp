@@ -129,16 +129,7 @@ bool Ros2Reader::step(ImportStream& stream) {
   try {
     if (is_imu) {
       const ros2::Imu m = ros2::decodeImu(msg_.data);
-      if (m.angular_velocity_covariance[0] == -1 || m.linear_acceleration_covariance[0] == -1)
-        throw BagError(
-            where + ": the IMU declares no " +
-            (m.angular_velocity_covariance[0] == -1 ? "angular velocity" : "linear acceleration") +
-            " (covariance[0] = -1)");
-      ImuSample s;
-      s.t = m.header.stamp.seconds();
-      s.gyro = Vec3(m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z);
-      s.accel = Vec3(m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z);
-      stream.imu(s, where);
+      stream.imu(imuSampleOf(m, m.header.stamp.seconds(), where), where);
     } else {
       const ros2::PointCloud2 m = ros2::decodePointCloud2(msg_.data);
       const PointCloudView v = view(m);

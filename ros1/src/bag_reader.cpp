@@ -286,16 +286,7 @@ struct Ros1Reader::Impl {
                   bags::ImportStream& stream) {
     sensor_msgs::Imu msg;
     read(m, RosMessage::kImu, msg);
-    if (msg.angular_velocity_covariance[0] == -1 || msg.linear_acceleration_covariance[0] == -1)
-      throw BagError(
-          where + ": the IMU declares no " +
-          (msg.angular_velocity_covariance[0] == -1 ? "angular velocity" : "linear acceleration") +
-          " (covariance[0] = -1)");
-    ImuSample s;
-    s.t = msg.header.stamp.toSec();
-    s.gyro = Vec3(msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z);
-    s.accel = Vec3(msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z);
-    stream.imu(s, where);
+    stream.imu(bags::imuSampleOf(msg, msg.header.stamp.toSec(), where), where);
   }
 
   void cloudMessage(const rosbag::MessageInstance& m, const std::string& where,
