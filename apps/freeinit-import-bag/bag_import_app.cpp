@@ -252,26 +252,18 @@ int BagImportApp::run(std::ostream& log) {
 void BagImportApp::chooseExtrinsics() {
   const std::string tf = settings.bag.tf_static_topic;
   extrinsics_warning.clear();
-  if (settings.extrinsics_given) {
-    settings.extrinsics_source = params.config_file + " [extrinsics]";
-    if (recorded_extrinsics) {
-      const std::string diff =
-          bags::extrinsicsDifference(settings.extrinsics, recorded_extrinsics->extrinsics);
-      if (!diff.empty())
-        extrinsics_warning = params.config_file + " [extrinsics] and " + tf + " of " + params.bag +
-                             " (" + recorded_extrinsics->chain + ") " + diff +
-                             ": the INI's are used";
-    }
-    return;
-  }
-  if (!recorded_extrinsics)
+  const auto chosen = bags::chooseExtrinsics(
+      settings.extrinsics_given ? std::optional<Extrinsics>(settings.extrinsics) : std::nullopt,
+      recorded_extrinsics, params.config_file + " [extrinsics]", tf, params.bag);
+  if (!chosen)
     throw std::invalid_argument(
         params.config_file + ": [extrinsics] R_bl: extrinsics missing, and " + params.bag +
         " has " + (tf.empty() ? std::string("tf_static_topic off") : "no " + tf) +
         " linking the IMU's frame to the LiDAR's: give R_bl (or roll_deg, pitch_deg, yaw_deg) "
         "and p_bl; the importer writes them as each point cloud's sensorPose");
-  settings.extrinsics = recorded_extrinsics->extrinsics;
-  settings.extrinsics_source = tf + " of " + params.bag + " (" + recorded_extrinsics->chain + ")";
+  settings.extrinsics = chosen->extrinsics;
+  settings.extrinsics_source = chosen->source;
+  extrinsics_warning = chosen->warning;
 }
 
 int BagImportApp::main(int argc, char** argv) {

@@ -182,28 +182,21 @@ std::unique_ptr<mrpt_plugins::RawlogReader> openInput(const std::string& path,
   } catch (const bags::BagError& e) {
     throw InputError(e.what());
   }
-  Extrinsics e;
-  if (config.extrinsics.given_in_ini) {
-    e = config.core.extrinsics;
-    if (recorded && warnings != nullptr) {
-      const std::string diff = bags::extrinsicsDifference(e, recorded->extrinsics);
-      if (!diff.empty())
-        warnings->push_back("[extrinsics] and " + bag.tf_static_topic + " of " + path + " (" +
-                            recorded->chain + ") " + diff + ": the INI's are used");
-    }
-  } else if (recorded) {
-    e = recorded->extrinsics;
-  } else {
+  const auto chosen = bags::chooseExtrinsics(config.extrinsics.given_in_ini
+                                                 ? std::optional<Extrinsics>(config.core.extrinsics)
+                                                 : std::nullopt,
+                                             recorded, "[extrinsics]", bag.tf_static_topic, path);
+  if (!chosen)
     throw InputError(
         path + ": " + reader->summary().kind + ": no " +
         (bag.tf_static_topic.empty() ? std::string("tf_static_topic") : bag.tf_static_topic) +
         " linking the IMU's frame to the LiDAR's: give the extrinsics in "
         "[extrinsics] (R_bl, p_bl, from_sensor_pose = false)");
-  }
+  if (!chosen->warning.empty() && warnings != nullptr) warnings->push_back(chosen->warning);
   for (const auto& w : reader->summary().warnings)
     if (warnings != nullptr) warnings->push_back(path + ": " + w);
   return std::make_unique<mrpt_plugins::RawlogReader>(
-      path, std::make_unique<BagSource>(std::move(reader), bag, e, config.input));
+      path, std::make_unique<BagSource>(std::move(reader), bag, chosen->extrinsics, config.input));
 }
 
 }  // namespace freeinit::app_support
