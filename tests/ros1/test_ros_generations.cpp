@@ -296,3 +296,22 @@ TEST(StraightIn, InputKindsAreRecognisedAndNamed) {
     EXPECT_CONTAINS(e.what(), kRecordings + ": a rosbag2 folder without metadata.yaml");
   }
 }
+
+// The progress of a recording read straight in counts its log time in seconds (a rawlog's counts
+// its bytes in MB): the fixtures' 0.4 s, read to the end.
+TEST(StraightIn, ProgressIsTheRecordingsLogTimeInSeconds) {
+  const std::string d = dir("progress");
+  const std::string ini = test::writeText(d + "/run.ini", "[window]\nduration = 0.25\n");
+  for (const char* f : {"imu_cloud.mcap", "imu_cloud.db3"}) {
+    FreeInitApp app;
+    app.params.config_file = ini;
+    app.params.rawlog = fixture(f);
+    app.params.out_dir = d + "/" + f;
+    app.params.echo_config = false;
+    app.params.check_all = true;
+    std::ostringstream log;
+    app.run(log);
+    EXPECT_CONTAINS(log.str(), "100%  0.4/0.4 s\n");
+    EXPECT_EQ(log.str().find(" MB"), std::string::npos) << log.str();
+  }
+}

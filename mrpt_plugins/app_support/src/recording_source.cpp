@@ -6,6 +6,7 @@
 #include <freeinit/ros1/bag_reader.h>
 #endif
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <filesystem>
@@ -68,8 +69,15 @@ class BagSource : public mrpt_plugins::RecordSource {
     return queue_.front().t;
   }
 
-  std::uint64_t size() const override { return 1000; }
-  std::uint64_t position() const override { return reader_->progress().first; }
+  // Progress in the recording's log time, shown in seconds ([ns] counted); 0 % where its span is
+  // unknown.
+  std::uint64_t size() const override {
+    return static_cast<std::uint64_t>(std::max<std::int64_t>(reader_->progress().second, 1));
+  }
+  std::uint64_t position() const override {
+    return static_cast<std::uint64_t>(reader_->progress().first);
+  }
+  mrpt_plugins::ProgressUnit progressUnit() const override { return {"s", 1e9}; }
   std::size_t recordsRead() const override { return read_; }
   std::size_t nextRecord() const override {
     return queue_.empty() ? record_ : queue_.front().index;
