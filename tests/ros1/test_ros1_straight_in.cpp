@@ -30,6 +30,7 @@
 #include "bag_import_app.h"
 #include "eval_rawlog_app.h"
 #include "free_init_app.h"
+#include "free_init_runs.h"
 #include "ros_test_files.h"
 #include "sim_app.h"
 
@@ -93,35 +94,8 @@ std::string import(const std::string& bag, const std::string& out) {
   return out;
 }
 
-struct AppRun {
-  std::map<std::string, std::string> files;  ///< name -> bytes (start folders: "<start>/<name>")
-  std::string log;
-};
-
-AppRun runFreeInit(const std::string& ini, const std::string& input, const std::string& out,
-                   std::optional<double> start = std::nullopt, double every = 0) {
-  FreeInitApp app;
-  app.params.config_file = ini;
-  app.params.rawlog = input;
-  app.params.out_dir = out;
-  app.params.progress = false;
-  app.params.echo_config = false;
-  app.params.start = start;
-  app.params.every = every;
-  std::ostringstream log;
-  app.run(log);
-  AppRun r;
-  r.log = log.str();
-  for (const auto& f : fs::recursive_directory_iterator(out)) {
-    const std::string name = fs::relative(f.path(), out).string();
-    // The simple map holds the observations' source names; the starts table names the input.
-    if (!f.is_regular_file() || f.path().extension() == ".simplemap" ||
-        f.path().filename() == "starts.md")
-      continue;
-    r.files[name] = test::fileBytes(f.path().string());
-  }
-  return r;
-}
+using test::AppRun;
+using test::runFreeInit;
 
 // [bytes] read by this process so far (Linux: every read(2), whoever made it).
 std::uint64_t bytesReadByProcess() {

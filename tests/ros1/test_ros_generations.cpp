@@ -20,6 +20,7 @@
 
 #include "bag_import_app.h"
 #include "free_init_app.h"
+#include "free_init_runs.h"
 #include "ros_test_files.h"
 
 using namespace freeinit;
@@ -238,22 +239,8 @@ std::map<std::string, std::string> runFreeInit(const std::string& input, const s
                                                std::optional<double> start = std::nullopt) {
   // The fixtures hold 0.4 s: a window that fits in them (the default 0.5 s is refused as longer
   // than the recording).
-  const std::string ini = out + ".ini";
-  std::ofstream(ini) << "[window]\nduration = 0.25\n";
-  FreeInitApp app;
-  app.params.config_file = ini;
-  app.params.rawlog = input;
-  app.params.out_dir = out;
-  app.params.progress = false;
-  app.params.echo_config = false;
-  app.params.start = start;
-  std::ostringstream log;
-  app.run(log);
-  std::map<std::string, std::string> files;
-  for (const auto& f : fs::directory_iterator(out))
-    if (f.path().extension() != ".simplemap")  // holds the observations' source names
-      files[f.path().filename().string()] = test::fileBytes(f.path().string());
-  return files;
+  const std::string ini = test::writeText(out + ".ini", "[window]\nduration = 0.25\n");
+  return test::runFreeInit(ini, input, out, start).files;
 }
 
 }  // namespace
