@@ -28,8 +28,8 @@ case "${1:-}" in
   --no-readme) readme=0 ;;
   *) echo "[results] error: unknown option $1 (usage: $0 [--no-readme])" >&2; exit 2 ;;
 esac
-eval_app=${BUILD_DIR:-build}/apps/freeinit-eval
-[ -x "$eval_app" ] || { echo "[results] error: $eval_app not built" >&2; exit 1; }
+eval_app=${BUILD_DIR:-build}/bin/freeinit-eval
+[ -f "$eval_app" ] && [ -x "$eval_app" ] || { echo "[results] error: $eval_app not built" >&2; exit 1; }
 out=gui_snapshots
 
 taskset -c 0 "$eval_app" --jobs 1 --seeds 3 --md $out/eval_presets.md --csv $out/eval_presets.csv \

@@ -221,6 +221,32 @@ TEST(ImuScreen, BridgesAShortGapWithNoiseGrowingIntoItAndLeavesALongOne) {
   EXPECT_FALSE(s.extraNoise()[110].synthetic());
 }
 
+// A driver that stamps on receipt delivers its first 30 samples in a burst 0.1 ms apart, then
+// every 5 ms: the nominal interval follows the stream, so the 5 ms intervals after the burst are
+// not gaps (with the interval read once from the burst, every one of them was bridged with ~50
+// synthetic samples). Where the burst meets the steady stream, at most a few intervals may look
+// like gaps; none after 0.1 s of the steady stream. The same offline (all samples at once).
+TEST(ImuScreen, ADriversBurstAtTheStartLeavesTheLaterIntervalsAlone) {
+  auto imu = smoothStream(330);
+  for (std::size_t k = 0; k < imu.size(); ++k)
+    imu[k].t = 100.0 + (k < 30 ? 1e-4 * static_cast<double>(k)
+                               : 29e-4 + 0.005 * static_cast<double>(k - 29));
+  const double steady = imu[29].t;
+  for (const bool offline : {false, true}) {
+    ImuScreen s{ImuScreenParams{}};
+    if (offline) {
+      s.advance(imu, true);
+    } else {
+      s = screened(imu);
+    }
+    EXPECT_LE(s.gaps().size(), 3u) << (offline ? "offline" : "live");
+    for (const detail::ImuGap& g : s.gaps())
+      EXPECT_LT(g.t, steady + 0.1) << (offline ? "offline" : "live");
+    EXPECT_NEAR(s.interval(), 0.005, 1e-9);
+    EXPECT_LE(s.samples().size(), imu.size() + 20);
+  }
+}
+
 /// 200 Hz at rest: constant readings plus white noise at 0.002 rad/s, 0.02 m/s^2.
 std::vector<ImuSample> restStream(std::size_t n, std::uint64_t seed) {
   std::mt19937_64 rng(seed);

@@ -62,6 +62,9 @@ const char* const kUsage =
     "                       Cramer-Rao bound, statuses, every run)\n"
     "  --csv FILE           CSV, one row per case and method\n"
     "  --summary-csv FILE   CSV, one row per method: statuses, error/bound quantiles, NEES\n"
+    "  --summary-by imu|doppler|imu,doppler\n"
+    "                       summaries per factor over the other factor's draws (a row per IMU\n"
+    "                       factor, then per Doppler factor) instead of per combination\n"
     "  --bounds-md FILE     the Markdown tables against the bound alone (at most ten\n"
     "                       confident wrong answers listed per method)\n"
     "  --plots DIR          velocity_error_dyna.png and tunnel_velocity.png (first seed)\n"
@@ -174,6 +177,21 @@ EvalAppParams parseParams(int argc, const char* const* argv) {
       {"--md", [&](int& i) { o.md = value(i); }},
       {"--csv", [&](int& i) { o.csv = value(i); }},
       {"--summary-csv", [&](int& i) { o.summary_csv = value(i); }},
+      {"--summary-by",
+       [&](int& i) {
+         const std::string flag = argv[i], v = value(i);
+         o.summary_by.clear();
+         std::size_t from = 0;
+         while (from <= v.size()) {
+           const std::size_t comma = std::min(v.find(',', from), v.size());
+           const std::string part = v.substr(from, comma - from);
+           if ((part != "imu" && part != "doppler") ||
+               std::find(o.summary_by.begin(), o.summary_by.end(), part) != o.summary_by.end())
+             throw UsageError(flag + ": must be imu, doppler or imu,doppler, not '" + v + "'");
+           o.summary_by.push_back(part);
+           from = comma + 1;
+         }
+       }},
       {"--bounds-md", [&](int& i) { o.bounds_md = value(i); }},
       {"--plots", [&](int& i) { o.plots = value(i); }},
       {"--fail-velocity", [&](int& i) { o.thresholds.velocity = positive(i); }},
@@ -224,7 +242,8 @@ EvalAppParams resolved(EvalAppParams o) {
 /// The summary block of a run: each misdeclaration the command line asks for, a fixed value as
 /// it is, a drawn factor binned to the nearest power of two ("imu≈×2"), a drawn offset by its
 /// range.
-std::string blockOf(const EvalAppParams& o, const sim::Misdeclaration& m) {
+std::string blockOf(const EvalAppParams& o, const sim::Misdeclaration& m,
+                    const std::string& only = "") {
   auto format = [](const char* fmt, double x) {
     char buf[48];
     std::snprintf(buf, sizeof(buf), fmt, x);
@@ -236,8 +255,9 @@ std::string blockOf(const EvalAppParams& o, const sim::Misdeclaration& m) {
     return std::string(name) + "≈×" + format("%g", std::exp2(std::round(std::log2(f))));
   };
   std::string block;
-  for (std::string part : {factor("imu", o.imu_noise_factor, m.imu_noise_factor),
-                           factor("doppler", o.doppler_noise_factor, m.doppler_noise_factor)})
+  for (std::string part :
+       {only == "doppler" ? "" : factor("imu", o.imu_noise_factor, m.imu_noise_factor),
+        only == "imu" ? "" : factor("doppler", o.doppler_noise_factor, m.doppler_noise_factor)})
     if (!part.empty()) block += (block.empty() ? "" : " ") + part;
   if (o.time_offset) {
     const sim::DrawRange& t = *o.time_offset;
@@ -269,6 +289,8 @@ void applyOverrides(const EvalAppParams& o, EvalCase& c) {
         sc.declared_rotation_error_deg.norm() > 0 || sc.declared_position_error.norm() > 0;
   }
   c.block = blockOf(o, c.misdeclared);
+  for (const std::string& by : o.summary_by)
+    c.summary_blocks.push_back(blockOf(o, c.misdeclared, by));
 }
 
 /// Every preset of the command line x seeds 1..N. (Randomized scenarios are one more function of
@@ -554,15 +576,24 @@ void EvalApp::run(std::ostream& out, std::ostream& progress) {
     rows.insert(rows.end(), r.rows.begin(), r.rows.end());
   }
   report::markFailures(rows, o.thresholds);
+  // The summaries' rows: each run under its block, or once per marginal block (--summary-by).
+  std::vector<report::EvalRow> summarized;
+  for (std::size_t q = 0; q < o.summary_by.size(); ++q)
+    for (std::size_t i = 0, k = 0; i < results.size(); ++i)
+      for (std::size_t j = 0; j < results[i].rows.size(); ++j, ++k) {
+        summarized.push_back(rows[k]);
+        summarized.back().block = cases[i].summary_blocks[q];
+      }
+  const std::vector<report::EvalRow>& summary_rows = o.summary_by.empty() ? rows : summarized;
   out << "\n"
       << report::markdownSummary(rows, o.thresholds) << "\n"
-      << report::boundsMarkdown(rows);
+      << report::boundsMarkdown(summary_rows);
   if (!o.csv.empty()) report::writeEvalCsv(o.csv, rows);
-  if (!o.summary_csv.empty()) report::writeSummaryCsv(o.summary_csv, rows);
+  if (!o.summary_csv.empty()) report::writeSummaryCsv(o.summary_csv, summary_rows);
   if (!o.md.empty()) report::writeEvalMarkdown(o.md, rows, o.thresholds, o.command);
   if (!o.bounds_md.empty()) {
     // For a README: ten confident wrong answers per method at most (the report lists all).
-    const std::string md = report::boundsMarkdown(rows, {}, 10);
+    const std::string md = report::boundsMarkdown(summary_rows, {}, 10);
     writeFileAtomically(o.bounds_md, [&](std::ostream& f) { f << md; });
   }
   if (!o.plots.empty()) {

@@ -53,6 +53,10 @@ struct EvalAppParams {
   /// injected into the recording. Unset: the datasheet noise (--random) or the configuration's
   /// (presets), and the scenario's own offset.
   std::optional<sim::DrawRange> imu_noise_factor, doppler_noise_factor, time_offset;
+  /// The factors whose marginal blocks the summaries give instead of one block per combination
+  /// ("imu", "doppler", or both: each run then counts once under each), e.g. a row per IMU
+  /// factor over every Doppler factor. Empty: one block per combination.
+  std::vector<std::string> summary_by;
   /// Gross IMU faults injected into each recording (issue 44): imu_spikes accelerometer samples
   /// of the window, each on a random axis with a random sign, made off by imu_spike_magnitude
   /// [m/s^2]; and [s] one IMU gap of imu_gap at a random time inside the window (0: none).
@@ -73,6 +77,7 @@ struct EvalCase {
   bool wrong_calibration = false;
   sim::Misdeclaration misdeclared;  ///< the noise factors and the offset (in `scenario` already)
   std::string block;                ///< the summary block (report::EvalRow::block)
+  std::vector<std::string> summary_blocks;  ///< its block per EvalAppParams::summary_by entry
 };
 
 class EvalApp {

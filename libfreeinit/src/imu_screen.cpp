@@ -1,6 +1,7 @@
 #include "imu_screen.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 
 namespace freeinit::detail {
@@ -51,21 +52,36 @@ double ImuScreen::robustSigma(bool accel) const {
   return std::max(floor, 1.4826 * *mid);
 }
 
+double ImuScreen::localInterval(std::size_t j) const {
+  // Intervals ending at most kMaxRun + 2 samples after j: what a live stream has received when
+  // j is decided, so that live and offline screening agree. The median of the kIntervals ending
+  // there, or of the few ahead of j when larger: after a burst (a driver stamping on receipt)
+  // the steady intervals ahead are the stream's, though the burst still fills the span behind.
+  const std::size_t last = work_.size() - 1;  // intervals end at samples 1..last
+  if (last == 0) return 0.0;
+  const std::size_t hi = std::min(last, std::max(j + kMaxRun + 2, kIntervals));
+  auto median = [this](std::size_t from, std::size_t to) {
+    std::array<double, kIntervals> dt{};
+    std::size_t n = 0;
+    for (std::size_t i = from; i <= to; ++i) dt[n++] = work_[i].t - work_[i - 1].t;
+    std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(n / 2),
+                     dt.begin() + static_cast<std::ptrdiff_t>(n));
+    return dt[n / 2];
+  };
+  const double behind = median(hi > kIntervals ? hi - kIntervals + 1 : 1, hi);
+  const std::size_t ahead_hi = std::min(last, j + kMaxRun + 2);
+  return ahead_hi > j ? std::max(behind, median(j + 1, ahead_hi)) : behind;
+}
+
 void ImuScreen::advance(const std::vector<ImuSample>& raw, bool finished) {
   for (std::size_t i = work_.size(); i < raw.size(); ++i) work_.push_back(raw[i]);
-  if (h_ == 0 && (work_.size() > kIntervals || (finished && work_.size() >= 2))) {
-    const std::size_t n = std::min(kIntervals, work_.size() - 1);
-    std::vector<double> dt(n);
-    for (std::size_t i = 0; i < n; ++i) dt[i] = work_[i + 1].t - work_[i].t;
-    std::nth_element(dt.begin(), dt.begin() + static_cast<std::ptrdiff_t>(n / 2), dt.end());
-    h_ = dt[n / 2];
-  }
-  if (h_ == 0 && !finished) return;
+  if (work_.size() <= kIntervals && !(finished && work_.size() >= 2)) return;
   if (recent_g_.empty()) {
     recent_g_.assign(3 * kRecentSamples, 0.0);
     recent_a_.assign(3 * kRecentSamples, 0.0);
   }
   while (next_ < work_.size() && (finished || next_ + kMaxRun + 2 < work_.size())) {
+    h_ = localInterval(next_);
     decide(next_);
     if (next_ + 1 < work_.size()) bridge(next_);
     ++next_;

@@ -105,7 +105,9 @@ class ImuScreen {
   const std::vector<ImuSample>& samples() const { return out_; }
   /// Per screened sample, the variance its value adds to the IMU's white noise.
   const std::vector<ImuExtraNoise>& extraNoise() const { return extra_; }
-  /// [s] the nominal sample interval (0 until known).
+  /// [s] the nominal sample interval at the last sample decided (0 until known): the median of
+  /// the 20 intervals up to 5 samples after it, so that a driver's burst or a change of rate
+  /// moves it only where it happens.
   double interval() const { return h_; }
   const std::vector<ImuFault>& faults() const { return faults_; }
   const std::vector<ImuGap>& gaps() const { return gaps_; }
@@ -118,6 +120,8 @@ class ImuScreen {
   void bridge(std::size_t j);
   /// The robust sigma of the neighbours residual of sensor `accel`, floored.
   double robustSigma(bool accel) const;
+  /// [s] the nominal interval about raw sample j (see interval()).
+  double localInterval(std::size_t j) const;
 
   ImuScreenParams p_;
   std::vector<ImuSample> work_;  ///< the raw samples, faults replaced once decided

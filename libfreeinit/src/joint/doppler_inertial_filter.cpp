@@ -796,6 +796,8 @@ void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior
   smoothed_ = 0;
   linearized_ = 0;
   forward_kept_ = 0;
+  forward_rss_ = 0;
+  forward_returns_ = 0;
   x0_prior_ = x0;
   x0_prior_.t = imu_.front().t;
   Node n;

@@ -245,6 +245,7 @@ class JointPipeline final : public Pipeline {
     rest_.start(rest, gm / cnt, am / cnt, d.imu_rest.gyro, d.imu_rest.accel, cfg_.imu.gyro_sigma,
                 cfg_.imu.accel_sigma);
     imu_noise_from_rest_ = rest;
+    gyro_motion_ = accel_motion_ = NoisePosterior{};
     startDopplerNoise(d.chosen);
     startFilter(d);
     r.diag.static_start = d.kind == StartDecision::Kind::Rest && cfg_.start.detect_rest;
@@ -698,8 +699,9 @@ class JointPipeline final : public Pipeline {
   }
 
   /// The noise the data show so far, for the next smoothing: the IMU's from its rest samples (a
-  /// static start). A change of less than a tenth (within the estimate's own uncertainty, and
-  /// cheaper than the re-solve every node's rows would need) is not made.
+  /// static start), else from the ladder of differences of the samples fed so far (each sensor
+  /// where it tells: imuMotionNoise). A change of less than a tenth (within the estimate's own
+  /// uncertainty, and cheaper than the re-solve every node's rows would need) is not made.
   void updateNoise() {
     const DopplerInertialFilterParams& p = filter_->params();
     constexpr double kChange = 0.1;
@@ -708,8 +710,14 @@ class JointPipeline final : public Pipeline {
     if (imu_noise_from_rest_) {
       g = rest_.gyroNoise().sigma;
       a = rest_.accelNoise().sigma;
-      if (!moved(g, p.gyro_sigma) && !moved(a, p.accel_sigma)) g = a = 0;
+    } else {  // the data's where they tell, else (again) the configured value
+      gyro_motion_ = motionNoise(false, cfg_.imu.gyro_sigma);
+      accel_motion_ = motionNoise(true, cfg_.imu.accel_sigma);
+      g = gyro_motion_.sigma > 0 ? gyro_motion_.sigma : cfg_.imu.gyro_sigma;
+      a = accel_motion_.sigma > 0 ? accel_motion_.sigma : cfg_.imu.accel_sigma;
     }
+    if (!moved(g, p.gyro_sigma)) g = 0;
+    if (!moved(a, p.accel_sigma)) a = 0;
     // The Doppler: the kept returns' residuals against each node's update, cut by the second
     // gate at regate_sigma of their std.
     const DopplerInertialFilter::ForwardResiduals f = filter_->forwardResiduals();
@@ -724,6 +732,14 @@ class JointPipeline final : public Pipeline {
       }
     }
     if (g > 0 || a > 0 || d > 0) filter_->setNoise(d, g, a);
+  }
+
+  /// A moving IMU's noise of one sensor from the samples fed to the filter, combined with the
+  /// configured value (zero where the motion hides it).
+  NoisePosterior motionNoise(bool accel, double declared) const {
+    const MotionNoise m = imuMotionNoise(screen_.samples(), k_first_, fed_, accel,
+                                         screen_.interval(), &screen_.extraNoise());
+    return m.sigma > 0 ? combineNoise(declared, m.sigma, m.dof) : NoisePosterior{};
   }
 
   /// The Doppler noise at the start: the start decision's robust scale of its residuals (its
@@ -792,6 +808,13 @@ class JointPipeline final : public Pipeline {
       n.gyro.rel_sigma = rest_.gyroNoise().rel_sigma;
       n.accel.rel_sigma = rest_.accelNoise().rel_sigma;
       n.gyro.source = n.accel.source = NoiseUsed::Source::DataRest;
+    } else {
+      if (gyro_motion_.sigma > 0)
+        n.gyro = {p.gyro_sigma, gyro_motion_.rel_sigma, cfg_.imu.gyro_sigma,
+                  NoiseUsed::Source::DataMoving};
+      if (accel_motion_.sigma > 0)
+        n.accel = {p.accel_sigma, accel_motion_.rel_sigma, cfg_.imu.accel_sigma,
+                   NoiseUsed::Source::DataMoving};
     }
     if (doppler_from_data_) {
       n.doppler.rel_sigma = doppler_noise_.rel_sigma;
@@ -1150,6 +1173,8 @@ class JointPipeline final : public Pipeline {
   bool early_smoothed_ = false;
   bool rest_withdrawn_ = false;  ///< the returns contradicted the IMU's rest (restContradicted)
   bool imu_noise_from_rest_ = false;  ///< the IMU's noise is read from its rest samples (rest_)
+  /// A moving IMU's noise from the samples' differences (updateNoise; sigma 0: not told)
+  NoisePosterior gyro_motion_, accel_motion_;
   /// The Doppler noise from the data (sigma 0: the configured one is used).
   NoisePosterior doppler_noise_;
   bool doppler_from_data_ = false;  ///< the Doppler noise used is the data's (finalDopplerNoise)

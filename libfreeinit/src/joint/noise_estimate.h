@@ -14,6 +14,14 @@
 // the samples (sum of squared differences over sum of squared deviations): about 2 for white
 // noise of any level, far below for a motion slower than the sample rate. Neither uses the
 // configured noise: rest is decided by the data's shape, not by a level.
+//
+// While the IMU moves, its white noise is read from a ladder of differences (imuMotionNoise):
+// the k-th differences of the samples, scaled by 1/sqrt(C(2k, k)), have the variance sigma^2 of
+// white noise at every order k, while a smooth motion adds (w^(k) h^k)^2 / C(2k, k), falling fast
+// with k. Where successive orders agree the motion is gone from them (a plateau). An IMU's own
+// low-pass filter colours its noise: the ladder then flattens below the noise the integration
+// sees; the same ladder over every other sample (mid rather than high frequencies) must reach
+// the same level. Where either fails, the data cannot tell and the configured value is kept.
 #pragma once
 
 #include <freeinit/initial_state.h>
@@ -91,5 +99,23 @@ struct RestEvidenceParams {
 ImuRestEvidence imuRestEvidence(const std::vector<ImuSample>& imu, std::size_t begin,
                                 std::size_t end, const RestEvidenceParams& params,
                                 const std::vector<ImuExtraNoise>* extra = nullptr);
+
+/// A moving IMU's white noise per sample from one of its signals (imuMotionNoise).
+struct MotionNoise {
+  double sigma = 0;  ///< the signal's unit per sample; 0: the data cannot tell it from motion
+  double dof = 0;    ///< effective degrees of freedom of sigma^2
+  int order = 0;     ///< the difference order the estimate is read from
+};
+
+/// The white noise of the gyro (`accel` false) or the accelerometer in imu[begin, end), moving
+/// or not, from the ladder of scaled differences (see the file's comment) of orders 1 to 8 over
+/// consecutive samples and over every other one. Each ladder's plateau is its first order k at
+/// which orders k, k + 1 and k + 2 agree pairwise within the spread white noise gives their
+/// ratio (99.9 %, two-sided); the two plateaus must agree likewise. The estimate is the stride-1
+/// plateau's level. Differences spanning a gap (an interval beyond 1.5 `interval`) or a synthetic
+/// sample (`extra`, ImuScreen) are left out; each order needs at least 20 differences.
+MotionNoise imuMotionNoise(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
+                           bool accel, double interval,
+                           const std::vector<ImuExtraNoise>* extra = nullptr);
 
 }  // namespace freeinit::detail
