@@ -18,30 +18,17 @@
 #include <vector>
 
 #include "joint/noise_estimate.h"
+#include "random_runs.h"
 
 namespace freeinit {
 namespace {
 
-struct NoisyRun {
-  sim::RandomScenario scenario;
-  sim::Recording rec;
-  FreeInitConfig cfg;
-  InitResult result;
-};
+using NoisyRun = test::RandomRun;
 
 /// The seed's scenario, the estimator handed the datasheet IMU noise times imu_factor and the
 /// Doppler noise times doppler_factor.
 NoisyRun runSeed(std::uint64_t seed, double imu_factor, double doppler_factor) {
-  NoisyRun r{sim::drawRandomScenario(seed), {}, {}, {}};
-  r.scenario.config.duration = 0.8;
-  r.scenario.config.points_per_frame = std::min(r.scenario.config.points_per_frame, 20000);
-  r.rec = sim::simulate(r.scenario.config);
-  r.cfg.extrinsics = r.rec.declared_extrinsics;
-  r.cfg.doppler.doppler_sigma = doppler_factor * r.rec.config.doppler_sigma;
-  r.cfg.imu.gyro_sigma = imu_factor * r.rec.config.gyro_sigma;
-  r.cfg.imu.accel_sigma = imu_factor * r.rec.config.accel_sigma;
-  r.result = FreeInit::run(r.cfg, r.rec.imu, r.rec.frames);
-  return r;
+  return test::runScenario(test::ciScenario(seed), imu_factor, doppler_factor);
 }
 
 /// The first `count` seeds from `first` that draw a start at rest throughout the window, with a
