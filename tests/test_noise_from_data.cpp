@@ -132,6 +132,33 @@ TEST(MotionNoise, LeavesOutDifferencesAcrossAGapOrASyntheticSample) {
   EXPECT_LT(m.dof, clean.dof);
 }
 
+// The ladder's sums kept as the samples arrive (the pipeline's two readings of the window) give
+// what one reading of the whole span does, exactly; a nominal interval that joins or parts two
+// samples already summed otherwise starts the sums again.
+TEST(MotionNoise, ALadderExtendedAsSamplesArriveReadsAsOneOverTheWholeSpan) {
+  const auto motion = [](double t, int a) { return 0.5 * std::sin(2 * kPi * t + a); };
+  std::vector<ImuSample> imu = gyroSamples(300, 200.0, 0.002, motion, 11);
+  for (std::size_t i = 150; i < imu.size(); ++i) imu[i].t += 0.004;  // an interval of 9 ms
+  std::vector<detail::ImuExtraNoise> extra(imu.size());
+  extra.at(40).gyro_synthetic = true;
+  for (const double late_interval : {0.005, 0.0065}) {  // 9 ms parted, then joined
+    detail::MotionNoiseLadder ladder(false);
+    for (const std::size_t end : {std::size_t{3}, std::size_t{120}, std::size_t{200}}) {
+      const detail::MotionNoise a = ladder.extend(imu, 2, end, 0.005, &extra);
+      const detail::MotionNoise b = detail::imuMotionNoise(imu, 2, end, false, 0.005, &extra);
+      EXPECT_EQ(a.sigma, b.sigma) << end;
+      EXPECT_EQ(a.dof, b.dof) << end;
+    }
+    const detail::MotionNoise a = ladder.extend(imu, 2, imu.size(), late_interval, &extra);
+    const detail::MotionNoise b =
+        detail::imuMotionNoise(imu, 2, imu.size(), false, late_interval, &extra);
+    ASSERT_GT(b.sigma, 0.0);
+    EXPECT_EQ(a.sigma, b.sigma) << late_interval;
+    EXPECT_EQ(a.dof, b.dof) << late_interval;
+    EXPECT_EQ(a.order, b.order) << late_interval;
+  }
+}
+
 /// "seed S IMU noise declared xF (platform)", for the messages.
 std::string imuRunName(const NoisyRun& r, std::uint64_t seed, double factor) {
   return "seed " + std::to_string(seed) + " IMU noise declared x" + std::to_string(factor) + " (" +

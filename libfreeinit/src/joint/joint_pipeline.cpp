@@ -768,8 +768,9 @@ class JointPipeline final : public Pipeline {
   /// A moving IMU's noise of one sensor from the samples fed to the filter, combined with the
   /// configured value (zero where the motion hides it).
   NoisePosterior motionNoise(bool accel, double declared) const {
-    const MotionNoise m = imuMotionNoise(screen_.samples(), k_first_, fed_, accel,
-                                         screen_.interval(), &screen_.extraNoise());
+    const MotionNoise m =
+        (accel ? accel_ladder_ : gyro_ladder_)
+            .extend(screen_.samples(), k_first_, fed_, screen_.interval(), &screen_.extraNoise());
     return m.sigma > 0 ? combineNoise(declared, m.sigma, m.dof) : NoisePosterior{};
   }
 
@@ -1207,6 +1208,8 @@ class JointPipeline final : public Pipeline {
   bool imu_noise_from_rest_ = false;  ///< the IMU's noise is read from its rest samples (rest_)
   /// A moving IMU's noise from the samples' differences (updateNoise; sigma 0: not told)
   NoisePosterior gyro_motion_, accel_motion_;
+  /// Their ladders' sums over the samples fed so far (each sample's differences taken once).
+  mutable MotionNoiseLadder gyro_ladder_{false}, accel_ladder_{true};
   /// The Doppler noise from the data (sigma 0: the configured one is used).
   NoisePosterior doppler_noise_;
   bool doppler_from_data_ = false;  ///< the Doppler noise used is the data's (finalDopplerNoise)

@@ -179,17 +179,45 @@ bool sameWhiteLevel(double ea, double eb, const DifferenceTaps& a, const Differe
 
 MotionNoise imuMotionNoise(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
                            bool accel, double interval, const std::vector<ImuExtraNoise>* extra) {
+  return MotionNoiseLadder(accel).extend(imu, begin, end, interval, extra);
+}
+
+void MotionNoiseLadder::reset(std::size_t begin) {
+  begin_ = next_ = begin;
+  run_ = 0;
+  joined_ = 0;
+  parted_ = std::numeric_limits<double>::infinity();
+  squares_ = {};
+  count_ = {};
+}
+
+MotionNoise MotionNoiseLadder::extend(const std::vector<ImuSample>& imu, std::size_t begin,
+                                      std::size_t end, double interval,
+                                      const std::vector<ImuExtraNoise>* extra) {
+  static_assert(kOrders == kLadderOrders && kStrides == kLadderStrides, "one ladder");
   end = std::min(end, imu.size());
+  const double cut = 1.5 * interval;
+  const bool same_joins = interval > 0 ? joined_ <= cut && parted_ > cut : joined_ == 0;
+  if (begin != begin_ || end < next_ || !same_joins) reset(begin);
+  const bool accel = accel_;
   std::array<std::array<DifferenceTaps, kLadderOrders>, kLadderStrides> taps;
-  std::array<std::array<double, kLadderOrders>, kLadderStrides> squares{};
-  std::array<std::array<std::size_t, kLadderOrders>, kLadderStrides> count{};
+  std::array<std::array<double, kLadderOrders>, kLadderStrides>& squares = squares_;
+  std::array<std::array<std::size_t, kLadderOrders>, kLadderStrides>& count = count_;
   for (int s = 0; s < kLadderStrides; ++s)
     for (int k = 0; k < kLadderOrders; ++k) taps[s][k] = differenceTaps(k + 1, s + 1);
   auto value = [&](std::size_t i) -> const Vec3& { return accel ? imu[i].accel : imu[i].gyro; };
   // run: consecutive measured samples ending at j without a gap between them.
-  int run = 0;
-  for (std::size_t j = begin; j < end; ++j) {
-    const bool joined = j > begin && interval > 0 && imu[j].t - imu[j - 1].t <= 1.5 * interval;
+  int run = run_;
+  for (std::size_t j = next_; j < end; ++j) {
+    bool joined = false;
+    if (j > begin) {
+      const double dt = imu[j].t - imu[j - 1].t;
+      joined = interval > 0 && dt <= cut;
+      if (joined)
+        joined_ = std::max(joined_, dt);
+      else
+        parted_ = std::min(parted_, dt);
+    }
     run = !measuredReading(extra, j, accel) ? 0 : (joined ? std::min(run + 1, kMostTaps) : 1);
     for (int s = 0; s < kLadderStrides; ++s)
       for (int k = 0; k < kLadderOrders; ++k) {
@@ -203,6 +231,8 @@ MotionNoise imuMotionNoise(const std::vector<ImuSample>& imu, std::size_t begin,
         ++count[s][k];
       }
   }
+  run_ = run;
+  next_ = std::max(next_, end);
   // Each ladder's plateau: its first order whose next two agree with it.
   constexpr std::size_t kMinDifferences = 20;
   std::array<int, kLadderStrides> plateau{};

@@ -27,7 +27,9 @@
 #include <freeinit/initial_state.h>
 #include <freeinit/types.h>
 
+#include <array>
 #include <cstddef>
+#include <limits>
 #include <vector>
 
 #include "imu_screen.h"
@@ -117,5 +119,31 @@ struct MotionNoise {
 MotionNoise imuMotionNoise(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
                            bool accel, double interval,
                            const std::vector<ImuExtraNoise>* extra = nullptr);
+
+/// imuMotionNoise's sums kept between calls over a span that grows at its end, so that every
+/// sample's differences are taken once: extend() to `end` gives what imuMotionNoise over
+/// [begin, end) would (the same sums, added in the same order). A call with another begin, an
+/// earlier end, or a nominal interval that would join or part two samples already summed
+/// otherwise, starts again from `begin`.
+class MotionNoiseLadder {
+ public:
+  explicit MotionNoiseLadder(bool accel) : accel_(accel) {}
+  /// imuMotionNoise(imu, begin, end, accel, interval, extra), from the sums so far.
+  MotionNoise extend(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
+                     double interval, const std::vector<ImuExtraNoise>* extra);
+
+  static constexpr int kOrders = 8;   ///< difference orders 1..8
+  static constexpr int kStrides = 2;  ///< over consecutive samples and every other one
+
+ private:
+  void reset(std::size_t begin);
+  bool accel_;
+  std::size_t begin_ = 0, next_ = 0;  ///< the span summed: [begin_, next_)
+  int run_ = 0;                       ///< consecutive measured samples ending at next_ - 1
+  /// [s] the largest interval joined and the smallest parted so far (the interval's test).
+  double joined_ = 0, parted_ = std::numeric_limits<double>::infinity();
+  std::array<std::array<double, kOrders>, kStrides> squares_{};
+  std::array<std::array<std::size_t, kOrders>, kStrides> count_{};
+};
 
 }  // namespace freeinit::detail
