@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -681,7 +682,7 @@ void DopplerInertialFilter::compose(const IntegrationJacobian& later, Integratio
 FilterState DopplerInertialFilter::integrateAcross(
     const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k, double tau,
     IntegrationJacobian* J, std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind,
-    ImuAlong& partial, const ImuAlong** last, PreintegrationChains* pre) {
+    ImuAlong& partial, const ImuAlong** last, PreintegrationChains* pre, const Node* before) {
   // Whole sample intervals while the end lies at or beyond the next sample (in the direction of
   // tau), then what is left from the sample reached.
   const double t_end = imu[k].t + tau;
@@ -697,11 +698,23 @@ FilterState DopplerInertialFilter::integrateAcross(
     while (forward ? j + 1 < imu.size() && imu[j + 1].t - t_end <= t_end - imu[j].t
                    : j > 0 && t_end - imu[j - 1].t <= imu[j].t - t_end)
       j = forward ? j + 1 : j - 1;
-    if (j != k) {
+    const std::size_t steps = forward ? j - k : k - j;
+    // Back towards the node before: through its chain forward (which reaches this node), so
+    // every sample is integrated once; else (its chain made at biases too far from x's) this
+    // node's own chain backward.
+    Preintegration derived;
+    if (j != k && !forward && before != nullptr && before->k_next == k && j >= before->k &&
+        backwardThrough(imu, *before, j, x, derived)) {
+      y = applyPreintegration(derived, imu, x, J != nullptr ? &total : nullptr);
+      // The IMU at the end, as the backward chain's last step samples it (read with no rest).
+      if (t_end == imu[j].t) {
+        if (behind.size() < steps) behind.resize(steps);
+        along = &imuAlong(imu, j + 1, imu[j].t - imu[j + 1].t, behind[steps - 1]);
+      }
+    } else if (j != k) {
       const Preintegration& P =
           preintegrated(imu, k, j, x, ahead, behind, forward ? pre->ahead : pre->behind);
       y = applyPreintegration(P, imu, x, J != nullptr ? &total : nullptr);
-      const std::size_t steps = forward ? j - k : k - j;
       along = &(forward ? ahead : behind)[steps - 1];
     }
   }
@@ -730,24 +743,76 @@ FilterState DopplerInertialFilter::integrateAcross(
   return y;
 }
 
+bool DopplerInertialFilter::chainHolds(const PreintegrationChain& chain, std::size_t from,
+                                       bool forward, double span, const FilterState& x) {
+  // Made again when the biases moved by more than db_g tau = 1e-3 rad or db_a tau = 1e-2 m/s
+  // over the preintegration's span tau: the first order's error, of the order of the products of
+  // (db tau) (db_g tau with itself, 1e-6 rad; with db_a tau, 5e-6 m/s: a hundredth or less of
+  // what a window resolves), whatever the span. With limits ten times smaller, the smoother's
+  // first steps remade a chain for every second sample on dyna_05 at 1 kHz (nodes at 200 Hz),
+  // a third of the integrations.
+  constexpr double kMostGyroBiasStep = 1e-3, kMostAccelBiasStep = 1e-2;  // [rad], [m/s]
+  const std::vector<Preintegration>& c = chain.prefix;
+  return !c.empty() && c.front().from == from && (c.front().to > from) == forward &&
+         (x.b_g - c.front().b_g).cwiseAbs().maxCoeff() * span <= kMostGyroBiasStep &&
+         (x.b_a - c.front().b_a).cwiseAbs().maxCoeff() * span <= kMostAccelBiasStep;
+}
+
+bool DopplerInertialFilter::backwardThrough(const std::vector<ImuSample>& imu, const Node& before,
+                                            std::size_t j, const FilterState& x,
+                                            Preintegration& D) {
+  // A = before.k -> k (the next node's sample) and B = before.k -> j, both from the chain of the
+  // node before, in its body frame at its biases b0; from sample k back to sample j:
+  //   dR = dR_A^T dR_B,  tau = tau_B - tau_A (< 0),  dv = dR_A^T (dv_B - dv_A),
+  //   dp = dR_A^T (dp_B - dp_A - dv_A tau)
+  // (gravity's terms cancel: each increment holds it out). At b = b0 + db, dR_A Exp(J_A db)
+  // turned back is Exp(-J_A db) dR_A^T, and Exp(-phi) w = w + [w]x phi to first order:
+  //   th_bg = J_B.th_bg - dR^T J_A.th_bg,
+  //   v_bg = dR_A^T (J_B.v_bg - J_A.v_bg) + [dv]x J_A.th_bg,  v_ba = dR_A^T (J_B.v_ba - J_A.v_ba),
+  //   p_bg = dR_A^T (J_B.p_bg - J_A.p_bg - J_A.v_bg tau) + [dp]x J_A.th_bg,
+  //   p_ba = dR_A^T (J_B.p_ba - J_A.p_ba - J_A.v_ba tau).
+  const std::size_t k = before.k_next, from = before.k;
+  if (!chainHolds(before.pre.ahead, from, true, imu[k].t - imu[from].t, x)) return false;
+  const Preintegration A =
+      preintegrated(imu, from, k, x, before.ahead, before.behind, before.pre.ahead);
+  Preintegration B;  // j = from: nothing
+  B.from = B.to = from;
+  B.b_g = A.b_g;
+  B.b_a = A.b_a;
+  if (j > from) B = preintegrated(imu, from, j, x, before.ahead, before.behind, before.pre.ahead);
+  const Mat3 At = A.dR.transpose();
+  const double tau = B.J.tau - A.J.tau;
+  D.from = k;
+  D.to = j;
+  D.samples = A.samples;
+  D.complete = A.complete;
+  D.b_g = A.b_g;
+  D.b_a = A.b_a;
+  D.dR = At * B.dR;
+  D.dv = At * (B.dv - A.dv);
+  D.dp = At * (B.dp - A.dp - A.dv * tau);
+  IntegrationJacobian& J = D.J;
+  const Mat3 S_v = skew(D.dv), S_p = skew(D.dp);
+  J.tau = tau;
+  J.th_th = D.dR.transpose();
+  J.th_bg = B.J.th_bg - D.dR.transpose() * A.J.th_bg;
+  J.v_th = -S_v;
+  J.v_bg = At * (B.J.v_bg - A.J.v_bg) + S_v * A.J.th_bg;
+  J.v_ba = At * (B.J.v_ba - A.J.v_ba);
+  J.p_th = -S_p;
+  J.p_bg = At * (B.J.p_bg - A.J.p_bg - A.J.v_bg * tau) + S_p * A.J.th_bg;
+  J.p_ba = At * (B.J.p_ba - A.J.p_ba - A.J.v_ba * tau);
+  return true;
+}
+
 const DopplerInertialFilter::Preintegration& DopplerInertialFilter::preintegrated(
     const std::vector<ImuSample>& imu, std::size_t from, std::size_t to, const FilterState& x,
     std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind, PreintegrationChain& chain) {
-  // Made again when the biases moved by more than db_g tau = 1e-4 rad or db_a tau = 1e-3 m/s
-  // over the preintegration's span tau: the first order's error, of the order of the products of
-  // (db tau) (db_g tau with itself, 1e-8 rad; with db_a tau, 5e-8 m/s), then stays below what it
-  // was with fixed limits of 2e-3 rad/s and 2e-2 m/s^2 over 50 ms, whatever the span (at nodes
-  // of 200 Hz the spans are 2.5-5 ms: those limits remade them as the smoother moved the biases,
-  // most of its cost with a fast IMU).
-  constexpr double kMostGyroBiasStep = 1e-4, kMostAccelBiasStep = 1e-3;  // [rad], [m/s]
   const bool forward = to > from;
   const std::size_t steps = forward ? to - from : from - to;
   const double span = std::abs(imu[to].t - imu[from].t);
   std::vector<Preintegration>& c = chain.prefix;
-  const bool usable = !c.empty() && c.front().from == from && (c.front().to > from) == forward &&
-                      (x.b_g - c.front().b_g).cwiseAbs().maxCoeff() * span <= kMostGyroBiasStep &&
-                      (x.b_a - c.front().b_a).cwiseAbs().maxCoeff() * span <= kMostAccelBiasStep;
-  if (usable) {
+  if (chainHolds(chain, from, forward, span, x)) {
     // Those made before samples they read had arrived go (the last ones: they read the most).
     while (!c.empty() && !(c.back().samples == imu.size() || c.back().complete)) c.pop_back();
     if (c.size() >= steps) return c[steps - 1];
@@ -840,6 +905,28 @@ FilterState DopplerInertialFilter::integrateAcross(const FilterState& x,
   IntegrationJacobian blocks;
   const FilterState y = integrateAcross(x, imu, k, tau, J != nullptr ? &blocks : nullptr, ahead,
                                         behind, partial, nullptr);
+  if (J != nullptr) *J = blocks.matrix();
+  return y;
+}
+
+FilterState DopplerInertialFilter::integrateBackThrough(const FilterState& x,
+                                                        const std::vector<ImuSample>& imu,
+                                                        std::size_t k_before, std::size_t k,
+                                                        double tau, const FilterState& x_before,
+                                                        MatS* J, bool* through) {
+  if (!(k_before < k && k < imu.size() && tau < 0 && imu[k].t + tau >= imu[k_before].t))
+    throw std::invalid_argument("DopplerInertialFilter::integrateBackThrough: out of the interval");
+  Node before, n;
+  before.k = k_before;
+  before.k_next = n.k = k;
+  n.k_prev = k_before;
+  preintegrated(imu, k_before, k, x_before, before.ahead, before.behind, before.pre.ahead);
+  if (through != nullptr)
+    *through = chainHolds(before.pre.ahead, k_before, true, imu[k].t - imu[k_before].t, x);
+  ImuAlong partial;
+  IntegrationJacobian blocks;
+  const FilterState y = integrateAcross(x, imu, k, tau, J != nullptr ? &blocks : nullptr, n.ahead,
+                                        n.behind, partial, nullptr, &n.pre, &before);
   if (J != nullptr) *J = blocks.matrix();
   return y;
 }
@@ -945,6 +1032,14 @@ DopplerInertialFilter::MatS DopplerInertialFilter::numericalTransitionJacobian(
   return F;
 }
 
+const DopplerInertialFilter::Node* DopplerInertialFilter::nodeBefore(const Node& n) const {
+  const std::less<const Node*> less;
+  const Node* first = nodes_.data();
+  if (nodes_.empty() || less(&n, first) || !less(&n, first + nodes_.size())) return nullptr;
+  const std::size_t i = static_cast<std::size_t>(&n - first);
+  return i > 0 && nodes_[i - 1].k_next == n.k ? &nodes_[i - 1] : nullptr;
+}
+
 Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
                                           std::size_t k, double tau,
                                           Eigen::Matrix<double, 3, kStateDim>* J) const {
@@ -972,7 +1067,8 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   } else if (chain != nullptr && cache != nullptr) {
     // Across the samples between: the IMU at the end is that of the integration's last step.
     const ImuAlong* along = nullptr;
-    y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, *cache, &along, pre);
+    y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, *cache, &along, pre,
+                        tau_true < 0 ? nodeBefore(*chain) : nullptr);
     if (along != nullptr) {
       gyro = along->gyro[2];
       accel = along->accel[2];

@@ -319,6 +319,14 @@ class DopplerInertialFilter {
   /// negative tau), the last one partial, their Jacobians composed.
   static FilterState integrateAcross(const FilterState& x, const std::vector<ImuSample>& imu,
                                      std::size_t k, double tau, MatS* J = nullptr);
+  /// integrateAcross() back from sample k by tau (< 0, to no earlier than sample k_before)
+  /// the way a node at k with a node before it at k_before integrates: the whole intervals
+  /// through the chain of preintegrations forward from k_before to k, made at x_before's biases
+  /// (with false if those are too far from x's for it, the node's own chain backward).
+  static FilterState integrateBackThrough(const FilterState& x, const std::vector<ImuSample>& imu,
+                                          std::size_t k_before, std::size_t k, double tau,
+                                          const FilterState& x_before, MatS* J = nullptr,
+                                          bool* through = nullptr);
   /// Nominal propagation of x from sample k to sample k + 1; F (if given): its transition
   /// Jacobian (analytic, first order).
   static FilterState propagate(const FilterState& x, const std::vector<ImuSample>& imu,
@@ -474,7 +482,9 @@ class DopplerInertialFilter {
     /// last, partial step of each fit instant's integration.
     mutable std::vector<ImuAlong> ahead, behind;
     /// ... and the preintegrations of the whole intervals of the fit instants' integrations and
-    /// of the interval to the next node; empty for a node per sample.
+    /// of the interval to the next node; empty for a node per sample. The integration back to
+    /// the fit instant before the node reads the chain forward of the node before
+    /// (backwardThrough); this node's chain back is made only when that one does not hold.
     mutable PreintegrationChains pre;
     /// Intervals across several samples: the process noise over the interval to the next node,
     /// carried through the steps at the state predict() integrated.
@@ -549,6 +559,18 @@ class DopplerInertialFilter {
                                              std::vector<ImuAlong>& ahead,
                                              std::vector<ImuAlong>& behind,
                                              PreintegrationChain& chain);
+  /// Whether the chain holds preintegrations from sample `from` that way whose biases are close
+  /// enough to x's over a span of `span` [s] (preintegrated()).
+  static bool chainHolds(const PreintegrationChain& chain, std::size_t from, bool forward,
+                         double span, const FilterState& x);
+  /// D: the preintegration from the next node's sample (before.k_next) back to sample j
+  /// (before.k <= j < before.k_next), from the chain forward of the node before (its prefixes to
+  /// both samples, the first turned back); false (D not set) unless that chain holds at x's
+  /// biases (chainHolds), made at them if needed.
+  static bool backwardThrough(const std::vector<ImuSample>& imu, const Node& before, std::size_t j,
+                              const FilterState& x, Preintegration& D);
+  /// The node before n in nodes_ (n one of them), if its interval ends at n's sample; else null.
+  const Node* nodeBefore(const Node& n) const;
   /// x moved by a preintegration (the time set to its last sample's); J: the blocks.
   static FilterState applyPreintegration(const Preintegration& P, const std::vector<ImuSample>& imu,
                                          const FilterState& x, IntegrationJacobian* J);
@@ -556,12 +578,14 @@ class DopplerInertialFilter {
   /// needed) and along its last partial one in partial; *last (if given): the IMU along the
   /// integration's last step (nullptr: tau = 0, no step).
   /// pre (if given): the whole intervals through a preintegration of its chains (the one that
-  /// way).
+  /// way); before (if given, with pre): the node before the one at sample k, whose chain forward
+  /// then gives the whole intervals back towards it (backwardThrough).
   static FilterState integrateAcross(const FilterState& x, const std::vector<ImuSample>& imu,
                                      std::size_t k, double tau, IntegrationJacobian* J,
                                      std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind,
                                      ImuAlong& partial, const ImuAlong** last,
-                                     PreintegrationChains* pre = nullptr);
+                                     PreintegrationChains* pre = nullptr,
+                                     const Node* before = nullptr);
   /// integrate() with the IMU along the span given (sampled over tau from sample k; not read
   /// at tau = 0).
   static FilterState integrate(const FilterState& x, const std::vector<ImuSample>& imu,
