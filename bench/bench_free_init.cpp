@@ -192,6 +192,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   if (node_rate >= 0) cfg.joint.node_rate = node_rate;
   HeapStats before{}, after{};
   std::size_t used = 0;
+  int iterations = 0;
   double t_div = 0, t_solve = 0, t_result = 0, t_map = 0;
   bool ok = true;
   double rate_hz = 0;
@@ -202,6 +203,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
       const freeinit::InitResult r = freeinit::FreeInit::run(cfg, rec.imu, rec.frames);
       after = g_heap;
       used = r.diag.points_used;
+      iterations = r.diag.iterations;
       rate_hz = r.diag.update_rate_hz;
       t_div += r.diag.time_velocimeter;
       t_solve += r.diag.time_solver;
@@ -222,6 +224,7 @@ void BM_FreeInitRun(benchmark::State& state, const std::string& name, int stride
   state.counters["ms_to_result"] = 1e3 * t_result / n;
   state.counters["ms_map"] = 1e3 * t_map / n;  // the map, after the state
   state.counters["points_used"] = static_cast<double>(used);
+  state.counters["smoother_iterations"] = iterations;  // all the window's smoothings
   state.counters["peak_heap_bytes"] = static_cast<double>(after.peak - before.live);
   state.counters["result_bytes"] = static_cast<double>(after.live - before.live);
   state.counters["allocs"] = static_cast<double>(after.allocs - before.allocs);
