@@ -702,10 +702,9 @@ FilterState DopplerInertialFilter::integrateAcross(
     // Back towards the node before: through its chain forward (which reaches this node), so
     // every sample is integrated once; else (its chain made at biases too far from x's) this
     // node's own chain backward.
-    Preintegration derived;
     if (j != k && !forward && before != nullptr && before->k_next == k && j >= before->k &&
-        backwardThrough(imu, *before, j, x, derived)) {
-      y = applyPreintegration(derived, imu, x, J != nullptr ? &total : nullptr);
+        backwardThrough(imu, *before, *pre, j, x)) {
+      y = applyPreintegration(pre->back, imu, x, J != nullptr ? &total : nullptr);
       // The IMU at the end, as the backward chain's last step samples it (read with no rest).
       if (t_end == imu[j].t) {
         if (behind.size() < steps) behind.resize(steps);
@@ -773,13 +772,16 @@ bool DopplerInertialFilter::backwardThrough(const std::vector<ImuSample>& imu, c
   //   p_ba = dR_A^T (J_B.p_ba - J_A.p_ba - J_A.v_ba tau).
   const std::size_t k = before.k_next, from = before.k;
   if (!chainHolds(before.pre.ahead, from, true, imu[k].t - imu[from].t, x)) return false;
-  const Preintegration A =
-      preintegrated(imu, from, k, x, before.ahead, before.behind, before.pre.ahead);
-  Preintegration B;  // j = from: nothing
-  B.from = B.to = from;
-  B.b_g = A.b_g;
-  B.b_a = A.b_a;
-  if (j > from) B = preintegrated(imu, from, j, x, before.ahead, before.behind, before.pre.ahead);
+  // The chain reaches k after the first call, so the second reads it as it is.
+  preintegrated(imu, from, k, x, before.ahead, before.behind, before.pre.ahead);
+  Preintegration identity;  // j = from: nothing
+  const std::vector<Preintegration>& c = before.pre.ahead.prefix;
+  const Preintegration& A = c[k - from - 1];
+  identity.b_g = A.b_g;
+  identity.b_a = A.b_a;
+  const Preintegration& B =
+      j > from ? preintegrated(imu, from, j, x, before.ahead, before.behind, before.pre.ahead)
+               : identity;
   const Mat3 At = A.dR.transpose();
   const double tau = B.J.tau - A.J.tau;
   D.from = k;
@@ -805,6 +807,21 @@ bool DopplerInertialFilter::backwardThrough(const std::vector<ImuSample>& imu, c
   return true;
 }
 
+bool DopplerInertialFilter::backwardThrough(const std::vector<ImuSample>& imu, const Node& before,
+                                            PreintegrationChains& pre, std::size_t j,
+                                            const FilterState& x) {
+  Preintegration& back = pre.back;
+  const PreintegrationChain& chain = before.pre.ahead;
+  const std::size_t k = before.k_next, from = before.k;
+  const bool kept = pre.back_changes == chain.changes && back.to == j && back.from == k &&
+                    chain.prefix.size() >= k - from &&
+                    chainHolds(chain, from, true, imu[k].t - imu[from].t, x);
+  if (kept) return true;
+  if (!backwardThrough(imu, before, j, x, back)) return false;
+  pre.back_changes = chain.changes;
+  return true;
+}
+
 const DopplerInertialFilter::Preintegration& DopplerInertialFilter::preintegrated(
     const std::vector<ImuSample>& imu, std::size_t from, std::size_t to, const FilterState& x,
     std::vector<ImuAlong>& ahead, std::vector<ImuAlong>& behind, PreintegrationChain& chain) {
@@ -814,9 +831,13 @@ const DopplerInertialFilter::Preintegration& DopplerInertialFilter::preintegrate
   std::vector<Preintegration>& c = chain.prefix;
   if (chainHolds(chain, from, forward, span, x)) {
     // Those made before samples they read had arrived go (the last ones: they read the most).
-    while (!c.empty() && !(c.back().samples == imu.size() || c.back().complete)) c.pop_back();
+    while (!c.empty() && !(c.back().samples == imu.size() || c.back().complete)) {
+      c.pop_back();
+      ++chain.changes;
+    }
     if (c.size() >= steps) return c[steps - 1];
   } else {
+    if (!c.empty()) ++chain.changes;
     c.clear();
   }
   // The steps from R = I, v = p = 0 at the chain's biases (x's for a new chain), from the last

@@ -435,11 +435,19 @@ class DopplerInertialFilter {
   /// prefix, or extends the chain by the steps it lacks, instead of making it again.
   struct PreintegrationChain {
     std::vector<Preintegration> prefix;
+    /// Counts the changes of prefixes already made (remade or dropped; not those added): what
+    /// was read from them holds while it stays.
+    std::size_t changes = 0;
   };
   /// A node's chains, from its sample to those after it and to those before it: the first holds
   /// the integration to the fit instant after the node and, further, to the next node.
   struct PreintegrationChains {
     PreintegrationChain ahead, behind;
+    /// The preintegration back to the fit instant's sample through the node before's chain
+    /// (backwardThrough), kept while that chain's prefixes stay (back_changes: its changes
+    /// then; back.to: the sample).
+    Preintegration back;
+    std::size_t back_changes = std::numeric_limits<std::size_t>::max();
   };
   /// The process noise (attitude, position, velocity) over an interval spanning several samples,
   /// each step's carried to the interval's end through the steps after it: per unit gyro and
@@ -569,6 +577,10 @@ class DopplerInertialFilter {
   /// biases (chainHolds), made at them if needed.
   static bool backwardThrough(const std::vector<ImuSample>& imu, const Node& before, std::size_t j,
                               const FilterState& x, Preintegration& D);
+  /// backwardThrough() into pre.back (the node's chains), unless it holds the one to sample j
+  /// already.
+  static bool backwardThrough(const std::vector<ImuSample>& imu, const Node& before,
+                              PreintegrationChains& pre, std::size_t j, const FilterState& x);
   /// The node before n in nodes_ (n one of them), if its interval ends at n's sample; else null.
   const Node* nodeBefore(const Node& n) const;
   /// x moved by a preintegration (the time set to its last sample's); J: the blocks.
