@@ -113,5 +113,33 @@ TEST(NodeRate, MovingStartWithAFastImuGivesTheSameEstimate) {
   EXPECT_LT(e.accel_bias, 0.1);
 }
 
+TEST(NodeRate, ANodeAtEverySampleIsTheNodePerSampleExactly) {
+  // node_rate at the IMU's rate (200 Hz): a stride of one sample, every interval a single one,
+  // so none of the preintegrations, the fitted lever-arm gyro or the intervals' noise is made:
+  // the estimate is node_rate = 0's to the bit.
+  sim::ScenarioConfig c = fastImuScenario("moving");
+  const double scale = std::sqrt(200.0 / c.imu_rate);
+  c.gyro_sigma *= scale;
+  c.accel_sigma *= scale;
+  c.imu_rate = 200.0;
+  const sim::Recording rec = sim::simulate(c);
+  FreeInitConfig cfg;
+  cfg.extrinsics = rec.declared_extrinsics;
+  cfg.joint.node_rate = 0;
+  const InitResult every = FreeInit::run(cfg, rec.imu, rec.frames);
+  cfg.joint.node_rate = 200.0;
+  const InitResult bounded = FreeInit::run(cfg, rec.imu, rec.frames);
+  ASSERT_TRUE(every.state.ok()) << every.state.message;
+  ASSERT_TRUE(bounded.state.ok()) << bounded.state.message;
+  EXPECT_EQ(every.trajectory.size(), bounded.trajectory.size());
+  EXPECT_EQ(every.state.timestamp, bounded.state.timestamp);
+  EXPECT_EQ(every.state.q_wb.coeffs(), bounded.state.q_wb.coeffs());
+  EXPECT_EQ(every.state.v_w, bounded.state.v_w);
+  EXPECT_EQ(every.state.b_g, bounded.state.b_g);
+  EXPECT_EQ(every.state.b_a, bounded.state.b_a);
+  EXPECT_EQ(every.state.g_w, bounded.state.g_w);
+  EXPECT_EQ(every.state.cov, bounded.state.cov);
+}
+
 }  // namespace
 }  // namespace freeinit
