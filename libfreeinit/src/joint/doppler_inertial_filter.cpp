@@ -665,18 +665,18 @@ void DopplerInertialFilter::intervalNoise(const Node& n, const Mat3& R, Interval
 void DopplerInertialFilter::compose(const IntegrationJacobian& later, IntegrationJacobian& J) {
   // later after J, block by block (th' = th_th th + th_bg b_g; p' = p + tau v + p_th th + p_bg
   // b_g + p_ba b_a; v' = v + v_th th + v_bg b_g + v_ba b_a; the rest unchanged).
+  // In place: each row block before the blocks it reads are overwritten (p reads v and th, v
+  // reads th; the products are evaluated into temporaries).
   const IntegrationJacobian& L = later;
-  IntegrationJacobian C;
-  C.th_th = L.th_th * J.th_th;
-  C.th_bg = L.th_th * J.th_bg + L.th_bg;
-  C.v_th = J.v_th + L.v_th * J.th_th;
-  C.v_bg = J.v_bg + L.v_th * J.th_bg + L.v_bg;
-  C.v_ba = J.v_ba + L.v_ba;
-  C.p_th = J.p_th + L.tau * J.v_th + L.p_th * J.th_th;
-  C.p_bg = J.p_bg + L.tau * J.v_bg + L.p_th * J.th_bg + L.p_bg;
-  C.p_ba = J.p_ba + L.tau * J.v_ba + L.p_ba;
-  C.tau = J.tau + L.tau;
-  J = C;
+  J.p_th = J.p_th + L.tau * J.v_th + L.p_th * J.th_th;
+  J.p_bg = J.p_bg + L.tau * J.v_bg + L.p_th * J.th_bg + L.p_bg;
+  J.p_ba = J.p_ba + L.tau * J.v_ba + L.p_ba;
+  J.v_th = J.v_th + L.v_th * J.th_th;
+  J.v_bg = J.v_bg + L.v_th * J.th_bg + L.v_bg;
+  J.v_ba = J.v_ba + L.v_ba;
+  J.th_bg = L.th_th * J.th_bg + L.th_bg;
+  J.th_th = L.th_th * J.th_th;
+  J.tau = J.tau + L.tau;
 }
 
 FilterState DopplerInertialFilter::integrateAcross(
