@@ -1262,6 +1262,7 @@ void DopplerInertialFilter::cancelRestFrom(double t, bool keep_rate) {
     Node& n = nodes_[k];
     if (imu_[n.k].t < t) continue;
     if (n.rest_velocity_sigma > 0 || (n.rest_rate_sigma > 0 && !keep_rate)) nodeChanged(k);
+    if (n.rest_velocity_sigma > 0) n.was_rest = true;
     n.rest_velocity_sigma = 0;
     if (!keep_rate) n.rest_rate_sigma = 0;
   }
@@ -1287,7 +1288,7 @@ void DopplerInertialFilter::linearize(std::size_t k, Linearization& L) const {
     // At rest the returns are the same whatever the clock offset: the offset's column is the
     // LiDAR velocity's rate from the IMU, there its noise only (differentiated, for the lever
     // arm's share), which would read as knowledge of the offset.
-    if (n.rest_velocity_sigma > 0) L.G.col(kTime).setZero();
+    if (n.rest_velocity_sigma > 0 || n.was_rest) L.G.col(kTime).setZero();
   }
   if (k + 1 < nodes_.size()) L.x_next = propagate(n, n.xs, &L.F);
 }

@@ -383,8 +383,9 @@ class DopplerInertialFilter {
     DopplerSums sums;
     Rows rows;
     double rest_velocity_sigma = 0;  ///< > 0: zero body velocity at the node
-    double rest_rate_sigma = 0;      ///< > 0: the node's gyro sample measures the bias
-    bool rows_stale = false;         ///< the sums changed after the rows were built
+    bool was_rest = false;
+    double rest_rate_sigma = 0;  ///< > 0: the node's gyro sample measures the bias
+    bool rows_stale = false;     ///< the sums changed after the rows were built
     /// The IMU along the integrations every linearization of the node repeats (to its three fit
     /// instants, to the next node): they depend on the IMU and the clock offset only, not on
     /// the state, so the smoother's iterations sample it once (a cache; the filter is not for
