@@ -14,15 +14,12 @@
 #include <string>
 #include <vector>
 
+#include "random_runs.h"
+
 namespace freeinit {
 namespace {
 
-struct OffsetRun {
-  sim::RandomScenario scenario;
-  sim::Recording rec;
-  FreeInitConfig cfg;
-  InitResult result;
-};
+using OffsetRun = test::RandomRun;
 
 /// The first `count` seeds from 6001 on whose start is `start` ("moving", "static") with the
 /// calibration declared right.
@@ -38,17 +35,9 @@ std::vector<std::uint64_t> seedsOf(const std::string& start, int count) {
 /// The seed's recording with the LiDAR clock `offset` [s] ahead of the IMU's, undeclared; the
 /// configuration's defaults but for the rig's datasheet noise and declared extrinsics.
 OffsetRun runWithOffset(std::uint64_t seed, double offset) {
-  OffsetRun r{sim::drawRandomScenario(seed), {}, {}, {}};
-  r.scenario.config.duration = 0.8;
-  r.scenario.config.points_per_frame = std::min(r.scenario.config.points_per_frame, 20000);
-  r.scenario.config.lidar_time_offset = offset;
-  r.rec = sim::simulate(r.scenario.config);
-  r.cfg.extrinsics = r.rec.declared_extrinsics;
-  r.cfg.doppler.doppler_sigma = r.rec.config.doppler_sigma;
-  r.cfg.imu.gyro_sigma = r.rec.config.gyro_sigma;
-  r.cfg.imu.accel_sigma = r.rec.config.accel_sigma;
-  r.result = FreeInit::run(r.cfg, r.rec.imu, r.rec.frames);
-  return r;
+  sim::RandomScenario sc = test::ciScenario(seed);
+  sc.config.lidar_time_offset = offset;
+  return test::runScenario(sc);
 }
 
 /// The state is ok and none of its errors is more than 3x its bound (above the floors).

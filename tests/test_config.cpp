@@ -5,11 +5,13 @@
 #include <freeinit/free_init.h>
 #include <freeinit/io/config_section.h>
 #include <freeinit/io/ini_file.h>
+#include <freeinit/io/number_format.h>
 #include <freeinit/sim/simulator.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <functional>
@@ -612,4 +614,22 @@ TEST(ConfigSection, ItemsAndKeysDumpedOnlyWhenTheyMatter) {
   ASSERT_EQ(keys.size(), 4u);
   EXPECT_EQ(keys[3].name, "board_<k>");
   EXPECT_EQ(keys[3].default_value, "");
+}
+
+// The three number forms (io/number_format.h): the shortest exact text reads back to the same
+// double; significant digits and decimals print as printf's %.*g and %.*f.
+TEST(NumberFormat, ShortestSignificantAndFixed) {
+  for (const double x : {0.0, -0.0, 0.1, 1.0 / 3.0, -2.5e-9, 123456789.0, 6.02214076e23, 9.81}) {
+    EXPECT_EQ(std::stod(formatNumber(x)), x) << formatNumber(x);
+    for (const int n : {1, 2, 3, 4, 6, 9, 12}) {
+      char g[64], f[512];
+      std::snprintf(g, sizeof g, "%.*g", n, x);
+      std::snprintf(f, sizeof f, "%.*f", n, x);
+      EXPECT_EQ(formatSignificant(x, n), g) << x << " " << n;
+      EXPECT_EQ(formatFixed(x, n), f) << x << " " << n;
+    }
+  }
+  EXPECT_EQ(formatNumber(0.1), "0.1");
+  EXPECT_EQ(formatSignificant(0.012345, 3), "0.0123");
+  EXPECT_EQ(formatFixed(1.5, 3), "1.500");
 }

@@ -17,29 +17,16 @@
 #include <cstdio>
 #include <string>
 
+#include "random_runs.h"
+
 namespace freeinit {
 namespace {
 
-struct RandomRun {
-  sim::RandomScenario scenario;
-  sim::Recording rec;
-  FreeInitConfig cfg;
-  InitResult result;
-};
+using test::RandomRun;
 
-/// What a user of the rig configures: the datasheet noise and the calibration as declared.
-RandomRun runSeed(std::uint64_t seed) {
-  RandomRun r{sim::drawRandomScenario(seed), {}, {}, {}};
-  r.scenario.config.duration = 0.8;
-  r.scenario.config.points_per_frame = std::min(r.scenario.config.points_per_frame, 20000);
-  r.rec = sim::simulate(r.scenario.config);
-  r.cfg.extrinsics = r.rec.declared_extrinsics;
-  r.cfg.doppler.doppler_sigma = r.rec.config.doppler_sigma;
-  r.cfg.imu.gyro_sigma = r.rec.config.gyro_sigma;
-  r.cfg.imu.accel_sigma = r.rec.config.accel_sigma;
-  r.result = FreeInit::run(r.cfg, r.rec.imu, r.rec.frames);
-  return r;
-}
+/// The seed's scenario with what a user of the rig configures: the datasheet noise and the
+/// calibration as declared.
+RandomRun runSeed(std::uint64_t seed) { return test::runScenario(test::ciScenario(seed)); }
 
 TEST(FreeInitRandomized, NoConfidentWrongStateAndAConsistentCovariance) {
   constexpr std::uint64_t kFirst = 7001, kRuns = 30;

@@ -18,30 +18,17 @@
 #include <vector>
 
 #include "joint/noise_estimate.h"
+#include "random_runs.h"
 
 namespace freeinit {
 namespace {
 
-struct NoisyRun {
-  sim::RandomScenario scenario;
-  sim::Recording rec;
-  FreeInitConfig cfg;
-  InitResult result;
-};
+using NoisyRun = test::RandomRun;
 
 /// The seed's scenario, the estimator handed the datasheet IMU noise times imu_factor and the
 /// Doppler noise times doppler_factor.
 NoisyRun runSeed(std::uint64_t seed, double imu_factor, double doppler_factor) {
-  NoisyRun r{sim::drawRandomScenario(seed), {}, {}, {}};
-  r.scenario.config.duration = 0.8;
-  r.scenario.config.points_per_frame = std::min(r.scenario.config.points_per_frame, 20000);
-  r.rec = sim::simulate(r.scenario.config);
-  r.cfg.extrinsics = r.rec.declared_extrinsics;
-  r.cfg.doppler.doppler_sigma = doppler_factor * r.rec.config.doppler_sigma;
-  r.cfg.imu.gyro_sigma = imu_factor * r.rec.config.gyro_sigma;
-  r.cfg.imu.accel_sigma = imu_factor * r.rec.config.accel_sigma;
-  r.result = FreeInit::run(r.cfg, r.rec.imu, r.rec.frames);
-  return r;
+  return test::runScenario(test::ciScenario(seed), imu_factor, doppler_factor);
 }
 
 /// The first `count` seeds from `first` that draw a start at rest throughout the window, with a
@@ -145,6 +132,12 @@ TEST(MotionNoise, LeavesOutDifferencesAcrossAGapOrASyntheticSample) {
   EXPECT_LT(m.dof, clean.dof);
 }
 
+/// "seed S IMU noise declared xF (platform)", for the messages.
+std::string imuRunName(const NoisyRun& r, std::uint64_t seed, double factor) {
+  return "seed " + std::to_string(seed) + " IMU noise declared x" + std::to_string(factor) + " (" +
+         sim::platformName(r.scenario.info.platform) + ")";
+}
+
 double rms(const Vec3& v) { return v.norm() / std::sqrt(3.0); }
 
 // A standing sensor whose IMU is 4x noisier or quieter than configured: rest is still decided
@@ -159,9 +152,7 @@ TEST(NoiseFromData, StaticStartWithTheImuNoiseDeclaredAQuarterOrFourTimesTheTrut
   for (const double factor : {0.25, 4.0}) {
     for (const std::uint64_t seed : seeds) {
       const NoisyRun r = runSeed(seed, factor, 1.0);
-      const std::string what = "seed " + std::to_string(seed) + " IMU noise declared x" +
-                               std::to_string(factor) + " (" +
-                               sim::platformName(r.scenario.info.platform) + ")";
+      const std::string what = imuRunName(r, seed, factor);
       ASSERT_TRUE(r.result.state.ok()) << what << ": " << r.result.state.message;
       EXPECT_TRUE(r.result.diag.static_start) << what;
       EXPECT_GT(r.result.diag.static_duration, 0.4) << what;
@@ -253,9 +244,7 @@ TEST(NoiseFromData, MovingStartsWithTheImuNoiseDeclaredAQuarterOrFourTimesTheTru
     const double factor = f == 0 ? 0.25 : 4.0;
     for (const std::uint64_t seed : seeds) {
       const NoisyRun r = runSeed(seed, factor, 1.0);
-      const std::string what = "seed " + std::to_string(seed) + " IMU noise declared x" +
-                               std::to_string(factor) + " (" +
-                               sim::platformName(r.scenario.info.platform) + ")";
+      const std::string what = imuRunName(r, seed, factor);
       ASSERT_TRUE(r.result.state.ok()) << what << ": " << r.result.state.message;
       const sim::InitErrors e = sim::evaluate(r.result.state, r.rec);
       const eval::Bound b = sim::cramerRaoBound(r.rec, r.cfg, r.result);

@@ -8,6 +8,7 @@
 #include <freeinit/bags/ros2_import.h>
 #include <freeinit/io/atomic_file.h>
 #include <freeinit/io/config_section.h>
+#include <freeinit/io/number_format.h>
 #include <freeinit/mrpt_plugins/rawlog_writer.h>
 #include <freeinit/ros2/open_recording.h>
 #include <unistd.h>
@@ -30,15 +31,9 @@ namespace {
 
 constexpr const char* kSection = "bag_import";
 
-std::string fixed(double x, int precision) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(precision) << x;
-  return os.str();
-}
-
 void writeFitRow(std::ostream& o, const LidarFrame& f, const ros1::DopplerFit& fit) {
-  o << fixed(f.stamp, 6) << "," << fixed(f.stamp + fit.mean_time_offset, 6) << "," << fit.points
-    << "," << fit.inliers << "," << (fit.ok ? 1 : 0);
+  o << formatFixed(f.stamp, 6) << "," << formatFixed(f.stamp + fit.mean_time_offset, 6) << ","
+    << fit.points << "," << fit.inliers << "," << (fit.ok ? 1 : 0);
   const double nan = std::numeric_limits<double>::quiet_NaN();
   auto num = [&](double x) { o << "," << (fit.ok ? x : nan); };
   o << std::setprecision(6) << std::defaultfloat;
@@ -133,21 +128,21 @@ int BagImportApp::run(std::ostream& log) {
     recorded_extrinsics = ros1::readStaticExtrinsics(params.bag, b);
   }
   chooseExtrinsics();
-  const std::string time = b.cloud.time.field.name.empty()
-                               ? "no per-point time (points spread over " +
-                                     fixed(b.cloud.time.frame_duration, 4) + " s in point order)"
-                               : "time '" + b.cloud.time.field.name + "' " +
-                                     ros1::fieldTypeName(b.cloud.time.field.type) + " x " +
-                                     fixed(b.cloud.time.scale, 12) + " s " +
-                                     (b.cloud.time.relative ? "after" : "absolute, not after") +
-                                     " the scan stamp";
+  const std::string time =
+      b.cloud.time.field.name.empty()
+          ? "no per-point time (points spread over " + formatFixed(b.cloud.time.frame_duration, 4) +
+                " s in point order)"
+          : "time '" + b.cloud.time.field.name + "' " +
+                ros1::fieldTypeName(b.cloud.time.field.type) + " x " +
+                formatFixed(b.cloud.time.scale, 12) + " s " +
+                (b.cloud.time.relative ? "after" : "absolute, not after") + " the scan stamp";
   log << "Importing " << params.bag << " -> " << out << "\n  extrinsics from "
       << settings.extrinsics_source << "\n  IMU " << b.imu_topic
       << (b.imu_accel_in_g ? " (accelerations in g)" : " (m/s^2)") << ", LiDAR " << b.lidar_topic
       << ": Doppler '" << b.cloud.doppler.name << "' x" << b.cloud.doppler_sign << ", " << time
       << "\n  scan stamps: " << ros1::stampSourceName(b.stamp_source)
       << (b.stamp_source == ros1::StampSource::kTrigger ? " " + b.trigger_topic : std::string())
-      << ", + " << fixed(b.lidar_time_offset, 6) << " s to the IMU clock\n";
+      << ", + " << formatFixed(b.lidar_time_offset, 6) << " s to the IMU clock\n";
 
   // The rawlog and its extrinsics file are one set (output_set.h), named after the rawlog.
   const std::filesystem::path stem_path(mrpt_plugins::rawlogStem(out));
@@ -244,34 +239,26 @@ int BagImportApp::run(std::ostream& log) {
         << " invalid point(s) dropped (see above)\n";
   if (summary.imu.gaps + summary.lidar.gaps > 0)
     log << "Warning: gaps in the recording (IMU " << summary.imu.gaps << ", LiDAR "
-        << summary.lidar.gaps << "); the largest IMU gap is " << fixed(summary.imu.largest_gap, 4)
-        << " s\n";
+        << summary.lidar.gaps << "); the largest IMU gap is "
+        << formatFixed(summary.imu.largest_gap, 4) << " s\n";
   return 0;
 }
 
 void BagImportApp::chooseExtrinsics() {
   const std::string tf = settings.bag.tf_static_topic;
   extrinsics_warning.clear();
-  if (settings.extrinsics_given) {
-    settings.extrinsics_source = params.config_file + " [extrinsics]";
-    if (recorded_extrinsics) {
-      const std::string diff =
-          bags::extrinsicsDifference(settings.extrinsics, recorded_extrinsics->extrinsics);
-      if (!diff.empty())
-        extrinsics_warning = params.config_file + " [extrinsics] and " + tf + " of " + params.bag +
-                             " (" + recorded_extrinsics->chain + ") " + diff +
-                             ": the INI's are used";
-    }
-    return;
-  }
-  if (!recorded_extrinsics)
+  const auto chosen = bags::chooseExtrinsics(
+      settings.extrinsics_given ? std::optional<Extrinsics>(settings.extrinsics) : std::nullopt,
+      recorded_extrinsics, params.config_file + " [extrinsics]", tf, params.bag);
+  if (!chosen)
     throw std::invalid_argument(
         params.config_file + ": [extrinsics] R_bl: extrinsics missing, and " + params.bag +
         " has " + (tf.empty() ? std::string("tf_static_topic off") : "no " + tf) +
         " linking the IMU's frame to the LiDAR's: give R_bl (or roll_deg, pitch_deg, yaw_deg) "
         "and p_bl; the importer writes them as each point cloud's sensorPose");
-  settings.extrinsics = recorded_extrinsics->extrinsics;
-  settings.extrinsics_source = tf + " of " + params.bag + " (" + recorded_extrinsics->chain + ")";
+  settings.extrinsics = chosen->extrinsics;
+  settings.extrinsics_source = chosen->source;
+  extrinsics_warning = chosen->warning;
 }
 
 int BagImportApp::main(int argc, char** argv) {

@@ -294,7 +294,8 @@ class FreeInitApp::StartPass {
         close_(std::move(close)),
         decoder_(app.config.input),
         checker_(app.config),
-        bar_(log, "  reading", "MB", app.params.progress_terminal, 1e6) {}
+        bar_(log, "  reading", reader_.progressUnit().unit, app.params.progress_terminal,
+             reader_.progressUnit().scale) {}
 
   /// Reads to the end of the file, to an unreadable record, or as far as the starts need, and
   /// closes every session: those still open fail at an unreadable record, else they finish with

@@ -1,6 +1,7 @@
 #include "start_table.h"
 
 #include <freeinit/io/atomic_file.h>
+#include <freeinit/io/number_format.h>
 #include <freeinit/report/plot.h>
 #include <freeinit/rotation.h>
 
@@ -55,12 +56,6 @@ double nees(const Vec3& e, const Mat3& C) {
 }
 
 double rms(const Mat3& C) { return std::sqrt(std::max(0.0, C.trace())); }
-
-std::string num(double x, int precision = 4) {
-  std::ostringstream os;
-  os << std::setprecision(precision) << x;
-  return os.str();
-}
 
 std::string csvQuote(const std::string& s) {
   if (s.find_first_of(",\"\n") == std::string::npos) return s;
@@ -218,17 +213,18 @@ void writeStartTableMarkdown(const std::string& path, const std::vector<StartRow
       }
       const GaugeFreeCov c = gaugeFreeCov(*r.state);
       const auto cell = [&](std::optional<double> err, double sigma) {
-        return (err ? num(*err, 3) : std::string("-")) + " (" + num(sigma, 2) + ")";
+        return (err ? formatSignificant(*err, 3) : std::string("-")) + " (" +
+               formatSignificant(sigma, 2) + ")";
       };
       const auto& t = r.truth;
-      o << num(r.state->v_b().norm(), 4) << " | "
+      o << formatSignificant(r.state->v_b().norm(), 4) << " | "
         << cell(t ? std::optional(t->errors.velocity) : std::nullopt, rms(c.vel_b)) << " | "
         << cell(t ? std::optional(t->errors.gravity_deg) : std::nullopt, rms(c.tilt) * kRadToDeg)
         << " | " << cell(t ? std::optional(t->errors.gyro_bias) : std::nullopt, rms(c.gyro_bias))
         << " | " << cell(t ? std::optional(t->errors.accel_bias) : std::nullopt, rms(c.accel_bias))
         << " | "
-        << (t ? num(t->vel_b, 2) + " / " + num(t->tilt, 2) + " / " + num(t->gyro_bias, 2) + " / " +
-                    num(t->accel_bias, 2)
+        << (t ? formatSignificant(t->vel_b, 2) + " / " + formatSignificant(t->tilt, 2) + " / " +
+                    formatSignificant(t->gyro_bias, 2) + " / " + formatSignificant(t->accel_bias, 2)
               : std::string("-"))
         << " |\n";
     }

@@ -1,23 +1,13 @@
 #include <freeinit/accel_unit.h>
 #include <freeinit/bags/import_stream.h>
+#include <freeinit/io/number_format.h>
 
 #include <algorithm>
 #include <cmath>
-#include <iomanip>
 #include <ostream>
-#include <sstream>
 #include <utility>
 
 namespace freeinit::bags {
-namespace {
-
-std::string fmt(double t, int precision = 9) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(precision) << t;
-  return os.str();
-}
-
-}  // namespace
 
 double TopicSummary::meanRate() const {
   return imported > 1 && last > first ? static_cast<double>(imported - 1) / (last - first) : 0;
@@ -36,12 +26,13 @@ void BagSummary::print(std::ostream& out) const {
     }
     out << "\n";
     if (t->imported == 0) continue;
-    out << "    " << fmt(t->first, 6) << " .. " << fmt(t->last, 6) << " ("
-        << fmt(t->last - t->first, 3) << " s), " << fmt(t->meanRate(), 2) << " Hz mean, "
-        << fmt(t->median_interval > 0 ? 1.0 / t->median_interval : 0.0, 2) << " Hz nominal; "
-        << t->gaps << " gap(s) > " << gap_factor << "x the nominal interval";
+    out << "    " << formatFixed(t->first, 6) << " .. " << formatFixed(t->last, 6) << " ("
+        << formatFixed(t->last - t->first, 3) << " s), " << formatFixed(t->meanRate(), 2)
+        << " Hz mean, " << formatFixed(t->median_interval > 0 ? 1.0 / t->median_interval : 0.0, 2)
+        << " Hz nominal; " << t->gaps << " gap(s) > " << gap_factor << "x the nominal interval";
     if (t->gaps > 0)
-      out << ", largest " << fmt(t->largest_gap, 4) << " s ending at " << fmt(t->largest_gap_at, 6);
+      out << ", largest " << formatFixed(t->largest_gap, 4) << " s ending at "
+          << formatFixed(t->largest_gap_at, 6);
     out << "\n";
   }
   if (!trigger.topic.empty()) {
@@ -49,12 +40,12 @@ void BagSummary::print(std::ostream& out) const {
         << " (std_msgs/Header, matched by seq): " << trigger.in_bag << " triggers, " << trigger.used
         << " used, " << trigger.in_bag - trigger.used << " without a cloud";
     if (trigger.repeated_seq > 0) out << ", " << trigger.repeated_seq << " with a repeated seq";
-    out << "; clouds recorded " << fmt(trigger.median_bag_delay, 6)
+    out << "; clouds recorded " << formatFixed(trigger.median_bag_delay, 6)
         << " s (median, bag time - trigger stamp) after their trigger\n";
   }
   out << "  points: " << points << " imported";
   if (invalid_points > 0) out << ", " << invalid_points << " NaN/inf points dropped";
-  out << "\n  mean specific force over the first IMU samples: " << fmt(accel_mean_norm, 3)
+  out << "\n  mean specific force over the first IMU samples: " << formatFixed(accel_mean_norm, 3)
       << " m/s^2\n";
   for (const auto& o : other_topics) out << "  not imported: " << o << "\n";
   for (const auto& w : warnings) out << "  warning: " << w << "\n";
@@ -113,9 +104,10 @@ void ImportStream::emit(std::map<Key, Pending>::iterator it) {
 
 void ImportStream::push(double t, int kind, Pending&& p, const std::string& where) {
   if (t < written_up_to_)
-    throw BagError(where + ": stamped " + fmt(t) + ", but messages up to " + fmt(written_up_to_) +
+    throw BagError(where + ": stamped " + formatFixed(t, 9) + ", but messages up to " +
+                   formatFixed(written_up_to_, 9) +
                    " were already written: it arrived more than reorder_window = " +
-                   fmt(config_.reorder_window, 3) + " s late; increase reorder_window");
+                   formatFixed(config_.reorder_window, 3) + " s late; increase reorder_window");
   buffer_.emplace(Key{t, kind, arrival_++}, std::move(p));
   newest_ = std::max(newest_, t);
   while (!buffer_.empty() && std::get<0>(buffer_.begin()->first) < newest_ - config_.reorder_window)
@@ -129,11 +121,11 @@ void ImportStream::checkUnit(const std::string& where) {
   const AccelUnitMismatch unit = accelUnitMismatch(g, config_.imu_accel_in_g);
   if (unit == AccelUnitMismatch::kDataInG)
     throw BagError(where + ": the mean specific force of the first " + std::to_string(accel_n_) +
-                   " IMU samples is " + fmt(g, 3) +
+                   " IMU samples is " + formatFixed(g, 3) +
                    ": the IMU reports g, not m/s^2 (set imu_accel_unit = g)");
   if (unit == AccelUnitMismatch::kDataInMs2)
     throw BagError(where + ": imu_accel_unit = g, but the first " + std::to_string(accel_n_) +
-                   " IMU samples average " + fmt(g, 2) +
+                   " IMU samples average " + formatFixed(g, 2) +
                    " m/s^2 after conversion: the IMU reports m/s^2");
 }
 

@@ -129,16 +129,7 @@ bool Ros2Reader::step(ImportStream& stream) {
   try {
     if (is_imu) {
       const ros2::Imu m = ros2::decodeImu(msg_.data);
-      if (m.angular_velocity_covariance[0] == -1 || m.linear_acceleration_covariance[0] == -1)
-        throw BagError(
-            where + ": the IMU declares no " +
-            (m.angular_velocity_covariance[0] == -1 ? "angular velocity" : "linear acceleration") +
-            " (covariance[0] = -1)");
-      ImuSample s;
-      s.t = m.header.stamp.seconds();
-      s.gyro = Vec3(m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z);
-      s.accel = Vec3(m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z);
-      stream.imu(s, where);
+      stream.imu(imuSampleOf(m, m.header.stamp.seconds(), where), where);
     } else {
       const ros2::PointCloud2 m = ros2::decodePointCloud2(msg_.data);
       const PointCloudView v = view(m);
@@ -161,12 +152,11 @@ bool Ros2Reader::step(ImportStream& stream) {
   return true;
 }
 
-std::pair<std::size_t, std::size_t> Ros2Reader::progress() const {
+std::pair<std::int64_t, std::int64_t> Ros2Reader::progress() const {
   const auto& range = rec_->timeRange();
   if (!range || range->last <= range->first) return {0, 0};
-  const double f = static_cast<double>(last_log_time_ - range->first) /
-                   static_cast<double>(range->last - range->first);
-  return {static_cast<std::size_t>(std::clamp(f, 0.0, 1.0) * 1000), 1000};
+  const std::int64_t span = range->last - range->first;
+  return {std::clamp<std::int64_t>(last_log_time_ - range->first, 0, span), span};
 }
 
 BagSummary readRos2Recording(const std::string& path, const BagImportConfig& config,
@@ -177,8 +167,12 @@ BagSummary readRos2Recording(const std::string& path, const BagImportConfig& con
   try {
     while (reader.step(stream))
       if (callbacks.progress) {
+        // In thousandths of the log-time span (the messages are not counted ahead).
         const auto [done, total] = reader.progress();
-        if (total > 0) callbacks.progress(done, total);
+        if (total > 0)
+          callbacks.progress(static_cast<std::size_t>(static_cast<double>(done) /
+                                                      static_cast<double>(total) * 1000),
+                             1000);
       }
   } catch (const BagError&) {
     throw;

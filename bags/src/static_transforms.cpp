@@ -94,4 +94,27 @@ std::string extrinsicsDifference(const Extrinsics& given, const Extrinsics& reco
   return os.str();
 }
 
+std::optional<ChosenExtrinsics> chooseExtrinsics(const std::optional<Extrinsics>& given,
+                                                 const std::optional<RecordedExtrinsics>& recorded,
+                                                 const std::string& ini_name,
+                                                 const std::string& tf_static_topic,
+                                                 const std::string& recording) {
+  if (!given && !recorded) return std::nullopt;
+  ChosenExtrinsics c;
+  if (!given) {
+    c.extrinsics = recorded->extrinsics;
+    c.source = tf_static_topic + " of " + recording + " (" + recorded->chain + ")";
+    return c;
+  }
+  c.extrinsics = *given;
+  c.source = ini_name;
+  if (recorded) {
+    const std::string diff = extrinsicsDifference(*given, recorded->extrinsics);
+    if (!diff.empty())
+      c.warning = ini_name + " and " + tf_static_topic + " of " + recording + " (" +
+                  recorded->chain + ") " + diff + ": the INI's are used";
+  }
+  return c;
+}
+
 }  // namespace freeinit::bags

@@ -1,36 +1,22 @@
 #include <freeinit/accel_unit.h>
 #include <freeinit/input_checks.h>
+#include <freeinit/io/number_format.h>
 
 #include <algorithm>
 #include <cmath>
 #include <limits>
-#include <sstream>
 #include <vector>
 
 namespace freeinit::input {
 namespace {
-
-std::string fmt(double x) {
-  std::ostringstream os;
-  os.precision(4);
-  os << x;
-  return os.str();
-}
 
 /// "duplicated (t after t)" or "goes backwards (t after t_prev)", with the digits it takes for
 /// two different stamps to print differently (MRPT's clock counts 100 ns).
 std::string orderWords(double t, double previous) {
   std::string a = formatStamp(t), b = formatStamp(previous);
   for (int digits = 7; a == b && t != previous && digits <= 9; ++digits) {
-    std::ostringstream x, y;
-    x.setf(std::ios::fixed);
-    y.setf(std::ios::fixed);
-    x.precision(digits);
-    y.precision(digits);
-    x << t;
-    y << previous;
-    a = x.str();
-    b = y.str();
+    a = formatFixed(t, digits);
+    b = formatFixed(previous, digits);
   }
   return std::string(t == previous ? "duplicated" : "goes backwards") + " (" + a + " after " + b +
          ")";
@@ -58,13 +44,7 @@ bool finiteAndSorted(const std::vector<DopplerPoint>& points) {
 
 }  // namespace
 
-std::string formatStamp(double t) {
-  std::ostringstream os;
-  os.setf(std::ios::fixed);
-  os.precision(6);
-  os << t;
-  return os.str();
-}
+std::string formatStamp(double t) { return formatFixed(t, 6); }
 
 std::optional<std::string> imuSampleProblem(const ImuSample& s, const ImuSample* previous) {
   if (!std::isfinite(s.t)) return std::string("IMU timestamp is not finite");
@@ -131,7 +111,8 @@ std::optional<std::string> imuRateProblem(const std::vector<ImuSample>& imu, dou
                    dts.end());
   const double rate = 1.0 / dts[dts.size() / 2];
   if (rate >= min_rate) return std::nullopt;
-  return "IMU rate " + fmt(rate) + " Hz is below [input] min_imu_rate = " + fmt(min_rate) + " Hz";
+  return "IMU rate " + formatSignificant(rate, 4) +
+         " Hz is below [input] min_imu_rate = " + formatSignificant(min_rate, 4) + " Hz";
 }
 
 std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, bool declared_g) {
@@ -143,12 +124,12 @@ std::optional<std::string> accelUnitProblem(const std::vector<ImuSample>& imu, b
   const double g_seen = (mean / static_cast<double>(n_mean)).norm();
   switch (accelUnitMismatch(g_seen, declared_g)) {
     case AccelUnitMismatch::kDataInG:
-      return "the mean accelerometer magnitude is " + fmt(g_seen) +
+      return "the mean accelerometer magnitude is " + formatSignificant(g_seen, 4) +
              ", the IMU reports g, not m/s^2: set [input] imu_accel_in_g = true";
     case AccelUnitMismatch::kDataInMs2:
       return "[input] imu_accel_in_g = true but the accelerations are already in m/s^2 (mean "
              "magnitude " +
-             fmt(g_seen) + " after conversion)";
+             formatSignificant(g_seen, 4) + " after conversion)";
     case AccelUnitMismatch::kNone:
       break;
   }
@@ -168,7 +149,7 @@ RestParams restParams(const FreeInitConfig& config) {
 
 std::optional<std::string> motionProblem(const std::vector<ImuSample>& imu, const RestParams& p) {
   if (imu.size() < 2)
-    return "fewer than 2 IMU samples within " + fmt(kRestMargin) +
+    return "fewer than 2 IMU samples within " + formatSignificant(kRestMargin, 4) +
            " s of its points to tell rest from motion";
   Vec3 w_mean = Vec3::Zero(), f_mean = Vec3::Zero();
   for (const auto& s : imu) {
@@ -185,17 +166,17 @@ std::optional<std::string> motionProblem(const std::vector<ImuSample>& imu, cons
   const double w_bias = (w_mean - p.gyro_bias_prior).norm();
   const double g_dev = std::abs(f_mean.norm() - kGravity);
   if (w_dev > p.max_gyro_dev)
-    return "the gyro varies by " + fmt(w_dev) + " rad/s (at rest: below " + fmt(p.max_gyro_dev) +
-           ")";
+    return "the gyro varies by " + formatSignificant(w_dev, 4) + " rad/s (at rest: below " +
+           formatSignificant(p.max_gyro_dev, 4) + ")";
   if (w_bias > p.max_gyro_bias)
-    return "the gyro reads " + fmt(w_mean.norm()) + " rad/s (at rest: its bias, below " +
-           fmt(p.max_gyro_bias) + ")";
+    return "the gyro reads " + formatSignificant(w_mean.norm(), 4) +
+           " rad/s (at rest: its bias, below " + formatSignificant(p.max_gyro_bias, 4) + ")";
   if (f_dev > p.max_accel_dev)
-    return "the specific force varies by " + fmt(f_dev) + " m/s^2 (at rest: below " +
-           fmt(p.max_accel_dev) + ")";
+    return "the specific force varies by " + formatSignificant(f_dev, 4) +
+           " m/s^2 (at rest: below " + formatSignificant(p.max_accel_dev, 4) + ")";
   if (g_dev > p.max_accel_bias)
-    return "the specific force is " + fmt(f_mean.norm()) + " m/s^2 (at rest: 1 g within " +
-           fmt(p.max_accel_bias) + ")";
+    return "the specific force is " + formatSignificant(f_mean.norm(), 4) +
+           " m/s^2 (at rest: 1 g within " + formatSignificant(p.max_accel_bias, 4) + ")";
   return std::nullopt;
 }
 

@@ -210,7 +210,8 @@ struct Ros1Reader::Impl {
   rosbag::View::iterator it;
   std::size_t done = 0, total = 0;
   std::size_t imu_index = 0, lidar_index = 0;
-  double last_log_time = 0;
+  double last_log_time = 0;       // [s] UNIX
+  std::uint64_t last_log_ns = 0;  // [ns] UNIX, the same
 
   // The triggers (stamp_source = trigger), by seq, read up to trigger_read_to.
   struct Trigger {
@@ -286,16 +287,7 @@ struct Ros1Reader::Impl {
                   bags::ImportStream& stream) {
     sensor_msgs::Imu msg;
     read(m, RosMessage::kImu, msg);
-    if (msg.angular_velocity_covariance[0] == -1 || msg.linear_acceleration_covariance[0] == -1)
-      throw BagError(
-          where + ": the IMU declares no " +
-          (msg.angular_velocity_covariance[0] == -1 ? "angular velocity" : "linear acceleration") +
-          " (covariance[0] = -1)");
-    ImuSample s;
-    s.t = msg.header.stamp.toSec();
-    s.gyro = Vec3(msg.angular_velocity.x, msg.angular_velocity.y, msg.angular_velocity.z);
-    s.accel = Vec3(msg.linear_acceleration.x, msg.linear_acceleration.y, msg.linear_acceleration.z);
-    stream.imu(s, where);
+    stream.imu(bags::imuSampleOf(msg, msg.header.stamp.toSec(), where), where);
   }
 
   void cloudMessage(const rosbag::MessageInstance& m, const std::string& where,
@@ -462,12 +454,14 @@ const CheckedBag& Ros1Reader::checked() const { return *impl_->checked; }
 
 double Ros1Reader::lastLogTime() const { return impl_->last_log_time; }
 
-std::pair<std::size_t, std::size_t> Ros1Reader::progress() const {
+std::pair<std::int64_t, std::int64_t> Ros1Reader::progress() const {
   const Impl& x = *impl_;
-  if (x.last_ns <= x.first_ns || x.done == 0) return {0, 0};
-  const double f = (x.last_log_time - 1e-9 * static_cast<double>(x.first_ns)) /
-                   (1e-9 * static_cast<double>(x.last_ns - x.first_ns));
-  return {static_cast<std::size_t>(std::clamp(f, 0.0, 1.0) * 1000), 1000};
+  if (x.last_ns <= x.first_ns) return {0, 0};
+  const auto span = static_cast<std::int64_t>(x.last_ns - x.first_ns);
+  if (x.done == 0) return {0, span};
+  const std::int64_t past =
+      static_cast<std::int64_t>(x.last_log_ns) - static_cast<std::int64_t>(x.first_ns);
+  return {std::clamp<std::int64_t>(past, 0, span), span};
 }
 
 void Ros1Reader::start(std::int64_t from, std::int64_t to) {
@@ -519,6 +513,7 @@ bool Ros1Reader::step(bags::ImportStream& stream) {
                               " message " +
                               std::to_string(is_imu ? x.imu_index++ : x.lidar_index++);
     x.last_log_time = m.getTime().toSec();
+    x.last_log_ns = m.getTime().toNSec();
     try {
       if (is_imu)
         x.imuMessage(m, where, stream);

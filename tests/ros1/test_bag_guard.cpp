@@ -15,20 +15,15 @@
 #include <iterator>
 #include <map>
 
+#include "ros_test_files.h"
+
 using namespace freeinit;
 using namespace freeinit::ros1;
 namespace fs = std::filesystem;
 
 namespace {
 
-std::string dir() {
-  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto d = fs::temp_directory_path() / "freeinit_bag_guard_tests" /
-                 (std::string(test->test_suite_name()) + "." + test->name());
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
-}
+std::string dir() { return test::testFolder("freeinit_bag_guard_tests"); }
 
 // 40 IMU samples and 3 frames of 10 points, release layout.
 std::string validBag(const std::string& path,
@@ -121,9 +116,6 @@ std::string guardError(const std::string& path) {
   }
   return "";
 }
-
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 
 }  // namespace
 

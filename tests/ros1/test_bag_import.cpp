@@ -23,6 +23,7 @@
 
 #include "bag_import_app.h"
 #include "free_init_app.h"
+#include "ros_test_files.h"
 #include "sim_app.h"
 
 using namespace freeinit;
@@ -35,14 +36,8 @@ namespace {
 
 const std::string kSrc = FREEINIT_SOURCE_DIR;
 
-// A fresh folder of the running test (ctest runs the tests of this file in parallel processes).
 std::string dir(const std::string& name) {
-  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto d = fs::temp_directory_path() / "freeinit_bag_import_tests" /
-                 (std::string(test->test_suite_name()) + "." + test->name()) / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
+  return test::testFolder("freeinit_bag_import_tests", name);
 }
 
 // The scenario both paths record: a handheld rotational start (dyna_01), 1 s, 6000 points per
@@ -350,9 +345,6 @@ std::string importError(const HandBag& h, const std::string& name, const std::st
   if (done) *done = app;
   return "";
 }
-
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 
 }  // namespace
 

@@ -27,6 +27,7 @@
 
 #include "bag_import_app.h"
 #include "joint/doppler_inertial_filter.h"
+#include "ros_test_files.h"
 
 using namespace freeinit;
 namespace fs = std::filesystem;
@@ -46,12 +47,7 @@ const std::string kIni = kSrc + "/ini/import_bag_ti_mmwave.ini";
   } while (false)
 
 std::string dir(const std::string& name) {
-  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto d = fs::temp_directory_path() / "freeinit_radar_bag_tests" /
-                 (std::string(test->test_suite_name()) + "." + test->name()) / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
+  return test::testFolder("freeinit_radar_bag_tests", name);
 }
 
 // The recording as read with the shipped INI (MRPT-free reader), once.

@@ -30,6 +30,8 @@
 #include "bag_import_app.h"
 #include "eval_rawlog_app.h"
 #include "free_init_app.h"
+#include "free_init_runs.h"
+#include "ros_test_files.h"
 #include "sim_app.h"
 
 using namespace freeinit;
@@ -41,28 +43,8 @@ namespace {
 const std::string kRecordings = FREEINIT_ROS2_RECORDINGS;
 
 std::string dir(const std::string& name) {
-  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto d = fs::temp_directory_path() / "freeinit_ros1_straight_in_tests" /
-                 (std::string(test->test_suite_name()) + "." + test->name()) / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
+  return test::testFolder("freeinit_ros1_straight_in_tests", name);
 }
-
-std::string bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string writeText(const std::string& path, const std::string& text) {
-  std::ofstream(path) << text;
-  return path;
-}
-
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 
 // The handheld rotational start (dyna_01) for `duration` s with `points` points per frame, as
 // freeinit-sim records it: its rawlog and its truth file in `d`.
@@ -104,7 +86,7 @@ std::string writeBag(const std::string& path, const sim::Recording& rec,
 std::string import(const std::string& bag, const std::string& out) {
   BagImportApp app;
   app.params.bag = bag;
-  app.params.config_file = writeText(out + ".import.ini", "[bag_import]\n");
+  app.params.config_file = test::writeText(out + ".import.ini", "[bag_import]\n");
   app.params.output = out;
   app.params.progress = false;
   std::ostringstream log;
@@ -112,35 +94,8 @@ std::string import(const std::string& bag, const std::string& out) {
   return out;
 }
 
-struct AppRun {
-  std::map<std::string, std::string> files;  ///< name -> bytes (start folders: "<start>/<name>")
-  std::string log;
-};
-
-AppRun runFreeInit(const std::string& ini, const std::string& input, const std::string& out,
-                   std::optional<double> start = std::nullopt, double every = 0) {
-  FreeInitApp app;
-  app.params.config_file = ini;
-  app.params.rawlog = input;
-  app.params.out_dir = out;
-  app.params.progress = false;
-  app.params.echo_config = false;
-  app.params.start = start;
-  app.params.every = every;
-  std::ostringstream log;
-  app.run(log);
-  AppRun r;
-  r.log = log.str();
-  for (const auto& f : fs::recursive_directory_iterator(out)) {
-    const std::string name = fs::relative(f.path(), out).string();
-    // The simple map holds the observations' source names; the starts table names the input.
-    if (!f.is_regular_file() || f.path().extension() == ".simplemap" ||
-        f.path().filename() == "starts.md")
-      continue;
-    r.files[name] = bytes(f.path().string());
-  }
-  return r;
-}
+using test::AppRun;
+using test::runFreeInit;
 
 // [bytes] read by this process so far (Linux: every read(2), whoever made it).
 std::uint64_t bytesReadByProcess() {
@@ -168,7 +123,7 @@ TEST(Ros1StraightIn, FreeInitOnABagIsFreeInitOnItsImport) {
   // The truth beside both: errors_wrt_gt.ini in both outputs.
   fs::copy_file(sim.truth, app_support::truthPathFor(bag));
   fs::copy_file(sim.truth, app_support::truthPathFor(rawlog));
-  const std::string ini = writeText(d + "/freeinit.ini", "[bag_import]\n");
+  const std::string ini = test::writeText(d + "/freeinit.ini", "[bag_import]\n");
   struct Case {
     std::optional<double> start;
     double every;
@@ -193,9 +148,9 @@ TEST(Ros1StraightIn, FreeInitOnABagIsFreeInitOnItsImport) {
 
   // The INI's extrinsics win over /tf_static, a disagreement is one warning line; neither is an
   // error naming the bag.
-  const std::string given = writeText(d + "/given.ini",
-                                      "[bag_import]\n[extrinsics]\nfrom_sensor_pose = false\n"
-                                      "R_bl = 1 0 0 0 1 0 0 0 1\np_bl = 0 0 0\n");
+  const std::string given = test::writeText(d + "/given.ini",
+                                            "[bag_import]\n[extrinsics]\nfrom_sensor_pose = false\n"
+                                            "R_bl = 1 0 0 0 1 0 0 0 1\np_bl = 0 0 0\n");
   EXPECT_CONTAINS(runFreeInit(given, bag, d + "/given").log,
                   "[extrinsics] and /tf_static of " + bag + " (imu -> aeva) differ by ");
   ros1::writeBag(d + "/no_tf.bag", sim.rec.imu, sim.rec.frames, ros1::BagWriteOptions());
@@ -270,7 +225,7 @@ TEST(Ros1StraightIn, AWindowReadsTheChunksItNeedsNotTheBag) {
   }
 
   // The app, as users run it: the bytes the process read, at the start and at --start 15.
-  const std::string ini = writeText(d + "/freeinit.ini", "[bag_import]\n");
+  const std::string ini = test::writeText(d + "/freeinit.ini", "[bag_import]\n");
   for (const std::optional<double> start : {std::optional<double>(), std::optional<double>(60.0)}) {
     const std::uint64_t before = bytesReadByProcess();
     const AppRun r = runFreeInit(ini, bag, d + "/out_" + std::to_string(start.value_or(0)), start);
@@ -304,8 +259,8 @@ TEST(Ros1StraightIn, DamagedBagsAreOneLineAndOnlyWhatIsReadIsChecked) {
   ros1::BagWriteOptions o;
   o.chunk_threshold = 64 * 1024;
   const std::string bag = writeBag(d + "/ok.bag", sim.rec, o);
-  const std::string ini = writeText(d + "/freeinit.ini", "[bag_import]\n");
-  std::string b = bytes(bag);
+  const std::string ini = test::writeText(d + "/freeinit.ini", "[bag_import]\n");
+  std::string b = test::fileBytes(bag);
   // The first record in the data of the last chunk: a header length far beyond the chunk.
   std::uint64_t pos = 0;
   {
@@ -332,7 +287,7 @@ TEST(Ros1StraightIn, DamagedBagsAreOneLineAndOnlyWhatIsReadIsChecked) {
     EXPECT_EQ(what.find('\n'), std::string::npos) << what;
   }
 
-  std::string cut = bytes(bag);
+  std::string cut = test::fileBytes(bag);
   cut.resize(cut.size() - 100);
   std::ofstream(d + "/cut.bag", std::ios::binary) << cut;
   try {
@@ -369,7 +324,7 @@ TEST(GroundTruth, EvalRawlogFindsTheTruthBesideAnMcapFile) {
   cb.imu = [&](const ImuSample& s) { (first == 0 ? first : last) = s.t; };
   cb.frame = [](LidarFrame&&) {};
   bags::readRos2Recording(mcap, bags::BagImportConfig(), cb);
-  const std::string ini = writeText(d + "/eval.ini", "[window]\nduration = 0.25\n");
+  const std::string ini = test::writeText(d + "/eval.ini", "[window]\nduration = 0.25\n");
   EvalRawlogApp app;
   app.params.config_file = ini;
   app.params.rawlogs = {mcap};

@@ -20,6 +20,8 @@
 
 #include "bag_import_app.h"
 #include "free_init_app.h"
+#include "free_init_runs.h"
+#include "ros_test_files.h"
 
 using namespace freeinit;
 using namespace freeinit::apps;
@@ -31,24 +33,7 @@ const std::string kRecordings = FREEINIT_ROS2_RECORDINGS;
 std::string fixture(const std::string& name) { return kRecordings + "/" + name; }
 
 std::string dir(const std::string& name) {
-  const auto* test = ::testing::UnitTest::GetInstance()->current_test_info();
-  const auto d = fs::temp_directory_path() / "freeinit_ros_generations_tests" /
-                 (std::string(test->test_suite_name()) + "." + test->name()) / name;
-  fs::remove_all(d);
-  fs::create_directories(d);
-  return d.string();
-}
-
-std::string bytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-std::string writeText(const std::string& path, const std::string& text) {
-  std::ofstream(path) << text;
-  return path;
+  return test::testFolder("freeinit_ros_generations_tests", name);
 }
 
 const char* const kIniExtrinsics = "[extrinsics]\nR_bl = 1 0 0 0 1 0 0 0 1\np_bl = 0 0 0\n";
@@ -71,14 +56,14 @@ struct Imported {
 Imported import(const std::string& input, const std::string& ini_text, const std::string& d) {
   Imported r;
   r.app.params.bag = input;
-  r.app.params.config_file = writeText(d + "/import.ini", ini_text);
+  r.app.params.config_file = test::writeText(d + "/import.ini", ini_text);
   r.app.params.output = d + "/out.rawlog";
   r.app.params.progress = false;
   std::ostringstream log;
   r.app.run(log);
   r.log = log.str();
-  r.rawlog = bytes(d + "/out.rawlog");
-  r.extrinsics_ini = bytes(d + "/out.extrinsics.ini");
+  r.rawlog = test::fileBytes(d + "/out.rawlog");
+  r.extrinsics_ini = test::fileBytes(d + "/out.extrinsics.ini");
   return r;
 }
 
@@ -92,9 +77,6 @@ std::string errorOf(const std::string& input, const std::string& ini_text, const
   ADD_FAILURE() << input << ": imported";
   return "";
 }
-
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 
 bool near(const Extrinsics& a, const Extrinsics& b, double tol) {
   return (a.R_bl - b.R_bl).cwiseAbs().maxCoeff() < tol && (a.p_bl - b.p_bl).norm() < tol;
@@ -257,22 +239,8 @@ std::map<std::string, std::string> runFreeInit(const std::string& input, const s
                                                std::optional<double> start = std::nullopt) {
   // The fixtures hold 0.4 s: a window that fits in them (the default 0.5 s is refused as longer
   // than the recording).
-  const std::string ini = out + ".ini";
-  std::ofstream(ini) << "[window]\nduration = 0.25\n";
-  FreeInitApp app;
-  app.params.config_file = ini;
-  app.params.rawlog = input;
-  app.params.out_dir = out;
-  app.params.progress = false;
-  app.params.echo_config = false;
-  app.params.start = start;
-  std::ostringstream log;
-  app.run(log);
-  std::map<std::string, std::string> files;
-  for (const auto& f : fs::directory_iterator(out))
-    if (f.path().extension() != ".simplemap")  // holds the observations' source names
-      files[f.path().filename().string()] = bytes(f.path().string());
-  return files;
+  const std::string ini = test::writeText(out + ".ini", "[window]\nduration = 0.25\n");
+  return test::runFreeInit(ini, input, out, start).files;
 }
 
 }  // namespace
@@ -313,5 +281,24 @@ TEST(StraightIn, InputKindsAreRecognisedAndNamed) {
     ADD_FAILURE() << "ran on a folder";
   } catch (const std::exception& e) {
     EXPECT_CONTAINS(e.what(), kRecordings + ": a rosbag2 folder without metadata.yaml");
+  }
+}
+
+// The progress of a recording read straight in counts its log time in seconds (a rawlog's counts
+// its bytes in MB): the fixtures' 0.4 s, read to the end.
+TEST(StraightIn, ProgressIsTheRecordingsLogTimeInSeconds) {
+  const std::string d = dir("progress");
+  const std::string ini = test::writeText(d + "/run.ini", "[window]\nduration = 0.25\n");
+  for (const char* f : {"imu_cloud.mcap", "imu_cloud.db3"}) {
+    FreeInitApp app;
+    app.params.config_file = ini;
+    app.params.rawlog = fixture(f);
+    app.params.out_dir = d + "/" + f;
+    app.params.echo_config = false;
+    app.params.check_all = true;
+    std::ostringstream log;
+    app.run(log);
+    EXPECT_CONTAINS(log.str(), "100%  0.4/0.4 s\n");
+    EXPECT_EQ(log.str().find(" MB"), std::string::npos) << log.str();
   }
 }

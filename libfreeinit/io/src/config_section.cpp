@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cctype>
 #include <cerrno>
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <iomanip>
@@ -111,12 +110,6 @@ std::string parseBool(std::string_view text, bool& x) {
       return "";
     }
   return quote(text) + " is not a boolean (true/false)";
-}
-
-std::string formatNumber(double x) {
-  char buf[64];
-  const auto r = std::to_chars(buf, buf + sizeof buf, x);
-  return std::string(buf, r.ptr);
 }
 
 bool Checker::has(const std::string& key) const {

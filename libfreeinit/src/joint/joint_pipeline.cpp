@@ -8,6 +8,7 @@
 //   WindowRecorder (window_parts.h)    the window's returns as received, mapped at the end
 //   RestCells (window_parts.h)         a standing sensor's returns by direction and range
 #include <freeinit/input_checks.h>
+#include <freeinit/io/number_format.h>
 #include <freeinit/rotation.h>
 
 #include <algorithm>
@@ -66,13 +67,6 @@ ImuScreenParams screenParams(const FreeInitConfig& cfg) {
   p.accel_sigma = cfg.imu.accel_sigma;
   p.max_bridged_gap = cfg.imu.max_bridged_gap;
   return p;
-}
-
-std::string formatNumber(double v, int precision = 3) {
-  std::ostringstream os;
-  os.precision(precision);
-  os << v;
-  return os.str();
 }
 
 /// The body velocity's derivative w.r.t. the filter's error state at x: dv_b = R^T dv_w +
@@ -400,11 +394,11 @@ class JointPipeline final : public Pipeline {
           // A gap the screen did not bridge, inside the window: the window would end at it.
           if (imu[k + 1].t - imu[k].t > std::max(cfg_.imu.max_bridged_gap, 2.5 * h)) {
             fail(r, InitStatus::NotEnoughData,
-                 "IMU gap of " + formatNumber(imu[k + 1].t - imu[k].t) + " s at " +
-                     input::formatStamp(imu[k].t) + " (" + formatNumber(imu[k].t - t_ref_) +
-                     " s into the window of " + formatNumber(duration) +
+                 "IMU gap of " + formatSignificant(imu[k + 1].t - imu[k].t, 3) + " s at " +
+                     input::formatStamp(imu[k].t) + " (" + formatSignificant(imu[k].t - t_ref_, 3) +
+                     " s into the window of " + formatSignificant(duration, 3) +
                      " s): longer than [imu] max_bridged_gap (" +
-                     formatNumber(cfg_.imu.max_bridged_gap) + " s), it is not bridged");
+                     formatSignificant(cfg_.imu.max_bridged_gap, 3) + " s), it is not bridged");
             return;
           }
           last_ =
@@ -434,11 +428,11 @@ class JointPipeline final : public Pipeline {
                               r.diag.points_rejected - rejected_before)) {
         fail(r, InitStatus::InconsistentData,
              "the LiDAR returns from " + input::formatStamp(collapse_t_) + " (" +
-                 formatNumber(collapse_t_ - t_ref_) +
+                 formatSignificant(collapse_t_ - t_ref_, 3) +
                  " s into the window) on contradict the IMU propagation (their acceptance fell "
                  "from " +
-                 formatNumber(100.0 * collapse_from_, 2) + " % to " +
-                 formatNumber(100.0 * collapse_to_, 2) +
+                 formatSignificant(100.0 * collapse_from_, 2) + " % to " +
+                 formatSignificant(100.0 * collapse_to_, 2) +
                  " %): an IMU fault the screen did not catch ([imu] fault_sigmas, accel_range, "
                  "gyro_range), or a sudden change of the scene");
         return;
@@ -667,29 +661,30 @@ class JointPipeline final : public Pipeline {
       const std::string what =
           std::to_string(diag.imu_faults) + " of the window's " + std::to_string(samples) +
           " IMU samples rejected as faults (the first at " + input::formatStamp(first->t) + ", " +
-          formatNumber(first->t - t_ref_) +
+          formatSignificant(first->t - t_ref_, 3) +
           " s into the window: " + (first->accel ? "accelerometer " : "gyro ") +
-          formatNumber(first->magnitude) + (first->accel ? " m/s^2" : " rad/s") +
+          formatSignificant(first->magnitude, 3) + (first->accel ? " m/s^2" : " rad/s") +
           (first->out_of_range ? " beyond its range" : " from what its neighbours imply") + ")";
       if (static_cast<double>(diag.imu_faults) >
           cfg_.imu.max_fault_share * static_cast<double>(samples)) {
         fail(r, InitStatus::NotEnoughData,
              what + ": more than [imu] max_fault_share (" +
-                 formatNumber(100.0 * cfg_.imu.max_fault_share) + " %); the IMU is not trusted");
+                 formatSignificant(100.0 * cfg_.imu.max_fault_share, 3) +
+                 " %); the IMU is not trusted");
         return false;
       }
       r.state.warnings.push_back(what + ": interpolated with their uncertainty, not integrated");
     }
     if (longest != nullptr) {
-      const std::string what = "IMU gaps of " + formatNumber(diag.imu_gap_s) +
+      const std::string what = "IMU gaps of " + formatSignificant(diag.imu_gap_s, 3) +
                                " s in all inside the window (the longest " +
-                               formatNumber(longest->length) + " s at " +
+                               formatSignificant(longest->length, 3) + " s at " +
                                input::formatStamp(longest->t) + ", " +
-                               formatNumber(longest->t - t_ref_) + " s into the window)";
+                               formatSignificant(longest->t - t_ref_, 3) + " s into the window)";
       if (diag.imu_gap_s > cfg_.imu.max_bridged_gap + 1e-9) {
         fail(r, InitStatus::NotEnoughData,
-             what + ": more than [imu] max_bridged_gap (" + formatNumber(cfg_.imu.max_bridged_gap) +
-                 " s) is missing");
+             what + ": more than [imu] max_bridged_gap (" +
+                 formatSignificant(cfg_.imu.max_bridged_gap, 3) + " s) is missing");
         return false;
       }
       r.state.warnings.push_back(what + " bridged by interpolation; the covariance includes it");
@@ -1006,12 +1001,7 @@ class JointPipeline final : public Pipeline {
   void addWarnings(InitResult& r) {
     InitialState& s = r.state;
     const Diagnostics& d = r.diag;
-    auto fmt = [](double v, int prec = 3) {
-      std::ostringstream os;
-      os.precision(prec);
-      os << v;
-      return os.str();
-    };
+    auto fmt = [](double v, int digits = 3) { return formatSignificant(v, digits); };
     const double sigma = filter_->params().doppler_sigma;
     const bool noisy = d.points_used >= 100 && d.doppler_residual_rms > 1.5 * sigma;
     const std::size_t judged = d.points_used + d.points_rejected;
@@ -1141,12 +1131,7 @@ class JointPipeline final : public Pipeline {
     using F = DopplerInertialFilter;
     const F::CalibrationTest t = filter_->testCalibration(std::max(rot, 1e-7), std::max(dt, 1e-7));
     if (!t.ok) return;
-    auto fmt = [](double v, int prec = 2) {
-      std::ostringstream os;
-      os.precision(prec);
-      os << v;
-      return os.str();
-    };
+    auto fmt = [](double v, int digits = 2) { return formatSignificant(v, digits); };
     const double phi_deg = t.correction.segment<3>(F::kRot).norm() * 180.0 / kPi;
     const double dt_ms = t.correction(F::kTime) * 1e3;
     constexpr double kChi2Quantile999Dof4 = 18.47;

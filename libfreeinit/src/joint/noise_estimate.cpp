@@ -5,6 +5,16 @@
 #include <cmath>
 
 namespace freeinit::detail {
+namespace {
+
+/// Whether sample i's accelerometer (`accel`) or gyro reading is a measurement, not a value
+/// ImuScreen made (`extra`: ImuScreen's per sample, or none).
+bool measuredReading(const std::vector<ImuExtraNoise>* extra, std::size_t i, bool accel) {
+  if (extra == nullptr || i >= extra->size()) return true;
+  return !(accel ? (*extra)[i].accel_synthetic : (*extra)[i].gyro_synthetic);
+}
+
+}  // namespace
 
 NoisePosterior combineNoise(double declared, double estimate, double dof) {
   // Prior on log sigma^2: the declared value, kNoisePriorSpread either way at 95 %.
@@ -51,10 +61,7 @@ ImuRestEvidence imuRestEvidence(const std::vector<ImuSample>& imu, std::size_t b
                                 const std::vector<ImuExtraNoise>* extra) {
   ImuRestEvidence out;
   if (end > imu.size() || end < begin + 5) return out;
-  auto measured = [&](std::size_t i, bool accel) {
-    if (extra == nullptr || i >= extra->size()) return true;
-    return !(accel ? (*extra)[i].accel_synthetic : (*extra)[i].gyro_synthetic);
-  };
+  auto measured = [extra](std::size_t i, bool accel) { return measuredReading(extra, i, accel); };
   std::size_t count_g = 0, count_a = 0;
   Vec3 mg = Vec3::Zero(), ma = Vec3::Zero();
   for (std::size_t i = begin; i < end; ++i) {
@@ -179,15 +186,11 @@ MotionNoise imuMotionNoise(const std::vector<ImuSample>& imu, std::size_t begin,
   for (int s = 0; s < kLadderStrides; ++s)
     for (int k = 0; k < kLadderOrders; ++k) taps[s][k] = differenceTaps(k + 1, s + 1);
   auto value = [&](std::size_t i) -> const Vec3& { return accel ? imu[i].accel : imu[i].gyro; };
-  auto measured = [&](std::size_t i) {
-    if (extra == nullptr || i >= extra->size()) return true;
-    return !(accel ? (*extra)[i].accel_synthetic : (*extra)[i].gyro_synthetic);
-  };
   // run: consecutive measured samples ending at j without a gap between them.
   int run = 0;
   for (std::size_t j = begin; j < end; ++j) {
     const bool joined = j > begin && interval > 0 && imu[j].t - imu[j - 1].t <= 1.5 * interval;
-    run = !measured(j) ? 0 : (joined ? std::min(run + 1, kMostTaps) : 1);
+    run = !measuredReading(extra, j, accel) ? 0 : (joined ? std::min(run + 1, kMostTaps) : 1);
     for (int s = 0; s < kLadderStrides; ++s)
       for (int k = 0; k < kLadderOrders; ++k) {
         const DifferenceTaps& d = taps[s][k];

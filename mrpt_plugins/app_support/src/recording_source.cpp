@@ -6,6 +6,7 @@
 #include <freeinit/ros1/bag_reader.h>
 #endif
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
 #include <filesystem>
@@ -68,8 +69,15 @@ class BagSource : public mrpt_plugins::RecordSource {
     return queue_.front().t;
   }
 
-  std::uint64_t size() const override { return 1000; }
-  std::uint64_t position() const override { return reader_->progress().first; }
+  // Progress in the recording's log time, shown in seconds ([ns] counted); 0 % where its span is
+  // unknown.
+  std::uint64_t size() const override {
+    return static_cast<std::uint64_t>(std::max<std::int64_t>(reader_->progress().second, 1));
+  }
+  std::uint64_t position() const override {
+    return static_cast<std::uint64_t>(reader_->progress().first);
+  }
+  mrpt_plugins::ProgressUnit progressUnit() const override { return {"s", 1e9}; }
   std::size_t recordsRead() const override { return read_; }
   std::size_t nextRecord() const override {
     return queue_.empty() ? record_ : queue_.front().index;
@@ -182,28 +190,21 @@ std::unique_ptr<mrpt_plugins::RawlogReader> openInput(const std::string& path,
   } catch (const bags::BagError& e) {
     throw InputError(e.what());
   }
-  Extrinsics e;
-  if (config.extrinsics.given_in_ini) {
-    e = config.core.extrinsics;
-    if (recorded && warnings != nullptr) {
-      const std::string diff = bags::extrinsicsDifference(e, recorded->extrinsics);
-      if (!diff.empty())
-        warnings->push_back("[extrinsics] and " + bag.tf_static_topic + " of " + path + " (" +
-                            recorded->chain + ") " + diff + ": the INI's are used");
-    }
-  } else if (recorded) {
-    e = recorded->extrinsics;
-  } else {
+  const auto chosen = bags::chooseExtrinsics(config.extrinsics.given_in_ini
+                                                 ? std::optional<Extrinsics>(config.core.extrinsics)
+                                                 : std::nullopt,
+                                             recorded, "[extrinsics]", bag.tf_static_topic, path);
+  if (!chosen)
     throw InputError(
         path + ": " + reader->summary().kind + ": no " +
         (bag.tf_static_topic.empty() ? std::string("tf_static_topic") : bag.tf_static_topic) +
         " linking the IMU's frame to the LiDAR's: give the extrinsics in "
         "[extrinsics] (R_bl, p_bl, from_sensor_pose = false)");
-  }
+  if (!chosen->warning.empty() && warnings != nullptr) warnings->push_back(chosen->warning);
   for (const auto& w : reader->summary().warnings)
     if (warnings != nullptr) warnings->push_back(path + ": " + w);
   return std::make_unique<mrpt_plugins::RawlogReader>(
-      path, std::make_unique<BagSource>(std::move(reader), bag, e, config.input));
+      path, std::make_unique<BagSource>(std::move(reader), bag, chosen->extrinsics, config.input));
 }
 
 }  // namespace freeinit::app_support

@@ -1,4 +1,5 @@
 #include <freeinit/app_support/snapshots.h>
+#include <freeinit/io/number_format.h>
 #include <freeinit/report/plot.h>
 #include <freeinit/report/plot_layout.h>
 #include <mrpt/img/CImage.h>
@@ -17,9 +18,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <filesystem>
-#include <iomanip>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 
 namespace freeinit::app_support {
@@ -31,12 +30,6 @@ using mrpt::img::TColor;
 // reason (a full disk), which CImage::saveToFile's boolean does not.
 void saveAtomically(const mrpt::img::CImage& img, const std::string& png) {
   report::savePng(png, img.asCvMatRef());
-}
-
-std::string num(double x, int prec = 3) {
-  std::ostringstream os;
-  os << std::fixed << std::setprecision(prec) << x;
-  return os.str();
 }
 
 // Height colormap (viridis-like, our own control points): dark purple (low) -> teal -> yellow
@@ -327,23 +320,25 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   img.selectTextFont("10x20");
   img.textOut(12, 8,
               "Free-Init static map   status: " + std::string(toString(s.status)) +
-                  "   speed at state " + num(s.v_w.norm()) + " m/s   gravity tilt " +
-                  num(tilt_deg, 2) + " deg",
+                  "   speed at state " + formatFixed(s.v_w.norm(), 3) + " m/s   gravity tilt " +
+                  formatFixed(tilt_deg, 2) + " deg",
               white);
   img.selectTextFont("9x15");
   double window = 0;
   if (!result.trajectory.empty()) window = s.timestamp - result.trajectory.front().t;
   img.textOut(12, 32,
               std::to_string(result.static_map.size()) + " static points, " +
-                  std::to_string(result.rejected.size()) + " rejected; window " + num(window, 2) +
-                  " s; path " + num(path_across, 2) + " m across; |b_g| " + num(s.b_g.norm(), 4) +
-                  " rad/s, |b_a| " + num(s.b_a.norm(), 3) + " m/s^2",
+                  std::to_string(result.rejected.size()) + " rejected; window " +
+                  formatFixed(window, 2) + " s; path " + formatFixed(path_across, 2) +
+                  " m across; |b_g| " + formatFixed(s.b_g.norm(), 4) + " rad/s, |b_a| " +
+                  formatFixed(s.b_a.norm(), 3) + " m/s^2",
               grey);
   int x = 12;
   const int y = 58;
   for (int k = 0; k < 6; ++k)
     img.filledRectangle(x + 4 * k, y + 3, x + 4 * k + 3, y + 15, heightColor(k / 5.0f));
-  img.textOut(x + 30, y, "map by height " + num(zr.lo, 1) + ".." + num(zr.hi, 1) + " m",
+  img.textOut(x + 30, y,
+              "map by height " + formatFixed(zr.lo, 1) + ".." + formatFixed(zr.hi, 1) + " m",
               TColor(230, 230, 230));
   x += 270;
   swatch(img, x, y, kRejected, "rejected (dynamic/outlier)");
@@ -360,10 +355,10 @@ void renderMapSnapshot(const std::string& png, const InitResult& result, int wid
   for (int k = 0; k <= 10; ++k)
     img.filledRectangle(left_w + 10 + 4 * k, dy + 23, left_w + 13 + 4 * k, dy + 35,
                         dopplerColor(static_cast<float>(k - 5) / 5.0f));
-  img.textOut(
-      left_w + 66, dy + 20,
-      "-" + num(doppler_scale, 2) + ".." + num(doppler_scale, 2) + " m/s, approaching..receding",
-      TColor(230, 230, 230));
+  img.textOut(left_w + 66, dy + 20,
+              "-" + formatFixed(doppler_scale, 2) + ".." + formatFixed(doppler_scale, 2) +
+                  " m/s, approaching..receding",
+              TColor(230, 230, 230));
   saveAtomically(img, png);
 }
 
@@ -417,9 +412,9 @@ void renderVelocityPlot(const std::string& png, const InitResult& result,
   img.textOut(left, 30, sub, black);
   if (err)
     img.textOut(left, 48,
-                "at the state: |v_b error| " + num(err->velocity, 3) + " m/s, gravity error " +
-                    num(err->gravity_deg, 2) + " deg, |b_g error| " + num(err->gyro_bias, 4) +
-                    " rad/s",
+                "at the state: |v_b error| " + formatFixed(err->velocity, 3) +
+                    " m/s, gravity error " + formatFixed(err->gravity_deg, 2) +
+                    " deg, |b_g error| " + formatFixed(err->gyro_bias, 4) + " rad/s",
                 black);
 
   // Four panels stacked under the header: v_b per axis with its band, then the gyro bias.

@@ -466,6 +466,9 @@ const std::string& RawlogReader::salvageStop() const { return impl_->salvage_sto
 std::uint64_t RawlogReader::fileBytes() const {
   return impl_->source ? impl_->source->size() : impl_->in.fileBytes();
 }
+ProgressUnit RawlogReader::progressUnit() const {
+  return impl_->source ? impl_->source->progressUnit() : ProgressUnit{};
+}
 std::uint64_t RawlogReader::bytesRead() const {
   return impl_->source ? impl_->source->position() : impl_->in.compressedPosition();
 }

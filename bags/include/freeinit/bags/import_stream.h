@@ -79,6 +79,24 @@ struct BagReadCallbacks {
   std::function<void(std::size_t, std::size_t)> progress;  ///< (messages done, total); optional
 };
 
+/// The sample of one sensor_msgs/Imu of either ROS generation (roscpp's message or ros2::Imu: the
+/// same field names), stamped `stamp` [s] (its header stamp), accelerations in the recorded unit.
+/// A covariance whose first element is -1 declares its vector absent (REP 145): BagError
+/// "<where>: the IMU declares no angular velocity|linear acceleration (covariance[0] = -1)".
+template <class ImuMessage>
+ImuSample imuSampleOf(const ImuMessage& m, double stamp, const std::string& where) {
+  const bool no_gyro = m.angular_velocity_covariance[0] == -1;
+  if (no_gyro || m.linear_acceleration_covariance[0] == -1)
+    throw BagError(where + ": the IMU declares no " +
+                   (no_gyro ? "angular velocity" : "linear acceleration") +
+                   " (covariance[0] = -1)");
+  ImuSample s;
+  s.t = stamp;
+  s.gyro = Vec3(m.angular_velocity.x, m.angular_velocity.y, m.angular_velocity.z);
+  s.accel = Vec3(m.linear_acceleration.x, m.linear_acceleration.y, m.linear_acceleration.z);
+  return s;
+}
+
 /// The decoded messages of one recording, in, and the callbacks, in header-time order, out.
 class ImportStream {
  public:

@@ -35,8 +35,10 @@ class RecordingReader {
   /// Reads, decodes and feeds one message to `stream`; false at the end of the window. Throws
   /// BagError naming the file, the topic and the message.
   virtual bool step(ImportStream& stream) = 0;
-  /// (done, total) for a progress bar: in thousandths of the recording's log-time span.
-  virtual std::pair<std::size_t, std::size_t> progress() const = 0;
+  /// (done, total) for a progress bar, in [ns] of log time: how far past the recording's first
+  /// message the last message read was logged, and the recording's span; (0, 0) when the span is
+  /// unknown.
+  virtual std::pair<std::int64_t, std::int64_t> progress() const = 0;
   /// [s] UNIX log time of the last message read.
   virtual double lastLogTime() const = 0;
 };

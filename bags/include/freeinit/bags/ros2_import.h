@@ -55,8 +55,7 @@ class Ros2Reader : public RecordingReader {
   /// Reads, decodes and feeds one message to `stream`; false at the end. Throws BagError naming
   /// the file, the topic and the message.
   bool step(ImportStream& stream) override;
-  /// (done, total) for a progress bar: in thousandths of the recording's log-time span.
-  std::pair<std::size_t, std::size_t> progress() const override;
+  std::pair<std::int64_t, std::int64_t> progress() const override;
   /// NaN/inf points dropped so far.
   std::size_t invalidPoints() const { return stats_.invalid_points; }
   /// Messages read per topic so far.

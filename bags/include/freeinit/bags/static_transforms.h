@@ -33,6 +33,25 @@ std::optional<RecordedExtrinsics> extrinsicsFromTransforms(
 /// differences, e.g. "differ by 90.000 deg and 0.0 mm".
 std::string extrinsicsDifference(const Extrinsics& given, const Extrinsics& recorded);
 
+/// The extrinsics an importer uses, where they come from, and a disagreement.
+struct ChosenExtrinsics {
+  Extrinsics extrinsics;
+  /// `ini_name`, or "<tf_static_topic> of <recording> (<chain>)".
+  std::string source;
+  /// "" or "<ini_name> and <tf_static_topic> of <recording> (<chain>) <difference>: the INI's are
+  /// used" where both give extrinsics and they differ (extrinsicsDifference).
+  std::string warning;
+};
+
+/// The INI's extrinsics (`given`) when it gives them, else the recording's (`recorded`, read from
+/// `tf_static_topic` of `recording`); nullopt when neither does. `ini_name` names where the INI
+/// gives them ("[extrinsics]", "import.ini [extrinsics]") in `source` and `warning`.
+std::optional<ChosenExtrinsics> chooseExtrinsics(const std::optional<Extrinsics>& given,
+                                                 const std::optional<RecordedExtrinsics>& recorded,
+                                                 const std::string& ini_name,
+                                                 const std::string& tf_static_topic,
+                                                 const std::string& recording);
+
 /// [deg] and [m]: the tolerances of extrinsicsDifference.
 inline constexpr double kExtrinsicsAngleTolerance = 0.1;
 inline constexpr double kExtrinsicsOffsetTolerance = 1e-3;

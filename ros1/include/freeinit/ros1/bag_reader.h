@@ -81,7 +81,7 @@ class Ros1Reader : public bags::RecordingReader {
              std::int64_t to = std::numeric_limits<std::int64_t>::max()) override;
   bool step(bags::ImportStream& stream) override;
   /// In thousandths of the bag's time span (from its index).
-  std::pair<std::size_t, std::size_t> progress() const override;
+  std::pair<std::int64_t, std::int64_t> progress() const override;
   double lastLogTime() const override;
 
   /// (messages read, messages in the window) since start().

@@ -29,6 +29,7 @@
 #pragma once
 
 #include <freeinit/io/ini_file.h>
+#include <freeinit/io/number_format.h>
 
 #include <Eigen/Core>
 #include <functional>
@@ -87,8 +88,8 @@ std::string parseInteger(std::string_view text, long double lo, long double hi, 
 std::string parseNumbers(std::string_view text, std::size_t n, std::vector<double>& out);
 /// true/false (also 1/0, yes/no, on/off), case-insensitive; returns an error or "".
 std::string parseBool(std::string_view text, bool& x);
-/// The shortest text that reads back as exactly x.
-std::string formatNumber(double x);
+/// The shortest text that reads back as exactly x (number_format.h).
+using freeinit::formatNumber;
 
 /// Where a check reports a problem: in a file (with the key's line) or in a struct filled in
 /// code ("configuration key section.key").

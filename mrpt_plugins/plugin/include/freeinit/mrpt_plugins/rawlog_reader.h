@@ -53,6 +53,13 @@ struct RawlogObject {
   mrpt::serialization::CSerializable::Ptr object;
 };
 
+/// What a reader's progress (RawlogReader::bytesRead of fileBytes) counts: `unit` once the counts
+/// are divided by `scale` (a rawlog: its bytes, shown in MB).
+struct ProgressUnit {
+  std::string unit = "MB";
+  double scale = 1e6;
+};
+
 /// Records that come from another kind of recording, converted as they are read (a ROS bag read
 /// straight in: app_support/recording_source.h). A RawlogReader made with one delegates to it.
 class RecordSource {
@@ -62,8 +69,9 @@ class RecordSource {
   virtual bool next(RawlogObject& out) = 0;
   virtual bool seekToTime(double t) = 0;
   virtual std::optional<double> firstTime() = 0;
-  virtual std::uint64_t size() const = 0;      ///< progress: the whole (e.g. bytes)
-  virtual std::uint64_t position() const = 0;  ///< progress: done so far, in the same unit
+  virtual std::uint64_t size() const = 0;         ///< progress: the whole (e.g. bytes)
+  virtual std::uint64_t position() const = 0;     ///< progress: done so far, in the same unit
+  virtual ProgressUnit progressUnit() const = 0;  ///< what size() and position() count
   virtual std::size_t recordsRead() const = 0;
   virtual std::size_t nextRecord() const = 0;
   virtual bool atEnd() const = 0;
@@ -99,6 +107,9 @@ class RawlogReader {
 
   std::uint64_t fileBytes() const;
   std::uint64_t bytesRead() const;  ///< [bytes] of the file consumed so far (progress)
+  /// What fileBytes and bytesRead count: bytes for a rawlog, the source's unit for another
+  /// recording (a ROS recording: its log time).
+  ProgressUnit progressUnit() const;
   std::size_t recordsDeserialized() const;
   std::size_t nextRecord() const;  ///< number of the record next() returns
   bool atEnd() const;              ///< next() returned false: the whole file was read
