@@ -94,12 +94,13 @@ TEST(ClockOffset, MovingStartsFromMinusTenToTenMilliseconds) {
   }
 }
 
-TEST(ClockOffset, AStartWithinTheWindowDoesNotReadItFromTheRestsNoise) {
-  // A window in which the platform starts moving: the rest the IMU showed is withdrawn from its
-  // last nodes, whose offset column is the accelerometer's noise there. Read as motion, it held the
-  // offset near zero with a sigma of ~0.5 ms against a true 4-8 ms (seeds 44800019, 44800195 of
-  // a held-out set: 5.5 and 19 sigma off). Where the offset is estimated it is within 3 sigma;
-  // where the motion cannot tell it, it stays at its prior.
+TEST(ClockOffset, AGentleStartDoesNotReadItFromTheImusNoise) {
+  // Windows in which the platform starts moving, gently: the acceleration grows from zero to a
+  // few 0.1 m/s^2, no more than the accelerometer's noise per sample. The offset's column built
+  // from the samples was mostly that noise and read as knowledge of the offset: seed 6006 at
+  // -8 ms claimed +6.9 +- 3 ms, and with the IMU's noise removed from the recording the same
+  // window gives +-9.4 ms, its prior nearly. Where the offset is estimated it is within 3 sigma;
+  // where the motion cannot tell it, it stays near its prior.
   const std::vector<std::uint64_t> seeds = seedsOf("starting", 3);
   ASSERT_EQ(seeds.size(), 3u);
   for (const std::uint64_t seed : seeds) {
