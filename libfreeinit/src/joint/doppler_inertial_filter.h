@@ -397,8 +397,8 @@ class DopplerInertialFilter {
     bool after_rest = false;
     /// The returns do not depend on the clock offset (lidarVelocity()).
     bool still() const { return rest_velocity_sigma > 0 || after_rest; }
-    /// [s] The clock offset the node's returns are integrated with: the filter's when the node
-    /// was opened (lidarVelocity()).
+    /// [s] The clock offset the node's returns are integrated with (lidarVelocity()): the
+    /// filter's when the node was opened.
     double dt_ref = 0;
     bool rows_stale = false;  ///< the sums changed after the rows were built
     /// The IMU along the integrations every linearization of the node repeats (to its three fit
