@@ -159,11 +159,13 @@ TEST(FreeInitRandomized, StartTooGentleForTheAccelerometerIsSeenInTheDoppler) {
 }
 
 // What moves cannot be told from the Doppler and the IMU alone when a moving object fills the view;
-// two such starts of held-out evaluations that came out ok and wrong are declined, saying why.
-// A handheld sensor walking at 1.6 m/s past a box truck that drives at 5.6 m/s 6 m away and covers
-// 93 % of the view (seed 44000300): the world showed only on the ground, and the state was the
-// truck's frame, 5.6 m/s off. A handheld sensor standing among walkers who make 96 % of the
-// returns (seed 44700290): the IMU at rest throughout, the state followed the walkers, 1.8 m/s off.
+// two such starts of held-out evaluations came out ok and wrong. A handheld sensor walking at
+// 1.6 m/s past a box truck that drives at 5.6 m/s 6 m away and covers 93 % of the view (seed
+// 44000300): the world showed only on the ground, and the state was the truck's frame, 5.6 m/s
+// off; it is declined, saying why. A handheld sensor standing among walkers who make 96 % of the
+// returns (seed 44700290): the IMU at rest throughout, the state followed the walkers, 1.8 m/s
+// off, and was then declined as ambiguous. Since the clock offset no longer moves with the first
+// nodes after a rest, the filter keeps the standing sensor: its state is right, within its bound.
 TEST(FreeInitRandomized, AMovingObjectFillingTheViewIsNotTakenForTheWorld) {
   const RandomRun truck = runSeed(44000300);
   ASSERT_EQ(truck.scenario.info.start, "moving") << "the scenario drawn for this seed changed";
@@ -172,9 +174,13 @@ TEST(FreeInitRandomized, AMovingObjectFillingTheViewIsNotTakenForTheWorld) {
       << truck.result.state.message;
   const RandomRun crowd = runSeed(44700290);
   ASSERT_EQ(crowd.scenario.info.start, "static") << "the scenario drawn for this seed changed";
-  EXPECT_EQ(crowd.result.state.status, InitStatus::AmbiguousMotion) << crowd.result.state.message;
-  EXPECT_NE(crowd.result.state.message.find("standing sensor"), std::string::npos)
-      << crowd.result.state.message;
+  ASSERT_TRUE(crowd.result.state.ok()) << crowd.result.state.message;
+  EXPECT_GT(crowd.result.diag.static_duration, 0.4);
+  const sim::InitErrors e = sim::evaluate(crowd.result.state, crowd.rec);
+  const eval::Bound b = sim::cramerRaoBound(crowd.rec, crowd.cfg, crowd.result);
+  ASSERT_TRUE(e.valid && b.ok) << b.message;
+  EXPECT_LT(e.vel_b, 3 * b.velocity);
+  EXPECT_LT(e.nees_vel_b, 16.27);
 }
 
 // A car at 15.5 m/s, turning at 0.02 rad/s, its LiDAR-IMU rotation declared 1.1 deg off (seed

@@ -376,6 +376,46 @@ void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, do
   }
 }
 
+void DopplerInertialFilter::motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
+                                     double gyro_sigma, double accel_sigma, Vec3& accel,
+                                     Vec3& gyro_rate) {
+  Vec3 gyro;
+  interpolateImu(imu, t, gyro, accel, hint, &gyro_rate);
+  std::size_t lo = 0;
+  std::size_t hi = interpolationSpan(imu, t, hint, lo);
+  while (lo > 0 && imu[lo - 1].t >= t - kMotionHalfSpan) --lo;
+  while (lo < hi && imu[lo].t < t - kMotionHalfSpan) ++lo;
+  while (hi + 1 < imu.size() && imu[hi + 1].t <= t + kMotionHalfSpan) ++hi;
+  while (hi > lo && imu[hi].t > t + kMotionHalfSpan) --hi;
+  // Least squares of c0 + c1 d per axis (d = t_i - t): the normal equations' sums, and the
+  // sums of squares for the residuals (RSS = sum |y|^2 - c0 . sum y - c1 . sum d y).
+  double s0 = 0, s1 = 0, s2 = 0, aa = 0, gg = 0;
+  Vec3 a0 = Vec3::Zero(), a1 = Vec3::Zero(), g0 = Vec3::Zero(), g1 = Vec3::Zero();
+  for (std::size_t i = lo; i <= hi; ++i) {
+    const double d = imu[i].t - t;
+    s0 += 1;
+    s1 += d;
+    s2 += d * d;
+    a0 += imu[i].accel;
+    a1 += d * imu[i].accel;
+    aa += imu[i].accel.squaredNorm();
+    g0 += imu[i].gyro;
+    g1 += d * imu[i].gyro;
+    gg += imu[i].gyro.squaredNorm();
+  }
+  const double det = s0 * s2 - s1 * s1;
+  if (s0 < 3 || !(det > 1e-6 * s0 * s2)) return;
+  // The residuals' degrees of freedom (three axes, two parameters each) and the 99.9 % quantile
+  // of their chi-square (Wilson-Hilferty).
+  const double dof = 3 * (s0 - 2);
+  const double w = 2.0 / (9.0 * dof);
+  const double q = dof * std::pow(1.0 - w + 3.09 * std::sqrt(w), 3);
+  const Vec3 ca0 = (s2 * a0 - s1 * a1) / det, ca1 = (s0 * a1 - s1 * a0) / det;
+  if (aa - ca0.dot(a0) - ca1.dot(a1) <= q * accel_sigma * accel_sigma) accel = ca0;
+  const Vec3 cg0 = (s2 * g0 - s1 * g1) / det, cg1 = (s0 * g1 - s1 * g0) / det;
+  if (gg - cg0.dot(g0) - cg1.dot(g1) <= q * gyro_sigma * gyro_sigma) gyro_rate = cg1;
+}
+
 std::size_t DopplerInertialFilter::interpolationSpan(const std::vector<ImuSample>& imu, double t,
                                                      std::size_t hint, std::size_t& lo) {
   // The interval of samples that holds t, then up to one more sample on each side.
@@ -471,8 +511,7 @@ void DopplerInertialFilter::sampleImu(const std::vector<ImuSample>& imu, std::si
   const double t = imu[k].t;
   const std::array<double, 3> s = {0.25 * tau, 0.5 * tau, tau};
   for (std::size_t i = 0; i < 3; ++i)
-    interpolateImu(imu, t + s[i], along.gyro[i], along.accel[i], k,
-                   i == 2 ? &along.gyro_rate : nullptr);
+    interpolateImu(imu, t + s[i], along.gyro[i], along.accel[i], k);
   along.tau = tau;
   along.samples = imu.size();
   // The span read at the latest instant (the spans grow with the time) ends before the last
@@ -1065,64 +1104,72 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
                                           std::size_t k, double tau,
                                           Eigen::Matrix<double, 3, kStateDim>* J) const {
   const Mat3 R_bl = R_bl_ * Exp(x.phi_bl);
-  if (J == nullptr) return lidarVelocity(x, imu, k, tau, R_bl, nullptr, nullptr, nullptr);
+  if (J == nullptr)
+    return lidarVelocity(x, imu, k, tau, x.dt_l, true, R_bl, nullptr, nullptr, nullptr);
   const Mat3 Jr_phi = rightJacobian(x.phi_bl);
-  return lidarVelocity(x, imu, k, tau, R_bl, &Jr_phi, J, nullptr);
+  return lidarVelocity(x, imu, k, tau, x.dt_l, true, R_bl, &Jr_phi, J, nullptr);
 }
 
 Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
-                                          std::size_t k, double tau, const Mat3& R_bl,
-                                          const Mat3* Jr_phi,
+                                          std::size_t k, double tau, double dt_ref,
+                                          bool offset_moves, const Mat3& R_bl, const Mat3* Jr_phi,
                                           Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
                                           const Node* chain, PreintegrationChains* pre) const {
-  const double tau_true = tau - x.dt_l;
+  const double tau_true = tau - dt_ref;
   IntegrationJacobian Js;
-  // The IMU at the LiDAR time: the node's sample at tau_true = 0 (interpolated there too for the
-  // rate), otherwise the integration's own interpolation at its end (the same time and hint).
-  Vec3 gyro = imu[k].gyro, accel = imu[k].accel, alpha = Vec3::Zero();
+  // The IMU at the LiDAR time: the node's sample at tau_true = 0, otherwise the integration's
+  // own interpolation at its end (the same time and hint).
+  Vec3 gyro = imu[k].gyro;
   IntegrationJacobian* Jy = J != nullptr ? &Js : nullptr;
   FilterState y;
   if (tau_true == 0) {
     y = integrate(x, imu, k, 0.0, Jy, ImuAlong{});
-    if (J != nullptr) interpolateImu(imu, imu[k].t, gyro, accel, k, &alpha);
   } else if (chain != nullptr && cache != nullptr) {
-    // Across the samples between: the IMU at the end is that of the integration's last step.
+    // Across the samples between: the IMU at the end is that of the integration's last step
+    // (none when tau_true is below the time's resolution).
     const ImuAlong* along = nullptr;
     y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, *cache, &along, pre,
                         tau_true < 0 ? nodeBefore(*chain) : nullptr);
-    if (along != nullptr) {
-      gyro = along->gyro[2];
-      accel = along->accel[2];
-      alpha = along->gyro_rate;
-    } else if (J != nullptr) {  // tau_true below the time's resolution: no step
-      interpolateImu(imu, imu[k].t, gyro, accel, k, &alpha);
-    }
+    if (along != nullptr) gyro = along->gyro[2];
   } else {
     ImuAlong sampled;
     if (cache == nullptr) sampleImu(imu, k, tau_true, sampled);
     const ImuAlong& along = cache != nullptr ? imuAlong(imu, k, tau_true, *cache) : sampled;
     y = integrate(x, imu, k, tau_true, Jy, along);
     gyro = along.gyro[2];
-    accel = along.accel[2];
-    alpha = along.gyro_rate;
   }
   if (chain != nullptr) {
-    // The lever arm's gyro: the node's fit (gyroFit), its rate the fit's derivative.
+    // The lever arm's gyro: the node's fit (gyroFit); the offset's column reads the motion's
+    // rate (motionAt()) as for a node per sample.
     const double s = tau_true * chain->inv_h;
     const std::array<Vec3, 3>& c = chain->gyro_fit;
     gyro = c[0] + s * (c[1] + s * c[2]);
-    alpha = (c[1] + 2.0 * s * c[2]) * chain->inv_h;
   }
   const Vec3 omega = gyro - x.b_g;
-  const Vec3 v_b = y.R_wb.transpose() * y.v_w;
-  const Vec3 v_l = R_bl.transpose() * (v_b + omega.cross(p_bl_));
+  const Mat3 Rt = y.R_wb.transpose();
+  const Mat3 Rlb = R_bl.transpose();
+  const Vec3 v_b = Rt * y.v_w;
+  Vec3 v_l = Rlb * (v_b + omega.cross(p_bl_));
+  // The offset's share: dv_l/d(dt_l) = -dv_l/dt = -R_bl^T (a_b - omega x v_b + alpha x p_bl),
+  // a_b = f - b_a + R^T g, with the rates the motion's (motionAt()), not the samples': where
+  // the motion is gentle those are mostly the IMU's noise (sigma_a per sample against a few
+  // 0.1 m/s^2; the gyro's slope sqrt(2) sigma_g / dt through the lever arm), and a column of
+  // noise reads as knowledge of the offset: a start 0.2 m/s^2 strong claimed 3 ms against a
+  // 15 ms error. The model is linear in the offset about dt_ref with this column, so that its
+  // derivative is the column (with the samples' interpolant there, Gauss-Newton diverged).
+  Vec3 column = Vec3::Zero();
+  if (offset_moves && (J != nullptr || x.dt_l != dt_ref)) {
+    Vec3 accel, alpha;
+    motionAt(imu, imu[k].t + tau_true, k, params_.gyro_sigma, params_.accel_sigma, accel, alpha);
+    const Vec3 a_b = accel - x.b_a + Rt * kGravityW;
+    column = -Rlb * (a_b - omega.cross(v_b) + alpha.cross(p_bl_));
+    v_l += column * (x.dt_l - dt_ref);
+  }
   if (J != nullptr) {
     // dv_b = R^T dv_w + [v_b]x dtheta;  dv_l = R_bl^T (dv_b + [p_bl]x db_g) + [v_l]x dphi_bl
-    // ((R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T); d/d(dt_l) = -dv_l/dtau.
+    // ((R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T).
     // Only the attitude and velocity rows of the integration's Jacobian are read, and of those
     // only the blocks of dtheta, dv, db_g and db_a are not zero.
-    const Mat3 Rt = y.R_wb.transpose();
-    const Mat3 Rlb = R_bl.transpose();
     const Mat3 S_vb = skew(v_b);
     J->block<3, 3>(0, kPos).setZero();
     J->block<3, 3>(0, kTheta) = Rlb * Mat3(Rt * Js.v_th + S_vb * Js.th_th);
@@ -1132,11 +1179,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
     J->block<3, 3>(0, kBg) += Rlb * skew(p_bl_);
     // The correction is additive (phi_bl + dphi): Exp(phi + dphi) = Exp(phi) Exp(J_r(phi) dphi).
     J->block<3, 3>(0, kRot) = skew(v_l) * *Jr_phi;
-    // dv_l/dt = R_bl^T (a_b - omega x v_b + alpha x p_bl), a_b = f - b_a + R^T g (the angular
-    // acceleration alpha: the derivative of the interpolated gyro), and
-    // dv_l/d(dt_l) = -dv_l/dt.
-    const Vec3 a_b = accel - x.b_a + Rt * kGravityW;
-    J->col(kTime) = -Rlb * (a_b - omega.cross(v_b) + alpha.cross(p_bl_));
+    J->col(kTime) = column;
   }
   return v_l;
 }
@@ -1155,9 +1198,10 @@ DopplerInertialFilter::Vec9 DopplerInertialFilter::velocityPolynomial(const Node
   if (G != nullptr) Jr_phi = rightJacobian(x.phi_bl);
   for (int i = 0; i < 3; ++i) {
     const Vec3 v =
-        lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, R_bl, G != nullptr ? &Jr_phi : nullptr,
-                      G != nullptr ? &J : nullptr, &n.fit_imu[static_cast<std::size_t>(i)],
-                      n.spansSamples() ? &n : nullptr, n.spansSamples() ? &n.pre : nullptr);
+        lidarVelocity(x, imu_, n.k, n.s_fit[i] * n.h, n.dt_ref, !n.still(), R_bl,
+                      G != nullptr ? &Jr_phi : nullptr, G != nullptr ? &J : nullptr,
+                      &n.fit_imu[static_cast<std::size_t>(i)], n.spansSamples() ? &n : nullptr,
+                      n.spansSamples() ? &n.pre : nullptr);
     for (int m = 0; m < 3; ++m) {
       Q.segment<3>(3 * m) += Vinv(m, i) * v;
       if (G != nullptr) G->middleRows<3>(3 * m) += Vinv(m, i) * J;
@@ -1265,6 +1309,14 @@ void DopplerInertialFilter::predict() {
 void DopplerInertialFilter::beginNode(bool last, std::size_t next) {
   Node& n = nodes_.back();
   nodeChanged(nodes_.size() - 1);
+  n.dt_ref = n.x_pred.dt_l;
+  if (nodes_.size() >= 2) {
+    // The previous node's rest is decided; this one's is not until after its update.
+    Node& previous = nodes_[nodes_.size() - 2];
+    if (previous.after_rest) nodeChanged(nodes_.size() - 2);
+    previous.after_rest = false;
+    n.after_rest = previous.rest_velocity_sigma > 0;
+  }
   n.last = last;
   node_open_ = true;
   n.k_next = last ? n.k : next == 0 ? n.k + 1 : next;
@@ -1807,10 +1859,6 @@ void DopplerInertialFilter::linearize(std::size_t k, Linearization& L) const {
   L.x = n.xs;
   if (n.rows.W.rows() > 0) {
     L.Q = velocityPolynomial(n, n.xs, &L.G);
-    // At rest the returns are the same whatever the clock offset: the offset's column is the
-    // LiDAR velocity's rate from the IMU, there its noise only (differentiated, for the lever
-    // arm's share), which would read as knowledge of the offset.
-    if (n.rest_velocity_sigma > 0) L.G.col(kTime).setZero();
   }
   if (k + 1 < nodes_.size()) L.x_next = propagate(n, n.xs, &L.F);
 }

@@ -350,6 +350,16 @@ class DopplerInertialFilter {
   static void interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro, Vec3& accel,
                              std::size_t hint = static_cast<std::size_t>(-1),
                              Vec3* gyro_rate = nullptr);
+  /// The motion's specific force and angular acceleration at time t, for the clock offset's
+  /// column (lidarVelocity()): the value of a straight line fitted to the accelerometer samples
+  /// within kMotionHalfSpan of t and the slope of one fitted to the gyro's, each where its
+  /// residuals are the sensor's white noise (sigma per sample, 99.9 %); where they are not
+  /// (a motion brisker than a line over the span) or fewer than three samples are, the
+  /// interpolant's (interpolateImu()).
+  static void motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
+                       double gyro_sigma, double accel_sigma, Vec3& accel, Vec3& gyro_rate);
+  /// [s] Half the span of motionAt()'s fit.
+  static constexpr double kMotionHalfSpan = 0.025;
   /// The samples lo..hi (returned) interpolateImu() uses at t (hint: as there).
   static std::size_t interpolationSpan(const std::vector<ImuSample>& imu, double t,
                                        std::size_t hint, std::size_t& lo);
@@ -385,14 +395,13 @@ class DopplerInertialFilter {
   };
 
   /// The IMU along one integration from a sample over tau (tau != 0): gyro and accelerometer
-  /// interpolated at tau / 4, tau / 2 and tau, the gyro's rate at tau; what integrate() reads.
+  /// interpolated at tau / 4, tau / 2 and tau; what integrate() reads.
   struct ImuAlong {
     double tau = std::numeric_limits<double>::quiet_NaN();  ///< [s] what it holds (NaN: nothing)
     std::size_t samples = 0;  ///< the IMU samples there were (with fewer, lower orders)
     /// Every interpolation had a sample after the span it read: later samples change nothing.
     bool complete = false;
     std::array<Vec3, 3> gyro, accel;
-    Vec3 gyro_rate = Vec3::Zero();
   };
   static void sampleImu(const std::vector<ImuSample>& imu, std::size_t k, double tau,
                         ImuAlong& along);
@@ -477,7 +486,14 @@ class DopplerInertialFilter {
     double rest_rate_sigma = 0;      ///< > 0: the node's gyro samples measure the bias ...
     std::size_t rest_samples = 1;    ///< ... so many (rest_rate_sigma is per sample) ...
     Vec3 rest_gyro = Vec3::Zero();   ///< ... their mean
-    bool rows_stale = false;         ///< the sums changed after the rows were built
+    /// Opened after a rest node, its own rest not yet decided (the forward update's).
+    bool after_rest = false;
+    /// The returns do not depend on the clock offset (lidarVelocity()).
+    bool still() const { return rest_velocity_sigma > 0 || after_rest; }
+    /// [s] The clock offset the node's returns are integrated with (lidarVelocity()): the
+    /// filter's when the node was opened.
+    double dt_ref = 0;
+    bool rows_stale = false;  ///< the sums changed after the rows were built
     /// The IMU along the integrations every linearization of the node repeats (to its three fit
     /// instants, to the next node): they depend on the IMU and the clock offset only, not on
     /// the state, so the smoother's iterations sample it once (a cache; the filter is not for
@@ -619,13 +635,17 @@ class DopplerInertialFilter {
   MatS propagateCovariance(const IntegrationJacobian& F, const MatS& P, const Node& n,
                            bool full = false) const;
   /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
-  /// given): the IMU along the integration, as imuAlong() keeps it.
+  /// given): the IMU along the integration, as imuAlong() keeps it. The IMU is integrated to
+  /// the LiDAR time with the clock offset dt_ref; the state's offset enters as its difference
+  /// from dt_ref times the motion's rate (motionAt()), the model's derivative and the column
+  /// alike, so that a Gauss-Newton solve converges; not at all where !offset_moves (a sensor
+  /// standing still sees the same returns whatever the offset).
   /// chain (if given): the node at sample k, whose intervals span several samples: integrated
   /// across them (integrateAcross) with its caches, the whole intervals through pre, the gyro
   /// of the lever-arm term its fit (Node::gyro_fit).
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
-                     double tau, const Mat3& R_bl, const Mat3* Jr_phi,
-                     Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
+                     double tau, double dt_ref, bool offset_moves, const Mat3& R_bl,
+                     const Mat3* Jr_phi, Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
                      const Node* chain = nullptr, PreintegrationChains* pre = nullptr) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2

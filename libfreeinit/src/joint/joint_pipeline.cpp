@@ -580,6 +580,16 @@ class JointPipeline final : public Pipeline {
     rep << "joint: " << N << " nodes, " << diag.iterations << " smoother iterations";
     diag.solver_report = rep.str();
 
+    // A solve that diverged is no state, whatever the tests above read from it.
+    const bool finite = x.R_wb.allFinite() && x.p_w.allFinite() && x.v_w.allFinite() &&
+                        x.b_g.allFinite() && x.b_a.allFinite() && std::isfinite(x.dt_l) &&
+                        filter_->covariance().allFinite();
+    if (!finite) {
+      fail(r, InitStatus::SolverFailed,
+           "the smoother's solution is not finite (it diverged after " +
+               std::to_string(diag.iterations) + " iterations): no state is reported");
+      return;
+    }
     InitialState& s = r.state;
     s.status = InitStatus::Ok;
     s.message.clear();
