@@ -1505,12 +1505,32 @@ DopplerInertialFilter::LeverNoise DopplerInertialFilter::leverNoise(const Node& 
 }
 
 void DopplerInertialFilter::gyroFit(const Node& n, std::array<Vec3, 3>* coef, Mat3* cov) const {
-  // The node's samples: j with k_prev + k <= 2 j <= k + k_next (its interval of returns in
-  // samples), a half weight on a boundary shared with a neighbour.
-  const std::size_t lo = (n.k_prev + n.k + 1) / 2, hi = (n.k + n.k_next) / 2;
+  // The node's samples: those in its interval of returns taken to the IMU's clock (shifted by
+  // dt_ref, where lidarVelocity() reads the fit: a fit through the node's own samples would be
+  // extrapolated there, by two node intervals at a 9 ms offset with nodes at 200 Hz, and a
+  // brisk rotation's lever-arm term with it), a half weight on a boundary shared with a
+  // neighbour; at least the sample nearest the interval's centre.
+  const double t_c = imu_[n.k].t - n.dt_ref;
+  const double before = 0.5 * (imu_[n.k].t - imu_[n.k_prev].t);
+  const double after = 0.5 * (imu_[n.k_next].t - imu_[n.k].t);
+  constexpr double kOnBoundary = 1e-9;  // [s] below the stamps' resolution
+  const double t_lo = t_c - before, t_hi = t_c + after;
+  auto first_at = [&](double t) {
+    return static_cast<std::size_t>(
+        std::lower_bound(imu_.begin(), imu_.end(), t,
+                         [](const ImuSample& a, double b) { return a.t < b; }) -
+        imu_.begin());
+  };
+  std::size_t lo = first_at(t_lo - kOnBoundary), hi = first_at(t_hi + kOnBoundary);
+  if (lo >= hi) {  // no sample inside: the nearest one to the centre
+    const std::size_t j = std::min(first_at(t_c), imu_.size() - 1);
+    lo = j > 0 && t_c - imu_[j - 1].t < imu_[j].t - t_c ? j - 1 : j;
+    hi = lo + 1;
+  }
+  --hi;  // the last sample inside
   auto weight = [&](std::size_t j) {
-    const bool shared = (2 * j == n.k_prev + n.k && n.k_prev != n.k) ||
-                        (2 * j == n.k + n.k_next && n.k_next != n.k);
+    const bool shared = (before > 0 && std::abs(imu_[j].t - t_lo) <= kOnBoundary) ||
+                        (after > 0 && std::abs(imu_[j].t - t_hi) <= kOnBoundary);
     return shared ? 0.5 : 1.0;
   };
   const int dim = static_cast<int>(std::min<std::size_t>(3, hi - lo + 1));  // degree + 1
@@ -1909,6 +1929,7 @@ void DopplerInertialFilter::referOffsets() {
     Node& n = nodes_[k];
     if (std::abs(n.xs.dt_l - n.dt_ref) > kOffsetRefStep) {
       n.dt_ref = n.xs.dt_l;
+      if (n.spansSamples()) gyroFit(n, &n.gyro_fit, &n.gyro_fit_cov);
       nodeChanged(k);
     }
   }
