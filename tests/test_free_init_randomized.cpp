@@ -168,13 +168,23 @@ TEST(FreeInitRandomized, StartTooGentleForTheAccelerometerIsSeenInTheDoppler) {
 // node, before any rest is known, where the walkers' returns move the state (and the clock
 // offset by four times its prior): a reference offset that followed the filter kept the standing
 // sensor, one held at the prior until the first smoothing declines it, naming moving objects.
-// What must hold either way: it is not ok and wrong.
+// What must hold either way: it is not ok and wrong. A handheld start among walkers whose
+// returns make 90 % of the view (seed 45000206, once of a held-out evaluation): the state
+// followed them after the start, 0.29 m/s off at a NEES of 2000 with the Doppler noise read from
+// the residuals (so they looked right); it is declined, as only a tenth of the returns agree with
+// it and even those do not fit it.
 TEST(FreeInitRandomized, AMovingObjectFillingTheViewIsNotTakenForTheWorld) {
   const RandomRun truck = runSeed(44000300);
   ASSERT_EQ(truck.scenario.info.start, "moving") << "the scenario drawn for this seed changed";
   EXPECT_EQ(truck.result.state.status, InitStatus::AmbiguousMotion) << truck.result.state.message;
   EXPECT_NE(truck.result.state.message.find("ground"), std::string::npos)
       << truck.result.state.message;
+  const RandomRun walkers = runSeed(45000206);
+  ASSERT_EQ(walkers.scenario.info.start, "starting") << "the scenario drawn for this seed changed";
+  EXPECT_EQ(walkers.result.state.status, InitStatus::AmbiguousMotion)
+      << walkers.result.state.message;
+  EXPECT_NE(walkers.result.state.message.find("moving objects"), std::string::npos)
+      << walkers.result.state.message;
   const RandomRun crowd = runSeed(44700290);
   ASSERT_EQ(crowd.scenario.info.start, "static") << "the scenario drawn for this seed changed";
   if (!crowd.result.state.ok()) {
