@@ -24,16 +24,18 @@
 #include <cstdint>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 namespace freeinit {
 namespace {
 
-/// The first scenario of the development range with a right calibration and the given start
-/// ("moving", "static", ...), its IMU at 1 kHz (the per-sample noise at the scenario's density).
-sim::ScenarioConfig fastImuScenario(const std::string& start) {
+/// The n-th scenario (from 0) of the development range with a right calibration and the given
+/// start ("moving", "static", ...), its IMU at 1 kHz (the per-sample noise at the scenario's
+/// density).
+sim::ScenarioConfig fastImuScenario(const std::string& start, int n = 0) {
   for (std::uint64_t seed = 8301;; ++seed) {
     const sim::RandomScenario s = sim::drawRandomScenario(seed);
-    if (s.info.calibration_wrong || s.info.start != start) continue;
+    if (s.info.calibration_wrong || s.info.start != start || n-- > 0) continue;
     sim::ScenarioConfig c = s.config;
     c.duration = 1.0;
     c.points_per_frame = 20000;
@@ -84,26 +86,40 @@ Difference differenceOverBound(const sim::ScenarioConfig& c, const char* name) {
   return d;
 }
 
-TEST(NodeRate, StaticStartWithAFastImuGivesTheSameEstimate) {
-  // Development: 0.014, 0.001, 0.004, 0.002 (0.039 for the velocity with three instants).
-  const Difference d = differenceOverBound(fastImuScenario("static"), "static");
-  EXPECT_LT(d.velocity, 0.1);
-  EXPECT_LT(d.gravity, 0.1);
-  EXPECT_LT(d.gyro_bias, 0.1);
-  EXPECT_LT(d.accel_bias, 0.1);
+double median(std::vector<double> v) {
+  std::nth_element(v.begin(), v.begin() + v.size() / 2, v.end());
+  return v[v.size() / 2];
 }
 
-TEST(NodeRate, MovingStartWithAFastImuGivesTheSameEstimate) {
-  // The rig as drawn (development: 0.059, 0.003, 0.024, 0.003; 0.33 for the velocity with the
-  // lever arm's gyro read at three instants, see the top of the file), then without a lever arm
-  // (0.031, 0.001, 0.006, 0.005). A tenth of the bound: the parity limit for the median
-  // over held-out scenarios, met here by the one scenario with a margin of 1.7.
+TEST(NodeRate, AFastImuGivesTheSameEstimateInTheMedian) {
+  // The parity criterion, the median over scenarios of each quantity's difference below
+  // a tenth of the bound, on four moving and four static starts of the development range (the
+  // moving ones with their lever arms, 0.1-0.3 m). Single scenarios differ by more: the two
+  // layouts group the samples' noise into different polynomials and their gates keep different
+  // returns (development: up to 0.16 of the bound on a moving start; a held-out set's 90th
+  // percentile near 0.4). No single case a whole bound apart.
+  std::vector<double> velocity, gravity, gyro_bias, accel_bias;
+  for (const char* start : {"moving", "static"})
+    for (int n = 0; n < 4; ++n) {
+      const Difference d = differenceOverBound(
+          fastImuScenario(start, n), (std::string(start) + " " + std::to_string(n)).c_str());
+      velocity.push_back(d.velocity);
+      gravity.push_back(d.gravity);
+      gyro_bias.push_back(d.gyro_bias);
+      accel_bias.push_back(d.accel_bias);
+      EXPECT_LT(std::max({d.velocity, d.gravity, d.gyro_bias, d.accel_bias}), 1.0)
+          << start << " " << n;
+    }
+  EXPECT_LT(median(velocity), 0.1);
+  EXPECT_LT(median(gravity), 0.1);
+  EXPECT_LT(median(gyro_bias), 0.1);
+  EXPECT_LT(median(accel_bias), 0.1);
+}
+
+TEST(NodeRate, WithoutALeverArmAFastImuGivesTheSameEstimate) {
+  // Without the lever arm's gyro noise in the returns the grouping matters little: a moving
+  // start (development: 0.020, 0.001, 0.005, 0.005).
   sim::ScenarioConfig c = fastImuScenario("moving");
-  const Difference d = differenceOverBound(c, "moving");
-  EXPECT_LT(d.velocity, 0.1);
-  EXPECT_LT(d.gravity, 0.1);
-  EXPECT_LT(d.gyro_bias, 0.1);
-  EXPECT_LT(d.accel_bias, 0.1);
   c.lidar_position.setZero();
   c.lidar_position_jitter = 0;
   const Difference e = differenceOverBound(c, "moving, no lever arm");

@@ -355,8 +355,8 @@ class DopplerInertialFilter {
   /// within kMotionHalfSpan of t and the slope of one fitted to the gyro's, each where its
   /// residuals are the sensor's white noise (sigma per sample, 99.9 %); where they are not
   /// (a motion brisker than a line over the span) or fewer than three samples are, the
-  /// interpolant's (interpolateImu()).
-  static void motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
+  /// interpolant's (interpolateImu()). Returns whether gyro_rate is the fitted line's.
+  static bool motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
                        double gyro_sigma, double accel_sigma, Vec3& accel, Vec3& gyro_rate);
   /// [s] Half the span of motionAt()'s fit.
   static constexpr double kMotionHalfSpan = 0.025;
