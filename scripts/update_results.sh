@@ -22,14 +22,8 @@
 # Environment: BUILD_DIR (default build; must hold a Release build of freeinit-eval).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-readme=1
-case "${1:-}" in
-  "") ;;
-  --no-readme) readme=0 ;;
-  *) echo "[results] error: unknown option $1 (usage: $0 [--no-readme])" >&2; exit 2 ;;
-esac
-eval_app=${BUILD_DIR:-build}/bin/freeinit-eval
-[ -f "$eval_app" ] && [ -x "$eval_app" ] || { echo "[results] error: $eval_app not built" >&2; exit 1; }
+tag=results
+source scripts/eval_common.sh
 out=gui_snapshots
 
 taskset -c 0 "$eval_app" --jobs 1 --seeds 3 --md $out/eval_presets.md --csv $out/eval_presets.csv \
@@ -51,16 +45,10 @@ echo "[results] wrote $out/eval_presets.{md,csv}, $out/eval_summary.csv, $out/ev
 # Copy each table file into docs/results.md between its markers.
 for name in results-table results-bounds results-random; do
   file=$out/${name/-/_}.md
-  if ! grep -q "^<!-- $name:begin -->$" docs/results.md || ! grep -q "^<!-- $name:end -->$" docs/results.md; then
+  if ! copy_between_markers "$file" "$name" docs/results.md; then
     echo "[results] docs/results.md has no <!-- $name:begin/end --> markers: $file not copied"
     continue
   fi
-  tmp=docs/results.md.tmp
-  awk -v file="$file" -v name="$name" '
-    $0 == "<!-- " name ":begin -->" { print; while ((getline line < file) > 0) print line; skip = 1; next }
-    $0 == "<!-- " name ":end -->" { skip = 0 }
-    !skip' docs/results.md > "$tmp"
-  mv "$tmp" docs/results.md
   echo "[results] docs/results.md: $name updated from $file"
 done
 echo "[results] check the prose around the tables against the new numbers"
