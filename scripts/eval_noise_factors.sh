@@ -10,19 +10,14 @@
 #   ./scripts/eval_noise_factors.sh [--no-readme]
 #
 # Environment: BUILD_DIR (default build; a Release build of freeinit-eval), SEED_BASE (default
-# 44900001: a set held out until this table was last made; 44800001 on was used to develop the
-# clock offset's column since), RUNS (default 300), JOBS (default 0: every core).
+# 45100001: a set held out until this table was last made; 44800001 on was used to develop the
+# clock offset's column, 44900001 and 45000001 on were held out once each since), RUNS (default
+# 300), JOBS (default 0: every core).
 set -euo pipefail
 cd "$(dirname "$0")/.."
-readme=1
-case "${1:-}" in
-  "") ;;
-  --no-readme) readme=0 ;;
-  *) echo "[noise] error: unknown option $1 (usage: $0 [--no-readme])" >&2; exit 2 ;;
-esac
-eval_app=${BUILD_DIR:-build}/bin/freeinit-eval
-[ -f "$eval_app" ] && [ -x "$eval_app" ] || { echo "[noise] error: $eval_app not built" >&2; exit 1; }
-base=${SEED_BASE:-44900001}
+tag=noise
+source scripts/eval_common.sh
+base=${SEED_BASE:-45100001}
 runs=${RUNS:-300}
 out=gui_snapshots
 tmp=$(mktemp -d)
@@ -71,14 +66,6 @@ summary=$tmp/summary.csv
 echo "[noise] wrote $out/results_noise.md"
 [ "$readme" -eq 1 ] || exit 0
 
-name=results-noise
-if ! grep -q "^<!-- $name:begin -->$" README.md || ! grep -q "^<!-- $name:end -->$" README.md; then
-  echo "[noise] error: README.md has no <!-- $name:begin/end --> markers" >&2
-  exit 1
-fi
-awk -v file="$out/results_noise.md" -v name="$name" '
-  $0 == "<!-- " name ":begin -->" { print; while ((getline line < file) > 0) print line; skip = 1; next }
-  $0 == "<!-- " name ":end -->" { skip = 0 }
-  !skip' README.md > README.md.tmp
-mv README.md.tmp README.md
-echo "[noise] README.md: $name updated"
+copy_between_markers "$out/results_noise.md" results-noise README.md ||
+  { echo "[noise] error: README.md has no <!-- results-noise:begin/end --> markers" >&2; exit 1; }
+echo "[noise] README.md: results-noise updated"
