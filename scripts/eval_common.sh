@@ -1,6 +1,6 @@
-# Shared by the evaluation scripts (sourced, not run): their one option, the evaluation program
-# and the copy of a table between a file's markers. The caller sets `tag` (its messages' prefix)
-# before sourcing and runs from the repository's root.
+# Shared by the evaluation scripts (sourced, not run): their one option, their output and
+# scratch folders, the evaluation program and the copy of a table between a file's markers. The
+# caller sets `tag` (its messages' prefix) before sourcing and runs from the repository's root.
 
 # --no-readme (readme=0: write the files only) or nothing (readme=1).
 readme=1
@@ -9,6 +9,11 @@ case "${1:-}" in
   --no-readme) readme=0 ;;
   *) echo "[$tag] error: unknown option $1 (usage: $0 [--no-readme])" >&2; exit 2 ;;
 esac
+
+# The tables and runs go to out; tmp is removed on exit.
+out=gui_snapshots
+tmp=$(mktemp -d)
+trap 'rm -rf "$tmp"' EXIT
 
 # The Release build's freeinit-eval (BUILD_DIR, default build).
 eval_app=${BUILD_DIR:-build}/bin/freeinit-eval

@@ -19,9 +19,6 @@ tag=imu-rates
 source scripts/eval_common.sh
 base=${SEED_BASE:-45200001}
 runs=${RUNS:-200}
-out=gui_snapshots
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
 
 for nodes in 0 200; do
   "$eval_app" --random "$runs" --seed-base "$base" --no-baselines --duration 0.8 \

@@ -19,9 +19,6 @@ tag=noise
 source scripts/eval_common.sh
 base=${SEED_BASE:-45100001}
 runs=${RUNS:-300}
-out=gui_snapshots
-tmp=$(mktemp -d)
-trap 'rm -rf "$tmp"' EXIT
 
 # One run: both factors drawn per run (log-uniform in [1/4, 4], from a stream of their own), the
 # summaries per IMU factor over every Doppler one and per Doppler factor over every IMU one (each

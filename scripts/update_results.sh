@@ -24,7 +24,6 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 tag=results
 source scripts/eval_common.sh
-out=gui_snapshots
 
 taskset -c 0 "$eval_app" --jobs 1 --seeds 3 --md $out/eval_presets.md --csv $out/eval_presets.csv \
   --summary-csv $out/eval_summary.csv --bounds-md $out/results_bounds.md --plots $out > /dev/null
