@@ -383,39 +383,57 @@ bool DopplerInertialFilter::motionAt(const std::vector<ImuSample>& imu, double t
   interpolateImu(imu, t, gyro, accel, hint, &gyro_rate);
   std::size_t lo = 0;
   std::size_t hi = interpolationSpan(imu, t, hint, lo);
-  while (lo > 0 && imu[lo - 1].t >= t - kMotionHalfSpan) --lo;
-  while (lo < hi && imu[lo].t < t - kMotionHalfSpan) ++lo;
-  while (hi + 1 < imu.size() && imu[hi + 1].t <= t + kMotionHalfSpan) ++hi;
-  while (hi > lo && imu[hi].t > t + kMotionHalfSpan) --hi;
-  // Least squares of c0 + c1 d per axis (d = t_i - t): the normal equations' sums, and the
-  // sums of squares for the residuals (RSS = sum |y|^2 - c0 . sum y - c1 . sum d y).
-  double s0 = 0, s1 = 0, s2 = 0, aa = 0, gg = 0;
-  Vec3 a0 = Vec3::Zero(), a1 = Vec3::Zero(), g0 = Vec3::Zero(), g1 = Vec3::Zero();
-  for (std::size_t i = lo; i <= hi; ++i) {
-    const double d = imu[i].t - t;
-    s0 += 1;
-    s1 += d;
-    s2 += d * d;
-    a0 += imu[i].accel;
-    a1 += d * imu[i].accel;
-    aa += imu[i].accel.squaredNorm();
-    g0 += imu[i].gyro;
-    g1 += d * imu[i].gyro;
-    gg += imu[i].gyro.squaredNorm();
+  // The widest span (kMotionHalfSpan, then a half, then a quarter of it) over which a line holds,
+  // for each sensor: a car's vibration or a hand's tremor bends the motion within 25 ms, and a
+  // fast IMU's many samples tell the bend from the noise (at 1.4 kHz on a car the accelerometer's
+  // line held at 0.3 % of the instants, and the interpolant's noise, read as the column, held the
+  // offset near its reference: -2.9 +- 0.03 ms against -9.0).
+  bool accel_line = false, gyro_line = false;
+  double span = kMotionHalfSpan;
+  for (int round = 0; round < 3 && !(accel_line && gyro_line); ++round, span *= 0.5) {
+    // The samples within the span (from the interpolation's, widened or narrowed).
+    while (lo > 0 && imu[lo - 1].t >= t - span) --lo;
+    while (lo < hi && imu[lo].t < t - span) ++lo;
+    while (hi + 1 < imu.size() && imu[hi + 1].t <= t + span) ++hi;
+    while (hi > lo && imu[hi].t > t + span) --hi;
+    // Least squares of c0 + c1 d per axis (d = t_i - t): the normal equations' sums, and the
+    // sums of squares for the residuals (RSS = sum |y|^2 - c0 . sum y - c1 . sum d y).
+    double s0 = 0, s1 = 0, s2 = 0, aa = 0, gg = 0;
+    Vec3 a0 = Vec3::Zero(), a1 = Vec3::Zero(), g0 = Vec3::Zero(), g1 = Vec3::Zero();
+    for (std::size_t i = lo; i <= hi; ++i) {
+      const double d = imu[i].t - t;
+      s0 += 1;
+      s1 += d;
+      s2 += d * d;
+      a0 += imu[i].accel;
+      a1 += d * imu[i].accel;
+      aa += imu[i].accel.squaredNorm();
+      g0 += imu[i].gyro;
+      g1 += d * imu[i].gyro;
+      gg += imu[i].gyro.squaredNorm();
+    }
+    // A shorter span only with samples enough to average their noise (from 320 Hz for the half,
+    // 640 Hz for the quarter: slower IMUs keep the one span).
+    constexpr double kFewestShortFit = 8;
+    const double det = s0 * s2 - s1 * s1;
+    if (s0 < (round == 0 ? 3 : kFewestShortFit) || !(det > 1e-6 * s0 * s2)) break;
+    // The residuals' degrees of freedom (three axes, two parameters each) and the 99.9 %
+    // quantile of their chi-square (Wilson-Hilferty).
+    const double dof = 3 * (s0 - 2);
+    const double w = 2.0 / (9.0 * dof);
+    const double q = dof * std::pow(1.0 - w + 3.09 * std::sqrt(w), 3);
+    const Vec3 ca0 = (s2 * a0 - s1 * a1) / det, ca1 = (s0 * a1 - s1 * a0) / det;
+    if (!accel_line && aa - ca0.dot(a0) - ca1.dot(a1) <= q * accel_sigma * accel_sigma) {
+      accel = ca0;
+      accel_line = true;
+    }
+    const Vec3 cg0 = (s2 * g0 - s1 * g1) / det, cg1 = (s0 * g1 - s1 * g0) / det;
+    if (!gyro_line && gg - cg0.dot(g0) - cg1.dot(g1) <= q * gyro_sigma * gyro_sigma) {
+      gyro_rate = cg1;
+      gyro_line = true;
+    }
   }
-  const double det = s0 * s2 - s1 * s1;
-  if (s0 < 3 || !(det > 1e-6 * s0 * s2)) return false;
-  // The residuals' degrees of freedom (three axes, two parameters each) and the 99.9 % quantile
-  // of their chi-square (Wilson-Hilferty).
-  const double dof = 3 * (s0 - 2);
-  const double w = 2.0 / (9.0 * dof);
-  const double q = dof * std::pow(1.0 - w + 3.09 * std::sqrt(w), 3);
-  const Vec3 ca0 = (s2 * a0 - s1 * a1) / det, ca1 = (s0 * a1 - s1 * a0) / det;
-  if (aa - ca0.dot(a0) - ca1.dot(a1) <= q * accel_sigma * accel_sigma) accel = ca0;
-  const Vec3 cg0 = (s2 * g0 - s1 * g1) / det, cg1 = (s0 * g1 - s1 * g0) / det;
-  if (gg - cg0.dot(g0) - cg1.dot(g1) > q * gyro_sigma * gyro_sigma) return false;
-  gyro_rate = cg1;
-  return true;
+  return gyro_line;
 }
 
 std::size_t DopplerInertialFilter::interpolationSpan(const std::vector<ImuSample>& imu, double t,
@@ -1142,8 +1160,8 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   }
   if (chain != nullptr) {
     // The lever arm's gyro: the node's fit (gyroFit); the offset's column reads the motion's
-    // rate (motionAt()) as for a node per sample.
-    const double s = tau_true * chain->inv_h;
+    // rate (motionAt()) as for a node per sample, or this fit's where no line holds.
+    const double s = tau * chain->inv_h;  // the returns' time, as gyroFit() fits
     const std::array<Vec3, 3>& c = chain->gyro_fit;
     gyro = c[0] + s * (c[1] + s * c[2]);
   }
@@ -1169,7 +1187,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
       // interpolant's, so that the column is the prediction's derivative (a handheld start at
       // 597 Hz, nodes at 200 Hz and a 9 ms offset: the offset 8 sigma off with the interpolant's).
       const std::array<Vec3, 3>& c = chain->gyro_fit;
-      alpha = (c[1] + 2.0 * (tau_true * chain->inv_h) * c[2]) * chain->inv_h;
+      alpha = (c[1] + 2.0 * (tau * chain->inv_h) * c[2]) * chain->inv_h;
     }
     const Vec3 a_b = accel - x.b_a + Rt * kGravityW;
     column = -Rlb * (a_b - omega.cross(v_b) + alpha.cross(p_bl_));
@@ -1347,7 +1365,7 @@ void DopplerInertialFilter::beginNode(bool last, std::size_t next) {
   for (int i = 0; i < 3; ++i) V.row(i) << 1.0, n.s_fit[i], n.s_fit[i] * n.s_fit[i];
   n.V_inv = V.inverse();
   n.inv_h = 1.0 / n.h;
-  if (n.spansSamples()) gyroFit(n, &n.gyro_fit, &n.gyro_fit_cov);
+  if (n.spansSamples()) gyroFit(n, &n.gyro_fit, &n.gyro_fit_cov, &n.gyro_fit_complete);
   n.sums = DopplerSums{};
   open_.clear();
   q_open_ = velocityPolynomial(n, n.x_pred, &G_open_);
@@ -1514,38 +1532,46 @@ DopplerInertialFilter::LeverNoise DopplerInertialFilter::leverNoise(const Node& 
   return E;
 }
 
-void DopplerInertialFilter::gyroFit(const Node& n, std::array<Vec3, 3>* coef, Mat3* cov) const {
+void DopplerInertialFilter::gyroFit(const Node& n, std::array<Vec3, 3>* coef, Mat3* cov,
+                                    bool* complete) const {
   // The node's samples: those in its interval of returns taken to the IMU's clock (shifted by
   // dt_ref, where lidarVelocity() reads the fit: a fit through the node's own samples would be
   // extrapolated there, by two node intervals at a 9 ms offset with nodes at 200 Hz, and a
   // brisk rotation's lever-arm term with it), a half weight on a boundary shared with a
-  // neighbour; at least the sample nearest the interval's centre.
-  const double t_c = imu_[n.k].t - n.dt_ref;
-  const double before = 0.5 * (imu_[n.k].t - imu_[n.k_prev].t);
-  const double after = 0.5 * (imu_[n.k_next].t - imu_[n.k].t);
-  constexpr double kOnBoundary = 1e-9;  // [s] below the stamps' resolution
-  const double t_lo = t_c - before, t_hi = t_c + after;
-  auto first_at = [&](double t) {
+  // neighbour; at least the sample nearest the interval's centre. In the returns' own time
+  // (s = tau / h, tau from the node's LiDAR time, sample j at tau_j = t_j - t_k + dt_ref): the
+  // coefficients are then those of the velocity polynomial's lever-arm term, and their
+  // covariance its own (leverCovariance()). Times relative to the node's sample, a boundary
+  // within a thousandth of a sample interval (absolute stamps carry 1e-7 s of rounding).
+  const double t_k = imu_[n.k].t;
+  const double before = 0.5 * (t_k - imu_[n.k_prev].t);
+  const double after = 0.5 * (imu_[n.k_next].t - t_k);
+  const double on_boundary =
+      1e-3 * (imu_.size() > 1 ? (imu_.back().t - imu_.front().t) / (imu_.size() - 1) : 1.0);
+  auto tau_of = [&](std::size_t j) { return imu_[j].t - t_k + n.dt_ref; };
+  auto first_at = [&](double tau) {  // the first sample at or after LiDAR tau
     return static_cast<std::size_t>(
-        std::lower_bound(imu_.begin(), imu_.end(), t,
-                         [](const ImuSample& a, double b) { return a.t < b; }) -
+        std::lower_bound(imu_.begin(), imu_.end(), tau,
+                         [&](const ImuSample& x, double b) { return x.t - t_k + n.dt_ref < b; }) -
         imu_.begin());
   };
-  std::size_t lo = first_at(t_lo - kOnBoundary), hi = first_at(t_hi + kOnBoundary);
+  std::size_t lo = first_at(-before - on_boundary), hi = first_at(after + on_boundary);
+  // The interval's end has a sample after it: later samples change nothing.
+  if (complete != nullptr) *complete = hi < imu_.size();
   if (lo >= hi) {  // no sample inside: the nearest one to the centre
-    const std::size_t j = std::min(first_at(t_c), imu_.size() - 1);
-    lo = j > 0 && t_c - imu_[j - 1].t < imu_[j].t - t_c ? j - 1 : j;
+    const std::size_t j = std::min(first_at(0.0), imu_.size() - 1);
+    lo = j > 0 && -tau_of(j - 1) < tau_of(j) ? j - 1 : j;
     hi = lo + 1;
   }
   --hi;  // the last sample inside
   auto weight = [&](std::size_t j) {
-    const bool shared = (before > 0 && std::abs(imu_[j].t - t_lo) <= kOnBoundary) ||
-                        (after > 0 && std::abs(imu_[j].t - t_hi) <= kOnBoundary);
+    const bool shared = (before > 0 && std::abs(tau_of(j) + before) <= on_boundary) ||
+                        (after > 0 && std::abs(tau_of(j) - after) <= on_boundary);
     return shared ? 0.5 : 1.0;
   };
   const int dim = static_cast<int>(std::min<std::size_t>(3, hi - lo + 1));  // degree + 1
   auto basis = [&](std::size_t j) {
-    const double s = (imu_[j].t - imu_[n.k].t) * n.inv_h;
+    const double s = tau_of(j) * n.inv_h;
     Vec3 x(1.0, s, s * s);
     x.tail(3 - dim).setZero();
     return x;
@@ -1578,8 +1604,8 @@ DopplerInertialFilter::Mat9 DopplerInertialFilter::leverCovariance(const Node& n
   if (n.spansSamples()) {
     // Q_m's lever-arm part is lever_noise_ c_m (the quadratic through the fit instants of a
     // quadratic is itself): block (m, l) of the covariance is cov(c_m, c_l) L L^T.
-    // The covariance kept at beginNode() holds while every sample is a measured one (with
-    // synthetic ones it depends on gyro_sigma, which setNoise() may have changed since).
+    // The covariance kept at beginNode() (or referOffsets()) holds while every sample is a measured
+    // one (with synthetic ones it depends on gyro_sigma, which setNoise() may have changed since).
     Mat3 cov = n.gyro_fit_cov;
     if (!imu_extra_var_.empty()) gyroFit(n, nullptr, &cov);
     const Mat3 LLt = lever_noise_ * lever_noise_.transpose();
@@ -1937,11 +1963,17 @@ void DopplerInertialFilter::referOffsets() {
   // reference moved at each one changes the model under Gauss-Newton).
   for (std::size_t k = 0; k < nodes_.size(); ++k) {
     Node& n = nodes_[k];
-    if (std::abs(n.xs.dt_l - n.dt_ref) > kOffsetRefStep) {
-      n.dt_ref = n.xs.dt_l;
-      if (n.spansSamples()) gyroFit(n, &n.gyro_fit, &n.gyro_fit_cov);
-      nodeChanged(k);
+    const bool moved = std::abs(n.xs.dt_l - n.dt_ref) > kOffsetRefStep;
+    if (moved) n.dt_ref = n.xs.dt_l;
+    // The lever-arm gyro's fit where it moved or was made before all its samples had arrived
+    // (a negative offset reads samples after the next node's), with the rows it weighs.
+    const bool refit = n.spansSamples() && (moved || !n.gyro_fit_complete);
+    if (refit) {
+      gyroFit(n, &n.gyro_fit, &n.gyro_fit_cov, &n.gyro_fit_complete);
+      buildRows(n);
+      n.rows_stale = false;
     }
+    if (moved || refit) nodeChanged(k);
   }
 }
 

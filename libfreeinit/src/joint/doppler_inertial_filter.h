@@ -26,8 +26,9 @@
 // each step carried to the interval's end through the steps after it, each with its own
 // samples' noise. A node's interval of returns is then m times longer (at a 2 kHz IMU with nodes
 // at 200 Hz its intervals are those of a 200 Hz IMU), and the gyro in its lever-arm term is the
-// least-squares quadratic through its own samples (gyroFit), so that every sample's noise
-// reaches the returns it covers as with a node per sample; nothing else in the model changes.
+// least-squares quadratic through the samples of its interval of returns at the IMU's clock
+// (gyroFit), so that every sample's noise reaches the returns it covers as with a node per
+// sample; nothing else in the model changes.
 // Doppler: every point is one scalar measurement at its own time t_j,
 //   z_j = -d_j^T v_l(t_j) + n_j,   v_l = R_bl^T (R_wb^T v_w + omega_b x p_bl),
 // d_j the unit direction in the LiDAR frame. A point belongs to the node whose interval holds its
@@ -352,10 +353,12 @@ class DopplerInertialFilter {
                              Vec3* gyro_rate = nullptr);
   /// The motion's specific force and angular acceleration at time t, for the clock offset's
   /// column (lidarVelocity()): the value of a straight line fitted to the accelerometer samples
-  /// within kMotionHalfSpan of t and the slope of one fitted to the gyro's, each where its
-  /// residuals are the sensor's white noise (sigma per sample, 99.9 %); where they are not
-  /// (a motion brisker than a line over the span) or fewer than three samples are, the
-  /// interpolant's (interpolateImu()). Returns whether gyro_rate is the fitted line's.
+  /// within kMotionHalfSpan of t and the slope of one fitted to the gyro's, each over the widest
+  /// of that span, its half and its quarter (these two with eight samples or more) where its
+  /// residuals are the sensor's white noise
+  /// (sigma per sample, 99.9 %); where none is (a motion brisker than a line over a quarter of
+  /// the span) or fewer than three samples are, the interpolant's (interpolateImu()). Returns
+  /// whether gyro_rate is a fitted line's.
   static bool motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
                        double gyro_sigma, double accel_sigma, Vec3& accel, Vec3& gyro_rate);
   /// [s] Half the span of motionAt()'s fit.
@@ -491,8 +494,9 @@ class DopplerInertialFilter {
     /// The returns do not depend on the clock offset (lidarVelocity()).
     bool still() const { return rest_velocity_sigma > 0 || after_rest; }
     /// [s] The clock offset the node's returns are integrated with (lidarVelocity()):
-    /// offset_ref_ when the node was opened, then the smoothed offset once that moved away from
-    /// it (smooth()).
+    /// offset_ref_ when the node was opened, then, at a smoothing's start, the node's offset
+    /// there (the forward filter's at the first smoothing, the last smoothing's after) once that
+    /// moved away from it (referOffsets()).
     double dt_ref = 0;
     bool rows_stale = false;  ///< the sums changed after the rows were built
     /// The IMU along the integrations every linearization of the node repeats (to its three fit
@@ -515,9 +519,11 @@ class DopplerInertialFilter {
     /// carried through the steps at the state predict() integrated.
     IntervalNoise noise;
     /// ... and the gyro in the lever-arm term: [rad/s] the coefficients of 1, s, s^2 (s = tau /
-    /// h) of the least-squares fit through the node's own samples (gyroFit).
+    /// h, tau the returns' time from the node's) of the least-squares fit through the samples
+    /// of its interval of returns (gyroFit).
     std::array<Vec3, 3> gyro_fit{};
     Mat3 gyro_fit_cov = Mat3::Zero();  ///< ... their covariance per unit gyro_sigma^2
+    bool gyro_fit_complete = true;     ///< ... made with every sample it reads
     /// Whether an interval of the node spans more than one sample interval.
     bool spansSamples() const { return k_next > k + 1 || k > k_prev + 1; }
   };
@@ -656,15 +662,16 @@ class DopplerInertialFilter {
   using LeverNoise = Eigen::Matrix<double, 9, kLeverDim>;
   LeverNoise leverNoise(const Node& n) const;
   /// For a node whose intervals span several samples, the gyro in its lever-arm term is the
-  /// least-squares polynomial in s = tau / h through the node's own samples: those within its
-  /// interval of returns (k_prev + k <= 2 j <= k + k_next), a sample on a boundary with another
-  /// node (m even) weighted by a half (the two nodes share it), of degree 2 (the LiDAR
-  /// velocity's) or less with fewer than three samples. So every sample's gyro noise reaches the
-  /// node(s) whose returns it covers, as with a node per sample, where three instants would read
-  /// a dozen samples' (the boundaries' twice) and not the rest. coef (if given): [rad/s] the
-  /// coefficients of 1, s, s^2; cov (if given): their covariance per unit gyro_sigma^2 (a sample
-  /// the screen interpolated with its extra variance).
-  void gyroFit(const Node& n, std::array<Vec3, 3>* coef, Mat3* cov) const;
+  /// least-squares polynomial in s = tau / h (tau the returns' time from the node's) through the
+  /// samples within its interval of returns taken to the IMU's clock (t_j - t_k + dt_ref in
+  /// [-before, after]), a sample on a boundary with another node weighted by a half (the two
+  /// nodes share it), of degree 2 (the LiDAR velocity's) or less with fewer than three samples. So
+  /// every sample's gyro noise reaches the node(s) whose returns it covers, as with a node per
+  /// sample, where three instants would read a dozen samples' (the boundaries' twice) and not the
+  /// rest. coef (if given): [rad/s] the coefficients of 1, s, s^2; cov (if given): their covariance
+  /// per unit gyro_sigma^2 (a sample the screen interpolated with its extra variance); complete (if
+  /// given): a sample after the interval had arrived (later ones change nothing).
+  void gyroFit(const Node& n, std::array<Vec3, 3>* coef, Mat3* cov, bool* complete = nullptr) const;
   /// E E^T of the node's lever-arm noise (leverNoise, or through gyroFit when its intervals span
   /// several samples).
   Mat9 leverCovariance(const Node& n) const;
@@ -721,7 +728,8 @@ class DopplerInertialFilter {
   /// only. Every change of a node's data calls it (beginNode, update, updateRest,
   /// cancelRestFrom, removePoint).
   void nodeChanged(std::size_t k) { forward_kept_ = std::min(forward_kept_, k); }
-  /// Moves the nodes' dt_ref to their smoothed offsets where those moved away (kOffsetRefStep).
+  /// Moves the nodes' dt_ref to their offsets where those moved away (kOffsetRefStep), and makes
+  /// again the lever-arm gyro's fits (and the rows) that moved or lacked samples.
   void referOffsets();
   /// r_doppler_ and lever_ratio_ from params_.
   void noiseChanged();

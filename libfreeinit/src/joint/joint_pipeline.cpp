@@ -1070,9 +1070,9 @@ class JointPipeline final : public Pipeline {
       return;
     }
     // Few returns agree with the motion, and even those do not fit it: their residuals exceed
-    // the Doppler noise, or, where the noise was read from them (a noise read from residuals
-    // that include the motion's error hides it), each node's returns disagree with it as a
-    // whole (a handheld start among walkers whose returns were 90 % of the view: 9.6 % agreeing,
+    // the Doppler noise, or each node's returns disagree with it as a whole (the sign that is
+    // left once the noise is read from the residuals, which then include the motion's error: a
+    // handheld start among walkers whose returns were 90 % of the view: 9.6 % agreeing,
     // chi-square per degree of freedom 4.7, the velocity 0.29 m/s off at 2000 of NEES; on 300
     // development runs with noise misdeclared by up to 4x, no run had both signs).
     if ((noisy || node_residuals_inflated_) && judged >= 100 && agree < 0.5) {
