@@ -355,10 +355,9 @@ class DopplerInertialFilter {
   /// column (lidarVelocity()): the value of a straight line fitted to the accelerometer samples
   /// within kMotionHalfSpan of t and the slope of one fitted to the gyro's, each over the widest
   /// of that span, its half and its quarter (these two with eight samples or more) where its
-  /// residuals are the sensor's white noise
-  /// (sigma per sample, 99.9 %); where none is (a motion brisker than a line over a quarter of
-  /// the span) or fewer than three samples are, the interpolant's (interpolateImu()). Returns
-  /// whether gyro_rate is a fitted line's.
+  /// residuals are the sensor's white noise (sigma per sample, 99.9 %); where none is (a motion
+  /// brisker than a line over a quarter of the span) or fewer than three samples are, the
+  /// interpolant's (interpolateImu()). Returns whether gyro_rate is a fitted line's.
   static bool motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
                        double gyro_sigma, double accel_sigma, Vec3& accel, Vec3& gyro_rate);
   /// [s] Half the span of motionAt()'s fit.
