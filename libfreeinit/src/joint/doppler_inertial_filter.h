@@ -493,9 +493,9 @@ class DopplerInertialFilter {
     /// The returns do not depend on the clock offset (lidarVelocity()).
     bool still() const { return rest_velocity_sigma > 0 || after_rest; }
     /// [s] The clock offset the node's returns are integrated with (lidarVelocity()):
-    /// offset_ref_ when the node was opened, then, at a smoothing's start, the node's offset
-    /// there (the forward filter's at the first smoothing, the last smoothing's after) once that
-    /// moved away from it (referOffsets()).
+    /// the prior's or the last smoothing's when the node was opened (beginNode()), then, at a
+    /// smoothing's start, the node's offset there (the forward filter's at the first smoothing, the
+    /// last smoothing's after) once that moved away from it (referOffsets()).
     double dt_ref = 0;
     bool rows_stale = false;  ///< the sums changed after the rows were built
     /// The IMU along the integrations every linearization of the node repeats (to its three fit
@@ -702,12 +702,6 @@ class DopplerInertialFilter {
   /// Nodes a smoothing has already been through (the first smoothed_ of nodes_): the later ones
   /// start the next smoothing from the propagation of the last smoothed one (smooth()).
   std::size_t smoothed_ = 0;
-  /// [s] The clock offset new nodes integrate their returns with (Node::dt_ref): the prior's
-  /// until a smoothing, then the last smoothing's. Not the forward filter's own estimate: a
-  /// reference that follows it feeds its errors back (at a 1.3 kHz IMU, the first nodes of a
-  /// standing start read the offset from the state's uncertain acceleration, and the reference
-  /// ran to 37 ms against a 6 ms truth within 15 ms, the returns' acceptance collapsing).
-  double offset_ref_ = 0;
   /// [s] A node's dt_ref is moved to the smoothed offset when they differ by more than this.
   static constexpr double kOffsetRefStep = 5e-4;
   /// smooth()'s filtered and predicted covariances per node, kept from one smoothing to the
