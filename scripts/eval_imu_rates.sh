@@ -71,7 +71,9 @@ done
       printf "| median (90th percentile) over %d runs | %.3f (%.2f) | %.3f (%.2f) | %.3f (%.2f) | %.3f (%.2f) |\n",
         n, med[1], p90[1], med[2], p90[2], med[3], p90[3], med[4], p90[4]
     }' "$out/eval_imu_rates_nodes0.csv" "$out/eval_imu_rates_nodes200.csv"
-} > "$out/results_imu_rates.md"
+} > "$tmp/table.md"
+# Whole or not at all: an interrupted run leaves the earlier table.
+mv "$tmp/table.md" "$out/results_imu_rates.md"
 echo "[imu-rates] wrote $out/results_imu_rates.md"
 [ "$readme" -eq 1 ] || exit 0
 

@@ -59,7 +59,9 @@ summary=$tmp/summary.csv
           v("noise_doppler_within_20pct"), v("noise_doppler_resolved")
       }' "$summary"
   done
-} > "$out/results_noise.md"
+} > "$tmp/table.md"
+# Whole or not at all: an interrupted run leaves the earlier table.
+mv "$tmp/table.md" "$out/results_noise.md"
 echo "[noise] wrote $out/results_noise.md"
 [ "$readme" -eq 1 ] || exit 0
 
