@@ -378,11 +378,12 @@ void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, do
 
 bool DopplerInertialFilter::motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
                                      double gyro_sigma, double accel_sigma, Vec3& accel,
-                                     Vec3& gyro_rate) {
+                                     Vec3& gyro_rate, bool* complete) {
   Vec3 gyro;
   interpolateImu(imu, t, gyro, accel, hint, &gyro_rate);
   std::size_t lo = 0;
   std::size_t hi = interpolationSpan(imu, t, hint, lo);
+  const std::size_t hi_interpolant = hi;
   // The widest span (kMotionHalfSpan, then a half, then a quarter of it) over which a line holds,
   // for each sensor: a car's vibration or a hand's tremor bends the motion within 25 ms, and a
   // fast IMU's many samples tell the bend from the noise (at 1.4 kHz on a car the accelerometer's
@@ -402,6 +403,8 @@ bool DopplerInertialFilter::motionAt(const std::vector<ImuSample>& imu, double t
   while (lo < hi && imu[lo].t < t - kMotionHalfSpan) ++lo;
   while (hi + 1 < imu.size() && imu[hi + 1].t <= t + kMotionHalfSpan) ++hi;
   while (hi > lo && imu[hi].t > t + kMotionHalfSpan) --hi;
+  // The sample after the span, read, lies beyond it (the loop above): later ones do too.
+  if (complete != nullptr) *complete = std::max(hi, hi_interpolant) + 1 < imu.size();
   for (std::size_t i = lo; i <= hi; ++i) {
     const double d = imu[i].t - t;
     double span = kMotionHalfSpan;
@@ -1142,7 +1145,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
 Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu,
                                           std::size_t k, double tau, double dt_ref,
                                           bool offset_moves, const Mat3& R_bl, const Mat3* Jr_phi,
-                                          Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
+                                          Eigen::Matrix<double, 3, kStateDim>* J, FitInstant* cache,
                                           const Node* chain, PreintegrationChains* pre) const {
   const double tau_true = tau - dt_ref;
   IntegrationJacobian Js;
@@ -1157,13 +1160,13 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
     // Across the samples between: the IMU at the end is that of the integration's last step
     // (none when tau_true is below the time's resolution).
     const ImuAlong* along = nullptr;
-    y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, *cache, &along, pre,
-                        tau_true < 0 ? nodeBefore(*chain) : nullptr);
+    y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, cache->along, &along,
+                        pre, tau_true < 0 ? nodeBefore(*chain) : nullptr);
     if (along != nullptr) gyro = along->gyro[2];
   } else {
     ImuAlong sampled;
     if (cache == nullptr) sampleImu(imu, k, tau_true, sampled);
-    const ImuAlong& along = cache != nullptr ? imuAlong(imu, k, tau_true, *cache) : sampled;
+    const ImuAlong& along = cache != nullptr ? imuAlong(imu, k, tau_true, cache->along) : sampled;
     y = integrate(x, imu, k, tau_true, Jy, along);
     gyro = along.gyro[2];
   }
@@ -1188,9 +1191,21 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   // derivative is the column (with the samples' interpolant there, Gauss-Newton diverged).
   Vec3 column = Vec3::Zero();
   if (offset_moves && (J != nullptr || x.dt_l != dt_ref)) {
-    Vec3 accel, alpha;
-    const bool gyro_line = motionAt(imu, imu[k].t + tau_true, k, params_.gyro_sigma,
-                                    params_.accel_sigma, accel, alpha);
+    const double t = imu[k].t + tau_true;
+    MotionCache fitted;
+    MotionCache& m = cache != nullptr ? cache->motion : fitted;
+    if (!(m.t == t && m.gyro_sigma == params_.gyro_sigma && m.accel_sigma == params_.accel_sigma &&
+          (m.samples == imu.size() || m.complete))) {
+      m.gyro_line = motionAt(imu, t, k, params_.gyro_sigma, params_.accel_sigma, m.accel,
+                             m.gyro_rate, &m.complete);
+      m.t = t;
+      m.gyro_sigma = params_.gyro_sigma;
+      m.accel_sigma = params_.accel_sigma;
+      m.samples = imu.size();
+    }
+    const bool gyro_line = m.gyro_line;
+    Vec3 alpha = m.gyro_rate;
+    const Vec3& accel = m.accel;
     if (chain != nullptr && !gyro_line) {
       // No line holds: the rate of the gyro the prediction reads (the node's fit), not the
       // interpolant's, so that the column is the prediction's derivative (a handheld start at

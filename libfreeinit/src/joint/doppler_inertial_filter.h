@@ -358,8 +358,10 @@ class DopplerInertialFilter {
   /// residuals are the sensor's white noise (sigma per sample, 99.9 %); where none is (a motion
   /// brisker than a line over a quarter of the span) or fewer than three samples are, the
   /// interpolant's (interpolateImu()). Returns whether gyro_rate is a fitted line's.
+  /// complete (if given): a sample after every span read had arrived (later ones change nothing).
   static bool motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
-                       double gyro_sigma, double accel_sigma, Vec3& accel, Vec3& gyro_rate);
+                       double gyro_sigma, double accel_sigma, Vec3& accel, Vec3& gyro_rate,
+                       bool* complete = nullptr);
   /// [s] Half the span of motionAt()'s fit.
   static constexpr double kMotionHalfSpan = 0.025;
   /// The samples lo..hi (returned) interpolateImu() uses at t (hint: as there).
@@ -407,6 +409,22 @@ class DopplerInertialFilter {
   };
   static void sampleImu(const std::vector<ImuSample>& imu, std::size_t k, double tau,
                         ImuAlong& along);
+  /// motionAt()'s result at one time, kept: a fit instant's time moves only with its node's
+  /// dt_ref, so the smoother's iterations fit the lines once.
+  struct MotionCache {
+    /// [s] The time it holds (NaN: nothing), and the noises it was fitted with.
+    double t = std::numeric_limits<double>::quiet_NaN();
+    double gyro_sigma = 0, accel_sigma = 0;
+    std::size_t samples = 0;  ///< the IMU samples there were
+    bool complete = false;    ///< a sample after every span read had arrived
+    bool gyro_line = false;   ///< motionAt()'s result, and its accel and gyro_rate
+    Vec3 accel = Vec3::Zero(), gyro_rate = Vec3::Zero();
+  };
+  /// A fit instant's caches: the IMU along the integration to it, the motion there.
+  struct FitInstant {
+    ImuAlong along;
+    MotionCache motion;
+  };
   /// cache, sampled again unless it holds tau from sample k with as many samples as there are
   /// (or with all those it reads, complete).
   static const ImuAlong& imuAlong(const std::vector<ImuSample>& imu, std::size_t k, double tau,
@@ -502,7 +520,7 @@ class DopplerInertialFilter {
     /// instants, to the next node): they depend on the IMU and the clock offset only, not on
     /// the state, so the smoother's iterations sample it once (a cache; the filter is not for
     /// concurrent use).
-    mutable std::array<ImuAlong, 3> fit_imu;
+    mutable std::array<FitInstant, 3> fit_imu;
     mutable ImuAlong step_imu;
     /// Intervals across several samples (spansSamples()): the IMU along the steps from sample k
     /// to each sample after it up to k_next (ahead[i]: k + i to k + i + 1) and before it down to
@@ -641,7 +659,8 @@ class DopplerInertialFilter {
   MatS propagateCovariance(const IntegrationJacobian& F, const MatS& P, const Node& n,
                            bool full = false) const;
   /// lidarVelocity() with R_bl = R_bl_ Exp(x.phi_bl) and, for J, J_r(x.phi_bl) given; cache (if
-  /// given): the IMU along the integration, as imuAlong() keeps it. The IMU is integrated to
+  /// given): the IMU along the integration, as imuAlong() keeps it, and the motion at its end
+  /// (motionAt()). The IMU is integrated to
   /// the LiDAR time with the clock offset dt_ref; the state's offset enters as its difference
   /// from dt_ref times the motion's rate (motionAt()), the model's derivative and the column
   /// alike, so that a Gauss-Newton solve converges; not at all where !offset_moves (a sensor
@@ -651,7 +670,7 @@ class DopplerInertialFilter {
   /// of the lever-arm term its fit (Node::gyro_fit).
   Vec3 lidarVelocity(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
                      double tau, double dt_ref, bool offset_moves, const Mat3& R_bl,
-                     const Mat3* Jr_phi, Eigen::Matrix<double, 3, kStateDim>* J, ImuAlong* cache,
+                     const Mat3* Jr_phi, Eigen::Matrix<double, 3, kStateDim>* J, FitInstant* cache,
                      const Node* chain = nullptr, PreintegrationChains* pre = nullptr) const;
   void buildRows(Node& n) const;
   /// The gyro samples whose noise reaches a node's polynomial through the interpolation (k - 2
