@@ -1,8 +1,7 @@
 // The window recorder's vectorized per-return loops (window_parts.h) against the scalar forms they
 // replace: a node's returns laid out and tested (usablePoint), the rest cells of RestCells::cellOf,
-// the Doppler residual as Eigen computes it, the map of a return (A p_l + a + tau (B p_l + b)), the
-// split of a node's returns into the map and the rejected ones, and the sums of the moving-cell
-// test.
+// the map of a return (A p_l + a + tau (B p_l + b)), the split of a node's returns into the map and
+// the rejected ones, and the runs of the moving-cell test against the residuals they sum.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -116,23 +115,6 @@ TEST(WindowParts, CellsAreThoseOfRestCells) {
         << "return " << i << " at " << r.x[i] << " " << r.y[i] << " " << r.z[i];
 }
 
-TEST(WindowParts, DopplerResidualsAreThoseOfTheScalarForm) {
-  const Returns r = someReturns();
-  const std::size_t n = r.x.size();
-  const float q[9] = {1.5f, -0.2f, 0.03f, 0.4f, 0.1f, -0.05f, -0.02f, 0.01f, 0.003f};
-  const float inv_h = 1.0f / 0.0025f;
-  std::vector<float> res(n);
-  recorder_kernels::dopplerResiduals(n, q, inv_h, r.x.data(), r.y.data(), r.z.data(), r.tau.data(),
-                                     r.doppler.data(), res.data());
-  const Eigen::Vector3f q0(q[0], q[1], q[2]), q1(q[3], q[4], q[5]), q2(q[6], q[7], q[8]);
-  for (std::size_t i = 0; i < n; ++i) {
-    const float s = r.tau[i] * inv_h;
-    const Eigen::Vector3f v = q0 + s * (q1 + s * q2);
-    const Eigen::Vector3f p_l(r.x[i], r.y[i], r.z[i]);
-    ASSERT_EQ(res[i], r.doppler[i] + p_l.dot(v) / p_l.norm()) << "return " << i;
-  }
-}
-
 TEST(WindowParts, ReturnsMapThroughTheNodeMotion) {
   Returns r = someReturns();
   const std::size_t n = r.x.size();
@@ -194,46 +176,57 @@ TEST(WindowParts, SplitReturnsCopiesEachReturnToItsList) {
   }
 }
 
-TEST(WindowParts, SumIntoCellsAddsInOrder) {
+TEST(WindowParts, ARunsResidualSumIsThatOfItsReturns) {
+  const Returns r = someReturns();
+  const std::size_t n = r.x.size();
   std::mt19937 rng(9);
-  std::uniform_real_distribution<float> v(-0.3f, 0.3f);
-  std::uniform_int_distribution<int> cell_of(0, 40), run(1, 12);
+  std::uniform_int_distribution<int> cell_of(0, 40), run(1, 30);
   constexpr std::uint16_t kNo = 50;
-  std::vector<double> sum(kNo + 1, 0.0), sum_ref(kNo + 1, 0.0);
-  std::vector<std::uint32_t> count(kNo + 1, 0), count_ref(kNo + 1, 0), touched(kNo + 2);
-  std::vector<std::uint32_t> touched_ref;
-  double squares = 0, squares_ref = 0;
-  std::size_t slots = 0, in_cells_ref = 0, in_cells = 0;
-  // Several calls (nodes) into the same sums: runs of one cell, rejected returns among them.
-  for (const std::size_t n : {0, 1, 7, 100, 333}) {
-    std::vector<std::uint16_t> cell;
-    while (cell.size() < n) {
-      const std::uint16_t c = std::bernoulli_distribution(0.1)(rng) ? kNo : cell_of(rng);
-      for (int k = run(rng); k > 0 && cell.size() < n; --k) cell.push_back(c);
+  // Runs of one cell, with returns in no cell among and between them.
+  std::vector<std::uint16_t> cell;
+  while (cell.size() < n) {
+    const std::uint16_t c = cell_of(rng);
+    for (int k = run(rng); k > 0 && cell.size() < n; --k)
+      cell.push_back(std::bernoulli_distribution(0.1)(rng) ? kNo : c);
+  }
+  const float inv_h = 1.0f / 0.0025f;
+  std::vector<float> terms(9 * n);
+  recorder_kernels::runTerms(n, inv_h, r.x.data(), r.y.data(), r.z.data(), r.tau.data(),
+                             terms.data());
+  std::vector<recorder_kernels::CellRun> runs(n);
+  const std::size_t m =
+      recorder_kernels::cellRuns(n, cell.data(), kNo, terms.data(), r.doppler.data(), runs.data());
+  const double Q[9] = {1.5, -0.2, 0.03, 0.4, 0.1, -0.05, -0.02, 0.01, 0.003};
+  const Eigen::Vector3d q0(Q[0], Q[1], Q[2]), q1(Q[3], Q[4], Q[5]), q2(Q[6], Q[7], Q[8]);
+  // The scalar form, return by return in double, run by run: a run ends where the next return
+  // in a cell is in another one.
+  std::size_t j = 0, in_cells = 0;
+  for (std::size_t i = 0; i < m; ++i) {
+    const recorder_kernels::CellRun& run_i = runs[i];
+    if (i > 0) {
+      EXPECT_NE(run_i.cell, runs[i - 1].cell) << "run " << i << " is not maximal";
     }
-    std::vector<float> residual(n);
-    for (float& r : residual) r = v(rng);
-    in_cells += recorder_kernels::sumIntoCells(n, cell.data(), kNo, residual.data(), sum.data(),
-                                               count.data(), touched.data(), slots, squares);
-    for (std::size_t j = 0; j < n; ++j) {  // the scalar form it replaces
+    double sum = 0, scale = 0;
+    std::uint32_t count = 0;
+    for (; j < n && count < run_i.count; ++j) {
       if (cell[j] == kNo) continue;
-      if (count_ref[cell[j]]++ == 0) touched_ref.push_back(cell[j]);
-      sum_ref[cell[j]] += residual[j];
-      squares_ref += static_cast<double>(residual[j]) * residual[j];
-      ++in_cells_ref;
+      ASSERT_EQ(cell[j], run_i.cell) << "return " << j << ", run " << i;
+      const double s = static_cast<double>(r.tau[j] * inv_h);
+      const Eigen::Vector3d v = q0 + s * (q1 + s * q2);
+      const Eigen::Vector3d p(r.x[j], r.y[j], r.z[j]);
+      sum += r.doppler[j] + p.dot(v) / p.norm();
+      scale += std::abs(r.doppler[j]) + v.norm();
+      ++count;
     }
+    ASSERT_EQ(count, run_i.count) << "run " << i;
+    in_cells += count;
+    // The run's sums are in float: each term rounded a few times (a few 1e-7 of its size), and
+    // the sums of up to 30 terms: within 1e-5 of the sum of the terms' sizes.
+    EXPECT_NEAR(run_i.residualSum(Q), sum, 1e-5 * scale) << "run " << i;
   }
-  EXPECT_EQ(squares, squares_ref);
-  EXPECT_EQ(in_cells, in_cells_ref);
-  for (std::uint16_t c = 0; c < kNo; ++c) {
-    EXPECT_EQ(sum[c], sum_ref[c]) << c;
-    EXPECT_EQ(count[c], count_ref[c]) << c;
-  }
-  EXPECT_EQ(sum[kNo], 0.0);  // only exact zeros added to the spare slot
-  // Each touched cell once, in the order first seen; the spare slot may be among them.
-  std::vector<std::uint32_t> seen(touched.begin(), touched.begin() + static_cast<long>(slots));
-  seen.erase(std::remove(seen.begin(), seen.end(), kNo), seen.end());
-  EXPECT_EQ(seen, touched_ref);
+  for (; j < n; ++j) EXPECT_EQ(cell[j], kNo) << "return " << j << " is in no run";
+  EXPECT_EQ(in_cells, static_cast<std::size_t>(std::count_if(
+                          cell.begin(), cell.end(), [](std::uint16_t c) { return c != kNo; })));
 }
 
 }  // namespace

@@ -2180,19 +2180,20 @@ void DopplerInertialFilter::checkPolynomials(const std::vector<Vec9>& Q) const {
 double DopplerInertialFilter::residualSumOfSquares(const std::vector<Vec9>& Qs) const {
   checkPolynomials(Qs);
   double rss = 0;
-  for (std::size_t i = 0; i < nodes_.size(); ++i) {
-    const Node& n = nodes_[i];
-    if (n.sums.n == 0) continue;
-    const Vec9& Q = Qs[i];
-    double quad = 0, lin = 0;
-    for (int m = 0; m < 3; ++m) {
-      lin += n.sums.bz.col(m).dot(Q.segment<3>(3 * m));
-      for (int k = 0; k < 3; ++k)
-        quad += Q.segment<3>(3 * m).dot(n.sums.moment(m + k) * Q.segment<3>(3 * k));
-    }
-    rss += n.sums.c + 2.0 * lin + quad;
-  }
+  for (std::size_t i = 0; i < nodes_.size(); ++i) rss += nodeResidualSumOfSquares(i, Qs[i]);
   return std::max(0.0, rss);
+}
+
+double DopplerInertialFilter::nodeResidualSumOfSquares(std::size_t k, const Vec9& Q) const {
+  const Node& n = nodes_[k];
+  if (n.sums.n == 0) return 0.0;
+  double quad = 0, lin = 0;
+  for (int m = 0; m < 3; ++m) {
+    lin += n.sums.bz.col(m).dot(Q.segment<3>(3 * m));
+    for (int i = 0; i < 3; ++i)
+      quad += Q.segment<3>(3 * m).dot(n.sums.moment(m + i) * Q.segment<3>(3 * i));
+  }
+  return n.sums.c + 2.0 * lin + quad;
 }
 
 std::size_t DopplerInertialFilter::acceptedPointsTotal() const {

@@ -290,6 +290,8 @@ class DopplerInertialFilter {
   double residualSumOfSquares() const { return residualSumOfSquares(lidarVelocityPolynomials()); }
   /// The same with the nodes' polynomials given (lidarVelocityPolynomials()).
   double residualSumOfSquares(const std::vector<Vec9>& Q) const;
+  /// Node k's part of it, with its polynomial Q (not clamped: rounding may leave it below zero).
+  double nodeResidualSumOfSquares(std::size_t k, const Vec9& Q) const;
   std::size_t acceptedPointsTotal() const;
   /// Whether each node's returns agree with its smoothed LiDAR velocity as the noise model says
   /// (after smooth()): for every node with at least min_returns accepted returns and no rest

@@ -899,9 +899,8 @@ class JointPipeline final : public Pipeline {
   /// rejectMovingCells' per-cell sums, zero, made at the start rather than in the call that
   /// closes the window (their first pages would be faulted in there).
   void prepareMovingCellSums() {
-    // The cells and a spare slot (WindowRecorder::kNoCell, one past them) where the returns
-    // not accepted go, so that every return is added to its cell without a branch on its
-    // verdict; the spare one is never tested.
+    // The cells and a spare slot (WindowRecorder::kNoCell, one past them, never coherent), so
+    // that every return's cell can be read without a branch on its verdict.
     constexpr std::size_t kSlots = RestCells::kCells + 1;
     if (span_sum_.size() == kSlots) return;
     span_sum_.assign(kSlots, 0.0);
@@ -926,7 +925,7 @@ class JointPipeline final : public Pipeline {
     constexpr std::size_t kMinReturns = 200;
     const double sigma = filter_->params().doppler_sigma;
     const auto& imu = screen_.samples();
-    const WindowRecorder& rec = recorder_;
+    WindowRecorder& rec = recorder_;
     const std::size_t nodes = rec.nodes();
     prepareMovingCellSums();
     std::uint32_t* touched = span_touched_.data();  // the span's slots, in the order first seen
@@ -937,9 +936,10 @@ class JointPipeline final : public Pipeline {
     auto moving = [this](std::size_t k) { return !(k < node_rest_.size() && node_rest_[k]); };
     std::size_t k = 0;
     while (k < nodes) {
-      // One span, from a node with returns: each accepted return of a moving node, its
-      // residual against the smoothed motion summed into its cell. The residual is computed in
-      // float, as the recorder keeps it.
+      // One span, from a node with returns: the accepted returns of its moving nodes, their
+      // residuals against the smoothed motion summed into their cells, run by run
+      // (WindowRecorder::runs: the linear form of a run's sum in the node's polynomial); the
+      // sum of their squares, the nodes' (the filter's sums hold the same returns).
       if (rec.node(k).begin == rec.node(k).end) {
         ++k;
         continue;
@@ -951,19 +951,18 @@ class JointPipeline final : public Pipeline {
       std::size_t total = 0;
       for (; k < nodes && imu[nodeSample(k)].t < t_begin + kSpan; ++k) {
         if (!moving(k)) continue;
-        const WindowRecorder::NodeReturns nr = rec.node(k);
-        const std::size_t n = nr.end - nr.begin;
-        if (n == 0) continue;
-        const Eigen::Matrix<float, 9, 1> Q = Qs[k].cast<float>();
-        float q[9];
-        for (int j = 0; j < 9; ++j) q[j] = Q(j);
-        const float inv_h = static_cast<float>(filter_->normalizedTime(k, 1.0));
-        span_residual_.resize(std::max(span_residual_.size(), n));
-        float* res = span_residual_.data();
-        recorder_kernels::dopplerResiduals(n, q, inv_h, nr.x, nr.y, nr.z, nr.tau, nr.doppler, res);
-        total += recorder_kernels::sumIntoCells(n, nr.cell, WindowRecorder::kNoCell, res,
-                                                span_sum_.data(), span_count_.data(), touched,
-                                                slots, sumsq);
+        const WindowRecorder::Runs runs = rec.runs(k);
+        if (runs.count == 0) continue;
+        const double* q = Qs[k].data();
+        for (std::size_t i = 0; i < runs.count; ++i) {
+          const recorder_kernels::CellRun& run = runs.first[i];
+          const std::uint16_t c = run.cell;
+          if (span_count_[c] == 0) touched[slots++] = c;
+          span_sum_[c] += run.residualSum(q);
+          span_count_[c] += run.count;
+          total += run.count;
+        }
+        sumsq += filter_->nodeResidualSumOfSquares(k, Qs[k]);
       }
       // The test of RestCells::coherent, per span: the std from the Doppler noise or, when
       // larger, the span's residual RMS. It is a cell's: cell by cell, then (only if a cell
@@ -974,7 +973,6 @@ class JointPipeline final : public Pipeline {
         const double kk = kSigmas * kSigmas * var;
         for (std::size_t t = 0; t < slots; ++t) {
           const std::uint32_t c = touched[t];
-          if (c == WindowRecorder::kNoCell) continue;
           const std::uint32_t n = span_count_[c];
           const double sum = span_sum_[c];
           const bool coherent_cell = n >= kMinCount && sum * sum > kk * static_cast<double>(n);
@@ -1249,7 +1247,6 @@ class JointPipeline final : public Pipeline {
   RestCells rest_cells_;
   std::vector<double> span_sum_;           ///< rejectMovingCells: residual sums of one span's cells
   std::vector<std::uint32_t> span_count_;  ///< ... and their counts (zero between spans)
-  std::vector<float> span_residual_;       ///< rejectMovingCells: a node's residuals
   std::vector<std::uint8_t> span_coherent_;  ///< ... whether a cell of the span fails the test
   std::vector<std::uint32_t> span_touched_;  ///< ... the cells the span touched
 };

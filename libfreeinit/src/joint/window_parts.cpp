@@ -265,73 +265,77 @@ std::size_t splitReturns(std::size_t n, const float* __restrict arrays,
   return kept;
 }
 
+namespace {
+/// runTerms' loop, each array its own restrict pointer (with all nine from one, the compiler
+/// cannot vectorize the stores).
 FREEINIT_VECTOR_CLONES
-std::size_t sumIntoCells(std::size_t n, const std::uint16_t* __restrict cell, std::uint16_t no_cell,
-                         float* __restrict residual, double* __restrict sum,
-                         std::uint32_t* __restrict count, std::uint32_t* __restrict touched,
-                         std::size_t& slots, double& squares) {
-  if (n == 0) return 0;
-  // First, in a loop the compiler vectorizes, the residuals outside the cells cleared (their
-  // bits: +0) and the others counted.
-  std::size_t in_cells = 0;
-  for (std::size_t j = 0; j < n; ++j) {
-    const std::uint32_t keep = cell[j] != no_cell ? 0xffffffffu : 0u;
-    std::uint32_t bits;
-    std::memcpy(&bits, residual + j, sizeof bits);
-    bits &= keep;
-    std::memcpy(residual + j, &bits, sizeof bits);
-    in_cells += keep & 1u;
-  }
-  // Consecutive returns mostly share a cell (a scan line sweeps a cell's few degrees in tens of
-  // returns): the cell's sum and count are held here while they do, and written back when the
-  // cell changes, instead of each addition waiting for the one before it through memory. The
-  // same additions in the same order.
-  double sq = squares;
-  std::size_t s = slots;
-  std::uint32_t c = cell[0];
-  double c_sum = sum[c];
-  std::uint32_t c_count = count[c];
-  touched[s] = c;
-  s += c_count == 0 ? 1 : 0;
-  for (std::size_t j = 0; j < n; ++j) {
-    const std::uint32_t next = cell[j];
-    if (next != c) {
-      sum[c] = c_sum;
-      count[c] = c_count;
-      c = next;
-      c_sum = sum[c];
-      c_count = count[c];
-      touched[s] = c;
-      s += c_count == 0 ? 1 : 0;
-    }
-    const float r = residual[j];
-    c_sum += r;
-    ++c_count;
-    sq += static_cast<double>(r) * r;
-  }
-  sum[c] = c_sum;
-  count[c] = c_count;
-  squares = sq;
-  slots = s;
-  return in_cells;
-}
-
-FREEINIT_VECTOR_CLONES
-void dopplerResiduals(std::size_t n, const float (&q)[9], float inv_h, const float* __restrict x,
-                      const float* __restrict y, const float* __restrict z,
-                      const float* __restrict tau, const float* __restrict doppler,
-                      float* __restrict residual) {
-  const float q0x = q[0], q0y = q[1], q0z = q[2], q1x = q[3], q1y = q[4], q1z = q[5], q2x = q[6],
-              q2y = q[7], q2z = q[8];
+void runTermsInto(std::size_t n, float inv_h, const float* __restrict x, const float* __restrict y,
+                  const float* __restrict z, const float* __restrict tau, float* __restrict d0x,
+                  float* __restrict d0y, float* __restrict d0z, float* __restrict d1x,
+                  float* __restrict d1y, float* __restrict d1z, float* __restrict d2x,
+                  float* __restrict d2y, float* __restrict d2z) {
   for (std::size_t i = 0; i < n; ++i) {
     const float s = tau[i] * inv_h;
-    const float vx = q0x + s * (q1x + s * q2x), vy = q0y + s * (q1y + s * q2y),
-                vz = q0z + s * (q1z + s * q2z);
     const float px = x[i], py = y[i], pz = z[i];
-    // p_l.dot(v) / p_l.norm(), each sum in the order Eigen takes a 3-vector's (x + (y + z)).
-    residual[i] =
-        doppler[i] + (px * vx + (py * vy + pz * vz)) / std::sqrt(px * px + (py * py + pz * pz));
+    const float inv = 1.0f / std::sqrt(px * px + (py * py + pz * pz));
+    const float ux = px * inv, uy = py * inv, uz = pz * inv;
+    d0x[i] = ux;
+    d0y[i] = uy;
+    d0z[i] = uz;
+    d1x[i] = s * ux;
+    d1y[i] = s * uy;
+    d1z[i] = s * uz;
+    d2x[i] = s * (s * ux);
+    d2y[i] = s * (s * uy);
+    d2z[i] = s * (s * uz);
   }
+}
+}  // namespace
+
+void runTerms(std::size_t n, float inv_h, const float* x, const float* y, const float* z,
+              const float* tau, float* terms) {
+  runTermsInto(n, inv_h, x, y, z, tau, terms, terms + n, terms + 2 * n, terms + 3 * n,
+               terms + 4 * n, terms + 5 * n, terms + 6 * n, terms + 7 * n, terms + 8 * n);
+}
+
+std::size_t cellRuns(std::size_t n, const std::uint16_t* __restrict cell, std::uint16_t no_cell,
+                     const float* __restrict terms, const float* __restrict doppler,
+                     CellRun* __restrict runs) {
+  const float *d0x = terms, *d0y = terms + n, *d0z = terms + 2 * n, *d1x = terms + 3 * n,
+              *d1y = terms + 4 * n, *d1z = terms + 5 * n, *d2x = terms + 6 * n,
+              *d2y = terms + 7 * n, *d2z = terms + 8 * n;
+  std::size_t m = 0, j = 0;
+  while (j < n) {
+    const std::uint16_t c = cell[j];
+    if (c == no_cell) {
+      ++j;
+      continue;
+    }
+    // The run's sums, each its own variable, so that they stay in registers while it lasts.
+    float sz = 0, s0x = 0, s0y = 0, s0z = 0, s1x = 0, s1y = 0, s1z = 0, s2x = 0, s2y = 0, s2z = 0;
+    std::uint32_t count = 0;
+    for (; j < n && (cell[j] == c || cell[j] == no_cell); ++j) {
+      if (cell[j] == no_cell) continue;
+      sz += doppler[j];
+      s0x += d0x[j];
+      s0y += d0y[j];
+      s0z += d0z[j];
+      s1x += d1x[j];
+      s1y += d1y[j];
+      s1z += d1z[j];
+      s2x += d2x[j];
+      s2y += d2y[j];
+      s2z += d2z[j];
+      ++count;
+    }
+    CellRun& r = runs[m++];
+    r.cell = c;
+    r.count = count;
+    r.doppler = sz;
+    const float d[9] = {s0x, s0y, s0z, s1x, s1y, s1z, s2x, s2y, s2z};
+    std::memcpy(r.d, d, sizeof d);
+  }
+  return m;
 }
 
 }  // namespace freeinit::detail::recorder_kernels

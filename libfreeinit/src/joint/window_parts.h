@@ -151,20 +151,34 @@ std::size_t verdicts(std::size_t n, const DopplerInertialFilter& filter, std::ui
 std::size_t splitReturns(std::size_t n, const float* arrays, const std::uint16_t* cell,
                          std::uint16_t no_cell, MapPoint* map, MapPoint* rejected,
                          std::size_t& dropped);
-/// Adds n returns to the cells they are in, in order: sum[cell] += residual, count[cell] += 1,
-/// squares += residual^2, and a cell seen for the first time (its count was zero) appended to
-/// touched[slots++]. A return whose cell is no_cell counts as a zero residual (its residual is
-/// set to +0): exact zeros added to the sums (squares is never -0) and to that slot's. Returns
-/// how many are in cells. (A function of its own, so that its sums stay in registers: in the
-/// caller's loop, which calls out, the compiler keeps them on the stack.)
-std::size_t sumIntoCells(std::size_t n, const std::uint16_t* cell, std::uint16_t no_cell,
-                         float* residual, double* sum, std::uint32_t* count, std::uint32_t* touched,
-                         std::size_t& slots, double& squares);
-/// The Doppler residual of n returns against a LiDAR velocity v(s) = q0 + s (q1 + s q2),
-/// s = tau inv_h (DopplerInertialFilter::lidarVelocityPolynomial): doppler + p_l.v / |p_l|.
-void dopplerResiduals(std::size_t n, const float (&q)[9], float inv_h, const float* x,
-                      const float* y, const float* z, const float* tau, const float* doppler,
-                      float* residual);
+/// Consecutive returns of a node in one cell (those between them in no cell skipped), and the
+/// sum of their Doppler residuals as a linear form in the node's LiDAR velocity polynomial
+/// (dopplerResiduals): sum_j (doppler_j + d_j . v(s_j)) = doppler + sum_m d_m . q_m with
+/// d_m = sum_j s_j^m d_j (d_j = p_l / |p_l|). A node's runs are made once, when it is judged;
+/// a test of the whole window against its final motion then reads a run where it read each
+/// return (about 15 returns per run on the presets).
+struct CellRun {
+  std::uint16_t cell = 0;
+  std::uint32_t count = 0;  ///< returns
+  float doppler = 0;        ///< [m/s] sum of their Doppler
+  float d[9] = {};          ///< d_0, d_1, d_2 (x, y, z each)
+  /// The sum of the run's residuals against v(s) = q0 + s (q1 + s q2), Q = [q0; q1; q2].
+  double residualSum(const double* Q) const {
+    double r = doppler;
+    for (int i = 0; i < 9; ++i) r += static_cast<double>(d[i]) * Q[i];
+    return r;
+  }
+};
+/// The terms d_0, d_1, d_2 of n returns (s = tau inv_h) into terms, as nine arrays of n
+/// (d_0's x, y, z, then d_1's, d_2's), in float.
+void runTerms(std::size_t n, float inv_h, const float* x, const float* y, const float* z,
+              const float* tau, float* terms);
+/// The runs of a node's n returns (those whose cell is not no_cell), their terms (runTerms), in
+/// order, into runs (room for one per return in a cell). Returns how many. The sums are in
+/// float: a run's Doppler sum and its d_0 . q0 nearly cancel, to an error of a few 1e-7 of the
+/// Doppler sum, far below what the test of a cell resolves (4 sigma sqrt(n)).
+std::size_t cellRuns(std::size_t n, const std::uint16_t* cell, std::uint16_t no_cell,
+                     const float* terms, const float* doppler, CellRun* runs);
 }  // namespace recorder_kernels
 
 /// The residuals of the returns while the sensor stands still, by direction: a standing sensor
@@ -285,6 +299,9 @@ class WindowRecorder {
     node_begin_ = {front};
     front_ = front;
     cells_.assign(n, kNoCell);
+    // Runs: about one per 15 returns on the presets; room for twice as many.
+    runs_.assign(n / 8, recorder_kernels::CellRun{});
+    run_begin_ = {0};
   }
   std::size_t size() const { return node_begin_.back() - front_; }  ///< judged returns
   std::size_t nodes() const { return node_begin_.size() - 1; }      ///< judged nodes
@@ -351,6 +368,15 @@ class WindowRecorder {
     std::uint16_t* cell = cells_.data() + (begin - front_);
     recorder_kernels::cellsOf(n, f, f + n, f + 2 * n, cell);
     const std::size_t accepted = recorder_kernels::verdicts(n, filter, kNoCell, cell, res);
+    // The node's runs (cellRuns), at its filter node's time scale (the recorder's node k is the
+    // filter's).
+    const float inv_h = static_cast<float>(filter.normalizedTime(nodes(), 1.0));
+    const std::size_t r0 = run_begin_.back();
+    holdAtLeast(runs_, r0 + accepted);
+    const std::size_t made = makeRuns(n, cell, inv_h, f, r0);
+    run_begin_.push_back(r0 + made);
+    run_count_.push_back(made);
+    run_inv_h_.push_back(inv_h);
     node_begin_.push_back(begin + n);
     accepted_ += accepted;
     used += accepted;
@@ -363,11 +389,29 @@ class WindowRecorder {
     return {i,         i + n,     f,         f + n,     f + 2 * n,
             f + 3 * n, f + 4 * n, f + 5 * n, f + 6 * n, cells_.data() + i};
   }
-  /// Takes an accepted return out of the map (into the rejected returns).
+  /// Judged node k's runs (cellRuns) over its returns in cells: [first, first + count).
+  struct Runs {
+    const recorder_kernels::CellRun* first;
+    std::size_t count;
+  };
+  /// (Made again first where returns were rejected since: in place, as they are no more.)
+  Runs runs(std::size_t k) {
+    if (run_count_[k] == kStaleRuns) {
+      const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
+      run_count_[k] =
+          makeRuns(n, cells_.data() + (b - front_), run_inv_h_[k],
+                   reinterpret_cast<const float*>(returns_.data()) + 7 * b, run_begin_[k]);
+    }
+    return {runs_.data() + run_begin_[k], run_count_[k]};
+  }
+  /// Takes an accepted return out of the map (into the rejected returns) and out of its node's
+  /// runs.
   void reject(std::size_t i) {
     if (cells_[i] == kNoCell) return;
     cells_[i] = kNoCell;
     --accepted_;
+    const auto after = std::upper_bound(node_begin_.begin(), node_begin_.end(), front_ + i);
+    run_count_[static_cast<std::size_t>(after - node_begin_.begin()) - 1] = kStaleRuns;
   }
   /// Maps every return with the final node states (the body moved by tau, its angular and
   /// linear velocity at the node, between the node and the return), the accepted ones into
@@ -427,6 +471,10 @@ class WindowRecorder {
     r.static_map = std::move(returns_);
     returns_ = {};
     cells_ = {};
+    runs_ = {};
+    run_begin_ = {0};
+    run_count_.clear();
+    run_inv_h_.clear();
     node_begin_ = {0};
     front_ = 0;
     end_ = 0;
@@ -445,18 +493,34 @@ class WindowRecorder {
   static void holdAtLeast(std::vector<T>& v, std::size_t n) {
     if (v.size() < n) v.resize(std::max(n, v.size() + v.size() / 2));
   }
+  /// The runs of a node's n returns (cells, its arrays from f) into runs_ from `first`.
+  std::size_t makeRuns(std::size_t n, const std::uint16_t* cell, float inv_h, const float* f,
+                       std::size_t first) {
+    if (run_terms_.size() < 9 * n) run_terms_.resize(9 * n);
+    recorder_kernels::runTerms(n, inv_h, f, f + n, f + 2 * n, f + 5 * n, run_terms_.data());
+    return recorder_kernels::cellRuns(n, cell, kNoCell, run_terms_.data(), f + 4 * n,
+                                      runs_.data() + first);
+  }
   // The buffers seen as floats: a MapPoint is seven floats.
   static_assert(sizeof(MapPoint) == 7 * sizeof(float) && alignof(MapPoint) == alignof(float));
 
   std::vector<MapPoint> returns_;     ///< the judged nodes' returns (see the class comment)
   std::vector<std::uint16_t> cells_;  ///< every judged return's cell, kNoCell if not accepted
   std::vector<std::size_t> node_begin_{
-      0};                       ///< node k's returns: [node_begin_[k], node_begin_[k+1])
-  std::size_t accepted_ = 0;    ///< judged returns accepted (not kNoCell)
-  std::size_t front_ = 0;       ///< unused slots before the first node's part (reserve)
-  std::size_t end_ = 0;         ///< the end of the laid-out returns in returns_ (the rest is room)
-  std::vector<Run> open_runs_;  ///< the open node's returns, where the frames hold them
-  std::size_t open_given_ = 0;  ///< returns in open_runs_
+      0};                     ///< node k's returns: [node_begin_[k], node_begin_[k+1])
+  std::size_t accepted_ = 0;  ///< judged returns accepted (not kNoCell)
+  std::size_t front_ = 0;     ///< unused slots before the first node's part (reserve)
+  std::size_t end_ = 0;       ///< the end of the laid-out returns in returns_ (the rest is room)
+  /// Node k's runs: from runs_[run_begin_[k]], run_count_[k] of them (kStaleRuns: returns were
+  /// rejected since they were made; never more than before), made at the time scale
+  /// run_inv_h_[k].
+  std::vector<recorder_kernels::CellRun> runs_;
+  std::vector<std::size_t> run_begin_{0}, run_count_;
+  std::vector<float> run_inv_h_;
+  std::vector<float> run_terms_;  ///< makeRuns' work space
+  static constexpr std::size_t kStaleRuns = static_cast<std::size_t>(-1);
+  std::vector<Run> open_runs_;         ///< the open node's returns, where the frames hold them
+  std::size_t open_given_ = 0;         ///< returns in open_runs_
   std::vector<std::uint8_t> verdict_;  ///< closeNode's work space: each return usable or not
 };
 
