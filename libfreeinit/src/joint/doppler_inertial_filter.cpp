@@ -378,7 +378,8 @@ void DopplerInertialFilter::interpolateImu(const std::vector<ImuSample>& imu, do
 
 bool DopplerInertialFilter::motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
                                      double gyro_sigma, double accel_sigma, Vec3& accel,
-                                     Vec3& gyro_rate, bool* complete) {
+                                     Vec3& gyro_rate, bool* complete,
+                                     const std::vector<RunningSums>* running) {
   Vec3 gyro;
   interpolateImu(imu, t, gyro, accel, hint, &gyro_rate);
   std::size_t lo = 0;
@@ -391,8 +392,8 @@ bool DopplerInertialFilter::motionAt(const std::vector<ImuSample>& imu, double t
   // offset near its reference: -2.9 +- 0.03 ms against -9.0).
   // Least squares of c0 + c1 d per axis (d = t_i - t) over each span: the normal equations'
   // sums, and the sums of squares for the residuals (RSS = sum |y|^2 - c0 . sum y - c1 . sum d y),
-  // gathered in one pass over the widest span (each sample added, in order, to the spans that
-  // hold it).
+  // from the running sums, or gathered in one pass over the widest span (each sample added, in
+  // order, to the spans that hold it).
   struct Sums {
     double s0 = 0, s1 = 0, s2 = 0, aa = 0, gg = 0;
     Vec3 a0 = Vec3::Zero(), a1 = Vec3::Zero(), g0 = Vec3::Zero(), g1 = Vec3::Zero();
@@ -405,7 +406,34 @@ bool DopplerInertialFilter::motionAt(const std::vector<ImuSample>& imu, double t
   while (hi > lo && imu[hi].t > t + kMotionHalfSpan) --hi;
   // The sample after the span, read, lies beyond it (the loop above): later ones do too.
   if (complete != nullptr) *complete = std::max(hi, hi_interpolant) + 1 < imu.size();
-  for (std::size_t i = lo; i <= hi; ++i) {
+  const bool from_running = running != nullptr && running->size() == imu.size() + 1;
+  if (from_running && lo <= hi) {
+    // Samples i with |t_i - t| <= span: [b, e), found by bisection within the widest span's.
+    auto time = [](const ImuSample& x, double v) { return x.t < v; };
+    const auto first = imu.begin() + static_cast<std::ptrdiff_t>(lo);
+    const auto end = imu.begin() + static_cast<std::ptrdiff_t>(hi) + 1;
+    const double tau = t - imu.front().t;  // in the running sums' time
+    double span = kMotionHalfSpan;
+    for (int r = 0; r < kSpans; ++r, span *= 0.5) {
+      const auto b = std::lower_bound(first, end, t - span, time);
+      const auto e =
+          std::upper_bound(b, end, t + span, [](double v, const ImuSample& x) { return v < x.t; });
+      const RunningSums& A = (*running)[static_cast<std::size_t>(b - imu.begin())];
+      const RunningSums& B = (*running)[static_cast<std::size_t>(e - imu.begin())];
+      Sums& S = sums[static_cast<std::size_t>(r)];
+      S.s0 = static_cast<double>(e - b);
+      const double U = B.u - A.u;
+      S.s1 = U - S.s0 * tau;
+      S.s2 = (B.uu - A.uu) - 2.0 * tau * U + S.s0 * tau * tau;
+      S.a0 = B.a - A.a;
+      S.a1 = (B.ua - A.ua) - tau * S.a0;
+      S.aa = B.aa - A.aa;
+      S.g0 = B.g - A.g;
+      S.g1 = (B.ug - A.ug) - tau * S.g0;
+      S.gg = B.gg - A.gg;
+    }
+  }
+  for (std::size_t i = lo; i <= hi && !from_running; ++i) {
     const double d = imu[i].t - t;
     double span = kMotionHalfSpan;
     for (int r = 0; r < kSpans && std::abs(d) <= span; ++r, span *= 0.5) {
@@ -446,6 +474,25 @@ bool DopplerInertialFilter::motionAt(const std::vector<ImuSample>& imu, double t
     }
   }
   return gyro_line;
+}
+
+void DopplerInertialFilter::extendRunningSums(const std::vector<ImuSample>& imu,
+                                              std::vector<RunningSums>& sums) {
+  if (sums.empty()) sums.emplace_back();
+  while (sums.size() < imu.size() + 1) {
+    const ImuSample& s = imu[sums.size() - 1];
+    RunningSums next = sums.back();
+    const double u = s.t - imu.front().t;
+    next.u += u;
+    next.uu += u * u;
+    next.a += s.accel;
+    next.ua += u * s.accel;
+    next.aa += s.accel.squaredNorm();
+    next.g += s.gyro;
+    next.ug += u * s.gyro;
+    next.gg += s.gyro.squaredNorm();
+    sums.push_back(next);
+  }
 }
 
 std::size_t DopplerInertialFilter::interpolationSpan(const std::vector<ImuSample>& imu, double t,
@@ -1197,7 +1244,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
     if (!(m.t == t && m.gyro_sigma == params_.gyro_sigma && m.accel_sigma == params_.accel_sigma &&
           (m.samples == imu.size() || m.complete))) {
       m.gyro_line = motionAt(imu, t, k, params_.gyro_sigma, params_.accel_sigma, m.accel,
-                             m.gyro_rate, &m.complete);
+                             m.gyro_rate, &m.complete, &imu == &imu_ ? &imu_sums_ : nullptr);
       m.t = t;
       m.gyro_sigma = params_.gyro_sigma;
       m.accel_sigma = params_.accel_sigma;
@@ -1270,6 +1317,7 @@ void DopplerInertialFilter::addImu(const ImuSample& s, double gyro_var, double a
   if (!imu_extra_var_.empty())
     imu_extra_var_.emplace_back(static_cast<float>(gyro_var), static_cast<float>(accel_var));
   imu_.push_back(s);
+  extendRunningSums(imu_, imu_sums_);
 }
 
 DopplerInertialFilter::MatS DopplerInertialFilter::priorCovariance(const FilterState& x,

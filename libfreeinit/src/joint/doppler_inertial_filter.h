@@ -361,9 +361,20 @@ class DopplerInertialFilter {
   /// brisker than a line over a quarter of the span) or fewer than three samples are, the
   /// interpolant's (interpolateImu()). Returns whether gyro_rate is a fitted line's.
   /// complete (if given): a sample after every span read had arrived (later ones change nothing).
+  /// running (if given): the running sums of imu (addImu() keeps the filter's), from which each
+  /// span's sums are two differences, whatever the IMU rate; without, they are summed.
+  struct RunningSums;
   static bool motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
                        double gyro_sigma, double accel_sigma, Vec3& accel, Vec3& gyro_rate,
-                       bool* complete = nullptr);
+                       bool* complete = nullptr, const std::vector<RunningSums>* running = nullptr);
+  /// The sums over the IMU samples before one (element i: over samples 0 .. i - 1) that a line
+  /// fit reads, times u = t - t_0 from the first sample's.
+  struct RunningSums {
+    double u = 0, uu = 0, aa = 0, gg = 0;  ///< sum u, u^2, |accel|^2, |gyro|^2
+    Vec3 a = Vec3::Zero(), ua = Vec3::Zero(), g = Vec3::Zero(), ug = Vec3::Zero();
+  };
+  /// sums extended to the samples of imu (one element per sample, and the first, zero).
+  static void extendRunningSums(const std::vector<ImuSample>& imu, std::vector<RunningSums>& sums);
   /// [s] Half the span of motionAt()'s fit.
   static constexpr double kMotionHalfSpan = 0.025;
   /// The samples lo..hi (returned) interpolateImu() uses at t (hint: as there).
@@ -716,6 +727,7 @@ class DopplerInertialFilter {
   Mat3 R_bl_;
   Vec3 p_bl_;
   std::vector<ImuSample> imu_;
+  std::vector<RunningSums> imu_sums_{RunningSums{}};  ///< of imu_ (motionAt())
   /// Per sample of imu_: the variance added to gyro_sigma^2, accel_sigma^2 (addImu); empty
   /// while every sample given is a measured one.
   std::vector<Eigen::Vector2f> imu_extra_var_;
