@@ -353,6 +353,14 @@ class DopplerInertialFilter {
   static void interpolateImu(const std::vector<ImuSample>& imu, double t, Vec3& gyro, Vec3& accel,
                              std::size_t hint = static_cast<std::size_t>(-1),
                              Vec3* gyro_rate = nullptr);
+  /// The sums over the IMU samples before one (element i: over samples 0 .. i - 1) that a line
+  /// fit reads, times u = t - t_0 from the first sample's.
+  struct RunningSums {
+    double u = 0, uu = 0, aa = 0, gg = 0;  ///< sum u, u^2, |accel|^2, |gyro|^2
+    Vec3 a = Vec3::Zero(), ua = Vec3::Zero(), g = Vec3::Zero(), ug = Vec3::Zero();
+  };
+  /// sums extended to the samples of imu (one element per sample, and the first, zero).
+  static void extendRunningSums(const std::vector<ImuSample>& imu, std::vector<RunningSums>& sums);
   /// The motion's specific force and angular acceleration at time t, for the clock offset's
   /// column (lidarVelocity()): the value of a straight line fitted to the accelerometer samples
   /// within kMotionHalfSpan of t and the slope of one fitted to the gyro's, each over the widest
@@ -363,18 +371,9 @@ class DopplerInertialFilter {
   /// complete (if given): a sample after every span read had arrived (later ones change nothing).
   /// running (if given): the running sums of imu (addImu() keeps the filter's), from which each
   /// span's sums are two differences, whatever the IMU rate; without, they are summed.
-  struct RunningSums;
   static bool motionAt(const std::vector<ImuSample>& imu, double t, std::size_t hint,
                        double gyro_sigma, double accel_sigma, Vec3& accel, Vec3& gyro_rate,
                        bool* complete = nullptr, const std::vector<RunningSums>* running = nullptr);
-  /// The sums over the IMU samples before one (element i: over samples 0 .. i - 1) that a line
-  /// fit reads, times u = t - t_0 from the first sample's.
-  struct RunningSums {
-    double u = 0, uu = 0, aa = 0, gg = 0;  ///< sum u, u^2, |accel|^2, |gyro|^2
-    Vec3 a = Vec3::Zero(), ua = Vec3::Zero(), g = Vec3::Zero(), ug = Vec3::Zero();
-  };
-  /// sums extended to the samples of imu (one element per sample, and the first, zero).
-  static void extendRunningSums(const std::vector<ImuSample>& imu, std::vector<RunningSums>& sums);
   /// [s] Half the span of motionAt()'s fit.
   static constexpr double kMotionHalfSpan = 0.025;
   /// The samples lo..hi (returned) interpolateImu() uses at t (hint: as there).

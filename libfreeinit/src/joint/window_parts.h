@@ -153,8 +153,9 @@ std::size_t splitReturns(std::size_t n, const float* arrays, const std::uint16_t
                          std::size_t& dropped);
 /// Consecutive returns of a node in one cell (those between them in no cell skipped), and the
 /// sum of their Doppler residuals as a linear form in the node's LiDAR velocity polynomial
-/// (dopplerResiduals): sum_j (doppler_j + d_j . v(s_j)) = doppler + sum_m d_m . q_m with
-/// d_m = sum_j s_j^m d_j (d_j = p_l / |p_l|). A node's runs are made once, when it is judged;
+/// v(s) = q0 + s (q1 + s q2) (DopplerInertialFilter::lidarVelocityPolynomial, s = tau inv_h):
+/// sum_j (doppler_j + d_j . v(s_j)) = doppler + sum_m d_m . q_m with d_m = sum_j s_j^m d_j
+/// (d_j = p_l / |p_l|). A node's runs are made once, when it is judged;
 /// a test of the whole window against its final motion then reads a run where it read each
 /// return (about 15 returns per run on the presets).
 struct CellRun {
@@ -394,7 +395,8 @@ class WindowRecorder {
     const recorder_kernels::CellRun* first;
     std::size_t count;
   };
-  /// (Made again first where returns were rejected since: in place, as they are no more.)
+  /// (Made again first where returns were rejected since they were made: in place, since they
+  /// can only be fewer.)
   Runs runs(std::size_t k) {
     if (run_count_[k] == kStaleRuns) {
       const std::size_t b = node_begin_[k], n = node_begin_[k + 1] - b;
