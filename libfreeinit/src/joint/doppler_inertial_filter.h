@@ -26,9 +26,9 @@
 // each step carried to the interval's end through the steps after it, each with its own
 // samples' noise. A node's interval of returns is then m times longer (at a 2 kHz IMU with nodes
 // at 200 Hz its intervals are those of a 200 Hz IMU), and the gyro in its lever-arm term is the
-// least-squares quadratic through the samples of its interval of returns at the IMU's clock
-// (gyroFit), so that every sample's noise reaches the returns it covers as with a node per
-// sample; nothing else in the model changes.
+// least-squares quadratic through the samples of its interval of returns at the IMU's clock and
+// the one on either side (gyroFit), so that every sample's noise reaches the returns it covers as
+// with a node per sample; nothing else in the model changes.
 // Doppler: every point is one scalar measurement at its own time t_j,
 //   z_j = -d_j^T v_l(t_j) + n_j,   v_l = R_bl^T (R_wb^T v_w + omega_b x p_bl),
 // d_j the unit direction in the LiDAR frame. A point belongs to the node whose interval holds its
@@ -549,7 +549,7 @@ class DopplerInertialFilter {
     IntervalNoise noise;
     /// ... and the gyro in the lever-arm term: [rad/s] the coefficients of 1, s, s^2 (s = tau /
     /// h, tau the returns' time from the node's) of the least-squares fit through the samples
-    /// of its interval of returns (gyroFit).
+    /// of its interval of returns and the one on either side (gyroFit).
     std::array<Vec3, 3> gyro_fit{};
     Mat3 gyro_fit_cov = Mat3::Zero();  ///< ... their covariance per unit gyro_sigma^2
     bool gyro_fit_complete = true;     ///< ... made with every sample it reads
@@ -694,13 +694,13 @@ class DopplerInertialFilter {
   /// For a node whose intervals span several samples, the gyro in its lever-arm term is the
   /// least-squares polynomial in s = tau / h (tau the returns' time from the node's) through the
   /// samples within its interval of returns taken to the IMU's clock (t_j - t_k + dt_ref in
-  /// [-before, after]), a sample on a boundary with another node weighted by a half (the two
-  /// nodes share it), of degree 2 (the LiDAR velocity's) or less with fewer than three samples. So
-  /// every sample's gyro noise reaches the node(s) whose returns it covers, as with a node per
-  /// sample, where three instants would read a dozen samples' (the boundaries' twice) and not the
-  /// rest. coef (if given): [rad/s] the coefficients of 1, s, s^2; cov (if given): their covariance
-  /// per unit gyro_sigma^2 (a sample the screen interpolated with its extra variance); complete (if
-  /// given): a sample after the interval had arrived (later ones change nothing).
+  /// [-before, after]; the one nearest its centre where none is) and the sample on either side
+  /// of them, of degree 2 (the LiDAR velocity's) or less with fewer than three samples. So every
+  /// sample's gyro noise reaches the nodes whose returns it covers, as with a node per sample,
+  /// where three instants would read a dozen samples' (the boundaries' twice) and not the rest.
+  /// coef (if given): [rad/s] the coefficients of 1, s, s^2; cov (if given): their covariance
+  /// per unit gyro_sigma^2 (a sample the screen interpolated with its extra variance); complete
+  /// (if given): the sample after the interval had arrived (later ones change nothing).
   void gyroFit(const Node& n, std::array<Vec3, 3>* coef, Mat3* cov, bool* complete = nullptr) const;
   /// E E^T of the node's lever-arm noise (leverNoise, or through gyroFit when its intervals span
   /// several samples).
