@@ -121,49 +121,47 @@ constexpr int kLadderOrders = 8;
 constexpr int kLadderStrides = 2;
 constexpr int kMostTaps = kLadderOrders * kLadderStrides + 1;
 
-/// The k-th difference over samples `stride` apart as taps on consecutive samples, scaled to
-/// unit gain on white noise (zero between its samples).
+/// The k-th difference over samples `stride` apart as taps on consecutive samples: the signed
+/// binomials C(order, i) (zero between its samples), unscaled, exact in doubles; `norm`, the
+/// sum of their squares C(2 order, order), is the squared gain on white noise the ladder scales
+/// away.
 struct DifferenceTaps {
   std::array<double, kMostTaps> tap{};
   int length = 0;
-  double norm = 1;  ///< C(2 order, order): the unscaled (binomial) taps' sum of squares
+  double norm = 0;
 };
 
-DifferenceTaps differenceTaps(int order, int stride) {
+constexpr DifferenceTaps differenceTaps(int order, int stride) {
   DifferenceTaps d;
   d.length = order * stride + 1;
-  double binomial = 1, norm = 0;  // C(order, i), and the sum of its squares = C(2 order, order)
+  double binomial = 1;  // C(order, i)
   for (int i = 0; i <= order; ++i) {
     d.tap[static_cast<std::size_t>(i * stride)] = ((order - i) % 2 == 0 ? 1.0 : -1.0) * binomial;
-    norm += binomial * binomial;
+    d.norm += binomial * binomial;
     binomial = binomial * (order - i) / (i + 1);
   }
-  for (double& t : d.tap) t /= std::sqrt(norm);
-  d.norm = norm;
   return d;
 }
 
-/// Sum over lags of the squared cross-correlation of two tap sets: n / that is the effective
-/// number of samples behind the mean square of a (a = b), and the covariance of two mean squares
-/// over n outputs of white noise is 2 sigma^4 crossSquares(a, b) / n.
-double crossSquares(const DifferenceTaps& a, const DifferenceTaps& b) {
-  double sum = 0;
+/// Sum over lags of the squared cross-correlation of two tap sets scaled to unit gain on white
+/// noise: n / that is the effective number of samples behind the mean square of a (a = b), and
+/// the covariance of two mean squares over n outputs of white noise is
+/// 2 sigma^4 crossSquares(a, b) / n.
+constexpr double crossSquares(const DifferenceTaps& a, const DifferenceTaps& b) {
+  double sum = 0;  // of the unscaled taps: integers, exact
   for (int lag = -(a.length - 1); lag < b.length; ++lag) {
     double c = 0;
-    for (int i = 0; i < a.length; ++i) {
-      const int j = i + lag;
-      if (j >= 0 && j < b.length)
-        c += a.tap[static_cast<std::size_t>(i)] * b.tap[static_cast<std::size_t>(j)];
-    }
+    for (int i = lag < 0 ? -lag : 0; i < a.length && i + lag < b.length; ++i)
+      c += a.tap[static_cast<std::size_t>(i)] * b.tap[static_cast<std::size_t>(i + lag)];
     sum += c * c;
   }
-  return sum;
+  return sum / (a.norm * b.norm);
 }
 
-/// The ladder's constants, computed once: its tap sets and their crossSquares, per stride
-/// index s (stride s + 1) and order index k (order k + 1).
+/// The ladder's constants: its tap sets and their crossSquares, per stride index s (stride
+/// s + 1) and order index k (order k + 1).
 struct LadderTable {
-  std::array<std::array<DifferenceTaps, kLadderOrders>, kLadderStrides> taps;
+  std::array<std::array<DifferenceTaps, kLadderOrders>, kLadderStrides> taps{};
   /// crossSquares(taps[s][k], taps[t][l]) at cross[s][k][t][l].
   std::array<
       std::array<std::array<std::array<double, kLadderOrders>, kLadderStrides>, kLadderOrders>,
@@ -171,22 +169,24 @@ struct LadderTable {
       cross{};
 };
 
-const LadderTable& ladderTable() {
-  static const LadderTable table = [] {
-    LadderTable t;
-    for (int s = 0; s < kLadderStrides; ++s)
-      for (int k = 0; k < kLadderOrders; ++k) t.taps[s][k] = differenceTaps(k + 1, s + 1);
-    for (int s = 0; s < kLadderStrides; ++s)
-      for (int k = 0; k < kLadderOrders; ++k)
-        for (int u = 0; u < kLadderStrides; ++u)
-          for (int l = 0; l < kLadderOrders; ++l)
-            t.cross[s][k][u][l] = crossSquares(t.taps[s][k], t.taps[u][l]);
-    return t;
-  }();
-  return table;
+constexpr LadderTable ladderTable() {
+  LadderTable t;
+  for (int s = 0; s < kLadderStrides; ++s)
+    for (int k = 0; k < kLadderOrders; ++k) t.taps[s][k] = differenceTaps(k + 1, s + 1);
+  for (int s = 0; s < kLadderStrides; ++s)
+    for (int k = 0; k < kLadderOrders; ++k)
+      for (int u = 0; u < kLadderStrides; ++u)
+        for (int l = 0; l < kLadderOrders; ++l)
+          t.cross[s][k][u][l] = crossSquares(t.taps[s][k], t.taps[u][l]);
+  return t;
 }
 
-/// One of the ladder's differences: stride index s, order index k (LadderTable).
+constexpr LadderTable kLadder = ladderTable();
+static_assert(kLadder.taps[1][7].norm == 12870 && kLadder.taps[1][7].length == 17,
+              "C(16, 8) over 17 samples");
+static_assert(kLadder.cross[0][0][0][0] == 1.5, "first differences: 1 + 2 (1/2)^2");
+
+/// One of the ladder's differences: stride index s, order index k (kLadder).
 struct Rung {
   int s = 0, k = 0;
 };
@@ -234,7 +234,7 @@ double MotionNoiseLadder::meanSquare(int stride, int order) const {
   if (stride < 1 || stride > kStrides || order < 1 || order > kOrders) return 0.0;
   const auto s = static_cast<std::size_t>(stride - 1), k = static_cast<std::size_t>(order - 1);
   if (count_[s][k] == 0) return 0.0;
-  return squares_[s][k] / (ladderTable().taps[s][k].norm * 3.0 * static_cast<double>(count_[s][k]));
+  return squares_[s][k] / (kLadder.taps[s][k].norm * 3.0 * static_cast<double>(count_[s][k]));
 }
 
 std::size_t MotionNoiseLadder::differences(int stride, int order) const {
@@ -251,7 +251,7 @@ MotionNoise MotionNoiseLadder::extend(const std::vector<ImuSample>& imu, std::si
   const bool same_joins = interval > 0 ? joined_ <= cut && parted_ > cut : joined_ == 0;
   if (begin != begin_ || end < next_ || !same_joins) reset(begin);
   const bool accel = accel_;
-  const LadderTable& table = ladderTable();
+  const LadderTable& table = kLadder;
   std::array<std::array<double, kLadderOrders>, kLadderStrides>& squares = squares_;
   std::array<std::array<std::size_t, kLadderOrders>, kLadderStrides>& count = count_;
   // run: consecutive measured samples ending at j without a gap between them. The order-k
