@@ -159,6 +159,136 @@ TEST(MotionNoise, ALadderExtendedAsSamplesArriveReadsAsOneOverTheWholeSpan) {
   }
 }
 
+/// imuMotionNoise read directly from its definition, for the ladder's test: each difference a
+/// dot product of binomial taps with the samples, the plateaus from the taps' correlations.
+struct DirectLadder {
+  static constexpr int kOrders = detail::MotionNoiseLadder::kOrders;
+  static constexpr int kStrides = detail::MotionNoiseLadder::kStrides;
+  double mean_square[kStrides][kOrders] = {};
+  std::size_t count[kStrides][kOrders] = {};
+  detail::MotionNoise out;
+
+  /// The taps of the order-k difference over stride s on consecutive samples, scaled to unit
+  /// gain on white noise; the oldest sample first.
+  static std::vector<double> taps(int k, int s) {
+    std::vector<double> binomial(1, 1.0);
+    for (int i = 0; i < k; ++i) {
+      std::vector<double> next(binomial.size() + 1, 0.0);
+      for (std::size_t m = 0; m < binomial.size(); ++m) {
+        next[m] += binomial[m];
+        next[m + 1] += binomial[m];
+      }
+      binomial = next;
+    }
+    double norm = 0;
+    for (const double b : binomial) norm += b * b;
+    std::vector<double> out(static_cast<std::size_t>(k * s + 1), 0.0);
+    for (int m = 0; m <= k; ++m)  // sample j - m s gets (-1)^m C(k, m)
+      out[static_cast<std::size_t>((k - m) * s)] =
+          (m % 2 == 0 ? 1.0 : -1.0) * binomial[static_cast<std::size_t>(m)] / std::sqrt(norm);
+    return out;
+  }
+  static double cross(const std::vector<double>& a, const std::vector<double>& b) {
+    const int la = static_cast<int>(a.size()), lb = static_cast<int>(b.size());
+    double sum = 0;
+    for (int lag = -la; lag <= lb; ++lag) {
+      double c = 0;
+      for (int i = 0; i < la; ++i)
+        if (i + lag >= 0 && i + lag < lb)
+          c += a[static_cast<std::size_t>(i)] * b[static_cast<std::size_t>(i + lag)];
+      sum += c * c;
+    }
+    return sum;
+  }
+  static bool agree(double ea, double eb, const std::vector<double>& a,
+                    const std::vector<double>& b, double n) {
+    if (!(ea > 0) || !(eb > 0)) return ea == eb;
+    const double var = 2.0 / (3.0 * n) * (cross(a, a) + cross(b, b) - 2.0 * cross(a, b));
+    const double widen = 1.0 + 3.0 * static_cast<double>(std::max(a.size(), b.size())) / n;
+    return std::abs(std::log(ea / eb)) <= 3.29 * widen * std::sqrt(std::max(var, 0.0));
+  }
+
+  DirectLadder(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
+               double interval, const std::vector<detail::ImuExtraNoise>& extra) {
+    for (int s = 1; s <= kStrides; ++s)
+      for (int k = 1; k <= kOrders; ++k) {
+        const std::vector<double> w = taps(k, s);
+        const std::size_t span = w.size() - 1;
+        double squares = 0;
+        std::size_t n = 0;
+        for (std::size_t j = begin + span; j < end; ++j) {
+          bool whole = true;  // every sample measured, every interval within 1.5 nominal
+          for (std::size_t i = j - span; i <= j; ++i)
+            whole = whole && !extra[i].gyro_synthetic &&
+                    (i == j - span || imu[i].t - imu[i - 1].t <= 1.5 * interval);
+          if (!whole) continue;
+          Vec3 d = Vec3::Zero();
+          for (std::size_t t = 0; t <= span; ++t) d += w[t] * imu[j - span + t].gyro;
+          squares += d.squaredNorm();
+          ++n;
+        }
+        count[s - 1][k - 1] = n;
+        mean_square[s - 1][k - 1] = n > 0 ? squares / (3.0 * static_cast<double>(n)) : 0.0;
+      }
+    int plateau[kStrides] = {-1, -1};
+    for (int s = 0; s < kStrides; ++s) {
+      if (count[s][kOrders - 1] < 20) return;
+      const double n = static_cast<double>(count[s][kOrders - 1]);
+      auto same = [&](int k) {
+        return agree(mean_square[s][k], mean_square[s][k + 1], taps(k + 1, s + 1),
+                     taps(k + 2, s + 1), n);
+      };
+      for (int k = 0; k + 2 < kOrders && plateau[s] < 0; ++k)
+        if (same(k) && same(k + 1)) plateau[s] = k;
+      if (plateau[s] < 0) return;
+    }
+    const std::vector<double> a = taps(plateau[0] + 1, 1), b = taps(plateau[1] + 1, 2);
+    if (!agree(mean_square[0][plateau[0]], mean_square[1][plateau[1]], a, b,
+               static_cast<double>(count[1][plateau[1]])))
+      return;
+    out.sigma = std::sqrt(mean_square[0][plateau[0]]);
+    out.dof = 3.0 * static_cast<double>(count[0][plateau[0]]) / cross(a, a);
+    out.order = plateau[0] + 1;
+  }
+};
+
+// The ladder's differences, each taken from the orders below, are the binomial taps' over the
+// samples: its mean squares, counts and estimate are those of the definition (to rounding),
+// extended in chunks of every size over a signal with gaps and synthetic samples.
+TEST(MotionNoise, TheLadderReadsAsTheDifferencesTapByTap) {
+  const auto motion = [](double t, int a) { return 0.5 * std::sin(2 * kPi * t + a) + 0.3 * t; };
+  std::vector<ImuSample> imu = gyroSamples(900, 200.0, 0.002, motion, 23);
+  std::mt19937 rng(5);
+  std::vector<detail::ImuExtraNoise> extra(imu.size());
+  for (const std::size_t i :
+       {std::size_t{70}, std::size_t{71}, std::size_t{300}, std::size_t{305}, std::size_t{640}}) {
+    extra[i].gyro_synthetic = true;
+    imu[i].gyro = Vec3::Constant(3.0);
+  }
+  for (const std::size_t gap : {std::size_t{150}, std::size_t{500}, std::size_t{503}})
+    for (std::size_t i = gap; i < imu.size(); ++i) imu[i].t += 0.02;  // 4 samples unseen
+  std::uniform_int_distribution<std::size_t> chunk(1, 90);
+  const std::size_t begin = 4;
+  detail::MotionNoiseLadder ladder(false);
+  int told = 0;
+  for (std::size_t end = begin + 1; end <= imu.size(); end += chunk(rng)) {
+    const detail::MotionNoise got = ladder.extend(imu, begin, end, 0.005, &extra);
+    const DirectLadder want(imu, begin, end, 0.005, extra);
+    for (int s = 1; s <= DirectLadder::kStrides; ++s)
+      for (int k = 1; k <= DirectLadder::kOrders; ++k) {
+        const double e = want.mean_square[s - 1][k - 1];
+        EXPECT_NEAR(ladder.meanSquare(s, k), e, 1e-9 * e)
+            << end << " stride " << s << " order " << k;
+        EXPECT_EQ(ladder.differences(s, k), want.count[s - 1][k - 1]) << end;
+      }
+    EXPECT_NEAR(got.sigma, want.out.sigma, 1e-9 * want.out.sigma) << end;
+    EXPECT_NEAR(got.dof, want.out.dof, 1e-9 * want.out.dof) << end;
+    EXPECT_EQ(got.order, want.out.order) << end;
+    told += want.out.sigma > 0;
+  }
+  EXPECT_GT(told, 5);  // the estimate is read, not only its absence compared
+}
+
 /// "seed S IMU noise declared xF (platform)", for the messages.
 std::string imuRunName(const NoisyRun& r, std::uint64_t seed, double factor) {
   return "seed " + std::to_string(seed) + " IMU noise declared x" + std::to_string(factor) + " (" +

@@ -121,55 +121,89 @@ constexpr int kLadderOrders = 8;
 constexpr int kLadderStrides = 2;
 constexpr int kMostTaps = kLadderOrders * kLadderStrides + 1;
 
-/// The k-th difference over samples `stride` apart as taps on consecutive samples, scaled to
-/// unit gain on white noise (zero between its samples).
+/// The k-th difference over samples `stride` apart as taps on consecutive samples: the signed
+/// binomials C(order, i) (zero between its samples), unscaled, exact in doubles; `norm`, the
+/// sum of their squares C(2 order, order), is the squared gain on white noise the ladder scales
+/// away.
 struct DifferenceTaps {
   std::array<double, kMostTaps> tap{};
   int length = 0;
+  double norm = 0;
 };
 
-DifferenceTaps differenceTaps(int order, int stride) {
+constexpr DifferenceTaps differenceTaps(int order, int stride) {
   DifferenceTaps d;
   d.length = order * stride + 1;
-  double binomial = 1, norm = 0;  // C(order, i), and the sum of its squares = C(2 order, order)
+  double binomial = 1;  // C(order, i)
   for (int i = 0; i <= order; ++i) {
     d.tap[static_cast<std::size_t>(i * stride)] = ((order - i) % 2 == 0 ? 1.0 : -1.0) * binomial;
-    norm += binomial * binomial;
+    d.norm += binomial * binomial;
     binomial = binomial * (order - i) / (i + 1);
   }
-  for (double& t : d.tap) t /= std::sqrt(norm);
   return d;
 }
 
-/// Sum over lags of the squared cross-correlation of two tap sets: n / that is the effective
-/// number of samples behind the mean square of a (a = b), and the covariance of two mean squares
-/// over n outputs of white noise is 2 sigma^4 crossSquares(a, b) / n.
-double crossSquares(const DifferenceTaps& a, const DifferenceTaps& b) {
-  double sum = 0;
+/// Sum over lags of the squared cross-correlation of two tap sets scaled to unit gain on white
+/// noise: n / that is the effective number of samples behind the mean square of a (a = b), and
+/// the covariance of two mean squares over n outputs of white noise is
+/// 2 sigma^4 crossSquares(a, b) / n.
+constexpr double crossSquares(const DifferenceTaps& a, const DifferenceTaps& b) {
+  double sum = 0;  // of the unscaled taps: integers, exact
   for (int lag = -(a.length - 1); lag < b.length; ++lag) {
     double c = 0;
-    for (int i = 0; i < a.length; ++i) {
-      const int j = i + lag;
-      if (j >= 0 && j < b.length)
-        c += a.tap[static_cast<std::size_t>(i)] * b.tap[static_cast<std::size_t>(j)];
-    }
+    for (int i = lag < 0 ? -lag : 0; i < a.length && i + lag < b.length; ++i)
+      c += a.tap[static_cast<std::size_t>(i)] * b.tap[static_cast<std::size_t>(i + lag)];
     sum += c * c;
   }
-  return sum;
+  return sum / (a.norm * b.norm);
 }
 
-/// Whether the mean squares ea and eb of tap sets a and b, each over `outputs` differences per
+/// The ladder's constants: its tap sets and their crossSquares, per stride index s (stride
+/// s + 1) and order index k (order k + 1).
+struct LadderTable {
+  std::array<std::array<DifferenceTaps, kLadderOrders>, kLadderStrides> taps{};
+  /// crossSquares(taps[s][k], taps[t][l]) at cross[s][k][t][l].
+  std::array<
+      std::array<std::array<std::array<double, kLadderOrders>, kLadderStrides>, kLadderOrders>,
+      kLadderStrides>
+      cross{};
+};
+
+constexpr LadderTable ladderTable() {
+  LadderTable t;
+  for (int s = 0; s < kLadderStrides; ++s)
+    for (int k = 0; k < kLadderOrders; ++k) t.taps[s][k] = differenceTaps(k + 1, s + 1);
+  for (int s = 0; s < kLadderStrides; ++s)
+    for (int k = 0; k < kLadderOrders; ++k)
+      for (int u = 0; u < kLadderStrides; ++u)
+        for (int l = 0; l < kLadderOrders; ++l)
+          t.cross[s][k][u][l] = crossSquares(t.taps[s][k], t.taps[u][l]);
+  return t;
+}
+
+constexpr LadderTable kLadder = ladderTable();
+static_assert(kLadder.taps[1][7].norm == 12870 && kLadder.taps[1][7].length == 17,
+              "C(16, 8) over 17 samples");
+static_assert(kLadder.cross[0][0][0][0] == 1.5, "first differences: 1 + 2 (1/2)^2");
+
+/// One of the ladder's differences: stride index s, order index k (kLadder).
+struct Rung {
+  int s = 0, k = 0;
+};
+
+/// Whether the mean squares ea and eb of rungs a and b, each over `outputs` differences per
 /// axis of three, agree as white noise's would: |log(ea / eb)| within 3.29 of its std (99.9 %,
 /// two-sided). The std is the asymptotic one, 2 / (3 outputs) (X(a, a) + X(b, b) - 2 X(a, b))
 /// with X = crossSquares, times 1 + 3 L / outputs (L the longer tap set): over short windows the
 /// ratio of two highly correlated mean squares spreads wider (measured on 400 windows of white
 /// noise each: 1.05-1.5 at 100 samples for orders 1-8 and strides 1-2, 1.04-1.14 at 400).
-bool sameWhiteLevel(double ea, double eb, const DifferenceTaps& a, const DifferenceTaps& b,
-                    double outputs) {
+bool sameWhiteLevel(double ea, double eb, const LadderTable& t, Rung a, Rung b, double outputs) {
   if (!(ea > 0) || !(eb > 0) || !(outputs > 0)) return ea == eb;
-  const double var =
-      2.0 / (3.0 * outputs) * (crossSquares(a, a) + crossSquares(b, b) - 2.0 * crossSquares(a, b));
-  const double finite_window = 1.0 + 3.0 * std::max(a.length, b.length) / outputs;
+  const double var = 2.0 / (3.0 * outputs) *
+                     (t.cross[a.s][a.k][a.s][a.k] + t.cross[b.s][b.k][b.s][b.k] -
+                      2.0 * t.cross[a.s][a.k][b.s][b.k]);
+  const int longer = std::max(t.taps[a.s][a.k].length, t.taps[b.s][b.k].length);
+  const double finite_window = 1.0 + 3.0 * longer / outputs;
   constexpr double kZ999TwoSided = 3.29;
   return std::abs(std::log(ea / eb)) <=
          kZ999TwoSided * finite_window * std::sqrt(std::max(var, 0.0));
@@ -182,6 +216,8 @@ MotionNoise imuMotionNoise(const std::vector<ImuSample>& imu, std::size_t begin,
   return MotionNoiseLadder(accel).extend(imu, begin, end, interval, extra);
 }
 
+MotionNoiseLadder::MotionNoiseLadder(bool accel) : accel_(accel) { reset(0); }
+
 void MotionNoiseLadder::reset(std::size_t begin) {
   begin_ = next_ = begin;
   run_ = 0;
@@ -189,6 +225,21 @@ void MotionNoiseLadder::reset(std::size_t begin) {
   parted_ = std::numeric_limits<double>::infinity();
   squares_ = {};
   count_ = {};
+  for (auto& stride : last_)
+    for (auto& order : stride)
+      for (Vec3& d : order) d.setZero();
+}
+
+double MotionNoiseLadder::meanSquare(int stride, int order) const {
+  if (stride < 1 || stride > kStrides || order < 1 || order > kOrders) return 0.0;
+  const auto s = static_cast<std::size_t>(stride - 1), k = static_cast<std::size_t>(order - 1);
+  if (count_[s][k] == 0) return 0.0;
+  return squares_[s][k] / (kLadder.taps[s][k].norm * 3.0 * static_cast<double>(count_[s][k]));
+}
+
+std::size_t MotionNoiseLadder::differences(int stride, int order) const {
+  if (stride < 1 || stride > kStrides || order < 1 || order > kOrders) return 0;
+  return count_[static_cast<std::size_t>(stride - 1)][static_cast<std::size_t>(order - 1)];
 }
 
 MotionNoise MotionNoiseLadder::extend(const std::vector<ImuSample>& imu, std::size_t begin,
@@ -200,13 +251,12 @@ MotionNoise MotionNoiseLadder::extend(const std::vector<ImuSample>& imu, std::si
   const bool same_joins = interval > 0 ? joined_ <= cut && parted_ > cut : joined_ == 0;
   if (begin != begin_ || end < next_ || !same_joins) reset(begin);
   const bool accel = accel_;
-  std::array<std::array<DifferenceTaps, kLadderOrders>, kLadderStrides> taps;
+  const LadderTable& table = kLadder;
   std::array<std::array<double, kLadderOrders>, kLadderStrides>& squares = squares_;
   std::array<std::array<std::size_t, kLadderOrders>, kLadderStrides>& count = count_;
-  for (int s = 0; s < kLadderStrides; ++s)
-    for (int k = 0; k < kLadderOrders; ++k) taps[s][k] = differenceTaps(k + 1, s + 1);
-  auto value = [&](std::size_t i) -> const Vec3& { return accel ? imu[i].accel : imu[i].gyro; };
-  // run: consecutive measured samples ending at j without a gap between them.
+  // run: consecutive measured samples ending at j without a gap between them. The order-k
+  // difference over stride s at j exists where run >= k s + 1; it is the order k - 1 one at j
+  // less that at j - s, which then exists as well (and was kept in last_ then).
   int run = run_;
   for (std::size_t j = next_; j < end; ++j) {
     bool joined = false;
@@ -219,17 +269,21 @@ MotionNoise MotionNoiseLadder::extend(const std::vector<ImuSample>& imu, std::si
         parted_ = std::min(parted_, dt);
     }
     run = !measuredReading(extra, j, accel) ? 0 : (joined ? std::min(run + 1, kMostTaps) : 1);
-    for (int s = 0; s < kLadderStrides; ++s)
+    const Vec3& x = accel ? imu[j].accel : imu[j].gyro;
+    for (int s = 0; s < kLadderStrides; ++s) {
+      const int stride = s + 1;
+      const std::size_t slot = j % static_cast<std::size_t>(stride);
+      Vec3 d = x;  // the order-k difference at j (unscaled)
       for (int k = 0; k < kLadderOrders; ++k) {
-        const DifferenceTaps& d = taps[s][k];
-        if (run < d.length) break;  // the higher orders are longer still
-        Vec3 sum = Vec3::Zero();
-        for (int t = 0; t < d.length; t += s + 1)
-          sum += d.tap[static_cast<std::size_t>(t)] *
-                 value(j + 1 - static_cast<std::size_t>(d.length - t));
-        squares[s][k] += sum.squaredNorm();
+        Vec3& kept = last_[s][k][slot];
+        const Vec3 earlier = kept;  // the order-k difference at j - stride
+        kept = d;
+        if (run < (k + 1) * stride + 1) break;  // the higher orders are longer still
+        d -= earlier;
+        squares[s][k] += d.squaredNorm();
         ++count[s][k];
       }
+    }
   }
   run_ = run;
   next_ = std::max(next_, end);
@@ -241,24 +295,22 @@ MotionNoise MotionNoiseLadder::extend(const std::vector<ImuSample>& imu, std::si
     plateau[s] = -1;
     if (count[s][kLadderOrders - 1] < kMinDifferences) return {};
     std::array<double, kLadderOrders> e{};
-    for (int k = 0; k < kLadderOrders; ++k)
-      e[k] = squares[s][k] / (3.0 * static_cast<double>(count[s][k]));
+    for (int k = 0; k < kLadderOrders; ++k) e[k] = meanSquare(s + 1, k + 1);
     const double n = static_cast<double>(count[s][kLadderOrders - 1]);
     auto agree = [&](int k) {
-      return sameWhiteLevel(e[k], e[k + 1], taps[s][k], taps[s][k + 1], n);
+      return sameWhiteLevel(e[k], e[k + 1], table, Rung{s, k}, Rung{s, k + 1}, n);
     };
     for (int k = 0; k + 2 < kLadderOrders && plateau[s] < 0; ++k)
       if (agree(k) && agree(k + 1)) plateau[s] = k;
     if (plateau[s] < 0) return {};
     level[s] = e[plateau[s]];
   }
-  const DifferenceTaps& a = taps[0][plateau[0]];
-  const DifferenceTaps& b = taps[1][plateau[1]];
+  const Rung a{0, plateau[0]}, b{1, plateau[1]};
   const double n_b = static_cast<double>(count[1][plateau[1]]);
-  if (!sameWhiteLevel(level[0], level[1], a, b, n_b)) return {};
+  if (!sameWhiteLevel(level[0], level[1], table, a, b, n_b)) return {};
   MotionNoise out;
   out.sigma = std::sqrt(level[0]);
-  out.dof = 3.0 * static_cast<double>(count[0][plateau[0]]) / crossSquares(a, a);
+  out.dof = 3.0 * static_cast<double>(count[0][plateau[0]]) / table.cross[0][a.k][0][a.k];
   out.order = plateau[0] + 1;
   return out;
 }

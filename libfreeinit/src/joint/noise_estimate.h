@@ -122,18 +122,29 @@ MotionNoise imuMotionNoise(const std::vector<ImuSample>& imu, std::size_t begin,
 
 /// imuMotionNoise's sums kept between calls over a span that grows at its end, so that every
 /// sample's differences are taken once: extend() to `end` gives what imuMotionNoise over
-/// [begin, end) would (the same sums, added in the same order). A call with another begin, an
+/// [begin, end) would (it is imuMotionNoise's implementation: the same differences, summed in
+/// the same sample order, whatever the calls' split of the span). A call with another begin, an
 /// earlier end, or a nominal interval that would join or part two samples already summed
 /// otherwise, starts again from `begin`.
+///
+/// Each sample's differences come from the orders below (the k-th difference over stride s is
+/// the (k-1)-th at the sample less the (k-1)-th s samples earlier), so a sample costs O(orders)
+/// per stride; the last s differences of each order are kept for the next samples.
 class MotionNoiseLadder {
  public:
-  explicit MotionNoiseLadder(bool accel) : accel_(accel) {}
+  explicit MotionNoiseLadder(bool accel);
   /// imuMotionNoise(imu, begin, end, accel, interval, extra), from the sums so far.
   MotionNoise extend(const std::vector<ImuSample>& imu, std::size_t begin, std::size_t end,
                      double interval, const std::vector<ImuExtraNoise>* extra);
 
   static constexpr int kOrders = 8;   ///< difference orders 1..8
   static constexpr int kStrides = 2;  ///< over consecutive samples and every other one
+
+  /// The mean square per axis of the scaled differences of `order` (1..kOrders) over samples
+  /// `stride` (1..kStrides) apart summed so far (the signal's unit squared; 0 before any).
+  double meanSquare(int stride, int order) const;
+  /// How many differences of `order` over `stride` are summed so far.
+  std::size_t differences(int stride, int order) const;
 
  private:
   void reset(std::size_t begin);
@@ -142,8 +153,12 @@ class MotionNoiseLadder {
   int run_ = 0;                       ///< consecutive measured samples ending at next_ - 1
   /// [s] the largest interval joined and the smallest parted so far (the interval's test).
   double joined_ = 0, parted_ = std::numeric_limits<double>::infinity();
+  /// Sums of the squared norms of the unscaled differences (binomial taps) per stride, order.
   std::array<std::array<double, kOrders>, kStrides> squares_{};
   std::array<std::array<std::size_t, kOrders>, kStrides> count_{};
+  /// The unscaled differences of orders 0 (the samples) to kOrders - 1 at the last s samples
+  /// of stride s, the one at sample j in slot j % s; valid where the run covers them.
+  std::array<std::array<std::array<Vec3, kStrides>, kOrders>, kStrides> last_;
 };
 
 }  // namespace freeinit::detail
