@@ -126,8 +126,8 @@ struct JointParams {
   /// [Hz] the filter's nodes at about this rate, at every m-th IMU sample, m = max(1,
   /// round(IMU rate / node_rate)); the samples between two nodes are all integrated, so a fast
   /// IMU's information is kept while a window's cost no longer grows with its rate (0: a node
-  /// at every IMU sample).
-  double node_rate = 0.0;
+  /// at every IMU sample). An IMU below 1.5 times the rate has a node at every sample.
+  double node_rate = 200.0;
   /// While the IMU shows rest, the platform does not rotate: the gyro then measures its bias.
   bool zero_rate_at_rest = true;
   /// The gyro's white noise carried through the lever arm into the LiDAR velocity of all the
