@@ -53,17 +53,33 @@ struct Difference {
   double velocity = 0, gravity = 0, gyro_bias = 0, accel_bias = 0;
 };
 
-Difference differenceOverBound(const sim::ScenarioConfig& c, const char* name) {
-  const sim::Recording rec = sim::simulate(c);
-  FreeInitConfig cfg;
+/// A recording initialized with a node per sample and with nodes at 200 Hz, the estimator handed
+/// the scenario's noise and declared calibration.
+struct Layouts {
+  FreeInitConfig cfg;  ///< the bounded layout's
+  InitResult every, bounded;
+};
+
+Layouts bothLayouts(const sim::ScenarioConfig& c, const sim::Recording& rec) {
+  Layouts l;
+  FreeInitConfig& cfg = l.cfg;
   cfg.extrinsics = rec.declared_extrinsics;
   cfg.doppler.doppler_sigma = c.doppler_sigma;
   cfg.imu.gyro_sigma = c.gyro_sigma;
   cfg.imu.accel_sigma = c.accel_sigma;
   cfg.joint.node_rate = 0;
-  const InitResult every = FreeInit::run(cfg, rec.imu, rec.frames);
-  cfg.joint.node_rate = 200.0;  // every fifth sample
-  const InitResult fifth = FreeInit::run(cfg, rec.imu, rec.frames);
+  l.every = FreeInit::run(cfg, rec.imu, rec.frames);
+  cfg.joint.node_rate = 200.0;
+  l.bounded = FreeInit::run(cfg, rec.imu, rec.frames);
+  return l;
+}
+
+Difference differenceOverBound(const sim::ScenarioConfig& c, const char* name) {
+  const sim::Recording rec = sim::simulate(c);
+  const Layouts l = bothLayouts(c, rec);
+  const FreeInitConfig& cfg = l.cfg;
+  const InitResult& every = l.every;
+  const InitResult& fifth = l.bounded;  // every fifth sample
   Difference d;
   EXPECT_TRUE(every.state.ok()) << every.state.message;
   EXPECT_TRUE(fifth.state.ok()) << fifth.state.message;
@@ -174,22 +190,15 @@ TEST(NodeRate, TwoSamplesPerNodeReadTheGyroOnEitherSide) {
   c.imu_rate = rate;
   c.lidar_time_offset = 0.008088130167;
   const sim::Recording rec = sim::simulate(c);
-  FreeInitConfig cfg;
-  cfg.extrinsics = rec.declared_extrinsics;
-  cfg.doppler.doppler_sigma = c.doppler_sigma;
-  cfg.imu.gyro_sigma = c.gyro_sigma;
-  cfg.imu.accel_sigma = c.accel_sigma;
-  cfg.joint.node_rate = 0;
-  const InitResult every = FreeInit::run(cfg, rec.imu, rec.frames);
-  cfg.joint.node_rate = 200.0;
-  const InitResult bounded = FreeInit::run(cfg, rec.imu, rec.frames);
+  const Layouts l = bothLayouts(c, rec);
+  const InitResult &every = l.every, &bounded = l.bounded;
   ASSERT_TRUE(every.state.ok()) << every.state.message;
   ASSERT_TRUE(bounded.state.ok()) << bounded.state.message;
   const sim::InitErrors e = sim::evaluate(bounded.state, rec);
   constexpr double kChi2Quantile999Dof3 = 16.27;
   EXPECT_LT(e.nees_accel_bias, kChi2Quantile999Dof3);
   EXPECT_LT(e.nees_vel_b, kChi2Quantile999Dof3);
-  const eval::Bound b = sim::cramerRaoBound(rec, cfg, every);
+  const eval::Bound b = sim::cramerRaoBound(rec, l.cfg, every);
   ASSERT_TRUE(b.ok) << b.message;
   EXPECT_LT((bounded.state.b_a - every.state.b_a).norm(), b.accel_bias);
 }
