@@ -19,6 +19,9 @@ namespace freeinit {
 namespace {
 
 const Vec3 kGravityW(0, 0, -kGravity);
+// A preintegration made at biases b0 is applied at b to first order in b - b0 while that change
+// over its span tau stays within these (chainHolds() says why): [rad], [m/s].
+constexpr double kMostGyroBiasStep = 1e-3, kMostAccelBiasStep = 1e-2;
 /// Step of the central differences of the numerical Jacobians (state units: rad, m, m/s, rad/s,
 /// m/s^2; the functions are smooth and O(1-100) in these units).
 constexpr double kJacobianStep = 1e-6;
@@ -685,7 +688,7 @@ FilterState DopplerInertialFilter::propagate(const Node& n, const FilterState& x
                                              IntegrationJacobian* F, IntervalNoise* noise) const {
   if (n.k_next == n.k + 1) {
     const double tau = imu_[n.k + 1].t - imu_[n.k].t;
-    FilterState y = integrate(x, imu_, n.k, tau, F, imuAlong(imu_, n.k, tau, n.step_imu));
+    FilterState y = applyPreintegration(increment(x, imu_, n.k, tau, n.step).pre, imu_, x, F);
     y.t = imu_[n.k + 1].t;
     return y;
   }
@@ -868,11 +871,69 @@ bool DopplerInertialFilter::chainHolds(const PreintegrationChain& chain, std::si
   // what a window resolves), whatever the span. With limits ten times smaller, the smoother's
   // first steps remade a chain for every second sample on dyna_05 at 1 kHz (nodes at 200 Hz),
   // a third of the integrations.
-  constexpr double kMostGyroBiasStep = 1e-3, kMostAccelBiasStep = 1e-2;  // [rad], [m/s]
   const std::vector<Preintegration>& c = chain.prefix;
   return !c.empty() && c.front().from == from && (c.front().to > from) == forward &&
          (x.b_g - c.front().b_g).cwiseAbs().maxCoeff() * span <= kMostGyroBiasStep &&
          (x.b_a - c.front().b_a).cwiseAbs().maxCoeff() * span <= kMostAccelBiasStep;
+}
+
+const DopplerInertialFilter::Increment& DopplerInertialFilter::increment(
+    const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k, double tau,
+    Increment& cache, const Node* chain, PreintegrationChains* pre, const Node* before) {
+  // At x's biases rounded to a grid whose half cell is the change chainHolds() allows over the
+  // span: so the increment, and all that reads it, depends on the data and x only, not on the
+  // order of the calls that made it (at a 200 Hz IMU the cells are 0.4 rad/s and 4 m/s^2 wide:
+  // made once, at zero biases).
+  FilterState at;
+  if (tau != 0) {
+    const double g = 2.0 * kMostGyroBiasStep / std::abs(tau),
+                 a = 2.0 * kMostAccelBiasStep / std::abs(tau);
+    at.b_g = (x.b_g / g).array().round() * g;
+    at.b_a = (x.b_a / a).array().round() * a;
+  }
+  const Preintegration& P = cache.pre;
+  if (!(cache.tau == tau && (P.samples == imu.size() || P.complete) && P.b_g == at.b_g &&
+        P.b_a == at.b_a))
+    makeIncrement(at, imu, k, tau, cache, chain, pre, before);
+  return cache;
+}
+
+void DopplerInertialFilter::makeIncrement(const FilterState& x, const std::vector<ImuSample>& imu,
+                                          std::size_t k, double tau, Increment& cache,
+                                          const Node* chain, PreintegrationChains* pre,
+                                          const Node* before) {
+  Preintegration& P = cache.pre;
+  // From R = I, v = p = 0 at x's biases (tau = 0: the identity, the sample's gyro); gravity
+  // taken out as preintegrated() does.
+  FilterState origin;
+  origin.b_g = x.b_g;
+  origin.b_a = x.b_a;
+  origin.t = imu[k].t;
+  const ImuAlong* along = nullptr;
+  FilterState y;
+  if (tau == 0) {
+    y = origin;
+    P.J = IntegrationJacobian{};
+  } else if (chain != nullptr) {
+    y = integrateAcross(origin, imu, k, tau, &P.J, chain->ahead, chain->behind, cache.along, &along,
+                        pre, before);
+  } else {
+    along = &imuAlong(imu, k, tau, cache.along);
+    y = integrate(origin, imu, k, tau, &P.J, *along);
+  }
+  cache.tau = tau;
+  cache.gyro = along != nullptr ? along->gyro[2] : imu[k].gyro;
+  P.from = P.to = k;
+  P.samples = imu.size();
+  // Every interpolation it read (those of the steps back from sample k reach k + 2) had a
+  // sample after its span.
+  std::size_t lo = 0;
+  P.complete = interpolationSpan(imu, imu[k].t + std::max(0.0, tau), k, lo) + 1 < imu.size();
+  P.b_g = x.b_g;
+  P.b_a = x.b_a;
+  P.dR = y.R_wb;
+  P.dv = y.v_w - kGravityW * tau;
+  P.dp = y.p_w - 0.5 * kGravityW * (tau * tau);
 }
 
 bool DopplerInertialFilter::backwardThrough(const std::vector<ImuSample>& imu, const Node& before,
@@ -1195,28 +1256,25 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
                                           Eigen::Matrix<double, 3, kStateDim>* J, FitInstant* cache,
                                           const Node* chain, PreintegrationChains* pre) const {
   const double tau_true = tau - dt_ref;
-  IntegrationJacobian Js;
-  // The IMU at the LiDAR time: the node's sample at tau_true = 0, otherwise the integration's
-  // own interpolation at its end (the same time and hint).
-  Vec3 gyro = imu[k].gyro;
-  IntegrationJacobian* Jy = J != nullptr ? &Js : nullptr;
-  FilterState y;
-  if (tau_true == 0) {
-    y = integrate(x, imu, k, 0.0, Jy, ImuAlong{});
-  } else if (chain != nullptr && cache != nullptr) {
-    // Across the samples between: the IMU at the end is that of the integration's last step
-    // (none when tau_true is below the time's resolution).
-    const ImuAlong* along = nullptr;
-    y = integrateAcross(x, imu, k, tau_true, Jy, chain->ahead, chain->behind, cache->along, &along,
-                        pre, tau_true < 0 ? nodeBefore(*chain) : nullptr);
-    if (along != nullptr) gyro = along->gyro[2];
-  } else {
-    ImuAlong sampled;
-    if (cache == nullptr) sampleImu(imu, k, tau_true, sampled);
-    const ImuAlong& along = cache != nullptr ? imuAlong(imu, k, tau_true, cache->along) : sampled;
-    y = integrate(x, imu, k, tau_true, Jy, along);
-    gyro = along.gyro[2];
-  }
+  // The integration to the LiDAR time as an increment from the node's sample (without a cache
+  // made at x's biases: exact), applied at x's biases: the attitude there R E, the body
+  // velocity E^T (u + dv) with u = R^T (v + g tau) the start's velocity and gravity's share in
+  // its body frame. The IMU's gyro there: the node's sample at tau_true = 0, otherwise the
+  // integration's own interpolation at its end.
+  Increment made;
+  if (cache == nullptr) makeIncrement(x, imu, k, tau_true, made);
+  const Increment& inc =
+      cache != nullptr ? increment(x, imu, k, tau_true, cache->increment, chain, pre,
+                                   chain != nullptr && tau_true < 0 ? nodeBefore(*chain) : nullptr)
+                       : made;
+  const Preintegration& P = inc.pre;
+  const Vec3 dbg = x.b_g - P.b_g;
+  const Mat3 E = P.dR * Exp(Vec3(P.J.th_bg * dbg));
+  const Vec3 dv = P.dv + P.J.v_bg * dbg + P.J.v_ba * (x.b_a - P.b_a);
+  const Mat3 Rt0 = x.R_wb.transpose();
+  const Vec3 u = Rt0 * (x.v_w + kGravityW * tau_true);
+  const Vec3 v_b = E.transpose() * (u + dv);
+  Vec3 gyro = inc.gyro;
   if (chain != nullptr) {
     // The lever arm's gyro: the node's fit (gyroFit); the offset's column reads the motion's
     // rate (motionAt()) as for a node per sample, or this fit's where no line holds.
@@ -1225,9 +1283,7 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
     gyro = c[0] + s * (c[1] + s * c[2]);
   }
   const Vec3 omega = gyro - x.b_g;
-  const Mat3 Rt = y.R_wb.transpose();
   const Mat3 Rlb = R_bl.transpose();
-  const Vec3 v_b = Rt * y.v_w;
   Vec3 v_l = Rlb * (v_b + omega.cross(p_bl_));
   // The offset's share: dv_l/d(dt_l) = -dv_l/dt = -R_bl^T (a_b - omega x v_b + alpha x p_bl),
   // a_b = f - b_a + R^T g, with the rates the motion's (motionAt()), not the samples': where
@@ -1260,22 +1316,21 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
       const std::array<Vec3, 3>& c = chain->gyro_fit;
       alpha = (c[1] + 2.0 * (tau * chain->inv_h) * c[2]) * chain->inv_h;
     }
-    const Vec3 a_b = accel - x.b_a + Rt * kGravityW;
+    const Vec3 a_b = accel - x.b_a + E.transpose() * (Rt0 * kGravityW);
     column = -Rlb * (a_b - omega.cross(v_b) + alpha.cross(p_bl_));
     v_l += column * (x.dt_l - dt_ref);
   }
   if (J != nullptr) {
-    // dv_b = R^T dv_w + [v_b]x dtheta;  dv_l = R_bl^T (dv_b + [p_bl]x db_g) + [v_l]x dphi_bl
-    // ((R_bl Exp(dphi))^T = Exp(-dphi) R_bl^T).
-    // Only the attitude and velocity rows of the integration's Jacobian are read, and of those
-    // only the blocks of dtheta, dv, db_g and db_a are not zero.
-    const Mat3 S_vb = skew(v_b);
+    // The start's attitude R Exp(dtheta) moves u by [u]x dtheta, so v_b = E^T (u + dv) by
+    // E^T [u]x dtheta; v by E^T R^T dv; the biases through dv's blocks, E^T J.v_b, and E's,
+    // [v_b]x J.th_bg. dv_l = R_bl^T (dv_b + [p_bl]x db_g) + [v_l]x dphi_bl ((R_bl Exp(dphi))^T
+    // = Exp(-dphi) R_bl^T). The Doppler does not depend on the position.
+    const Mat3 M = Rlb * E.transpose();
     J->block<3, 3>(0, kPos).setZero();
-    J->block<3, 3>(0, kTheta) = Rlb * Mat3(Rt * Js.v_th + S_vb * Js.th_th);
-    J->block<3, 3>(0, kVel) = Rlb * Rt;
-    J->block<3, 3>(0, kBg) = Rlb * Mat3(Rt * Js.v_bg + S_vb * Js.th_bg);
-    J->block<3, 3>(0, kBa) = Rlb * Mat3(Rt * Js.v_ba);
-    J->block<3, 3>(0, kBg) += Rlb * skew(p_bl_);
+    J->block<3, 3>(0, kTheta) = M * skew(u);
+    J->block<3, 3>(0, kVel) = M * Rt0;
+    J->block<3, 3>(0, kBg) = M * P.J.v_bg + Rlb * Mat3(skew(v_b) * P.J.th_bg + skew(p_bl_));
+    J->block<3, 3>(0, kBa) = M * P.J.v_ba;
     // The correction is additive (phi_bl + dphi): Exp(phi + dphi) = Exp(phi) Exp(J_r(phi) dphi).
     J->block<3, 3>(0, kRot) = skew(v_l) * *Jr_phi;
     J->col(kTime) = column;

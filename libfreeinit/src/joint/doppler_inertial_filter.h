@@ -432,11 +432,7 @@ class DopplerInertialFilter {
     bool gyro_line = false;   ///< motionAt()'s result, and its accel and gyro_rate
     Vec3 accel = Vec3::Zero(), gyro_rate = Vec3::Zero();
   };
-  /// A fit instant's caches: the IMU along the integration to it, the motion there.
-  struct FitInstant {
-    ImuAlong along;
-    MotionCache motion;
-  };
+
   /// cache, sampled again unless it holds tau from sample k with as many samples as there are
   /// (or with all those it reads, complete).
   static const ImuAlong& imuAlong(const std::vector<ImuSample>& imu, std::size_t k, double tau,
@@ -469,6 +465,22 @@ class DopplerInertialFilter {
     Mat3 dR = Mat3::Identity();
     Vec3 dv = Vec3::Zero(), dp = Vec3::Zero();
     IntegrationJacobian J;  ///< of the integration from R = I, v = p = 0 at b0
+  };
+  /// The integration from a node's sample over tau (to a fit instant, or to the next sample) as
+  /// an increment (a Preintegration with to = from), made at one set of biases and applied at
+  /// the state's to first order, as a spanning interval's: a linearization then costs a few
+  /// products, whatever the IMU's rate, instead of an integration with its Jacobian (increment()).
+  struct Increment {
+    /// The IMU along its last step; [s] its span (NaN: none).
+    ImuAlong along;
+    double tau = std::numeric_limits<double>::quiet_NaN();
+    Preintegration pre;
+    Vec3 gyro = Vec3::Zero();  ///< [rad/s] the IMU's gyro at its end (the last step's)
+  };
+  /// A fit instant's caches: the integration to it, the motion there.
+  struct FitInstant {
+    Increment increment;
+    MotionCache motion;
   };
   /// The preintegrations from one sample to each sample after it (or before it), made at one set
   /// of biases: prefix[i] to from + i + 1 (from - i - 1). An integration whose end moves (a fit
@@ -533,10 +545,10 @@ class DopplerInertialFilter {
     /// the state, so the smoother's iterations sample it once (a cache; the filter is not for
     /// concurrent use).
     mutable std::array<FitInstant, 3> fit_imu;
-    mutable ImuAlong step_imu;
+    mutable Increment step;  ///< to the next sample (a node per sample)
     /// Intervals across several samples (spansSamples()): the IMU along the steps from sample k
     /// to each sample after it up to k_next (ahead[i]: k + i to k + i + 1) and before it down to
-    /// k_prev (behind[i]: k - i to k - i - 1), sampled as step_imu; fit_imu then holds the
+    /// k_prev (behind[i]: k - i to k - i - 1), sampled as ImuAlong; fit_imu then holds the
     /// last, partial step of each fit instant's integration.
     mutable std::vector<ImuAlong> ahead, behind;
     /// ... and the preintegrations of the whole intervals of the fit instants' integrations and
@@ -623,6 +635,19 @@ class DopplerInertialFilter {
   /// enough to x's over a span of `span` [s] (preintegrated()).
   static bool chainHolds(const PreintegrationChain& chain, std::size_t from, bool forward,
                          double span, const FilterState& x);
+  /// The increment from sample k over tau for a state x: from the cache when it holds it (that
+  /// span, with as many samples as there are or all it reads, at the biases it is made at for
+  /// x), else made (makeIncrement()).
+  static const Increment& increment(const FilterState& x, const std::vector<ImuSample>& imu,
+                                    std::size_t k, double tau, Increment& cache,
+                                    const Node* chain = nullptr,
+                                    PreintegrationChains* pre = nullptr,
+                                    const Node* before = nullptr);
+  /// The increment from sample k over tau at x's biases into cache (chain: the node at sample k,
+  /// across its samples with its caches, pre and before as integrateAcross()).
+  static void makeIncrement(const FilterState& x, const std::vector<ImuSample>& imu, std::size_t k,
+                            double tau, Increment& cache, const Node* chain = nullptr,
+                            PreintegrationChains* pre = nullptr, const Node* before = nullptr);
   /// D: the preintegration from the next node's sample (before.k_next) back to sample j
   /// (before.k <= j < before.k_next), from the chain forward of the node before (its prefixes to
   /// both samples, the first turned back); false (D not set) unless that chain holds at x's
