@@ -1428,6 +1428,7 @@ void DopplerInertialFilter::start(const FilterState& x0, const StartPrior& prior
   smoothed_ = 0;
   linearized_ = 0;
   forward_kept_ = 0;
+  test_kept_.nodes = 0;
   forward_rss_ = 0;
   forward_returns_ = 0;
   x0_prior_ = x0;
@@ -2241,18 +2242,26 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
     for (std::size_t k = 0; k < N; ++k) linearize(k, fresh[k]);
     lin = fresh.data();
   }
-  constexpr double kUninformedVelocity = 1e6;
-  MatS P = priorCovariance(lin[0].x, kUninformedVelocity);
-  P.block<3, 3>(kRot, kRot).diagonal().setConstant(rotation_sigma * rotation_sigma);
-  P(kTime, kTime) = time_sigma * time_sigma;
-  VecS dx = priorMean(lin[0].x);
-  for (std::size_t k = 0; k < N; ++k) {
-    const Node& n = nodes_[k];
-    const Linearization& L = lin[k];
-    dx = restUpdate(n, n.rest_gyro, L.x, dopplerUpdate(n, L.Q, L.G, dx, P, true), P, true);
-    if (k + 1 == N) break;
-    dx = L.F.times(dx) + boxminus(L.x_next, lin[k + 1].x);
-    P = propagateCovariance(L.F, P, n, true);
+  VecS dx;
+  MatS P;
+  const KeptCalibrationPass& kept = test_kept_;
+  if (kept.nodes > 0 && kept.nodes <= N && kept.rotation_sigma == rotation_sigma &&
+      kept.time_sigma == time_sigma) {
+    // On from the kept pass's last node: its transition to the first node added since, at the
+    // point that pass linearized it.
+    dx = kept.dx;
+    P = kept.P;
+    if (kept.nodes < N) {
+      const Node& n = nodes_[kept.nodes - 1];
+      IntegrationJacobian F;
+      const FilterState x_next = propagate(n, kept.x, &F);
+      dx = F.times(dx) + boxminus(x_next, lin[kept.nodes].x);
+      P = propagateCovariance(F, P, n, true);
+      calibrationPass(lin, kept.nodes, N, dx, P);
+    }
+  } else {
+    calibrationPrior(lin[0].x, rotation_sigma, time_sigma, dx, P);
+    calibrationPass(lin, 0, N, dx, P);
   }
   out.correction = dx;
   out.covariance = P;
@@ -2266,6 +2275,40 @@ DopplerInertialFilter::CalibrationTest DopplerInertialFilter::testCalibration(
   out.mahalanobis2 = c.dot(Pc.ldlt().solve(c));
   out.ok = std::isfinite(out.mahalanobis2);
   return out;
+}
+
+void DopplerInertialFilter::testCalibrationAhead(double rotation_sigma, double time_sigma) {
+  const std::size_t N = nodes_.size();
+  test_kept_.nodes = 0;
+  if (N == 0 || forward_kept_ != N) return;  // no pass made ahead to go along with
+  KeptCalibrationPass& kept = test_kept_;
+  calibrationPrior(linearization_[0].x, rotation_sigma, time_sigma, kept.dx, kept.P);
+  calibrationPass(linearization_.data(), 0, N, kept.dx, kept.P);
+  kept.rotation_sigma = rotation_sigma;
+  kept.time_sigma = time_sigma;
+  kept.x = linearization_[N - 1].x;
+  kept.nodes = N;
+}
+
+void DopplerInertialFilter::calibrationPrior(const FilterState& x0, double rotation_sigma,
+                                             double time_sigma, VecS& dx, MatS& P) const {
+  constexpr double kUninformedVelocity = 1e6;
+  P = priorCovariance(x0, kUninformedVelocity);
+  P.block<3, 3>(kRot, kRot).diagonal().setConstant(rotation_sigma * rotation_sigma);
+  P(kTime, kTime) = time_sigma * time_sigma;
+  dx = priorMean(x0);
+}
+
+void DopplerInertialFilter::calibrationPass(const Linearization* lin, std::size_t from,
+                                            std::size_t to, VecS& dx, MatS& P) const {
+  for (std::size_t k = from; k < to; ++k) {
+    const Node& n = nodes_[k];
+    const Linearization& L = lin[k];
+    dx = restUpdate(n, n.rest_gyro, L.x, dopplerUpdate(n, L.Q, L.G, dx, P, true), P, true);
+    if (k + 1 == to) break;
+    dx = L.F.times(dx) + boxminus(L.x_next, lin[k + 1].x);
+    P = propagateCovariance(L.F, P, n, true);
+  }
 }
 
 std::vector<DopplerInertialFilter::Vec9> DopplerInertialFilter::lidarVelocityPolynomials() const {

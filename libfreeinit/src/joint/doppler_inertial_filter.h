@@ -265,6 +265,11 @@ class DopplerInertialFilter {
     double mahalanobis2 = 0;  ///< of the calibration correction (4 dof)
   };
   CalibrationTest testCalibration(double rotation_sigma, double time_sigma) const;
+  /// After smooth(.., ahead): testCalibration()'s pass over the nodes so far, made now around the
+  /// states that smoothing left, and kept: testCalibration() with the same std then continues it
+  /// over the nodes added since (unless one of these changed since, as smooth()'s kept pass).
+  /// So the call that closes a window runs the test over its last nodes only.
+  void testCalibrationAhead(double rotation_sigma, double time_sigma);
 
   std::size_t nodes() const { return nodes_.size(); }
   /// Node k's IMU sample (index among those given to addImu()).
@@ -777,7 +782,27 @@ class DopplerInertialFilter {
   /// Node k's data (its returns, rows or rest) change: the kept forward pass holds before it
   /// only. Every change of a node's data calls it (beginNode, update, updateRest,
   /// cancelRestFrom, removePoint).
-  void nodeChanged(std::size_t k) { forward_kept_ = std::min(forward_kept_, k); }
+  void nodeChanged(std::size_t k) {
+    forward_kept_ = std::min(forward_kept_, k);
+    if (k < test_kept_.nodes) test_kept_.nodes = 0;
+  }
+  /// testCalibrationAhead()'s pass: its prior's std, the mean and covariance after the update of
+  /// its last node (nodes - 1, 0: none kept) and that node's linearization point.
+  struct KeptCalibrationPass {
+    std::size_t nodes = 0;
+    double rotation_sigma = 0, time_sigma = 0;
+    VecS dx = VecS::Zero();
+    MatS P = MatS::Zero();
+    FilterState x;
+  };
+  KeptCalibrationPass test_kept_;
+  /// The calibration test's prior (testCalibration()) at the linearization point x0.
+  void calibrationPrior(const FilterState& x0, double rotation_sigma, double time_sigma, VecS& dx,
+                        MatS& P) const;
+  /// The calibration test's pass over nodes [from, to) (each node's update, the transitions
+  /// between them) around lin (indexed by node), from dx and P at node from's prediction.
+  void calibrationPass(const Linearization* lin, std::size_t from, std::size_t to, VecS& dx,
+                       MatS& P) const;
   /// Moves the nodes' dt_ref to their offsets where those moved away (kOffsetRefStep), and makes
   /// again the lever-arm gyro's fits (and the rows) that moved or lacked samples.
   void referOffsets();

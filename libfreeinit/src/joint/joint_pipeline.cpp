@@ -519,6 +519,9 @@ class JointPipeline final : public Pipeline {
         updateNoise();
         const double t0 = wallSeconds();
         filter_->smooth(kEarlyLooseness, true);
+        // The calibration test's pass over these nodes too: the closing call continues it.
+        double rot = 0, dt = 0;
+        if (calibrationTestStd(rot, dt)) filter_->testCalibrationAhead(rot, dt);
         r.diag.time_solver += wallSeconds() - t0;
         r.diag.early_smoothing_to = hi - t_ref_;
         early_smoothed_ = true;
@@ -1168,16 +1171,26 @@ class JointPipeline final : public Pipeline {
 
   /// The calibration test: do the data say the declared LiDAR-IMU calibration is off, and would
   /// an error in it go unnoticed by this window while moving the state by more than users notice?
+  /// The calibration test's prior std (rotation [rad], clock offset [s]); false: no test.
+  /// A clock offset the state estimates is tested about the estimate with the state's own prior:
+  /// what the warnings name is the calibration taken as exact.
+  bool calibrationTestStd(double& rot, double& dt) const {
+    const JointParams& e = cfg_.joint;
+    rot = e.test_rotation_sigma_deg * kPi / 180.0;
+    dt = e.time_offset_sigma > 0 ? e.time_offset_sigma : e.test_time_offset_sigma;
+    if (!(rot > 0 || dt > 0)) return false;
+    rot = std::max(rot, 1e-7);
+    dt = std::max(dt, 1e-7);
+    return true;
+  }
+
   void testCalibration(InitResult& r) {
     const JointParams& e = cfg_.joint;
-    // A clock offset the state estimates is tested about the estimate with the state's own prior:
-    // what the warnings below name is the calibration taken as exact.
     const bool time_estimated = e.time_offset_sigma > 0;
-    const double rot = e.test_rotation_sigma_deg * kPi / 180.0,
-                 dt = time_estimated ? e.time_offset_sigma : e.test_time_offset_sigma;
-    if (!(rot > 0 || dt > 0)) return;
+    double rot = 0, dt = 0;
+    if (!calibrationTestStd(rot, dt)) return;
     using F = DopplerInertialFilter;
-    const F::CalibrationTest t = filter_->testCalibration(std::max(rot, 1e-7), std::max(dt, 1e-7));
+    const F::CalibrationTest t = filter_->testCalibration(rot, dt);
     if (!t.ok) return;
     auto fmt = [](double v, int digits = 2) { return formatSignificant(v, digits); };
     const double phi_deg = t.correction.segment<3>(F::kRot).norm() * 180.0 / kPi;
