@@ -680,6 +680,21 @@ TEST(DopplerInertialFilter, SmoothingAheadHoldsOnlyWhereTheRestStays) {
                       runWindow(m, imu, ret, noise, 75, true, rest));
 }
 
+/// A window's data: the IMU (0.6 s) and 20,000 returns (0.5 s) of the motion drawn with `seed`,
+/// the LiDAR clock `offset` [s] ahead of the IMU's.
+struct OffsetWindow {
+  std::vector<ImuSample> imu;
+  Returns ret;
+};
+OffsetWindow offsetWindow(const test::AnalyticMotion& m, const Noise& noise, double offset,
+                          unsigned seed = 21) {
+  std::mt19937 rng(seed);
+  OffsetWindow w;
+  w.imu = imuOf(m, 0.6, noise, rng);
+  w.ret = returnsOf(m, 0.5, 20000, noise.doppler, offset, rng);
+  return w;
+}
+
 TEST(DopplerInertialFilter, CalibrationTestFlagsAnUndeclaredTimeOffset) {
   // The same window with the LiDAR clock 4 ms ahead of the IMU's, declared as synchronized: the
   // calibration test (free calibration std 1 deg, 10 ms) finds a correction far outside what the
@@ -688,10 +703,8 @@ TEST(DopplerInertialFilter, CalibrationTestFlagsAnUndeclaredTimeOffset) {
   const test::AnalyticMotion m;
   const Noise noise{0.002, 0.02, 0.03};
   for (double offset : {0.0, 0.004}) {
-    std::mt19937 rng(21);
-    const auto imu = imuOf(m, 0.6, noise, rng);
-    const Returns ret = returnsOf(m, 0.5, 20000, noise.doppler, offset, rng);
-    const WindowRun r = runWindow(m, imu, ret, noise);
+    const OffsetWindow w = offsetWindow(m, noise, offset);
+    const WindowRun r = runWindow(m, w.imu, w.ret, noise);
     const Filter::CalibrationTest c = r.filter.testCalibration(kDeg, 0.01);
     ASSERT_TRUE(c.ok);
     if (offset == 0) {
@@ -712,10 +725,9 @@ TEST(DopplerInertialFilter, NodesPolynomialsFromIncrementsAreTheIntegrations) {
   // error is ~1e-10; a first-order term left out or of the wrong sign would leave ~1e-5.
   const test::AnalyticMotion m;
   const Noise noise{0.002, 0.02, 0.03};
-  std::mt19937 rng(31);
-  const auto imu = imuOf(m, 0.6, noise, rng);
-  const Returns ret = returnsOf(m, 0.5, 20000, noise.doppler, 0.0, rng);
-  const WindowRun r = runWindow(m, imu, ret, noise, 75);
+  const OffsetWindow w = offsetWindow(m, noise, 0.0, 31);
+  const std::vector<ImuSample>& imu = w.imu;
+  const WindowRun r = runWindow(m, imu, w.ret, noise, 75);
   const Filter& f = r.filter;
   const double half = 0.5 / kImuRate;
   double worst = 0;
@@ -744,9 +756,9 @@ TEST(DopplerInertialFilter, CalibrationTestMadeAheadIsContinuedByTheClosingOne) 
   const test::AnalyticMotion m;
   const Noise noise{0.002, 0.02, 0.03};
   for (double offset : {0.0, 0.004}) {
-    std::mt19937 rng(21);
-    const auto imu = imuOf(m, 0.6, noise, rng);
-    const Returns ret = returnsOf(m, 0.5, 20000, noise.doppler, offset, rng);
+    const OffsetWindow w = offsetWindow(m, noise, offset);
+    const std::vector<ImuSample>& imu = w.imu;
+    const Returns& ret = w.ret;
     auto earlyWith = [](bool ahead_test) {
       return [ahead_test](Filter& f, std::size_t k) {
         if (k != 75) return;
