@@ -437,7 +437,6 @@ class DopplerInertialFilter {
     bool gyro_line = false;   ///< motionAt()'s result, and its accel and gyro_rate
     Vec3 accel = Vec3::Zero(), gyro_rate = Vec3::Zero();
   };
-
   /// cache, sampled again unless it holds tau from sample k with as many samples as there are
   /// (or with all those it reads, complete).
   static const ImuAlong& imuAlong(const std::vector<ImuSample>& imu, std::size_t k, double tau,
@@ -545,10 +544,10 @@ class DopplerInertialFilter {
     /// last smoothing's after) once that moved away from it (referOffsets()).
     double dt_ref = 0;
     bool rows_stale = false;  ///< the sums changed after the rows were built
-    /// The IMU along the integrations every linearization of the node repeats (to its three fit
-    /// instants, to the next node): they depend on the IMU and the clock offset only, not on
-    /// the state, so the smoother's iterations sample it once (a cache; the filter is not for
-    /// concurrent use).
+    /// The integrations every linearization of the node repeats (to its three fit instants and,
+    /// `step`, with a node per sample to the next node), as increments: they depend on the IMU,
+    /// the clock offset and the biases' grid cell only, so the smoother's iterations make them
+    /// once (a cache; the filter is not for concurrent use).
     mutable std::array<FitInstant, 3> fit_imu;
     mutable Increment step;  ///< to the next sample (a node per sample)
     /// Intervals across several samples (spansSamples()): the IMU along the steps from sample k
