@@ -931,9 +931,19 @@ void DopplerInertialFilter::makeIncrement(const FilterState& x, const std::vecto
   P.complete = interpolationSpan(imu, imu[k].t + std::max(0.0, tau), k, lo) + 1 < imu.size();
   P.b_g = x.b_g;
   P.b_a = x.b_a;
-  P.dR = y.R_wb;
-  P.dv = y.v_w - kGravityW * tau;
-  P.dp = y.p_w - 0.5 * kGravityW * (tau * tau);
+  P.endAt(y, tau);
+}
+
+void DopplerInertialFilter::Preintegration::at(const FilterState& x, Mat3& E, Vec3& dv_x) const {
+  const Vec3 dbg = x.b_g - b_g;
+  E = dR * Exp(Vec3(J.th_bg * dbg));
+  dv_x = dv + J.v_bg * dbg + J.v_ba * (x.b_a - b_a);
+}
+
+void DopplerInertialFilter::Preintegration::endAt(const FilterState& y, double tau) {
+  dR = y.R_wb;
+  dv = y.v_w - kGravityW * tau;
+  dp = y.p_w - 0.5 * kGravityW * (tau * tau);
 }
 
 bool DopplerInertialFilter::backwardThrough(const std::vector<ImuSample>& imu, const Node& before,
@@ -1057,10 +1067,7 @@ const DopplerInertialFilter::Preintegration& DopplerInertialFilter::preintegrate
     P.complete = std::max(from, j) + 3 < imu.size();
     P.b_g = y.b_g;
     P.b_a = y.b_a;
-    const double tau = imu[j].t - imu[from].t;
-    P.dR = y.R_wb;
-    P.dv = y.v_w - kGravityW * tau;
-    P.dp = y.p_w - 0.5 * kGravityW * (tau * tau);
+    P.endAt(y, imu[j].t - imu[from].t);
     P.J = total;
     c.push_back(P);
   }
@@ -1073,8 +1080,9 @@ FilterState DopplerInertialFilter::applyPreintegration(const Preintegration& P,
                                                        IntegrationJacobian* J) {
   const Vec3 dbg = x.b_g - P.b_g, dba = x.b_a - P.b_a;
   const double tau = P.J.tau;
-  const Mat3 E = P.dR * Exp(Vec3(P.J.th_bg * dbg));
-  const Vec3 dv = P.dv + P.J.v_bg * dbg + P.J.v_ba * dba;
+  Mat3 E;
+  Vec3 dv;
+  P.at(x, E, dv);
   const Vec3 dp = P.dp + P.J.p_bg * dbg + P.J.p_ba * dba;
   FilterState y = x;
   y.t = imu[P.to].t;
@@ -1262,19 +1270,20 @@ Vec3 DopplerInertialFilter::lidarVelocity(const FilterState& x, const std::vecto
   // its body frame. The IMU's gyro there: the node's sample at tau_true = 0, otherwise the
   // integration's own interpolation at its end.
   Increment made;
-  if (cache == nullptr) makeIncrement(x, imu, k, tau_true, made);
-  const Increment& inc =
-      cache != nullptr ? increment(x, imu, k, tau_true, cache->increment, chain, pre,
-                                   chain != nullptr && tau_true < 0 ? nodeBefore(*chain) : nullptr)
-                       : made;
-  const Preintegration& P = inc.pre;
-  const Vec3 dbg = x.b_g - P.b_g;
-  const Mat3 E = P.dR * Exp(Vec3(P.J.th_bg * dbg));
-  const Vec3 dv = P.dv + P.J.v_bg * dbg + P.J.v_ba * (x.b_a - P.b_a);
+  const Increment* inc = &made;
+  if (cache != nullptr)
+    inc = &increment(x, imu, k, tau_true, cache->increment, chain, pre,
+                     chain != nullptr && tau_true < 0 ? nodeBefore(*chain) : nullptr);
+  else
+    makeIncrement(x, imu, k, tau_true, made);
+  const Preintegration& P = inc->pre;
+  Mat3 E;
+  Vec3 dv;
+  P.at(x, E, dv);
   const Mat3 Rt0 = x.R_wb.transpose();
   const Vec3 u = Rt0 * (x.v_w + kGravityW * tau_true);
   const Vec3 v_b = E.transpose() * (u + dv);
-  Vec3 gyro = inc.gyro;
+  Vec3 gyro = inc->gyro;
   if (chain != nullptr) {
     // The lever arm's gyro: the node's fit (gyroFit); the offset's column reads the motion's
     // rate (motionAt()) as for a node per sample, or this fit's where no line holds.

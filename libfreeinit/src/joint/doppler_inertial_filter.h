@@ -469,6 +469,11 @@ class DopplerInertialFilter {
     Mat3 dR = Mat3::Identity();
     Vec3 dv = Vec3::Zero(), dp = Vec3::Zero();
     IntegrationJacobian J;  ///< of the integration from R = I, v = p = 0 at b0
+    /// The attitude and velocity increments at x's biases (first order in their change).
+    void at(const FilterState& x, Mat3& E, Vec3& dv_x) const;
+    /// dR, dv and dp from the end y of the integration over tau from R = I, v = p = 0 (gravity,
+    /// which every step adds in the world frame as g tau and g tau^2 / 2, taken out).
+    void endAt(const FilterState& y, double tau);
   };
   /// The integration from a node's sample over tau (to a fit instant, or to the next sample) as
   /// an increment (a Preintegration with to = from), made at one set of biases and applied at

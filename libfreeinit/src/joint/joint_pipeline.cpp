@@ -1169,8 +1169,6 @@ class JointPipeline final : public Pipeline {
     testCalibration(r);
   }
 
-  /// The calibration test: do the data say the declared LiDAR-IMU calibration is off, and would
-  /// an error in it go unnoticed by this window while moving the state by more than users notice?
   /// The calibration test's prior std (rotation [rad], clock offset [s]); false: no test.
   /// A clock offset the state estimates is tested about the estimate with the state's own prior:
   /// what the warnings name is the calibration taken as exact.
@@ -1184,6 +1182,8 @@ class JointPipeline final : public Pipeline {
     return true;
   }
 
+  /// The calibration test: do the data say the declared LiDAR-IMU calibration is off, and would
+  /// an error in it go unnoticed by this window while moving the state by more than users notice?
   void testCalibration(InitResult& r) {
     const JointParams& e = cfg_.joint;
     const bool time_estimated = e.time_offset_sigma > 0;
